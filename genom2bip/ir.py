@@ -1,0 +1,339 @@
+"""The description IR: what a GenoM module says, independent of the dialect it was written in.
+
+Both front ends (GenoM3 dotgen and GenoM2 ``.gen``) produce these plain
+dataclasses; everything downstream (checks, the BIP model builder, the
+summaries) reads only this.  Every node carries the :class:`Span` it came from
+so that later errors can still point at ``file:line:column``.
+
+Durations are stored in seconds (floats); the original text is kept on the
+node for messages.  Names are kept as written in the description; renaming for
+BIP reserved words happens in the back end.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
+from typing import Any
+
+from runtime.diagnostics import NOWHERE, Span
+
+# --------------------------------------------------------------------------- types
+
+
+@dataclass
+class Type:
+    """Base of IDL type expressions."""
+
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class BaseType(Type):
+    """A predefined IDL type: ``long``, ``unsigned short``, ``double``, ``boolean``, ``char``, ``octet``, ``any``..."""
+
+    name: str
+
+
+@dataclass
+class NamedType(Type):
+    """A reference to a declared type by scoped name (``ns::pose``)."""
+
+    name: str
+
+
+@dataclass
+class StringType(Type):
+    bound: int | None = None
+
+
+@dataclass
+class SequenceType(Type):
+    element: Type
+    bound: int | None = None
+
+
+@dataclass
+class OptionalType(Type):
+    element: Type
+
+
+@dataclass
+class ArrayType(Type):
+    """``T name[d1][d2]``: an array declarator turns the member type into this."""
+
+    element: Type
+    dims: list[int]
+
+
+@dataclass
+class Member:
+    """A struct/exception member, an ids member, or a local variable."""
+
+    name: str
+    type: Type
+    initializer: Any = None
+    doc: str | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class StructType(Type):
+    name: str
+    members: list[Member] = field(default_factory=list)
+
+
+@dataclass
+class UnionCase:
+    labels: list[Any]  # constant values; the string "default" for ``default:``
+    member: Member
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class UnionType(Type):
+    name: str
+    discriminator: Type
+    cases: list[UnionCase] = field(default_factory=list)
+
+
+@dataclass
+class EnumType(Type):
+    name: str
+    enumerators: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Typedef:
+    name: str
+    type: Type
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Constant:
+    name: str
+    type: Type
+    value: Any
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class ExceptionDecl:
+    """An IDL/GenoM exception; members carry detail data with the failure."""
+
+    name: str
+    members: list[Member] = field(default_factory=list)
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+# --------------------------------------------------------------------------- codels
+
+
+@dataclass
+class Duration:
+    """A time value such as a period or a WCET, normalised to seconds."""
+
+    seconds: float
+    text: str = ""
+
+    def __str__(self) -> str:
+        return self.text or f"{self.seconds}s"
+
+
+@dataclass
+class Yield:
+    """A target of a codel: ``main`` (run at once) or ``pause::main`` (wait for the next period)."""
+
+    state: str
+    pause: bool = False
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+    def __str__(self) -> str:
+        return f"pause::{self.state}" if self.pause else self.state
+
+
+@dataclass
+class CodelParam:
+    """One codel argument: where it comes from, its direction, the variable path and an optional alias.
+
+    ``source`` is ``ids``, ``local``, ``port``, ``remote`` or ``None`` when the
+    description leaves it to name resolution (service parameter, then ids).
+    """
+
+    path: str
+    direction: str | None = None  # in, out, inout
+    source: str | None = None
+    alias: str | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Codel:
+    """A C function of the module.  FSM codels have ``triggers`` (the states that run them) and ``yields``."""
+
+    name: str
+    triggers: list[str] = field(default_factory=list)
+    yields: list[Yield] = field(default_factory=list)
+    params: list[CodelParam] = field(default_factory=list)
+    is_async: bool = False
+    wcet: Duration | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+# --------------------------------------------------------------------------- component parts
+
+
+@dataclass
+class Port:
+    """A GenoM port: ``out`` ports are posters written by this component, ``in`` ports read others'."""
+
+    name: str
+    direction: str  # "in" or "out"
+    type: Type
+    multiple: bool = False
+    doc: str | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Task:
+    """An execution task: its period (None = aperiodic), its permanent-activity codels and scheduling data."""
+
+    name: str
+    period: Duration | None = None
+    delay: Duration | None = None
+    priority: int | None = None
+    stack: int | None = None
+    codels: list[Codel] = field(default_factory=list)
+    throws: list[str] = field(default_factory=list)
+    doc: str | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Parameter:
+    """A service parameter: ``in``/``out``/``inout``, named after an ids member or local, with a default and doc."""
+
+    direction: str
+    name: str
+    type: Type | None = None  # None when it names an ids member whose type is found by lookup
+    source: str = "local"  # "ids" (the value is an ids member) or "local" (a service argument)
+    default: Any = None
+    doc: str | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Service:
+    """A service: ``attribute`` and ``function`` run in the control task, ``activity`` in its ``task``."""
+
+    name: str
+    kind: str  # "attribute", "function" or "activity"
+    parameters: list[Parameter] = field(default_factory=list)
+    task: str | None = None
+    validate: Codel | None = None
+    codels: list[Codel] = field(default_factory=list)
+    interrupts: list[str] = field(default_factory=list)
+    before: list[str] = field(default_factory=list)
+    after: list[str] = field(default_factory=list)
+    throws: list[str] = field(default_factory=list)
+    locals: list[Member] = field(default_factory=list)
+    doc: str | None = None
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+    def states(self) -> list[str]:
+        """The FSM states of the service, in order of first appearance (triggers first)."""
+        seen: list[str] = []
+        for codel in self.codels:
+            for t in codel.triggers:
+                if t not in seen:
+                    seen.append(t)
+        return seen
+
+
+@dataclass
+class Interface:
+    """A GenoM3 ``interface``: a component-like template merged into components that provide/use it."""
+
+    name: str
+    ids: list[Member] = field(default_factory=list)
+    ports: list[Port] = field(default_factory=list)
+    services: list[Service] = field(default_factory=list)
+    throws: list[str] = field(default_factory=list)
+    properties: dict[str, Any] = field(default_factory=dict)
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Component:
+    """A GenoM module (GenoM3 ``component``, GenoM2 ``module``)."""
+
+    name: str
+    dialect: str  # "genom3" or "genom2"
+    ids: list[Member] = field(default_factory=list)
+    tasks: list[Task] = field(default_factory=list)
+    ports: list[Port] = field(default_factory=list)
+    services: list[Service] = field(default_factory=list)
+    throws: list[str] = field(default_factory=list)
+    provides: list[str] = field(default_factory=list)
+    uses: list[str] = field(default_factory=list)
+    clock_rate: Duration | None = None
+    properties: dict[str, Any] = field(default_factory=dict)  # doc, version, lang, email, require, codels-require...
+    file: str = ""
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+    def task(self, name: str) -> Task | None:
+        return next((t for t in self.tasks if t.name == name), None)
+
+    def service(self, name: str) -> Service | None:
+        return next((s for s in self.services if s.name == name), None)
+
+    def port(self, name: str) -> Port | None:
+        return next((p for p in self.ports if p.name == name), None)
+
+
+@dataclass
+class Pragma:
+    """A ``#pragma`` line kept for later stages (``requires``, ``provides``, ...)."""
+
+    name: str
+    arguments: str
+    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Description:
+    """Everything read from a set of files: components plus the shared types, constants and interfaces."""
+
+    components: list[Component] = field(default_factory=list)
+    types: dict[str, Any] = field(default_factory=dict)  # scoped name -> StructType/UnionType/EnumType/Typedef
+    constants: dict[str, Constant] = field(default_factory=dict)
+    exceptions: dict[str, ExceptionDecl] = field(default_factory=dict)
+    interfaces: dict[str, Interface] = field(default_factory=dict)
+    pragmas: list[Pragma] = field(default_factory=list)
+    files: list[str] = field(default_factory=list)
+
+    def component(self, name: str) -> Component | None:
+        return next((c for c in self.components if c.name == name), None)
+
+
+# --------------------------------------------------------------------------- JSON
+
+
+def to_json(node: Any) -> Any:
+    """Turn IR nodes into JSON-ready data; each dataclass gets a ``"node"`` key naming its class."""
+    if is_dataclass(node) and not isinstance(node, type):
+        out: dict[str, Any] = {"node": type(node).__name__}
+        for f in fields(node):
+            value = getattr(node, f.name)
+            if isinstance(value, Span):
+                out[f.name] = str(value) if value is not NOWHERE else None
+            else:
+                out[f.name] = to_json(value)
+        return out
+    if isinstance(node, dict):
+        return {str(k): to_json(v) for k, v in node.items()}
+    if isinstance(node, (list, tuple)):
+        return [to_json(v) for v in node]
+    return node
+
+

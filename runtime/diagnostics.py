@@ -1,0 +1,127 @@
+"""Source locations and compiler-style error reports shared by every front end.
+
+Both the GenoM front end (``genom2bip.parser``) and the BIP2 reader
+(``runtime.bip2``) report problems as :class:`Diagnostic` objects that name
+``file:line:column``, quote the source line with a caret under the column and
+say what was expected.  Several diagnostics are collected and raised together
+as one :class:`DiagnosticError`, so that a user sees every problem in a file at
+once.  This module lives in ``runtime`` because the runtime reads ``.bip`` files
+on its own and must never import the generator.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class Span:
+    """A position in a source file: 1-based line and column."""
+
+    file: str
+    line: int
+    column: int
+    end_line: int | None = None
+    end_column: int | None = None
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+NOWHERE = Span("<unknown>", 0, 0)
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    """One problem found in an input: where, what, and (optionally) a hint."""
+
+    span: Span
+    message: str
+    severity: str = "error"
+    hint: str | None = None
+    source_line: str | None = None
+
+    def render(self, sources: "SourceCache | None" = None) -> str:
+        """Format as ``file:line:col: error: message`` plus the quoted line and caret."""
+        head = f"{self.span}: {self.severity}: {self.message}"
+        lines = [head]
+        text = self.source_line
+        if text is None and sources is not None:
+            text = sources.line(self.span.file, self.span.line)
+        if text is not None and self.span.line > 0:
+            text = text.rstrip("\n")
+            lines.append(f"    {text}")
+            col = max(self.span.column, 1)
+            prefix = "".join(ch if ch == "\t" else " " for ch in text[: col - 1])
+            width = 1
+            if self.span.end_line == self.span.line and self.span.end_column:
+                width = max(1, self.span.end_column - col)
+            lines.append(f"    {prefix}{'^' * width}")
+        if self.hint:
+            lines.append(f"    hint: {self.hint}")
+        return "\n".join(lines)
+
+
+class SourceCache:
+    """Reads source lines lazily so that diagnostics can quote them."""
+
+    def __init__(self) -> None:
+        self._texts: dict[str, list[str]] = {}
+
+    def add(self, file: str, text: str) -> None:
+        self._texts[file] = text.splitlines()
+
+    def line(self, file: str, line: int) -> str | None:
+        if file not in self._texts:
+            try:
+                self._texts[file] = Path(file).read_text(encoding="utf-8", errors="replace").splitlines()
+            except OSError:
+                return None
+        lines = self._texts[file]
+        if 1 <= line <= len(lines):
+            return lines[line - 1]
+        return None
+
+
+@dataclass
+class DiagnosticError(Exception):
+    """Raised when an input has one or more errors; carries all of them."""
+
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    sources: SourceCache | None = None
+
+    def __post_init__(self) -> None:
+        super().__init__(self.render())
+
+    def render(self) -> str:
+        body = "\n".join(d.render(self.sources) for d in self.diagnostics)
+        n = sum(1 for d in self.diagnostics if d.severity == "error")
+        if n > 1:
+            body += f"\n{n} errors"
+        return body
+
+    def __str__(self) -> str:
+        return self.render()
+
+
+class Reporter:
+    """Collects diagnostics while a front end works; raises them all at the end."""
+
+    def __init__(self, sources: SourceCache | None = None) -> None:
+        self.sources = sources or SourceCache()
+        self.diagnostics: list[Diagnostic] = []
+
+    def error(self, span: Span, message: str, hint: str | None = None) -> None:
+        self.diagnostics.append(Diagnostic(span, message, "error", hint))
+
+    def warning(self, span: Span, message: str, hint: str | None = None) -> None:
+        self.diagnostics.append(Diagnostic(span, message, "warning", hint))
+
+    @property
+    def has_errors(self) -> bool:
+        return any(d.severity == "error" for d in self.diagnostics)
+
+    def raise_if_errors(self) -> None:
+        if self.has_errors:
+            ordered = sorted(self.diagnostics, key=lambda d: (d.span.file, d.span.line, d.span.column))
+            raise DiagnosticError(ordered, self.sources)

@@ -1,0 +1,87 @@
+"""Behaviour layer: port types and atom types (places, transitions, guards, actions, atom priorities)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from runtime.diagnostics import Span
+from runtime.model.common import Annotation, DataDecl, DataParam, _span
+from runtime.model.expressions import Expr, Stmt
+
+
+@dataclass
+class PortType:
+    """``port type T(int x, bool y)``: the data a port carries."""
+
+    name: str
+    params: list[DataParam] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
+    span: Span = _span()
+
+
+@dataclass
+class PortDecl:
+    """``[export] port T p(x, y)`` in an atom: a port of type ``T`` bound to the atom's variables."""
+
+    type: str
+    name: str
+    data: list[str] = field(default_factory=list)
+    exported: bool = False
+    span: Span = _span()
+
+
+@dataclass
+class InitialTransition:
+    """``initial to p1, p2 do { ... }``."""
+
+    targets: list[str]
+    action: list[Stmt] = field(default_factory=list)
+    span: Span = _span()
+
+
+@dataclass
+class Transition:
+    """``on p from s to t provided (g) do { ... }``; ``port`` is None for an ``internal`` transition."""
+
+    port: str | None
+    sources: list[str]
+    targets: list[str]
+    guard: Expr | None = None
+    action: list[Stmt] = field(default_factory=list)
+    span: Span = _span()
+
+    @property
+    def internal(self) -> bool:
+        return self.port is None
+
+
+@dataclass
+class AtomPriority:
+    """``priority name low < high provided (g)`` between ports of one atom (``*`` allowed on either side)."""
+
+    name: str
+    low: str
+    high: str
+    guard: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass
+class AtomType:
+    """An atomic component type: an automaton extended with data."""
+
+    name: str
+    params: list[DataParam] = field(default_factory=list)
+    data: list[DataDecl] = field(default_factory=list)
+    ports: list[PortDecl] = field(default_factory=list)
+    places: list[str] = field(default_factory=list)
+    initial: InitialTransition | None = None
+    transitions: list[Transition] = field(default_factory=list)
+    priorities: list[AtomPriority] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
+    span: Span = _span()
+
+    def port(self, name: str) -> PortDecl | None:
+        return next((p for p in self.ports if p.name == name), None)
+
+    def variable(self, name: str) -> DataDecl | None:
+        return next((d for d in self.data if d.name == name), None)

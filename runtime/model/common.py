@@ -1,0 +1,44 @@
+"""Pieces shared by the three BIP layers: typed parameters, data declarations, annotations."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from runtime.diagnostics import NOWHERE, Span
+from runtime.model.expressions import Expr
+
+#: The BIP2 built-in data types; any other type name must be declared ``extern data type``.
+BUILTIN_TYPES = ("bool", "int", "float", "string")
+
+
+def _span():
+    return field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Annotation:
+    """``@cpp(include="x.hpp")`` and the like: kept verbatim, ignored by the engine."""
+
+    name: str
+    arguments: dict[str, str] = field(default_factory=dict)
+    span: Span = _span()
+
+
+@dataclass
+class DataParam:
+    """A typed formal parameter: of a port type, an atom/compound type, or an extern function."""
+
+    type: str
+    name: str
+    span: Span = _span()
+
+
+@dataclass
+class DataDecl:
+    """``[export] [const] data T x [= e]`` in an atom or connector."""
+
+    type: str
+    name: str
+    init: Expr | None = None
+    const: bool = False
+    exported: bool = False
+    span: Span = _span()
