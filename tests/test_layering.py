@@ -1,0 +1,47 @@
+"""The runtime is what generated packages import: it must stand alone, without the generator."""
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _imported_modules(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+    return names
+
+
+def test_runtime_sources_never_import_genom2bip():
+    offenders = []
+    for path in sorted((ROOT / "runtime").rglob("*.py")):
+        bad = {m for m in _imported_modules(path) if m == "genom2bip" or m.startswith("genom2bip.")}
+        if bad:
+            offenders.append(f"{path.relative_to(ROOT)}: {sorted(bad)}")
+    assert offenders == []
+
+
+def test_runtime_imports_in_a_process_without_genom2bip():
+    # Block the generator package entirely, then import every runtime module.
+    code = (
+        "import sys, importlib, pkgutil\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'genom2bip' or name.startswith('genom2bip.'):\n"
+        "            raise ImportError('runtime must not import ' + name)\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "import runtime\n"
+        "for m in pkgutil.walk_packages(runtime.__path__, 'runtime.'):\n"
+        "    if m.name != 'runtime.__main__':\n"
+        "        importlib.import_module(m.name)\n"
+        "print('ok')\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "ok"
