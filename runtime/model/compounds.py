@@ -18,6 +18,7 @@ class ComponentInstance:
     type: str
     name: str
     args: list[Expr] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -29,6 +30,7 @@ class ConnectorInstance:
     name: str
     ports: list[PortRef] = field(default_factory=list)
     args: list[Expr] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)  # e.g. @label(name="NDD.GoTo:trigger")
     span: Span = _span()
 
 
