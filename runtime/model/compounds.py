@@ -31,6 +31,7 @@ class ConnectorInstance:
     ports: list[PortRef] = field(default_factory=list)
     args: list[Expr] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)  # e.g. @label(name="NDD.GoTo:trigger")
+    comment: str | None = field(default=None, compare=False)  # printed as a comment above the declaration
     span: Span = _span()
 
 
@@ -82,6 +83,7 @@ class ExternFunction:
     name: str
     return_type: str | None = None
     param_types: list[str] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)  # e.g. the outcomes of a codel
     span: Span = _span()
 
 

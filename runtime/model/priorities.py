@@ -42,4 +42,5 @@ class Priority:
     low: InteractionPattern
     high: InteractionPattern
     guard: Expr | None = None
+    comment: str | None = field(default=None, compare=False)  # why the rule exists; printed as a comment
     span: Span = _span()
