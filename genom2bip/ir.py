@@ -207,6 +207,8 @@ class Task:
     throws: list[str] = field(default_factory=list)
     doc: str | None = None
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+    # Where the names this task refers to were written ("period", "throws:e_x"), for messages.
+    ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
@@ -239,6 +241,9 @@ class Service:
     locals: list[Member] = field(default_factory=list)
     doc: str | None = None
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+    # Where the names this service refers to were written, keyed "task", "interrupts:Stop",
+    # "after:Init", "before:X", "throws:e_x": checks point at the offending name, not the service.
+    ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
 
     def states(self) -> list[str]:
         """The FSM states of the service, in order of first appearance (triggers first)."""
@@ -321,6 +326,8 @@ class Description:
 
 def to_json(node: Any) -> Any:
     """Turn IR nodes into JSON-ready data; each dataclass gets a ``"node"`` key naming its class."""
+    if isinstance(node, Span):
+        return str(node) if node is not NOWHERE else None
     if is_dataclass(node) and not isinstance(node, type):
         out: dict[str, Any] = {"node": type(node).__name__}
         for f in fields(node):
