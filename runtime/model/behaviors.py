@@ -26,6 +26,7 @@ class PortDecl:
     name: str
     data: list[str] = field(default_factory=list)
     exported: bool = False
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -47,6 +48,7 @@ class Transition:
     targets: list[str]
     guard: Expr | None = None
     action: list[Stmt] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
     @property

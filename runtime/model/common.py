@@ -41,4 +41,5 @@ class DataDecl:
     init: Expr | None = None
     const: bool = False
     exported: bool = False
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()

@@ -19,6 +19,7 @@ class ComponentInstance:
     name: str
     args: list[Expr] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -30,6 +31,7 @@ class ConnectorInstance:
     name: str
     ports: list[PortRef] = field(default_factory=list)
     args: list[Expr] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)  # e.g. @label(name="NDD.GoTo:trigger")
     comment: str | None = field(default=None, compare=False)  # printed as a comment above the declaration
     span: Span = _span()
@@ -42,6 +44,7 @@ class ExportPort:
     type: str
     name: str
     targets: list[PortRef] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -52,6 +55,7 @@ class ExportData:
     type: str
     name: str
     target: PortRef
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -83,6 +87,7 @@ class ExternFunction:
     name: str
     return_type: str | None = None
     param_types: list[str] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)  # e.g. the outcomes of a codel
     span: Span = _span()
 
@@ -94,6 +99,7 @@ class Constant:
     type: str
     name: str
     value: Expr
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -112,6 +118,8 @@ class Package:
     compound_types: list[CompoundType] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
+    #: annotations written before ``extern data type T``, by type name (types are plain names above)
+    extern_type_annotations: dict[str, list[Annotation]] = field(default_factory=dict)
 
     def _find(self, items, name):
         return next((x for x in items if x.name == name), None)

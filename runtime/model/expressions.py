@@ -37,7 +37,8 @@ class Var:
 
 @dataclass(frozen=True)
 class PortData:
-    """``p.x`` inside a connector: variable ``x`` carried by the connector's port parameter ``p``."""
+    """``p.x``: in a connector, variable ``x`` carried by its port parameter ``p``;
+    in a compound priority guard, exported data ``x`` of component ``p``."""
 
     port: str
     name: str

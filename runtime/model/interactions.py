@@ -44,6 +44,7 @@ class ConnectorExport:
     port_type: str
     name: str
     data: list[str] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -59,6 +60,7 @@ class InteractionSpec:
     guard: Expr | None = None
     up: list[Stmt] = field(default_factory=list)
     down: list[Stmt] = field(default_factory=list)
+    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
