@@ -19,7 +19,6 @@ class ComponentInstance:
     name: str
     args: list[Expr] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)
-    annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
 
 
@@ -31,7 +30,6 @@ class ConnectorInstance:
     name: str
     ports: list[PortRef] = field(default_factory=list)
     args: list[Expr] = field(default_factory=list)
-    annotations: list[Annotation] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)  # e.g. @label(name="NDD.GoTo:trigger")
     comment: str | None = field(default=None, compare=False)  # printed as a comment above the declaration
     span: Span = _span()
@@ -87,7 +85,6 @@ class ExternFunction:
     name: str
     return_type: str | None = None
     param_types: list[str] = field(default_factory=list)
-    annotations: list[Annotation] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)  # e.g. the outcomes of a codel
     span: Span = _span()
 
