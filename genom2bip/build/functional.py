@@ -1,0 +1,303 @@
+"""The functional level as a BIP model, following the paper's grammar (§II-B).
+
+``Functional level ::= Module+``, ``Module ::= Service+ . ControlTask . Poster+``,
+``Service ::= ExecutionTask . Activity``, ``ControlTask ::= Timer . SchedulerActivity``.
+
+Every atom and connector is named after what it comes from in the
+description (``NDD.GoTo.activity``, the connector labelled ``NDD.GoTo:trigger``),
+so that a trace, a counterexample or a line of the ``.bip`` output leads back
+to the ``.gen`` file.  docs/genom-to-bip.md has the construct-by-construct table.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from genom2bip import ir
+from genom2bip.build import library
+from genom2bip.build.assembly import Assembly, End, Path, Rank, Wire
+from genom2bip.build.names import ident, joined
+from genom2bip.build.service import Fsm, acceptor_type, activity_type, codel_extern, controller_type, exec_port
+from runtime.model import (
+    Annotation,
+    AtomType,
+    Const,
+    ConnectorType,
+    ExternFunction,
+    Package,
+    PortData,
+    Unary,
+)
+from runtime.model.expressions import Expr
+
+CONTROL_TASK = "control"
+
+
+@dataclass
+class Constraint:
+    """A condition on starting ``service``: the status of ``others`` (``after``: completed; ``before``: not yet).
+
+    ``rule`` names it in reports (``NDD.GoTo.after``); ``refuse`` says
+    whether a violating request is refused (else it waits until allowed).
+    """
+
+    module: str
+    service: str
+    kind: str  # "after" (others completed at least once) or "before" (others never completed)
+    others: list[tuple[str, str]]
+    rule: str
+    refuse: bool = True
+
+    def condition(self, first_param: int) -> Expr:
+        terms: list[Expr] = []
+        for i, _ in enumerate(self.others):
+            done = PortData(f"p{first_param + i}", "done")
+            terms.append(done if self.kind == "after" else Unary("!", done))
+        return library.conjunction(terms)
+
+
+@dataclass
+class ServiceParts:
+    module: str
+    service: ir.Service
+    path: Path  # the service compound
+    task: Path  # the task compound whose scheduler runs its codels
+    fsm: Fsm
+
+    @property
+    def control(self) -> Path:
+        return self.path + ("control",)
+
+    @property
+    def activity(self) -> Path:
+        return self.path + ("activity",)
+
+    @property
+    def label(self) -> str:
+        return f"{self.module}.{self.service.name}"
+
+
+class FunctionalLevel:
+    """Builds the package for a set of components: one compound per module under one root compound."""
+
+    def __init__(self, description: ir.Description, system: str) -> None:
+        self.description = description
+        self.system = system
+        self.atom_types: dict[str, AtomType] = {}
+        self.connector_types: dict[str, ConnectorType] = {}
+        self.externs: dict[str, ExternFunction] = {}
+        self.asm = Assembly(self._port_type)
+        self.services: dict[tuple[str, str], ServiceParts] = {}
+        self.constraints: list[Constraint] = []
+        self.task_execs: dict[Path, list[Wire]] = {}
+        self.wakes: dict[Path, list[End]] = {}
+
+    # -- registries ---------------------------------------------------------------------
+    def _port_type(self, atom_type: str, port: str) -> str:
+        decl = self.atom_types[atom_type].port(port)
+        return decl.type if decl else library.PORT
+
+    def _atom_type(self, t: AtomType) -> str:
+        self.atom_types.setdefault(t.name, t)
+        return t.name
+
+    def _connector(self, t: ConnectorType) -> ConnectorType:
+        return self.connector_types.setdefault(t.name, t)
+
+    def _rendezvous(self, ends: list[End], exported: bool = False) -> ConnectorType:
+        types = tuple(self._port_type(self.asm.atoms[e.atom].type, e.port) for e in ends)
+        return self._connector(library.rendezvous_type(types, exported))
+
+    # -- the whole level ------------------------------------------------------------------
+    def build(self) -> Package:
+        for t in (library.timer_type(), library.scheduler_type(), library.poster_type()):
+            self._atom_type(t)
+        self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"])
+        self.asm.group((), ident(self.system), comment=f"functional level {self.system}")
+        for component in self.description.components:
+            self._module(component)
+        self._triggers()
+        return Package(
+            name=ident(self.system.lower()),
+            extern_functions=sorted(self.externs.values(), key=lambda f: f.name),
+            port_types=library.port_types(),
+            atom_types=list(self.atom_types.values()),
+            connector_types=sorted(self.connector_types.values(), key=lambda c: c.name),
+            compound_types=self.asm.compounds(),
+        )
+
+    # -- one module -----------------------------------------------------------------------
+    def _module(self, c: ir.Component) -> None:
+        m = ident(c.name)
+        root: Path = (m,)
+        self.asm.group(root, joined(m, "Module"), comment=f"GenoM component {c.name}")
+        requests = [(ident(s.name), f"{c.name}.{s.name}") for s in c.services]
+        self.asm.atom(root + ("requests",), self._atom_type(acceptor_type(m, requests)))
+        for port in c.ports:
+            if port.direction == "out":
+                self.asm.atom(root + (ident(port.name),), "Poster")
+
+        tasks: dict[str, Path] = {}
+        taken = {ident(s.name) for s in c.services}
+        for task in c.tasks:
+            tasks[task.name] = self._task(m, root, task, taken)
+        tasks[CONTROL_TASK + "\0"] = self._task(m, root, ir.Task(CONTROL_TASK), taken)
+
+        for s in c.services:
+            on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == "activity" else tasks[CONTROL_TASK + "\0"]
+            self._service(m, c, root, s, on)
+        self._interruptions(m, c)
+        for task_path, execs in self.task_execs.items():
+            if task_path[0] == m:
+                self._period(m, task_path, execs)
+        for s in c.services:
+            for kind, names in (("after", s.after), ("before", s.before)):
+                if names:
+                    self.constraints.append(
+                        Constraint(m, s.name, kind, [(m, n) for n in names], rule=f"{c.name}.{s.name}.{kind}")
+                    )
+
+    def _task(self, m: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
+        name = ident(task.name)
+        if name in taken:
+            name += "_task"
+        taken.add(name)
+        path = self.asm.group(root + (name,), joined(m, name, "Task"), comment=f"task {task.name}")
+        if task.period is not None:
+            period_us = round(task.period.seconds * 1e6)
+            self.asm.atom(path + ("timer",), "Timer", [Const(period_us)])
+        self.asm.atom(path + ("scheduler",), "Scheduler")
+        self.task_execs[path] = []
+        self.wakes[path] = []
+        if task.codels:
+            fsm = Fsm.of(task.codels, task.throws)
+            atom = self._atom_type(activity_type(m, name, fsm, permanent=True))
+            self._codel_externs(m, fsm)
+            activity = self.asm.atom(path + ("permanent",), atom)
+            for state in fsm.states:
+                self._exec(m, f"{m}.{task.name}", path, activity, state, fsm.codel_of[state], owner=path)
+            if fsm.paused:
+                self.wakes[path].append(End(activity, "wake"))
+        return path
+
+    def _codel_externs(self, m: str, fsm: Fsm) -> None:
+        for codel in fsm.codel_of.values():
+            self.externs.setdefault(joined(m, codel.name), codel_extern(m, codel, fsm.throws))
+
+    def _exec(self, m: str, label: str, task: Path, activity: Path, state: str, codel: ir.Codel, owner: Path) -> Wire:
+        """``exec_<state>``: the task's scheduler lets the activity run the codel of ``state``; posters it writes join."""
+        ends = [End(task + ("scheduler",), "exec"), End(activity, exec_port(state))]
+        for p in codel.params:
+            if p.source == "port" and p.direction in ("out", "inout"):
+                poster = (m, ident(p.path.split(".")[0].split("[")[0]))
+                if poster in self.asm.atoms and End(poster, "write") not in ends:
+                    ends.append(End(poster, "write"))
+        w = self.asm.wire(
+            Wire(self._rendezvous(ends), ends, name=exec_port(state), owner=owner, label=f"{label}:{exec_port(state)}",
+                 comment=f"codel {codel.name} of state {state}")
+        )
+        self.task_execs[task].append(w)
+        return w
+
+    def _service(self, m: str, c: ir.Component, root: Path, s: ir.Service, task: Path) -> None:
+        name = ident(s.name)
+        path = self.asm.group(root + (name,), joined(m, name, "Service"), comment=f"{s.kind} {s.name}")
+        fsm = Fsm.of(s.codels, list(dict.fromkeys(s.throws + c.throws)))
+        constrained = bool(s.after or s.before)
+        control = self.asm.atom(path + ("control",), self._atom_type(controller_type(m, s, constrained)))
+        activity = self.asm.atom(path + ("activity",), self._atom_type(activity_type(m, name, fsm)))
+        self._codel_externs(m, fsm)
+        if s.validate is not None:
+            v = s.validate
+            ok = ir.Codel(v.name, yields=[ir.Yield("ok")], params=v.params, wcet=v.wcet)
+            self.externs.setdefault(joined(m, v.name), codel_extern(m, ok, s.throws))
+        parts = ServiceParts(m, s, path, task, fsm)
+        self.services[(m, s.name)] = parts
+
+        label = parts.label
+        reject = [End(control, "reject")]
+        self.asm.wire(Wire(self._rendezvous(reject), reject, "reject", path, f"{label}:reject",
+                           comment="the validate codel refused the parameters"))
+        for port in ("finish", "fail", "interrupted"):
+            ends = [End(control, port), End(activity, port)]
+            self.asm.wire(Wire(self._rendezvous(ends), ends, port, path, f"{label}:{port}"))
+        for state in fsm.states:
+            self._exec(m, label, task, activity, state, fsm.codel_of[state], owner=path)
+        if fsm.paused:
+            self.wakes[task].append(End(activity, "wake"))
+
+    def _interruptions(self, m: str, c: ir.Component) -> None:
+        """``start`` of every service; a service that ``interrupts`` others aborts them as it starts (paper: Stop → GoTo)."""
+        names = [s.name for s in c.services]
+        for s in c.services:
+            parts = self.services[(m, s.name)]
+            victims = names if "all" in s.interrupts else [n for n in s.interrupts if n in names]
+            victims = [n for n in victims if n != s.name]
+            start = [End(parts.control, "start"), End(parts.activity, "start")]
+            if not victims:
+                self.asm.wire(Wire(self._rendezvous(start), start, "start", parts.path, f"{parts.label}:start"))
+                continue
+            inner = Wire(self._rendezvous(start, exported=True), start, "start_sync", parts.path)
+            aborts = [End(self.services[(m, v)].activity, "abort") for v in victims]
+            outer = self.asm.wire(
+                Wire(self._connector(library.broadcast_type(len(aborts))), [inner, *aborts], "start", parts.path,
+                     f"{parts.label}:start", comment=f"{s.name} interrupts {', '.join(victims)}")
+            )
+            self.asm.wires.append(inner)
+            for v in victims:
+                for w in self.task_execs[self.services[(m, v)].task]:
+                    if w.ends[1].atom == self.services[(m, v)].activity:
+                        self.asm.rank(Rank(f"{ident(v)}_{w.name}_before_{ident(s.name)}_start", w, outer,
+                                           comment=f"an interruption by {s.name} takes effect before {v} runs another codel"))
+
+    def _period(self, m: str, task: Path, execs: list[Wire]) -> None:
+        """Period start (timer trigger, waking the paused activities) and end (only once no codel can run)."""
+        timer = task + ("timer",)
+        has_timer = timer in self.asm.atoms
+        opening = ([End(timer, "trigger")] if has_timer else []) + [End(task + ("scheduler",), "period")]
+        wakes = self.wakes[task]
+        tname = task[-1]
+        if wakes:
+            inner = Wire(self._rendezvous(opening, exported=True), opening, "period_sync", task)
+            self.asm.wires.append(inner)
+            self.asm.wire(Wire(self._connector(library.broadcast_type(len(wakes))), [inner, *wakes], "period", task,
+                               f"{m}.{tname}:period", comment="a period starts: paused activities wake up"))
+        else:
+            self.asm.wire(Wire(self._rendezvous(opening), opening, "period", task, f"{m}.{tname}:period"))
+        closing = ([End(timer, "sleep")] if has_timer else []) + [End(task + ("scheduler",), "sleep")]
+        sleep = self.asm.wire(Wire(self._rendezvous(closing), closing, "sleep", task, f"{m}.{tname}:sleep"))
+        for w in execs:
+            self.asm.rank(Rank(f"{tname}_sleep_before_{w.owner[-1] if len(w.owner) > 1 else m}_{w.name}", sleep, w,
+                               comment="a period ends only when no codel of the task can run"))
+
+    # -- requests ---------------------------------------------------------------------------
+    def _triggers(self) -> None:
+        """``trigger`` of every service, guarded by its constraints; one ``refuse`` connector per refusing constraint."""
+        for (m, sname), parts in self.services.items():
+            mine = [k for k in self.constraints if (k.module, k.service) == (m, sname)]
+            request = End((m, "requests"), ident(sname))
+            ends: list[End] = [request, End(parts.control, "trigger")]
+            terms: list[Expr] = []
+            for k in mine:
+                terms.append(k.condition(len(ends) + 1))
+                ends += [End(self.services[o].control, "status") for o in k.others]
+            ttype = self._rendezvous(ends) if not terms else self._guarded(f"{m}_{ident(sname)}_Trigger", ends, library.conjunction(terms))
+            self.asm.wire(Wire(ttype, ends, "trigger", parts.path, f"{parts.label}:trigger",
+                               comment="; ".join(f"{k.rule}: {k.kind} {', '.join(o[1] for o in k.others)}" for k in mine) or None))
+            for k in mine:
+                if not k.refuse:
+                    continue
+                rends = [request, End(parts.control, "refuse")] + [End(self.services[o].control, "status") for o in k.others]
+                guard = Unary("!", k.condition(3))
+                rtype = self._guarded(f"{m}_{ident(sname)}_Refuse_{k.kind}", rends, guard)
+                self.asm.wire(Wire(rtype, rends, f"refuse_{k.kind}", parts.path, f"{parts.label}:refuse",
+                                   comment=f"rule {k.rule}: refuse {sname} {k.kind} {', '.join(o[1] for o in k.others)}",
+                                   annotations=[Annotation("rule", {"name": k.rule})]))
+
+    def _guarded(self, name: str, ends: list[End], guard: Expr) -> ConnectorType:
+        types = tuple(self._port_type(self.asm.atoms[e.atom].type, e.port) for e in ends)
+        return self._connector(library.guarded_type(name, types, guard))
+
+
+def build_package(description: ir.Description, system: str) -> Package:
+    """The BIP package of the functional level made of every component of ``description``."""
+    return FunctionalLevel(description, system).build()

@@ -1,0 +1,140 @@
+"""The fixed part of every generated model: port types, Timer, Scheduler, Poster and connector types.
+
+These are the paper's building blocks that do not depend on a particular
+module (Fig. 7 bottom left: Timer and scheduler; posters); connector types are
+made on demand by arity so that the ``.bip`` output declares only what it uses.
+"""
+from __future__ import annotations
+
+from runtime.model import (
+    Assign,
+    AtomType,
+    Binary,
+    Const,
+    ConnectorExport,
+    ConnectorParam,
+    ConnectorType,
+    DataDecl,
+    DataParam,
+    DefineGroup,
+    DefinePort,
+    InitialTransition,
+    PortDecl,
+    PortType,
+    Transition,
+    Var,
+)
+from runtime.model.expressions import Expr
+
+#: A synchronisation without data.
+PORT = "Port"
+#: The status of a service controller: completed at least once, latest run succeeded, running now.
+STATUS = "Status"
+STATUS_FIELDS = ("done", "ok", "running")
+
+
+def port_types() -> list[PortType]:
+    return [
+        PortType(PORT),
+        PortType(STATUS, [DataParam("bool", f) for f in STATUS_FIELDS]),
+    ]
+
+
+def timer_type() -> AtomType:
+    """Timer (paper Fig. 7): alternates ``trigger`` (a period starts) and ``sleep`` (it ends).
+
+    ``period`` (µs) is a parameter so that the real-time runtime and the
+    timing observers know when ``trigger`` may happen; the untimed semantics
+    ignores it.
+    """
+    return AtomType(
+        name="Timer",
+        params=[DataParam("int", "period")],
+        ports=[PortDecl(PORT, "trigger", exported=True), PortDecl(PORT, "sleep", exported=True)],
+        places=["WAIT", "PERIOD"],
+        initial=InitialTransition(["WAIT"]),
+        transitions=[
+            Transition("trigger", ["WAIT"], ["PERIOD"]),
+            Transition("sleep", ["PERIOD"], ["WAIT"]),
+        ],
+    )
+
+
+def scheduler_type() -> AtomType:
+    """Scheduler of a task: ``period`` opens a period, ``exec`` authorises one codel, ``sleep`` closes it."""
+    return AtomType(
+        name="Scheduler",
+        ports=[
+            PortDecl(PORT, "period", exported=True),
+            PortDecl(PORT, "exec", exported=True),
+            PortDecl(PORT, "sleep", exported=True),
+        ],
+        places=["SLEEP", "RUN"],
+        initial=InitialTransition(["SLEEP"]),
+        transitions=[
+            Transition("period", ["SLEEP"], ["RUN"]),
+            Transition("exec", ["RUN"], ["RUN"]),
+            Transition("sleep", ["RUN"], ["SLEEP"]),
+        ],
+    )
+
+
+def poster_type() -> AtomType:
+    """Poster: ``write`` synchronises with every codel that has the port as ``port out``."""
+    return AtomType(
+        name="Poster",
+        data=[DataDecl("bool", "written")],
+        ports=[PortDecl(PORT, "write", exported=True)],
+        places=["READY"],
+        initial=InitialTransition(["READY"], [Assign(Var("written"), Const(False))]),
+        transitions=[Transition("write", ["READY"], ["READY"], action=[Assign(Var("written"), Const(True))])],
+    )
+
+
+def param_names(n: int) -> list[str]:
+    return [f"p{i + 1}" for i in range(n)]
+
+
+def rendezvous_type(types: tuple[str, ...], exported: bool = False) -> ConnectorType:
+    """All ports together or nothing; ``exported`` adds a port for use inside another connector."""
+    names = param_names(len(types))
+    suffix = "".join("S" if t == STATUS else "P" for t in types)
+    return ConnectorType(
+        name=f"{'RendezvousX' if exported else 'Rendezvous'}_{suffix}",
+        params=[ConnectorParam(t, n) for t, n in zip(types, names)],
+        define=DefineGroup([DefinePort(n) for n in names]),
+        export=ConnectorExport(PORT, "ep") if exported else None,
+    )
+
+
+def broadcast_type(receivers: int) -> ConnectorType:
+    """A trigger with ``receivers`` synchrons: every subset containing the trigger; maximal progress keeps the largest."""
+    names = param_names(receivers + 1)
+    return ConnectorType(
+        name=f"Broadcast_{receivers}",
+        params=[ConnectorParam(PORT, n) for n in names],
+        define=DefineGroup([DefinePort(names[0], trigger=True)] + [DefinePort(n) for n in names[1:]]),
+    )
+
+
+def guarded_type(name: str, types: tuple[str, ...], guard: Expr) -> ConnectorType:
+    """A rendezvous whose guard reads status ports (constraints and rules)."""
+    names = param_names(len(types))
+    from runtime.model import InteractionSpec
+
+    return ConnectorType(
+        name=name,
+        params=[ConnectorParam(t, n) for t, n in zip(types, names)],
+        define=DefineGroup([DefinePort(n) for n in names]),
+        interactions=[InteractionSpec(list(names), guard=guard)],
+    )
+
+
+def conjunction(terms: list[Expr]) -> Expr:
+    """``t1 && t2 && ...`` (``true`` for no term)."""
+    if not terms:
+        return Const(True)
+    out = terms[0]
+    for t in terms[1:]:
+        out = Binary("&&", out, t)
+    return out

@@ -1,0 +1,228 @@
+"""The two atoms of a service (paper Fig. 6): its execution-task controller and its activity automaton.
+
+Codels are extern functions that return an *outcome*: the index of the yield
+they took, ``len(yields) + j`` for the ``j``-th exception the service throws,
+or a negative number for a failure the description did not declare.  An
+internal, eager transition per outcome then moves the activity to the target
+place, so a codel step is one interaction in traces and exploration.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from genom2bip import ir
+from genom2bip.build.library import PORT, STATUS, STATUS_FIELDS
+from genom2bip.build.names import joined, place
+from runtime.model import (
+    Annotation,
+    Assign,
+    AtomType,
+    Binary,
+    Call,
+    Const,
+    DataDecl,
+    ExternFunction,
+    InitialTransition,
+    PortDecl,
+    Transition,
+    Unary,
+    Var,
+)
+
+ETHER, FINISHED, FAILED, INTERRUPTED = "ETHER", "FINISHED", "FAILED", "INTERRUPTED"
+
+
+@dataclass
+class Fsm:
+    """An activity automaton read from the codels of a service or of a task's permanent activity."""
+
+    states: list[str]
+    codel_of: dict[str, ir.Codel]
+    throws: list[str]
+    paused: list[str] = field(default_factory=list)  # states entered through pause::
+
+    @classmethod
+    def of(cls, codels: list[ir.Codel], throws: list[str]) -> "Fsm":
+        states: list[str] = []
+        codel_of: dict[str, ir.Codel] = {}
+        paused: list[str] = []
+        for codel in codels:
+            for t in codel.triggers:
+                if t not in codel_of:
+                    states.append(t)
+                    codel_of[t] = codel
+        for codel in codels:
+            for y in codel.yields:
+                if y.pause and y.state != "ether" and y.state not in paused:
+                    paused.append(y.state)
+        return cls(states, codel_of, list(throws), paused)
+
+    @property
+    def has_stop(self) -> bool:
+        return "stop" in self.codel_of
+
+
+def exec_port(state: str) -> str:
+    return f"exec_{state}"
+
+
+def codel_extern(module: str, codel: ir.Codel, throws: list[str]) -> ExternFunction:
+    """``extern function int NDD_nddPlan()`` annotated with the outcomes a codel may return.
+
+    A validate codel is described with the single yield ``ok`` (outcome 0).
+    """
+    args = {"codel": codel.name, "yields": ",".join(str(y) for y in codel.yields), "throws": ",".join(throws)}
+    if codel.wcet is not None:
+        args["wcet_us"] = str(round(codel.wcet.seconds * 1e6))
+    return ExternFunction(joined(module, codel.name), "int", [], [Annotation("codel", args)])
+
+
+def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> AtomType:
+    """Activity automaton (Fig. 3): ETHER → start → codel steps → finish / fail / interrupted.
+
+    A permanent activity (the codels of a task) starts at once and has no
+    start/finish/abort ports: nobody requests it and nobody waits for it.
+    """
+    data = [DataDecl("int", "outcome"), DataDecl("bool", "interrupted")]
+    places = [ETHER] + [place(s) for s in fsm.states]
+    places += [place(s) + "_PAUSED" for s in fsm.paused]
+    places += [place(s) + "_YIELD" for s in fsm.states]
+    ports: list[PortDecl] = []
+    transitions: list[Transition] = []
+    if not permanent:
+        places += [FINISHED, FAILED, INTERRUPTED]
+        ports.append(PortDecl(PORT, "start", exported=True))
+        first = place("start") if "start" in fsm.codel_of else FINISHED
+        transitions.append(
+            Transition("start", [ETHER], [first], action=[Assign(Var("interrupted"), Const(False))])
+        )
+
+    for state in fsm.states:
+        codel = fsm.codel_of[state]
+        ports.append(PortDecl(PORT, exec_port(state), exported=True))
+        transitions.append(
+            Transition(
+                exec_port(state),
+                [place(state)],
+                [place(state) + "_YIELD"],
+                action=[Assign(Var("outcome"), Call(joined(module, codel.name)))],
+            )
+        )
+        transitions += _outcome_transitions(state, codel, fsm, permanent)
+
+    if fsm.paused:
+        ports.append(PortDecl(PORT, "wake", exported=True))
+        for s in fsm.paused:
+            transitions.append(Transition("wake", [place(s) + "_PAUSED"], [place(s)]))
+
+    if not permanent:
+        for port, source in (("finish", FINISHED), ("fail", FAILED), ("interrupted", INTERRUPTED)):
+            ports.append(PortDecl(PORT, port, exported=True))
+            transitions.append(Transition(port, [source], [ETHER]))
+        ports.append(PortDecl(PORT, "abort", exported=True))
+        running = [place(s) for s in fsm.states if s != "stop"] + [place(s) + "_PAUSED" for s in fsm.paused if s != "stop"]
+        target = place("stop") if fsm.has_stop else INTERRUPTED
+        for p in running:
+            transitions.append(Transition("abort", [p], [target], action=[Assign(Var("interrupted"), Const(True))]))
+
+    init = place("start") if permanent and "start" in fsm.codel_of else ETHER
+    return AtomType(
+        name=joined(module, name, "Activity"),
+        data=data,
+        ports=ports,
+        places=places,
+        initial=InitialTransition([init], [Assign(Var("outcome"), Const(0)), Assign(Var("interrupted"), Const(False))]),
+        transitions=transitions,
+    )
+
+
+def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool) -> list[Transition]:
+    """Eager internal transitions from ``STATE_YIELD``, one per outcome of the codel."""
+    source = [place(state) + "_YIELD"]
+    out: list[Transition] = []
+    outcome = Var("outcome")
+    for k, y in enumerate(codel.yields):
+        is_k = Binary("==", outcome, Const(k))
+        if y.state == "ether":
+            if permanent:
+                out.append(Transition(None, source, [ETHER], guard=is_k))
+            else:
+                # Reaching ether after an interruption reports "interrupted", otherwise "finished".
+                out.append(Transition(None, source, [FINISHED], guard=Binary("&&", is_k, Unary("!", Var("interrupted")))))
+                out.append(Transition(None, source, [INTERRUPTED], guard=Binary("&&", is_k, Var("interrupted"))))
+        else:
+            target = place(y.state) + "_PAUSED" if y.pause else place(y.state)
+            out.append(Transition(None, source, [target], guard=is_k))
+    failed = [ETHER] if permanent else [FAILED]
+    n = len(codel.yields)
+    thrown = Binary(">=", outcome, Const(n))
+    undeclared = Binary("<", outcome, Const(0))
+    out.append(Transition(None, source, failed, guard=Binary("||", thrown, undeclared)))
+    return out
+
+
+def controller_type(module: str, service: ir.Service, constrained: bool) -> AtomType:
+    """Execution task of a service (Fig. 6 left): trigger → validate → reject or start → report.
+
+    ``status`` is available in every place and tells constraint connectors
+    whether the service has completed (at least once / latest run) and whether
+    it runs now.  ``refuse`` exists when a constraint may refuse a request.
+    """
+    places = ["IDLE", "CHECK", "ACTIVE"]
+    data = [DataDecl("int", "verdict")] + [DataDecl("bool", f) for f in STATUS_FIELDS]
+    validate = (
+        [Assign(Var("verdict"), Call(joined(module, service.validate.name)))] if service.validate else [Assign(Var("verdict"), Const(0))]
+    )
+    ports = [
+        PortDecl(PORT, "trigger", exported=True),
+        PortDecl(PORT, "reject", exported=True),
+        PortDecl(PORT, "start", exported=True),
+        PortDecl(PORT, "finish", exported=True),
+        PortDecl(PORT, "fail", exported=True),
+        PortDecl(PORT, "interrupted", exported=True),
+        PortDecl(STATUS, "status", list(STATUS_FIELDS), exported=True),
+    ]
+    ended = [Assign(Var("running"), Const(False))]
+    transitions = [
+        Transition("trigger", ["IDLE"], ["CHECK"], action=validate),
+        Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0))),
+        Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0)),
+                   action=[Assign(Var("running"), Const(True))]),
+        Transition("finish", ["ACTIVE"], ["IDLE"],
+                   action=ended + [Assign(Var("done"), Const(True)), Assign(Var("ok"), Const(True))]),
+        Transition("fail", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
+        Transition("interrupted", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
+    ]
+    transitions += [Transition("status", [p], [p]) for p in places]
+    if constrained:
+        ports.insert(1, PortDecl(PORT, "refuse", exported=True))
+        transitions.insert(1, Transition("refuse", ["IDLE"], ["IDLE"]))
+    return AtomType(
+        name=joined(module, service.name, "Control"),
+        data=data,
+        ports=ports,
+        places=places,
+        initial=InitialTransition(["IDLE"], [Assign(Var(v), Const(0 if v == "verdict" else False)) for v in ("verdict",) + STATUS_FIELDS]),
+        transitions=transitions,
+    )
+
+
+def acceptor_type(module: str, requests: list[tuple[str, str]]) -> AtomType:
+    """Request acceptor of a module: one port per service, enabled while a request for it is pending.
+
+    ``requests`` pairs each port with the service's ``Module.Service`` name;
+    ``request_pending("NDD.GoTo")`` is answered by the services interface at
+    run time and by the environment (any request, any time) in exploration.
+    """
+    ports = [PortDecl(PORT, port, exported=True) for port, _ in requests]
+    transitions = [
+        Transition(port, ["READY"], ["READY"], guard=Call("request_pending", (Const(name),)))
+        for port, name in requests
+    ]
+    return AtomType(
+        name=joined(module, "Requests"),
+        ports=ports,
+        places=["READY"],
+        initial=InitialTransition(["READY"]),
+        transitions=transitions,
+    )
