@@ -65,6 +65,38 @@ class ArrayType(Type):
 
 
 @dataclass
+class NativeType(Type):
+    """``native name;``: a type opaque to GenoM, only handled by codels."""
+
+    name: str
+
+
+@dataclass
+class FixedType(Type):
+    """IDL ``fixed<digits, scale>`` (both None for the unbounded form)."""
+
+    digits: int | None = None
+    scale: int | None = None
+
+
+class EnumValue(int):
+    """An enumerator used as a constant value: an ``int`` (its ordinal) that remembers its scoped name."""
+
+    name: str
+
+    def __new__(cls, value: int, name: str) -> "EnumValue":
+        obj = super().__new__(cls, value)
+        obj.name = name
+        return obj
+
+    def __repr__(self) -> str:
+        return f"EnumValue({int(self)}, {self.name!r})"
+
+    def __str__(self) -> str:
+        return self.name
+
+
+@dataclass
 class Member:
     """A struct/exception member, an ids member, or a local variable."""
 
@@ -221,6 +253,10 @@ class Parameter:
     source: str = "local"  # "ids" (the value is an ids member) or "local" (a service argument)
     default: Any = None
     doc: str | None = None
+    # source="ids": the ids member path bound to the parameter (``pos.x``); "" binds the whole ids
+    member: str | None = None
+    # docs of parts of a structured default (``{ .x = 1 : "x doc" }``), keyed by path ("x", "[2]", "a.b")
+    member_docs: dict[str, str] = field(default_factory=dict)
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
@@ -265,6 +301,7 @@ class Interface:
     services: list[Service] = field(default_factory=list)
     throws: list[str] = field(default_factory=list)
     properties: dict[str, Any] = field(default_factory=dict)
+    tasks: list[Task] = field(default_factory=list)
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
