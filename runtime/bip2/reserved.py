@@ -1,0 +1,34 @@
+"""Words that no BIP2 identifier may be, and the shape of a valid identifier.
+
+The set is the union of the keywords of every version of the Verimag BIP2
+grammar (untimed, timed, real-time), so that a ``.bip`` file we write is
+accepted by any of their compilers, even though our reader uses only some.
+"""
+from __future__ import annotations
+
+import re
+
+#: Keywords our grammar (bip2.lark) actually uses.
+KEYWORDS = frozenset({
+    "package", "end", "use", "const", "data", "extern", "function", "type", "port", "atom",
+    "connector", "compound", "component", "export", "place", "initial", "to", "from", "on",
+    "internal", "provided", "do", "priority", "define", "up", "down", "as", "if", "then", "else",
+    "fi", "true", "false", "int", "bool", "float", "string",
+})
+
+#: Words the Verimag grammars reserve for constructs we do not read (time, urgency,
+#: extern ports, operators, invariants, type refinement).
+UNUSED_KEYWORDS = frozenset({
+    "refine", "operator", "remember", "ignore", "error", "at", "invariant", "clock", "unit",
+    "nanosecond", "microsecond", "millisecond", "second", "minute", "hour", "day",
+    "lazy", "delayable", "eager", "resume", "sync", "async",
+})
+
+RESERVED = KEYWORDS | UNUSED_KEYWORDS
+
+IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+def is_identifier(name: str) -> bool:
+    """True when ``name`` can be written as a BIP2 identifier as it is."""
+    return bool(IDENTIFIER.match(name)) and name not in RESERVED
