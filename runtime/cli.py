@@ -1,0 +1,83 @@
+"""``python -m runtime run MODEL.bip --root 'System()' ...``: run a BIP2 model on the engine.
+
+Every failure (unreadable or malformed file, bad root, missing extern
+binding, model error at a step) is a message on stderr and a non-zero exit
+status, never a traceback: 1 for bad input, 2 for a model error during the run.
+A run that ends in a deadlock or at the step limit exits with 0.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from runtime.diagnostics import DiagnosticError
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m runtime", description="BIP engine: run a BIP2 model.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="execute a model, choosing among enabled interactions by a policy")
+    run.add_argument("model", help="the .bip file (package P lives in P.bip)")
+    run.add_argument("--root", default="System()", help="root instance, e.g. 'System()' or 'Sys(3)'")
+    run.add_argument("--seed", type=int, default=None, help="seed of the random policy")
+    run.add_argument("--limit", type=int, default=None, help="stop after this many steps")
+    run.add_argument("--policy", choices=("first", "random", "interactive"), default="random")
+    run.add_argument("--trace", metavar="FILE", help="write the steps as JSON lines to FILE")
+    run.add_argument("--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions")
+    run.add_argument("--quiet", action="store_true", help="print only the summary line")
+    run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
+    return ap
+
+
+def run_command(args, out=None, err=None) -> int:
+    from runtime.bip2 import parse_file
+    from runtime.engine import ConsoleTracer, Engine, EngineError, JsonlTracer, MultiTracer, make_policy
+
+    out = out or sys.stdout
+    err = err or sys.stderr
+    try:
+        package = parse_file(args.model)
+        engine = Engine(package, args.root, externs=args.externs)
+    except DiagnosticError as e:
+        print(e.render(), file=err)
+        return 1
+    except EngineError as e:
+        print(f"{args.model}: error: {e}", file=err)
+        return 1
+    if args.show_source:
+        print(engine.source, file=out)
+        return 0
+    if args.limit is not None and args.limit < 0:
+        print("error: --limit must be >= 0", file=err)
+        return 1
+    policy = make_policy(args.policy, args.seed, engine.format_state)
+    tracers = []
+    if not args.quiet:
+        tracers.append(ConsoleTracer(out))
+    if args.trace:
+        try:
+            tracers.append(JsonlTracer(args.trace))
+        except OSError as e:
+            print(f"error: cannot write trace: {e}", file=err)
+            return 1
+    summary = engine.run(policy, args.limit, MultiTracer(*tracers))
+    print(summary.line(), file=out)
+    if summary.outcome == "error":
+        print(f"{args.model}: model error: {summary.message}", file=err)
+        return 2
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "run":
+            return run_command(args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

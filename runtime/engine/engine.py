@@ -1,0 +1,248 @@
+"""The engine: a package instantiated from a root spec, its step compiled once, and a run loop.
+
+``initial_state``, ``enabled`` and ``fire`` are the whole semantics; the
+explorer calls exactly these, breadth-first, where ``run`` lets a policy
+choose.  States are flat tuples (see docs/engine.md), hashable and compact.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from runtime.engine import defines, support
+from runtime.engine.cexpr import HELPERS
+from runtime.engine.codegen import ErrorSite, generate
+from runtime.engine.errors import EngineError, ModelError
+from runtime.engine.externs import bind_externs, guarded_call
+from runtime.engine.flatten import flatten
+from runtime.engine.interaction import Interaction, interaction_label
+from runtime.engine.plan import Source, TreeNode, parts, plan
+from runtime.model import Package
+
+State = tuple
+Policy = Callable[[State, list[Interaction]], "Interaction | None"]
+
+
+@dataclass
+class RunSummary:
+    """How a run ended: ``outcome`` is ``deadlock``, ``limit``, ``error`` or ``stopped`` (the policy gave up)."""
+
+    steps: int
+    outcome: str
+    message: str = ""
+    state: State | None = None
+    enabled: list[str] = field(default_factory=list)
+
+    def line(self) -> str:
+        what = {"deadlock": "deadlock (no enabled interaction)", "limit": "step limit reached",
+                "stopped": "stopped", "error": f"model error: {self.message}"}[self.outcome]
+        return f"{self.steps} step{'s' if self.steps != 1 else ''}, {what}"
+
+
+def _raisers(errors: list[ErrorSite]) -> dict[str, Callable]:
+    """The error functions the generated code calls with the index of a static :class:`ErrorSite`."""
+    def nondet(k, flags):
+        e = errors[k]
+        ts = tuple(t for t, f in zip(e.transitions, flags) if f)
+        raise ModelError(e.message, atom=e.atom, port=e.port, transitions=ts)
+
+    def unsafe(k, bits):
+        e = errors[k]
+        places = tuple(p for i, p in enumerate(e.places) if bits >> i & 1)
+        raise ModelError(e.message, atom=e.atom, port=e.port, places=places, transitions=tuple(e.transitions))
+
+    def plain(k):
+        e = errors[k]
+        raise ModelError(e.message, atom=e.atom, port=e.port, transitions=tuple(e.transitions))
+
+    return {"_nondet": nondet, "_unsafe": unsafe, "_stuck": plain, "_notenabled": plain}
+
+
+class Engine:
+    """A runnable model. ``Engine(package, root="System()", externs=None)``.
+
+    ``externs`` binds the ``extern function`` names the model calls: a dict of
+    callables, a module, or a module's dotted name or ``.py`` path.  Unbound
+    names raise :class:`ExternError` here, before any step.
+    """
+
+    def __init__(self, package: Package, root: str = "System()", externs: Any = None) -> None:
+        self.package = package
+        self.root = root
+        self.flat = flatten(package, root)
+        self.infos, self.sources = plan(self.flat)
+        gen = generate(self.flat, self.infos, self.sources)
+        self.source: str = gen.source
+        bound = bind_externs(package, externs, gen.called)
+        self._caches: list[dict[int, Interaction]] = [{} for _ in self.sources]
+        ns: dict[str, Any] = dict(HELPERS)
+        ns.update(_raisers(gen.errors))
+        ns.update({f"_x_{name}": guarded_call(name, fn) for name, fn in bound.items()})
+        ns["_NONE"] = (None, None, None)
+        ns["_max_allowed"] = defines.max_allowed
+        ns["_maximal_enabled"] = defines.maximal_enabled
+        ns["_mk"] = self._make
+        for name, k in gen.type_index.items():
+            ns[f"_T{k}"] = self.infos[name].tree
+        for i, (order, rules, texts, guarded) in gen.atom_priorities.items():
+            ns[f"_aprio{i}"] = support.AtomPriorities(self.flat.atoms[i].name, order, rules, texts, guarded)
+        for src in self.sources:
+            ns[f"_IC{src.index}"] = self._caches[src.index]
+            if src.kind in ("port", "rendezvous"):
+                ns[f"_I{src.index}_{src.full}"] = self._make(src.index, src.full)
+            if src.kind == "generic":
+                ns[f"_S{src.index}"] = src
+        self.code = compile(self.source, f"<bip step: {package.name} {root}>", "exec")
+        exec(self.code, ns)  # noqa: S102 - our own generated source
+        self.namespace = ns
+        slots = tuple(p.slots for p in self.flat.ports)
+        fire_port = tuple(ns[f"_ap{p.id}"] for p in self.flat.ports)
+        ns["_generic"] = lambda src, s, E: support.generic_enabled(src, s, E, slots)
+        ns["_fire_tree"] = lambda src, L, mask, rec: support.fire_tree(src, L, mask, rec, slots, fire_port)
+        for src in self.sources:
+            if src.tree is not None:
+                self._attach(src.tree, gen.type_index, ns)
+        if self.flat.priorities:
+            tops: dict[int, set[int]] = {}
+            for src in self.sources:
+                if src.tree is not None:
+                    for cid in _connectors(src.tree):
+                        tops.setdefault(cid, set()).add(src.index)
+            rules = [(p.text, p.low.entries, p.high.entries, ns.get(f"_pg{r}"))
+                     for r, p in enumerate(self.flat.priorities)]
+            ns["_prio"] = support.Priorities(rules, tops).filter
+        self._initial = ns["initial"]
+        self._enabled = ns["enabled"]
+        self._fire = ns["FIRE"]
+
+    def _attach(self, node: TreeNode, type_index: dict[str, int], ns) -> None:
+        info = node.info
+        node.runtime = support.Clauses(ns[f"_K{type_index[info.type.name]}"], info.local_defaults, info.export_idx)
+        for alts in node.params:
+            for a in alts:
+                if a.node is not None:
+                    self._attach(a.node, type_index, ns)
+
+    # -- interactions ----------------------------------------------------------------------------
+    def _make(self, src_index: int, mask: int) -> Interaction:
+        """The Interaction ``(source, mask)``, created once and cached."""
+        cache = self._caches[src_index]
+        got = cache.get(mask)
+        if got is not None:
+            return got
+        src: Source = self.sources[src_index]
+        index = mask * len(self.sources) + src_index
+        if src.kind == "port":
+            inter = Interaction(index, src_index, mask, None, (src.port.path,), interaction_label(None, [src.port.path], True))
+        else:
+            fc = src.connector
+            ports = [self.flat.ports[p] for i, p in enumerate(src.leaves) if mask >> i & 1]
+            cut = len(fc.scope) + 1 if fc.scope else 0
+            rel = [p.path[cut:] for p in ports]
+            complete = mask == src.full and not src.alternatives
+            label = interaction_label(fc.label, rel, complete)
+            inter = Interaction(index, src_index, mask, fc.path, tuple(p.path for p in ports), label,
+                                tuple(parts(src.tree, mask)))
+        cache[mask] = inter
+        return inter
+
+    # -- the semantics ---------------------------------------------------------------------------
+    def initial_state(self) -> State:
+        """Initial transitions of every atom, then their eager internal transitions."""
+        return self._guard(self._initial)
+
+    def enabled(self, state: State) -> list[Interaction]:
+        """Interactions that may fire at ``state``, after maximal progress and priorities, in a fixed order."""
+        return self._guard(self._enabled, state)
+
+    def fire(self, state: State, interaction: Interaction) -> State:
+        """The state after firing ``interaction`` (which must be enabled at ``state``)."""
+        return self._guard(self._fire[interaction.source], state, interaction.mask, None)
+
+    def fire_traced(self, state: State, interaction: Interaction) -> tuple[State, dict[str, dict[str, Any]]]:
+        """Like :meth:`fire`, and also the values each atom port received (after ``down``), by ``atom.port``."""
+        rec: list[tuple[int, tuple]] = []
+        new = self._guard(self._fire[interaction.source], state, interaction.mask, rec)
+        values = {}
+        for pid, vals in rec:
+            fp = self.flat.ports[pid]
+            values[fp.path] = dict(zip(fp.fields, vals))
+        return new, values
+
+    def _guard(self, fn, *args):
+        try:
+            return fn(*args)
+        except EngineError:
+            raise
+        except RecursionError:
+            raise ModelError("recursion too deep while evaluating the model") from None
+        except Exception as err:  # a guard or action failed (ill-typed expression, ...)
+            raise ModelError(f"evaluation failed: {type(err).__name__}: {err}") from err
+
+    def find(self, state: State, label: str) -> Interaction:
+        """The enabled interaction with this label (for tests and scripted runs)."""
+        for i in self.enabled(state):
+            if i.label == label:
+                return i
+        raise KeyError(f"no enabled interaction labelled {label!r}; enabled: {[i.label for i in self.enabled(state)]}")
+
+    # -- states ------------------------------------------------------------------------------------
+    def describe_state(self, state: State) -> dict[str, dict[str, Any]]:
+        """Marked places and variables of every atom: ``{atom: {"places": [...], "data": {...}}}``."""
+        out = {}
+        for fa in self.flat.atoms:
+            m = state[fa.offset]
+            out[fa.name] = {
+                "places": [p for i, p in enumerate(fa.places) if m >> i & 1],
+                "data": {d.name: state[fa.slot(d.name)] for d in fa.variables},
+            }
+        return out
+
+    def format_state(self, state: State) -> str:
+        """One line per atom: ``name: PLACE x=1 y=2``."""
+        lines = []
+        for name, st in self.describe_state(state).items():
+            data = " ".join(f"{k}={v!r}" for k, v in st["data"].items())
+            lines.append(f"{name}: {','.join(st['places']) or '-'}" + (f" {data}" if data else ""))
+        return "\n".join(lines)
+
+    # -- running ---------------------------------------------------------------------------------------
+    def run(self, policy: Policy, limit: int | None = None, tracer=None) -> RunSummary:
+        """Step from the initial state, ``policy`` choosing, until deadlock, ``limit`` steps, an error or a stop."""
+        steps = 0
+        state = None
+        try:
+            state = self.initial_state()
+            if tracer is not None:
+                tracer.start(self, state)
+            while True:
+                enabled = self.enabled(state)
+                if not enabled:
+                    summary = RunSummary(steps, "deadlock", state=state)
+                    break
+                if limit is not None and steps >= limit:
+                    summary = RunSummary(steps, "limit", state=state, enabled=[i.label for i in enabled])
+                    break
+                chosen = policy(state, enabled)
+                if chosen is None:
+                    summary = RunSummary(steps, "stopped", state=state, enabled=[i.label for i in enabled])
+                    break
+                new, values = self.fire_traced(state, chosen)
+                steps += 1
+                if tracer is not None:
+                    tracer.step(steps, enabled, chosen, values, new)
+                state = new
+        except ModelError as err:
+            summary = RunSummary(steps, "error", str(err), state=state)
+        if tracer is not None:
+            tracer.finish(summary)
+        return summary
+
+
+def _connectors(node: TreeNode) -> list[int]:
+    out = [node.connector.id]
+    for alts in node.params:
+        for a in alts:
+            if a.node is not None:
+                out.extend(_connectors(a.node))
+    return out

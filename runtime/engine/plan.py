@@ -1,0 +1,163 @@
+"""What fires in a flat system: the sources of interactions, and each connector type's compiled define.
+
+A *source* is a top-level connector (one that exports no port) or a lone atom
+port (a port the atom does not export).  Each connector source has a tree of
+connector nodes whose leaves are atom ports; leaf ``i`` is bit ``1 << i`` of
+the masks that identify the source's interactions.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from runtime.engine import defines
+from runtime.engine.cexpr import coerce, default_value, evaluate
+from runtime.engine.errors import FlattenError
+from runtime.engine.flatten import FlatConnector, FlatPort, FlatSystem, Leaf
+from runtime.model import ConnectorType, InteractionSpec
+
+
+@dataclass
+class ConnectorInfo:
+    """A connector type compiled once: parameter indices, define tree, ``on`` clauses by parameter mask."""
+
+    type: ConnectorType
+    index: dict[str, int]
+    tree: defines.Node
+    clauses: dict[int, InteractionSpec]
+    local_defaults: list[Any]
+    export_idx: tuple[int, ...]
+
+    @property
+    def rendezvous(self) -> bool:
+        return not defines.has_trigger(self.tree)
+
+    @property
+    def all_params(self) -> int:
+        return (1 << len(self.type.params)) - 1
+
+
+@dataclass
+class TreeAlt:
+    """One alternative of a parameter in a source's tree: a leaf (atom port) or a sub-connector node."""
+
+    mask: int
+    port: int | None = None
+    node: "TreeNode | None" = None
+
+
+@dataclass
+class TreeNode:
+    """A connector instance as it occurs in one source's tree (a shared sub-connector occurs once per parent)."""
+
+    connector: FlatConnector
+    info: ConnectorInfo
+    params: list[list[TreeAlt]]
+    mask: int
+    runtime: Any = None  # clause functions, attached by the engine
+
+
+@dataclass
+class Source:
+    """Something that fires: ``kind`` is ``rendezvous``, ``flat``, ``generic`` (connectors) or ``port``."""
+
+    index: int
+    kind: str
+    connector: FlatConnector | None = None
+    port: FlatPort | None = None
+    leaves: list[int] = field(default_factory=list)
+    tree: TreeNode | None = None
+    alternatives: bool = False
+
+    @property
+    def full(self) -> int:
+        return (1 << len(self.leaves)) - 1
+
+
+def connector_info(ct: ConnectorType, constants) -> ConnectorInfo:
+    where = f"connector type {ct.name}"
+    index = {p.name: i for i, p in enumerate(ct.params)}
+    if len(index) != len(ct.params):
+        raise FlattenError(f"{where}: two port parameters with the same name")
+    tree = defines.compile_define(ct.define, index, where)
+    clauses: dict[int, InteractionSpec] = {}
+    for spec in ct.interactions:
+        mask = 0
+        for name in spec.ports:
+            if name not in index:
+                raise FlattenError(f"{where}: 'on {' '.join(spec.ports)}' names '{name}', not a port parameter")
+            mask |= 1 << index[name]
+        if not defines.allowed(tree, mask):
+            raise FlattenError(f"{where}: 'on {' '.join(spec.ports)}' is not an interaction allowed by define")
+        if mask in clauses:
+            raise FlattenError(f"{where}: two 'on' clauses for {' '.join(spec.ports)}")
+        clauses[mask] = spec
+    defaults = []
+    for d in ct.data:
+        v = evaluate(d.init, constants, f"{where}, data {d.name}") if d.init is not None else default_value(d.type)
+        defaults.append(coerce(v, d.type))
+    export_idx: tuple[int, ...] = ()
+    if ct.export is not None:
+        names = [d.name for d in ct.data]
+        for v in ct.export.data:
+            if v not in names:
+                raise FlattenError(f"{where}: exported port {ct.export.name} binds '{v}', not a data of the connector")
+        export_idx = tuple(names.index(v) for v in ct.export.data)
+    return ConnectorInfo(ct, index, tree, clauses, defaults, export_idx)
+
+
+def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
+    """Compile the connector types in use and list the sources in a fixed order (connectors, then lone ports)."""
+    infos: dict[str, ConnectorInfo] = {}
+    for fc in flat.connectors:
+        if fc.type.name not in infos:
+            infos[fc.type.name] = connector_info(fc.type, flat.constants)
+    sources: list[Source] = []
+    for fc in flat.connectors:
+        if not fc.top:
+            continue
+        counter = [0]
+        leaves: list[int] = []
+        alts_seen = [False]
+
+        def build(c: FlatConnector) -> TreeNode:
+            params = []
+            mask = 0
+            for alts in c.params:
+                if len(alts) > 1:
+                    alts_seen[0] = True
+                row = []
+                for a in alts:
+                    if isinstance(a, Leaf):
+                        bit = 1 << counter[0]
+                        counter[0] += 1
+                        leaves.append(a.port)
+                        row.append(TreeAlt(bit, port=a.port))
+                    else:
+                        node = build(flat.connectors[a.connector])
+                        row.append(TreeAlt(node.mask, node=node))
+                    mask |= row[-1].mask
+                params.append(row)
+            return TreeNode(c, infos[c.type.name], params, mask)
+
+        tree = build(fc)
+        flat_params = all(len(alts) == 1 and isinstance(alts[0], Leaf) for alts in fc.params)
+        kind = ("rendezvous" if infos[fc.type.name].rendezvous else "flat") if flat_params else "generic"
+        sources.append(Source(len(sources), kind, fc, None, leaves, tree, alts_seen[0]))
+    for fp in flat.ports:
+        if not fp.decl.exported:
+            sources.append(Source(len(sources), "port", None, fp, [fp.id]))
+    return infos, sources
+
+
+def parts(node: TreeNode, mask: int) -> list[tuple[int, int]]:
+    """``(connector id, parameter mask)`` of every connector node taking part in the interaction ``mask``."""
+    pm = 0
+    out: list[tuple[int, int]] = []
+    for i, alts in enumerate(node.params):
+        for a in alts:
+            if a.mask & mask:
+                pm |= 1 << i
+                if a.node is not None:
+                    out.extend(parts(a.node, mask))
+    return [(node.connector.id, pm)] + out if pm else out
