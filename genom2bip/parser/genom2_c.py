@@ -48,13 +48,13 @@ SpanOf = Callable[[Any], Span]
 
 def first_token(node: Any) -> Token | None:
     """The first token of a tree (for positions); None for an empty tree."""
-    if isinstance(node, Token):
-        return node
-    if isinstance(node, Tree):
-        for child in node.children:
-            tok = first_token(child)
-            if tok is not None:
-                return tok
+    stack = [node]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, Token):
+            return node
+        if isinstance(node, Tree):
+            stack.extend(reversed(node.children))
     return None
 
 
@@ -131,6 +131,13 @@ _BINARY = {
 
 def evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
     """Evaluate a constant expression tree; names are looked up in ``symbols``."""
+    try:
+        return _evaluate(tree, symbols, span_of)
+    except RecursionError:
+        raise CError(span_of(first_token(tree)), "constant expression nested too deeply") from None
+
+
+def _evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
     if isinstance(tree, Token):
         raise CError(span_of(tree), f"expected a constant expression, found '{tree}'")
     kind = tree.data
@@ -150,7 +157,7 @@ def evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
                          "constants are #define'd macros, enumerators or const declarations seen before")
         return symbols[name]
     if kind == "unop":
-        op, operand = str(ch[0]), evaluate(ch[1], symbols, span_of)
+        op, operand = str(ch[0]), _evaluate(ch[1], symbols, span_of)
         if op == "-":
             return -operand
         if op == "+":
@@ -161,9 +168,9 @@ def evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
             raise CError(span_of(ch[0]), "'~' needs an integer operand")
         return ~operand
     if kind == "binop":
-        left = evaluate(ch[0], symbols, span_of)
+        left = _evaluate(ch[0], symbols, span_of)
         op = str(ch[1])
-        right = evaluate(ch[2], symbols, span_of)
+        right = _evaluate(ch[2], symbols, span_of)
         if op in ("/", "%") and right == 0:
             raise CError(span_of(ch[1]), "division by zero in a constant expression")
         if op in ("|", "^", "&", "<<", ">>", "%") and not (isinstance(left, int) and isinstance(right, int)):
@@ -172,8 +179,8 @@ def evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
             raise CError(span_of(ch[1]), f"shift count {right} out of range")
         return _BINARY[op](left, right)
     if kind == "ternary":
-        cond = evaluate(ch[0], symbols, span_of)
-        return evaluate(ch[1] if cond else ch[2], symbols, span_of)
+        cond = _evaluate(ch[0], symbols, span_of)
+        return _evaluate(ch[1] if cond else ch[2], symbols, span_of)
     raise CError(span_of(first_token(tree)), "expected a constant expression")
 
 

@@ -1,0 +1,221 @@
+"""The ``genom2bip`` command: one subcommand (verb) per job, each a single function.
+
+A verb is added by writing ``def verb_x(args) -> int`` decorated with
+``@verb("x", help=..., arguments=...)``; ``arguments`` adds its options to
+its argparse subparser.  Every verb gets errors the same way: diagnostics
+(``file:line:column``, the source line, a caret) on stderr and exit code 1;
+bad usage exits 2; an unexpected exception is reported on one "internal
+error" line with exit code 3, never as a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+from genom2bip.ir import Description
+from runtime.diagnostics import Diagnostic, DiagnosticError, Reporter, SourceCache
+
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+
+#: The verb run when the first argument is not a verb (``genom2bip descriptions/dala -o gen/``).
+DEFAULT_VERB = "generate"
+
+DESCRIPTION_SUFFIXES = (".gen",)
+
+
+@dataclass
+class Verb:
+    name: str
+    help: str
+    run: Callable[[argparse.Namespace], int]
+    arguments: Callable[[argparse.ArgumentParser], None] | None
+
+
+VERBS: dict[str, Verb] = {}
+
+
+def verb(name: str, help: str, arguments: Callable[[argparse.ArgumentParser], None] | None = None):
+    """Register ``fn(args) -> exit code`` as the subcommand ``name``."""
+    def register(fn: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+        VERBS[name] = Verb(name, help, fn, arguments)
+        return fn
+    return register
+
+
+class Failure(Exception):
+    """Stops a verb with an exit code after its messages have been printed."""
+
+    def __init__(self, code: int = EXIT_ERRORS) -> None:
+        super().__init__(code)
+        self.code = code
+
+
+# --------------------------------------------------------------------------- shared helpers
+
+
+def version() -> str:
+    try:
+        from importlib.metadata import version as dist_version
+        return dist_version("genom2bip")
+    except Exception:  # noqa: BLE001 - not installed: fall back to the package's own idea
+        return getattr(sys.modules.get("genom2bip"), "__version__", "unknown")
+
+
+def add_source_arguments(parser: argparse.ArgumentParser) -> None:
+    """PATH... (files, or directories of .gen files), -I DIR, -D NAME[=VALUE]: what every reading verb takes."""
+    parser.add_argument("paths", metavar="PATH", nargs="+",
+                        help="description files (.gen), or directories whose .gen files are read")
+    parser.add_argument("-I", dest="include_dirs", metavar="DIR", action="append", default=[],
+                        help="add DIR to the #include search path")
+    parser.add_argument("-D", dest="defines", metavar="NAME[=VALUE]", action="append", default=[],
+                        help="define a preprocessor macro (VALUE defaults to 1)")
+
+
+def description_files(paths: Sequence[str]) -> list[Path]:
+    """Expand directories into their description files (sorted); missing paths are reported."""
+    files: list[Path] = []
+    missing: list[str] = []
+    for raw in paths:
+        path = Path(raw)
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir() if p.suffix in DESCRIPTION_SUFFIXES and p.is_file())
+            if not found:
+                error(f"{raw}: no {'/'.join(DESCRIPTION_SUFFIXES)} file in this directory")
+                missing.append(raw)
+            files.extend(found)
+        elif path.exists():
+            files.append(path)
+        else:
+            error(f"{raw}: no such file or directory")
+            missing.append(raw)
+    if missing:
+        raise Failure(EXIT_ERRORS)
+    return files
+
+
+def parse_defines(items: Sequence[str]) -> dict[str, str]:
+    defines: dict[str, str] = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        if not name.isidentifier():
+            error(f"-D {item}: '{name}' is not a macro name")
+            raise Failure(EXIT_USAGE)
+        defines[name] = value if _ else "1"
+    return defines
+
+
+def error(message: str) -> None:
+    print(f"genom2bip: error: {message}", file=sys.stderr)
+
+
+def print_diagnostics(diagnostics: Sequence[Diagnostic], sources: SourceCache | None) -> None:
+    """All diagnostics sorted by location, errors counted at the end."""
+    ordered = sorted(diagnostics, key=lambda d: (d.span.file, d.span.line, d.span.column))
+    for diag in ordered:
+        print(diag.render(sources), file=sys.stderr)
+    n = sum(1 for d in ordered if d.severity == "error")
+    if n > 1:
+        print(f"{n} errors", file=sys.stderr)
+
+
+def load(args: argparse.Namespace, check: bool = True) -> Description:
+    """Parse (and check) the descriptions named on the command line; print problems and fail on errors."""
+    files = description_files(args.paths)
+    defines = parse_defines(args.defines)
+    from genom2bip.checks import check_description
+    from genom2bip.parser import parse_paths
+
+    try:
+        description = parse_paths([str(f) for f in files], include_dirs=tuple(args.include_dirs), defines=defines)
+    except DiagnosticError as exc:
+        print_diagnostics(exc.diagnostics, exc.sources)
+        raise Failure(EXIT_ERRORS) from None
+    if check:
+        reporter = Reporter()
+        check_description(description, reporter)
+        if reporter.diagnostics:
+            print_diagnostics(reporter.diagnostics, reporter.sources)
+        if reporter.has_errors:
+            raise Failure(EXIT_ERRORS)
+    return description
+
+
+# --------------------------------------------------------------------------- verbs
+
+
+def _check_arguments(parser: argparse.ArgumentParser) -> None:
+    add_source_arguments(parser)
+    parser.add_argument("--json", action="store_true", help="print the description IR as JSON instead of a summary")
+
+
+@verb("check", help="parse and check descriptions; print a summary of each component", arguments=_check_arguments)
+def verb_check(args: argparse.Namespace) -> int:
+    """Parse, check, and print what each component contains (or the IR as JSON)."""
+    from genom2bip.ir import to_json
+    from genom2bip.summary import description_summary
+
+    description = load(args)
+    if args.json:
+        json.dump(to_json(description), sys.stdout, indent=2, default=str)
+        sys.stdout.write("\n")
+    else:
+        print(description_summary(description))
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------- entry point
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="genom2bip",
+        description="GenoM module descriptions to BIP component models: check, generate, run, verify.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
+    sub = parser.add_subparsers(dest="verb", metavar="COMMAND")
+    sub.required = True
+    for v in VERBS.values():
+        p = sub.add_parser(v.name, help=v.help, description=v.help)
+        if v.arguments is not None:
+            v.arguments(p)
+        p.set_defaults(run=v.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit code (0 ok, 1 errors in the input, 2 usage, 3 internal error)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
+        argv.insert(0, DEFAULT_VERB)
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse: --help, --version, usage errors
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        return args.run(args)
+    except Failure as exc:
+        return exc.code
+    except DiagnosticError as exc:  # a verb that let its input's problems through
+        print_diagnostics(exc.diagnostics, exc.sources)
+        return EXIT_ERRORS
+    except KeyboardInterrupt:
+        print("genom2bip: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+    except Exception as exc:  # noqa: BLE001 - the last resort: one line, never a traceback
+        print(f"genom2bip: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+def entry_point() -> None:
+    """Console-script wrapper: exit with main()'s code."""
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    entry_point()
