@@ -238,6 +238,7 @@ class Task:
     codels: list[Codel] = field(default_factory=list)
     throws: list[str] = field(default_factory=list)
     doc: str | None = None
+    scheduling: str | None = None  # "real-time" when the description asks for it
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
     # Where the names this task refers to were written ("period", "throws:e_x"), for messages.
     ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
