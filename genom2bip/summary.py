@@ -89,6 +89,7 @@ def _task_lines(task: Task) -> list[str]:
 def _service_lines(service: Service) -> list[str]:
     params = ", ".join(
         f"{p.direction} {p.name}" + (f"::{p.member}" if p.member and p.member != p.name else "")
+        + (f": {type_text(p.type)}" if p.type is not None else "")
         for p in service.parameters)
     head = f"  {service.kind} {service.name}({params})"
     if service.task:

@@ -634,7 +634,7 @@ class Genom2Frontend:
                 self.reporter.error(err.span, err.message, err.hint)
         rate = props.get("clkrate", DEFAULT_CLOCK_RATE)
         self.tick = 1.0 / rate
-        comp.clock_rate = Duration(self.tick, f"{rate} Hz" if "clkrate" in props else f"{rate} Hz (default)")
+        comp.clock_rate = Duration(self.tick, f"{rate} Hz")
         return comp
 
     def _module_field(self, comp: Component, props: dict, canonical: str, f: _Field) -> None:
@@ -786,7 +786,7 @@ class Genom2Frontend:
                 members.append(Member(mname, mtype if mtype is not None else NamedType("?"),
                                       doc=f"internal data {path_text(right)}", span=self.span_of(left)))
             typ = StructType(f"{self.component.name}_{name}_poster", members, span=self.span_of(block.name))
-            self.c.register(typ.name, typ, typ.span)
+            self._register_poster_type(typ)
             typ = NamedType(typ.name, span=self.span_of(block.name))
         elif "type" in fs:
             types = [self._type(fs["type"], item) for item in self._items(fs["type"])]
@@ -795,7 +795,7 @@ class Genom2Frontend:
             else:
                 members = [Member(f"data{i}", t, span=t.span) for i, t in enumerate(types)]
                 struct = StructType(f"{self.component.name}_{name}_poster", members, span=self.span_of(block.name))
-                self.c.register(struct.name, struct, struct.span)
+                self._register_poster_type(struct)
                 typ = NamedType(struct.name, span=struct.span)
         else:
             raise _FieldError(self.span_of(block.name), f"poster '{name}' needs 'data: name::sdi_field, ...;' "
@@ -815,6 +815,11 @@ class Genom2Frontend:
         if "address" in fs:
             info["address"] = " ".join(str(t) for t in fs["address"].value.scan_values(lambda v: isinstance(v, Token)))
         props[name] = info
+
+    def _register_poster_type(self, struct: StructType) -> None:
+        """The first poster of a name gets the type; a second one is a duplicate port, which the checks report."""
+        if struct.name not in self.description.types:
+            self.description.types[struct.name] = struct
 
     @staticmethod
     def _known(what: str, names: list[str], wrong: str) -> str:

@@ -1,0 +1,168 @@
+"""The genom2bip command: the check verb's output, exit codes, errors on stderr, never a traceback."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from genom2bip import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+RFLEX = ROOT / "tests" / "fixtures" / "genom2" / "rflex.gen"
+DALA = ROOT / "descriptions" / "dala"
+BAD = """typedef struct S { int a; } S;
+module m { internal_data: S; };
+request A { type: exec; exec_task: Nowhere; codel_start: f; };
+request B { type: control; interrupt_activity: Ghost; };
+"""
+
+
+def run(capsys, *argv):
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_check_prints_a_summary_of_a_genom2_module(capsys):
+    code, out, err = run(capsys, "check", RFLEX)
+    assert code == 0
+    assert out.startswith("module rflex (genom2)")
+    for line in (
+        "  clock tick 10 ms (100 Hz)",
+        "  MotorsTask: period 50 ms (5 ticks)  priority 100  stack 20000",
+        "  SonarTask: period 200 ms (20 ticks)  delay 10 ms (1 tick)  priority 110  stack 10000",
+        "  function SetSpeed(in speed::ref: RFLEX_SPEED)",
+        "  activity TrackSpeed()  in task MotorsTask",
+        "      states: start, exec, end, stop, fail",
+        "      exec: rflexTrackMain -> pause::exec, pause::end, ether  wcet 2 ms",
+        "      start/exec: rflexStopMain -> pause::exec, ether",
+        "      interrupts TrackSpeed, Stop",
+        "      throws MOTOR_ERROR, SPEED_TOO_HIGH",
+        "  out Robot: rflex_Robot_poster  written by MotorsTask",
+        "  in  pom_Pos: pom::Pos",
+    ):
+        assert line + "\n" in out, line
+    # services are listed by kind: functions before activities
+    assert out.index("function SetSpeed") < out.index("activity Init")
+    # the poster read from a module that is not checked with this one is a warning, not an error
+    assert "warning: type of poster 'pom::Pos' unchecked" in err
+    assert "error" not in err
+
+
+def test_check_the_dala_directory(capsys):
+    code, out, err = run(capsys, "check", DALA)
+    assert code == 0, err
+    for name in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM"):
+        assert f"component {name} (genom3)" in out
+    assert "after SetParams, SetSpeed, SetDataSource" in out
+    assert "motion: period 100 ms" in out
+
+
+def test_check_json_is_the_ir(capsys):
+    code, out, _ = run(capsys, "check", "--json", RFLEX)
+    assert code == 0
+    data = json.loads(out)
+    assert data["node"] == "Description"
+    [comp] = data["components"]
+    assert (comp["name"], comp["dialect"]) == ("rflex", "genom2")
+    assert [s["name"] for s in comp["services"]] == ["Init", "SetSpeed", "GetOdo", "TrackSpeed", "Stop"]
+    assert comp["services"][3]["ref_spans"]["task"].endswith("rflex.gen:54:19")
+    assert comp["tasks"][0]["period"] == {"node": "Duration", "seconds": 0.05, "text": "5 ticks"}
+
+
+def test_errors_go_to_stderr_with_location_and_caret(capsys, tmp_path):
+    bad = tmp_path / "bad.gen"
+    bad.write_text(BAD)
+    code, out, err = run(capsys, "check", bad)
+    assert code == 1
+    assert out == ""
+    lines = err.splitlines()
+    assert lines[0] == f"{bad}:3:36: error: unknown task 'Nowhere' for activity 'A'"
+    assert lines[1] == "    request A { type: exec; exec_task: Nowhere; codel_start: f; };"
+    assert lines[2] == "                                       ^^^^^^^"
+    assert f"{bad}:4:48: error: unknown service 'Ghost' in 'interrupts' of function 'B'" in err
+    assert lines[-1] == "2 errors"
+
+
+def test_syntax_errors_fail_before_the_checks(capsys, tmp_path):
+    bad = tmp_path / "syntax.gen"
+    bad.write_text(BAD.replace("request B { type: control;", "request B { type: control"))
+    code, out, err = run(capsys, "check", "--json", bad)
+    assert code == 1 and out == ""
+    assert "syntax.gen:4:27: error: syntax error" in err
+    assert "unknown task" not in err  # the checks run on descriptions that parse
+
+
+def test_missing_file(capsys):
+    code, out, err = run(capsys, "check", "/no/such/file.gen")
+    assert code == 1
+    assert err == "genom2bip: error: /no/such/file.gen: no such file or directory\n"
+
+
+def test_empty_directory(capsys, tmp_path):
+    code, _, err = run(capsys, "check", tmp_path)
+    assert code == 1
+    assert "no .gen file in this directory" in err
+
+
+def test_include_dirs_and_defines(capsys, tmp_path):
+    inc = tmp_path / "inc"
+    inc.mkdir()
+    (inc / "types.h").write_text("typedef struct S { int a; } S;\n")
+    (tmp_path / "m.gen").write_text('#include "types.h"\nmodule m { internal_data: S; };\n'
+                                    "exec_task T {\n#ifdef FAST\n  period: 1;\n#else\n  period: PERIOD;\n#endif\n};\n")
+    code, out, err = run(capsys, "check", tmp_path / "m.gen", "-I", inc, "-D", "FAST")
+    assert code == 0, err
+    assert "T: period 10 ms (1 tick)" in out
+    code, out, err = run(capsys, "check", tmp_path / "m.gen", "-I", inc, "-DPERIOD=7")
+    assert code == 0, err
+    assert "T: period 70 ms (7 ticks)" in out
+    code, _, err = run(capsys, "check", tmp_path / "m.gen")
+    assert code == 1 and "types.h" in err
+
+
+def test_bad_define(capsys):
+    code, _, err = run(capsys, "check", RFLEX, "-D", "1X=2")
+    assert code == 2
+    assert "'1X' is not a macro name" in err
+
+
+def test_version(capsys):
+    code, out, _ = run(capsys, "--version")
+    assert code == 0
+    assert out.startswith("genom2bip ")
+
+
+@pytest.mark.parametrize("argv", [[], ["frobnicate"], ["check"], ["check", "--nope", "x.gen"]])
+def test_usage_errors_exit_2(capsys, argv):
+    code, _, err = run(capsys, *argv)
+    assert code == 2
+    assert "usage: genom2bip" in err
+
+
+def test_unexpected_exception_is_one_line(capsys, monkeypatch):
+    import genom2bip.checks
+
+    def boom(description, reporter):
+        raise RuntimeError("kaboom")
+
+    monkeypatch.setattr(genom2bip.checks, "check_description", boom)
+    code, out, err = run(capsys, "check", RFLEX)
+    assert code == 3
+    assert err.strip().splitlines() == ["genom2bip: internal error: RuntimeError: kaboom"]
+
+
+def test_verbs_are_one_function_each():
+    assert "check" in cli.VERBS
+    assert cli.VERBS["check"].run is cli.verb_check
+
+
+def test_the_installed_command_never_prints_a_traceback(tmp_path):
+    bad = tmp_path / "bad.gen"
+    bad.write_text(BAD + "request {{{ ;;; \x00 @@ \n")
+    proc = subprocess.run([sys.executable, "-m", "genom2bip", "check", str(bad)],
+                          capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert proc.returncode == 1
+    assert "Traceback" not in proc.stderr
+    assert "bad.gen:5:" in proc.stderr
