@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lark import Token, Transformer
+from lark import Token, Transformer, v_args
 
 from runtime.bip2.literals import decode_string
 from runtime.bip2.locator import Locator
@@ -351,11 +351,26 @@ class Builder(Transformer):
         name, *args = children
         return name, self._present(args)
 
-    def connector_decl(self, children):
+    def comment_above(self, line: int) -> str | None:
+        """The ``//`` lines right above source line ``line`` (1-based), as one text: the writer prints
+        ``comment`` fields that way, and reading them back keeps regenerated text identical."""
+        lines = self.text.splitlines()
+        found: list[str] = []
+        i = line - 2
+        while i >= 0 and lines[i].strip().startswith("//"):
+            body = lines[i].strip()[2:]
+            found.insert(0, body[1:] if body.startswith(" ") else body)
+            i -= 1
+        return "\n".join(found) if found else None
+
+    @v_args(meta=True)
+    def connector_decl(self, meta, children):
         annotations, type_, *instances = children
+        comment = self.comment_above(meta.line)
         out = []
         for tok, refs in instances:
-            c = ConnectorInstance(type_.text, tok.value, refs, annotations=list(annotations), span=self.span(tok))
+            c = ConnectorInstance(type_.text, tok.value, refs, annotations=list(annotations), comment=comment,
+                                  span=self.span(tok))
             self.locator.note(c, type_.span, "type")
             out.append(c)
         return out
@@ -370,9 +385,10 @@ class Builder(Transformer):
         self.locator.note(ref, self.span(comp, port))
         return ref
 
-    def compound_priority(self, children):
+    @v_args(meta=True)
+    def compound_priority(self, meta, children):
         name, low, _lt, high, guard = children
-        return Priority(name.value, low, high, guard, span=self.span(name))
+        return Priority(name.value, low, high, guard, comment=self.comment_above(meta.line), span=self.span(name))
 
     def pattern_all(self, children):
         name, star = children

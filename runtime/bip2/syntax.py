@@ -128,7 +128,9 @@ def syntax_diagnostic(err: UnexpectedInput, text: str, filename: str) -> Diagnos
                           hint="rename it: the Verimag compilers reserve it")
     message = f"expected {_join(_terminal_words(expected))}, found {_describe_token(tok)}"
     hint = None
-    if tok.type in _COMPARISONS:
+    if text.startswith(("<<", ">>"), tok.start_pos):
+        hint = "BIP2 has no shift operators; use an extern function"
+    elif tok.type in _COMPARISONS:
         hint = "comparisons do not chain in BIP2: add parentheses, e.g. (a < b) == c"
     elif tok.value in _ORDER_WORDS and tok.type != "ID":
         hint = _ORDER_HINT

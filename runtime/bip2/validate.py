@@ -400,6 +400,10 @@ class _Checker:
             self.error(span, f"unknown connector '{pattern.connector}' in priority {pr.name} of {where}",
                        hint=suggestion(pattern.connector, [c.name for c in k.connectors]))
             return
+        user = next((c.name for c in k.connectors for r in c.ports if r.component == conn.name), None)
+        if user is not None:
+            self.error(span, f"priority {pr.name} of {where}: connector '{conn.name}' is not top-level (connector "
+                             f"'{user}' uses its port); priorities apply to top-level connectors only")
         for ref in pattern.ports or []:
             if ref not in conn.ports:
                 self.error(self.loc.at(ref, default=span), f"{ref} is not a port of connector '{conn.name}' "
