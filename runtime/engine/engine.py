@@ -172,12 +172,42 @@ class Engine:
     def _guard(self, fn, *args):
         try:
             return fn(*args)
+        except ModelError as err:
+            if err.atom is None and err.__traceback__ is not None:
+                raise ModelError(f"{err.message}{self._where(err)}", port=err.port, places=err.places,
+                                 transitions=err.transitions) from None
+            raise
         except EngineError:
             raise
         except RecursionError:
             raise ModelError("recursion too deep while evaluating the model") from None
         except Exception as err:  # a guard or action failed (ill-typed expression, ...)
-            raise ModelError(f"evaluation failed: {type(err).__name__}: {err}") from err
+            raise ModelError(f"evaluation failed: {type(err).__name__}: {err}{self._where(err)}") from err
+
+    def _where(self, err: BaseException) -> str:
+        """Where in the generated step an error happened: the function's docstring and the source line."""
+        tb = err.__traceback__
+        frame = None
+        while tb is not None:
+            if tb.tb_frame.f_code.co_filename == self.code.co_filename:
+                frame = tb
+            tb = tb.tb_next
+        if frame is None:
+            return ""
+        lines = self.source.splitlines()
+        n = frame.tb_lineno - 1
+        line = lines[n].strip() if 0 <= n < len(lines) else ""
+        where = None
+        for k in range(n, max(frame.tb_frame.f_code.co_firstlineno - 1, 0), -1):
+            text = lines[k].strip()
+            if text.startswith(("# atom ", "# connector ")):
+                where = text[2:]
+                break
+        if where is None:
+            fn = self.namespace.get(frame.tb_frame.f_code.co_name)
+            doc = (fn.__doc__ or "").strip() if fn is not None else ""
+            where = doc.splitlines()[0].rstrip(".") if doc else frame.tb_frame.f_code.co_name
+        return f" (in {where}: {line})"
 
     def find(self, state: State, label: str) -> Interaction:
         """The enabled interaction with this label (for tests and scripted runs)."""

@@ -57,8 +57,8 @@ class AtomPriorities:
             closure[p] = seen
             if p in seen:
                 rules = sorted({self.texts[r] for lo, hi, r in self.rules if lo in seen | {p} and hi in seen | {p}})
-                raise ModelError("priority cycle between ports", atom=self.atom,
-                                 port=", ".join(self.ports[q] for q in sorted(seen)), transitions=tuple(rules))
+                ports = ", ".join(self.ports[q] for q in sorted(seen))
+                raise ModelError(f"priority cycle between ports {ports} ({'; '.join(rules)})", atom=self.atom)
         out = raw
         for p, higher in closure.items():
             if any(raw >> q & 1 for q in higher):

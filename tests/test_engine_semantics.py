@@ -1,0 +1,230 @@
+"""The engine's step on hand-checked models: one test per construct and semantic rule."""
+from enginekit import atom, engine, labels, walk
+
+from runtime.engine import first
+
+
+# -- rendezvous -----------------------------------------------------------------------------------
+
+def test_rendezvous_enabled_and_first_policy_trace():
+    e = engine("Dining", "Table3()")
+    s = e.initial_state()
+    assert labels(e, s) == ["eat0", "eat1", "eat2"]
+    s1 = walk(e, "eat1")
+    # f1 and f2 are busy: only philosopher 1 can put them back
+    assert labels(e, s1) == ["done1"]
+    from runtime.engine import MemoryTracer
+    tr = MemoryTracer()
+    summary = e.run(first, limit=6, tracer=tr)
+    assert tr.labels == ["eat0", "done0"] * 3
+    assert summary.outcome == "limit" and summary.steps == 6
+    assert atom(e, summary.state, "p0") == {"places": ["think"], "data": {"meals": 3}}
+
+
+def test_interaction_identity_is_stable():
+    e1, e2 = engine("Dining", "Table3()"), engine("Dining", "Table3()")
+    a = e1.enabled(e1.initial_state())
+    b = e2.enabled(e2.initial_state())
+    assert [i.index for i in a] == [i.index for i in b]
+    assert a[0] == b[0] and hash(a[0]) == hash(b[0])
+    assert a[0].connector == "eat0"
+    assert a[0].ports == ("f0.take", "p0.eat", "f1.take")
+
+
+# -- broadcast ------------------------------------------------------------------------------------
+
+def test_broadcast_maximal_progress_and_down_values():
+    e = engine("Broadcast")
+    s = e.initial_state()
+    assert labels(e, s) == ["bc"]          # {s,r1,r2,r3} hides its 7 subsets with the trigger
+    s, values = e.fire_traced(s, e.find(s, "bc"))
+    assert values == {"snd.snd": {"v": 0}, "r1.rcv": {"v": 0}, "r2.rcv": {"v": 0}, "r3.rcv": {"v": 0}}
+    assert [atom(e, s, r)["data"]["x"] for r in ("r1", "r2", "r3")] == [0, 0, 0]
+    assert atom(e, s, "snd")["data"] == {"v": 1}
+    # all receivers busy: the trigger alone, and the receivers' lone ports
+    assert labels(e, s) == ["bc[snd.snd]", "r1.work", "r2.work", "r3.work"]
+    s = walk(e, "r2.work", state=s)
+    assert labels(e, s) == ["bc[snd.snd,r2.rcv]", "r1.work", "r3.work"]
+    s = walk(e, "bc[snd.snd,r2.rcv]", state=s)
+    assert atom(e, s, "r2") == {"places": ["busy"], "data": {"x": 1}}
+    assert atom(e, s, "snd")["data"] == {"v": 2}
+
+
+def test_broadcast_guard_false_on_largest_gives_the_next_maximal_ones():
+    e = engine("Broadcast")
+    s = walk(e, "bc", "bc[snd.snd]", "r1.work", "r2.work", "r3.work")
+    assert atom(e, s, "snd")["data"] == {"v": 2}
+    # s.v == 2 disables the full interaction: the three 3-port ones are maximal
+    assert labels(e, s) == ["bc[snd.snd,r1.rcv,r2.rcv]", "bc[snd.snd,r1.rcv,r3.rcv]", "bc[snd.snd,r2.rcv,r3.rcv]"]
+    s = walk(e, "bc[snd.snd,r1.rcv,r3.rcv]", state=s)
+    assert [atom(e, s, r) for r in ("r1", "r2", "r3")] == [
+        {"places": ["busy"], "data": {"x": 2}},
+        {"places": ["ready"], "data": {"x": 0}},
+        {"places": ["busy"], "data": {"x": 2}},
+    ]
+
+
+# -- hierarchical connectors ----------------------------------------------------------------------
+
+def test_nested_connector_max_up_and_down():
+    for root, expected in (("System(3, 7, 5)", 7), ("System(3, 7, 9)", 9), ("System(8, 7, 5)", 8)):
+        e = engine("NestedMax", root)
+        s = e.initial_state()
+        assert labels(e, s) == ["top"]     # inner exports a port: it never fires on its own
+        s, values = e.fire_traced(s, e.find(s, "top"))
+        assert values == {"a.p": {"x": expected}, "b.p": {"x": expected}, "c.p": {"x": expected}}
+        assert {n: st["data"]["x"] for n, st in e.describe_state(s).items()} == {"a": expected, "b": expected, "c": expected}
+        assert labels(e, s) == []
+
+
+def test_nested_connector_through_a_compound_export():
+    e = engine("NestedMax", "Boxed(3, 7, 9)")
+    s = e.initial_state()
+    (top,) = e.enabled(s)
+    assert top.label == "top" and top.ports == ("pair.a.p", "pair.b.p", "c.p")
+    s = e.fire(s, top)
+    assert [st["data"]["x"] for st in e.describe_state(s).values()] == [9, 9, 9]
+
+
+def test_maximal_progress_through_sub_connectors_with_guard_on_up_value():
+    e = engine("NestedAny")
+    s = e.initial_state()
+    assert labels(e, s) == ["top[x.p,y.p]", "top[x.p,z.p]", "top[y.p,z.p]"]
+    inter = e.find(s, "top[x.p,z.p]")
+    assert inter.ports == ("x.p", "z.p")
+    assert e.run(first, limit=3).steps == 3
+
+
+def test_exported_but_unused_connector_and_ports_never_fire():
+    e = engine("NestedAny", "Dangling()")
+    summary = e.run(first)
+    assert summary.outcome == "deadlock" and summary.steps == 0
+
+
+# -- atom priorities -------------------------------------------------------------------------------
+
+def test_atom_priorities_guarded_and_transitive():
+    e = engine("AtomPriorities")
+    s = e.initial_state()
+    # x = 0: lo < hi is off, hi < mid has mid disabled; st: a, b < c
+    assert labels(e, s) == ["p.lo", "p.hi", "p.inc", "st.c"]
+    s = walk(e, "p.inc", state=s)                    # x = 1: lo < hi holds
+    assert labels(e, s) == ["p.hi", "p.inc", "st.c"]
+    s = walk(e, "p.inc", "p.inc", state=s)           # x = 3: hi disabled, yet lo < hi < mid blocks lo
+    assert labels(e, s) == ["p.mid", "p.inc", "st.c"]
+    s = walk(e, "p.inc", state=s)                    # x = 4: hi enabled but below mid
+    assert labels(e, s) == ["p.mid", "p.inc", "st.c"]
+
+
+# -- compound priorities ---------------------------------------------------------------------------
+
+def test_compound_priority_low_side_containment_and_guard_each_step():
+    e = engine("Priorities", "Low()")
+    s = e.initial_state()
+    assert labels(e, s) == ["tk"]                    # t = 0 even: bc (contains S.snd, R1.rcv) waits
+    s = walk(e, "tk", state=s)
+    assert labels(e, s) == ["bc", "tk"]              # t = 1: rule off
+    s = walk(e, "bc", state=s)
+    assert labels(e, s) == ["bc[S.snd]", "tk", "R1.work", "R2.work"]
+    s = walk(e, "R2.work", "tk", state=s)            # t = 2: rule on, but bc[S.snd,R2.rcv] lacks R1.rcv
+    assert labels(e, s) == ["bc[S.snd,R2.rcv]", "tk", "R1.work"]
+    s = walk(e, "R1.work", state=s)                  # full bc contains S.snd, R1.rcv: blocked
+    assert labels(e, s) == ["tk"]
+
+
+def test_compound_priority_high_side_containment():
+    e = engine("Priorities", "High()")
+    s = e.initial_state()
+    assert labels(e, s) == ["bc"]
+    s = walk(e, "bc", state=s)
+    assert labels(e, s) == ["bc[S.snd]", "tk", "R1.work", "R2.work"]
+    s = walk(e, "R1.work", state=s)                  # bc[S.snd,R1.rcv] does not contain R2.rcv
+    assert labels(e, s) == ["bc[S.snd,R1.rcv]", "tk", "R2.work"]
+    s = walk(e, "R2.work", state=s)
+    assert labels(e, s) == ["bc"]
+
+
+def test_compound_priority_star_and_nested_compound():
+    e = engine("Priorities", "Star()")
+    s = e.initial_state()
+    assert labels(e, s) == ["tk"]
+    e = engine("Priorities", "Nested()")
+    s = e.initial_state()
+    assert labels(e, s) == ["low.tk"]
+    assert labels(e, walk(e, "low.tk")) == ["low.bc", "low.tk"]
+
+
+# -- internal transitions --------------------------------------------------------------------------
+
+def test_eager_chained_internal_transitions():
+    e = engine("Chain")
+    s = e.initial_state()
+    assert atom(e, s, "ch") == {"places": ["a"], "data": {"x": 1}}    # b -> c -> a at initialisation
+    s = walk(e, "ch.go", state=s)
+    assert atom(e, s, "ch") == {"places": ["a"], "data": {"x": 2}}
+    s = walk(e, "ch.go", state=s)                                     # b -> c -> d
+    assert atom(e, s, "ch") == {"places": ["d"], "data": {"x": 3}}
+    summary = e.run(first)
+    assert (summary.outcome, summary.steps) == ("deadlock", 2)
+
+
+# -- compound exports, labels ---------------------------------------------------------------------
+
+def test_merged_export_alternatives_and_label_annotation():
+    e = engine("Hierarchy")
+    s = e.initial_state()
+    en = e.enabled(s)
+    assert [i.label for i in en] == ["Mod.Pass:take[src.a.out,sink.take]", "Mod.Pass:take[src.b.out,sink.take]"]
+    assert en[1].ports == ("m.src.b.out", "m.sink.take") and en[1].connector == "m.pass"
+    s, values = e.fire_traced(s, en[1])
+    assert values == {"m.src.b.out": {"v": 2}, "m.sink.take": {"v": 2}}
+    assert atom(e, s, "m.sink") == {"places": ["full"], "data": {"got": 2}}
+    assert labels(e, s) == ["m.sink.reset"]
+    from runtime.engine import MemoryTracer
+    tr = MemoryTracer()
+    summary = e.run(first, tracer=tr)
+    assert tr.labels == ["Mod.Pass:take[src.a.out,sink.take]", "m.sink.reset",
+                         "Mod.Pass:take[src.b.out,sink.take]", "m.sink.reset"]
+    assert summary.outcome == "deadlock"
+
+
+# -- data: C semantics and externs ----------------------------------------------------------------
+
+def _ext():
+    calls = []
+    return calls, {"twice": lambda x: 2 * x, "log": calls.append}
+
+
+def test_c_arithmetic():
+    calls, ext = _ext()
+    e = engine("Arith", "System()", ext)
+    data = atom(e, e.initial_state(), "c")["data"]
+    assert data == {"q": 3, "r": 1, "q2": -3, "r2": -1, "t": 3, "f": 14, "land": False, "lnot": False, "h": 3.5}
+    e = engine("Arith", "Neg()", ext)
+    data = atom(e, e.initial_state(), "c")["data"]
+    assert (data["q"], data["r"], data["q2"], data["r2"]) == (-3, 1, 3, -1)
+
+
+def test_externs_in_guards_and_actions():
+    calls, ext = _ext()
+    e = engine("Arith", "System()", ext)
+    s = walk(e, "c.step")
+    assert calls == [14]
+    assert atom(e, s, "c") == {"places": ["t2"], "data": {"q": 3, "r": 1, "q2": -3, "r2": -1, "t": 3, "f": 16,
+                                                           "land": False, "lnot": False, "h": 3.5}}
+
+
+def test_externs_from_a_module_file():
+    from enginekit import FIXTURES
+    e = engine("Arith", "System()", str(FIXTURES / "arith_externs.py"))
+    assert atom(e, e.initial_state(), "c")["data"]["f"] == 14
+
+
+def test_state_is_a_flat_hashable_tuple():
+    e = engine("Broadcast")
+    s = e.initial_state()
+    assert isinstance(s, tuple) and hash(s) is not None
+    # snd: marking, v; then each receiver: marking, x
+    assert s == (1, 0, 1, -1, 1, -1, 1, -1)
+    assert e.fire(s, e.enabled(s)[0]) == (1, 1, 2, 0, 2, 0, 2, 0)
+    assert s == (1, 0, 1, -1, 1, -1, 1, -1)       # fire is pure
