@@ -193,9 +193,7 @@ class Builder(Transformer):
             elif isinstance(item, list):
                 atom.ports.extend(item)
             elif isinstance(item, _Places):
-                atom.places = [t.value for t in item.tokens]
-                for t in item.tokens:
-                    self.locator.note(atom, self.span(t), ("place", t.value))
+                atom.places = self._note_names(atom, "places", item.tokens)
             elif isinstance(item, InitialTransition):
                 atom.initial = item
             elif isinstance(item, Transition):

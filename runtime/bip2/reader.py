@@ -53,4 +53,16 @@ def _read(text: str, filename: str, reporter: Reporter) -> Package | None:
     package = Builder(filename, text, reporter, locator).transform(tree)
     resolve_export_types(package)
     validate(package, locator, reporter)
+    _drop_repeats(reporter)
     return package
+
+
+def _drop_repeats(reporter: Reporter) -> None:
+    """One report per place and message: ``component B a(), b()`` names the unknown B once."""
+    seen, kept = set(), []
+    for d in reporter.diagnostics:
+        key = (d.span, d.message)
+        if key not in seen:
+            seen.add(key)
+            kept.append(d)
+    reporter.diagnostics[:] = kept

@@ -123,12 +123,13 @@ def syntax_diagnostic(err: UnexpectedInput, text: str, filename: str) -> Diagnos
         span = Span(filename, line, column)
     else:
         span = Span(filename, tok.line, tok.column, tok.end_line, tok.end_column)
-    if "ID" in expected and tok.value in KEYWORDS and tok.type != "ID":
-        return Diagnostic(span, f"'{tok.value}' is a reserved word of BIP2 and cannot be used as a name",
-                          hint="rename it: the Verimag compilers reserve it")
     message = f"expected {_join(_terminal_words(expected))}, found {_describe_token(tok)}"
     hint = None
-    if text.startswith(("<<", ">>"), tok.start_pos):
+    if tok.value == "provided" and "ID" in expected:
+        hint = "a priority's provided (...) comes after the rule: priority name low < high provided (guard)"
+    elif "ID" in expected and tok.value in KEYWORDS and tok.type != "ID":
+        hint = f"'{tok.value}' is a reserved word of BIP2 and cannot be used as a name; rename it"
+    elif text.startswith(("<<", ">>"), max(tok.start_pos - 1, 0)):
         hint = "BIP2 has no shift operators; use an extern function"
     elif tok.type in _COMPARISONS:
         hint = "comparisons do not chain in BIP2: add parentheses, e.g. (a < b) == c"

@@ -71,6 +71,12 @@ class _Checker:
             self.error(span, f"unknown data type '{name}'",
                        hint=suggestion(name, known) or f"declare it: extern data type {name}")
 
+    def _known_data_type(self, name: str) -> bool:
+        return name in BUILTIN_TYPES or name in self.pkg.extern_types
+
+    def _known_port_type(self, name: str | None) -> bool:
+        return bool(name) and (self.pkg.port_type(name) is not None or self.external(name))
+
     def typed(self, obj, want: str, name: str, key: str = "type") -> object | None:
         """The declaration of type ``name`` that must be a ``want`` (e.g. "port type"), or None after an error."""
         if self.external(name):
@@ -145,13 +151,19 @@ class _Checker:
                 self.data_type(t, self.loc.at(f, ("param_types", i)))
 
     def _recursion(self) -> None:
+        reported: set[frozenset[str]] = set()
+
         def walk(comp: CompoundType, path: tuple[str, ...]) -> None:
             for inst in comp.components:
                 inner = self.pkg.compound_type(inst.type)
                 if inner is None:
                     continue
                 if inner.name in path:
-                    cycle = " -> ".join(path[path.index(inner.name):] + (inner.name,))
+                    members = path[path.index(inner.name):]
+                    if frozenset(members) in reported:
+                        continue
+                    reported.add(frozenset(members))
+                    cycle = " -> ".join(members + (inner.name,))
                     self.error(self.loc.at(inst, "type"), f"compound type {inner.name} contains itself ({cycle})")
                     continue
                 walk(inner, path + (inner.name,))
@@ -188,7 +200,11 @@ class _Checker:
             self._atom_port(a, p, where, variables)
         if not a.places:
             self.error(a.span, f"{where} declares no place")
-        self.unique(a.places, "place", where, name=lambda x: x)
+        for i, place in enumerate(a.places):
+            if place in a.places[:i]:
+                first = self.loc.at(a, ("places", a.places.index(place)))
+                self.error(self.loc.at(a, ("places", i)), f"duplicate place '{place}' in {where}",
+                           f"first declared at {first}" if first is not NOWHERE else None)
         scope = Scope(where, variables, assignable)
         if a.initial is None:
             self.error(a.span, f"{where} has no initial transition")
@@ -231,7 +247,7 @@ class _Checker:
                                        f"{len(ptype.params)} value(s), {len(p.data)} bound")
             return
         for i, (name, param) in enumerate(zip(p.data, ptype.params)):
-            if name in decls and decls[name] != param.type:
+            if name in decls and decls[name] != param.type and self._known_data_type(decls[name]):
                 self.error(self.loc.at(p, ("data", i)), f"port '{p.name}' of {where}: '{name}' is {decls[name]} but "
                                                         f"port type {ptype.name} carries {param.type} {param.name}")
 
@@ -347,10 +363,11 @@ class _Checker:
         self._exports(k, where)
 
     def _port_type(self, k: CompoundType, ref, default: Span) -> str | None:
+        """The port type behind ``ref``; None after an error, or when that type is itself in error."""
         offer = port_offer(self.pkg, k, ref)
         if offer.problem:
             self.error(self.loc.at(ref, default=default), offer.problem)
-        return offer.type
+        return offer.type if self._known_port_type(offer.type) else None
 
     def _connector_instance(self, k: CompoundType, conn, where: str) -> None:
         if conn.args:
