@@ -128,61 +128,72 @@ class Engine:
         """The Interaction ``(source, mask)``, created once and cached."""
         cache = self._caches[src_index]
         got = cache.get(mask)
-        if got is not None:
-            return got
-        src: Source = self.sources[src_index]
-        index = mask * len(self.sources) + src_index
+        if got is None:
+            src = self.sources[src_index]
+            path = src.connector.path if src.connector is not None else None
+            got = cache[mask] = Interaction(mask * len(self.sources) + src_index, src_index, mask, path, self._describe)
+        return got
+
+    def _describe(self, inter: Interaction) -> tuple:
+        """Ports, label and parts of an interaction, worked out when first asked for."""
+        src: Source = self.sources[inter.source]
+        mask = inter.mask
         if src.kind == "port":
-            inter = Interaction(index, src_index, mask, None, (src.port.path,), interaction_label(None, [src.port.path], True))
-        else:
-            fc = src.connector
-            ports = [self.flat.ports[p] for i, p in enumerate(src.leaves) if mask >> i & 1]
-            cut = len(fc.scope) + 1 if fc.scope else 0
-            rel = [p.path[cut:] for p in ports]
-            complete = mask == src.full and not src.alternatives
-            label = interaction_label(fc.label, rel, complete)
-            inter = Interaction(index, src_index, mask, fc.path, tuple(p.path for p in ports), label,
-                                tuple(parts(src.tree, mask)))
-        cache[mask] = inter
-        return inter
+            return (src.port.path,), interaction_label(None, [src.port.path], True), ()
+        fc = src.connector
+        ports = [self.flat.ports[p] for i, p in enumerate(src.leaves) if mask >> i & 1]
+        cut = len(fc.scope) + 1 if fc.scope else 0
+        label = interaction_label(fc.label, [p.path[cut:] for p in ports], mask == src.full and not src.alternatives)
+        return tuple(p.path for p in ports), label, tuple(parts(src.tree, mask))
 
     # -- the semantics ---------------------------------------------------------------------------
     def initial_state(self) -> State:
         """Initial transitions of every atom, then their eager internal transitions."""
-        return self._guard(self._initial)
+        try:
+            return self._initial()
+        except Exception as err:
+            raise self._model_error(err) from err
 
     def enabled(self, state: State) -> list[Interaction]:
         """Interactions that may fire at ``state``, after maximal progress and priorities, in a fixed order."""
-        return self._guard(self._enabled, state)
+        try:
+            return self._enabled(state)
+        except Exception as err:
+            raise self._model_error(err) from err
 
     def fire(self, state: State, interaction: Interaction) -> State:
         """The state after firing ``interaction`` (which must be enabled at ``state``)."""
-        return self._guard(self._fire[interaction.source], state, interaction.mask, None)
+        try:
+            return self._fire[interaction.source](state, interaction.mask, None)
+        except Exception as err:
+            raise self._model_error(err) from err
 
     def fire_traced(self, state: State, interaction: Interaction) -> tuple[State, dict[str, dict[str, Any]]]:
         """Like :meth:`fire`, and also the values each atom port received (after ``down``), by ``atom.port``."""
         rec: list[tuple[int, tuple]] = []
-        new = self._guard(self._fire[interaction.source], state, interaction.mask, rec)
+        try:
+            new = self._fire[interaction.source](state, interaction.mask, rec)
+        except Exception as err:
+            raise self._model_error(err) from err
         values = {}
         for pid, vals in rec:
             fp = self.flat.ports[pid]
             values[fp.path] = dict(zip(fp.fields, vals))
         return new, values
 
-    def _guard(self, fn, *args):
-        try:
-            return fn(*args)
-        except ModelError as err:
+    def _model_error(self, err: Exception) -> Exception:
+        """What a failure inside the generated step becomes: a ModelError saying where it happened."""
+        if isinstance(err, ModelError):
             if err.atom is None and err.__traceback__ is not None:
-                raise ModelError(f"{err.message}{self._where(err)}", port=err.port, places=err.places,
-                                 transitions=err.transitions) from None
-            raise
-        except EngineError:
-            raise
-        except RecursionError:
-            raise ModelError("recursion too deep while evaluating the model") from None
-        except Exception as err:  # a guard or action failed (ill-typed expression, ...)
-            raise ModelError(f"evaluation failed: {type(err).__name__}: {err}{self._where(err)}") from err
+                return ModelError(f"{err.message}{self._where(err)}", port=err.port, places=err.places,
+                                  transitions=err.transitions)
+            return err
+        if isinstance(err, EngineError):
+            return err
+        if isinstance(err, RecursionError):
+            return ModelError("recursion too deep while evaluating the model")
+        # a guard or action failed (ill-typed expression, ...)
+        return ModelError(f"evaluation failed: {type(err).__name__}: {err}{self._where(err)}")
 
     def _where(self, err: BaseException) -> str:
         """Where in the generated step an error happened: the function's docstring and the source line."""
@@ -257,10 +268,13 @@ class Engine:
                 if chosen is None:
                     summary = RunSummary(steps, "stopped", state=state, enabled=[i.label for i in enabled])
                     break
-                new, values = self.fire_traced(state, chosen)
-                steps += 1
                 if tracer is not None:
+                    new, values = self.fire_traced(state, chosen)
+                    steps += 1
                     tracer.step(steps, enabled, chosen, values, new)
+                else:
+                    new = self.fire(state, chosen)
+                    steps += 1
                 state = new
         except ModelError as err:
             summary = RunSummary(steps, "error", str(err), state=state)

@@ -4,28 +4,54 @@ Interactions are identified by ``(source, mask)``: ``source`` numbers the
 top-level connectors then the lone (non-exported) atom ports of the flat
 system, ``mask`` has one bit per atom port under that connector (its leaves,
 in parameter order, through sub-connectors).  Both are stable for one model,
-so ``index`` is too; equality and hashing use it alone.
+so ``index`` is too; equality and hashing use it alone.  The engine creates
+each interaction once; its ports, label and parts are worked out on first use
+(a broadcast has many interactions, and exploration mostly needs the index).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Interaction:
-    """One interaction of the flat system, as listed by ``Engine.enabled`` and fired by ``Engine.fire``."""
+    """One interaction of the flat system, as listed by ``Engine.enabled`` and fired by ``Engine.fire``.
+
+    ``connector`` is the dotted path of the top connector (None for a lone
+    atom port); ``ports`` the ``atom.port`` names taking part; ``label`` what
+    traces print; ``parts`` the ``(connector id, parameter mask)`` of every
+    connector node taking part, which compound priorities match.
+    """
 
     index: int
     source: int = field(compare=False)
     mask: int = field(compare=False)
-    connector: str | None = field(compare=False)      # dotted path; None for a lone atom port
-    ports: tuple[str, ...] = field(compare=False)     # "atom.port" of every atom port taking part
-    label: str = field(compare=False)
-    # (connector id, parameter mask) of every connector node taking part: what priority patterns match
-    parts: tuple[tuple[int, int], ...] = field(default=(), compare=False, repr=False)
+    connector: str | None = field(compare=False)
+    describe: Callable[["Interaction"], tuple] = field(compare=False)
+
+    @cached_property
+    def _info(self) -> tuple[tuple[str, ...], str, tuple[tuple[int, int], ...]]:
+        return self.describe(self)
+
+    @property
+    def ports(self) -> tuple[str, ...]:
+        return self._info[0]
+
+    @property
+    def label(self) -> str:
+        return self._info[1]
+
+    @property
+    def parts(self) -> tuple[tuple[int, int], ...]:
+        return self._info[2]
 
     def __str__(self) -> str:
         return self.label
+
+    def __repr__(self) -> str:
+        return f"Interaction({self.index}, {self.label!r})"
 
 
 def interaction_label(base: str | None, ports: list[str], complete: bool) -> str:
