@@ -69,3 +69,9 @@ def test_same_atom_twice_in_a_connector_is_a_message(tmp_path):
     path.write_text(text)
     r = cli(path, "--root", "Table3()")
     assert r.returncode == 1 and "atom f0 is reached through both parameters l and r" in r.stderr
+
+
+def test_show_source():
+    r = subprocess.run([sys.executable, "-m", "runtime", "run", str(FIXTURES / "Chain.bip"), "--show-source"],
+                       capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert r.returncode == 0 and "def _in0(L):" in r.stdout and "Eager internal transitions of atom ch" in r.stdout

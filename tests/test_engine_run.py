@@ -35,7 +35,7 @@ def test_limit_zero_and_deadlock_summary():
     assert e.run(first, limit=0).line() == "0 steps, step limit reached"
     summary = e.run(first)
     assert summary.line() == "2 steps, deadlock (no enabled interaction)"
-    assert e.describe_state(summary.state) == {"ch": {"places": ["d"], "data": {"x": 3}}}
+    assert e.describe_state(summary.state) == {"ch": {"places": ["d"], "data": {"x": 3, "y": 9}}}
 
 
 def test_jsonl_trace(tmp_path):

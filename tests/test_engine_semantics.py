@@ -159,11 +159,12 @@ def test_compound_priority_star_and_nested_compound():
 def test_eager_chained_internal_transitions():
     e = engine("Chain")
     s = e.initial_state()
-    assert atom(e, s, "ch") == {"places": ["a"], "data": {"x": 1}}    # b -> c -> a at initialisation
-    s = walk(e, "ch.go", state=s)
-    assert atom(e, s, "ch") == {"places": ["a"], "data": {"x": 2}}
+    # y = 7 from its declaration; b -> c (x = 1, y = 6) -> a at initialisation
+    assert atom(e, s, "ch") == {"places": ["a"], "data": {"x": 1, "y": 6}}
+    s = walk(e, "ch.go", state=s)                                     # a -> b -> c (x = 2: then branch) -> a
+    assert atom(e, s, "ch") == {"places": ["a"], "data": {"x": 2, "y": 10}}
     s = walk(e, "ch.go", state=s)                                     # b -> c -> d
-    assert atom(e, s, "ch") == {"places": ["d"], "data": {"x": 3}}
+    assert atom(e, s, "ch") == {"places": ["d"], "data": {"x": 3, "y": 9}}
     summary = e.run(first)
     assert (summary.outcome, summary.steps) == ("deadlock", 2)
 
@@ -199,7 +200,7 @@ def test_c_arithmetic():
     calls, ext = _ext()
     e = engine("Arith", "System()", ext)
     data = atom(e, e.initial_state(), "c")["data"]
-    assert data == {"q": 3, "r": 1, "q2": -3, "r2": -1, "t": 3, "f": 14, "land": False, "lnot": False, "h": 3.5}
+    assert data == {"q": 3, "r": 1, "q2": -3, "r2": -1, "t": 3, "f": 14, "land": False, "lnot": False, "h": 3.5, "w": 16}
     e = engine("Arith", "Neg()", ext)
     data = atom(e, e.initial_state(), "c")["data"]
     assert (data["q"], data["r"], data["q2"], data["r2"]) == (-3, 1, 3, -1)
@@ -211,7 +212,7 @@ def test_externs_in_guards_and_actions():
     s = walk(e, "c.step")
     assert calls == [14]
     assert atom(e, s, "c") == {"places": ["t2"], "data": {"q": 3, "r": 1, "q2": -3, "r2": -1, "t": 3, "f": 16,
-                                                           "land": False, "lnot": False, "h": 3.5}}
+                                                           "land": False, "lnot": False, "h": 3.5, "w": 16}}
 
 
 def test_externs_from_a_module_file():

@@ -273,7 +273,7 @@ class CodeGen:
             on = " ".join(spec.ports)
             fns = []
             if spec.guard is not None:
-                sc = self.connector_scope(info, mask, False, "lv")
+                sc = self.connector_scope(info, mask, False, "const")  # guards run before up: locals are initial
                 w(f"def _k{k}_{mask}_g(pv):  # {name}: on {on} provided")
                 w(f"    return {condition(spec.guard, sc)}")
                 fns.append(f"_k{k}_{mask}_g")
