@@ -110,7 +110,7 @@ _TERMINAL_NAMES = {
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
     return Lark(GRAMMAR.read_text(encoding="utf-8"), parser="lalr", start=["start", "expr"],
-                propagate_positions=True, maybe_placeholders=False)
+                propagate_positions=False, maybe_placeholders=False)
 
 
 def _terminal_text(name: str) -> str:
