@@ -215,3 +215,16 @@ def test_missing_file_is_a_diagnostic(tmp_path):
     with pytest.raises(DiagnosticError) as err:
         parse_file(tmp_path / "Nope.bip")
     assert "cannot read BIP2 file" in str(err.value)
+
+
+def test_used_packages_and_qualified_names():
+    text = ("package P use Q use R.S port type T() compound type K() component Q.Atom a(1) "
+            "connector Q.Rdv c(a.p, a.q) export port a.p as p end end")
+    pkg = parse_text(text)
+    assert pkg.uses == ["Q", "R.S"]
+    k = pkg.compound_types[0]
+    assert k.components[0].type == "Q.Atom" and k.connectors[0].type == "Q.Rdv"
+    assert k.ports[0].type == ""  # its type lives in package Q, which the reader does not load
+    with pytest.raises(DiagnosticError) as err:
+        parse_text(text.replace("use Q use R.S ", ""))
+    assert err.value.diagnostics[0].hint == "a qualified name needs: use Q"

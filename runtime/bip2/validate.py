@@ -93,7 +93,9 @@ class _Checker:
             pool = {"port type": self.pkg.port_types, "connector type": self.pkg.connector_types,
                     "component type": self.pkg.atom_types + self.pkg.compound_types}[want]
             word = "atom or compound type" if want == "component type" else want
-            self.error(span, f"unknown {word} '{name}'", hint=suggestion(name, [d.name for d in pool]))
+            hint = (f"a qualified name needs: use {name.rpartition('.')[0]}" if "." in name
+                    else suggestion(name, [d.name for d in pool]))
+            self.error(span, f"unknown {word} '{name}'", hint=hint)
         return None
 
     # ------------------------------------------------------------------ package
