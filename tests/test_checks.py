@@ -118,6 +118,16 @@ def test_unknown_port_in_a_codel_parameter():
         ("m.gen:7:30", "unknown port 'Spede' in codel 'f'", "did you mean 'Speed'?")]
 
 
+def test_unknown_ids_member_in_a_codel_parameter():
+    from genom2bip.ir import BaseType, CodelParam, Member
+    codel = Codel("f", ["start"], [Yield("ether")], [CodelParam("sped.v", "in", "ids", span=Span("m.gen", 8, 25))])
+    comp = Component("m", "genom3", ids=[Member("speed", BaseType("double"))], tasks=[Task("t", Duration(0.1))],
+                     services=[Service("A", "activity", task="t", codels=[codel])])
+    errors, _ = check(Description([comp]))
+    assert [(str(d.span), d.message, d.hint) for d in errors] == [
+        ("m.gen:8:25", "unknown ids member 'sped' in codel 'f'", "did you mean 'speed'?")]
+
+
 def test_poster_of_a_module_checked_alone_is_a_warning():
     text = SDI.replace("exec_task Main { period: 10; };", "exec_task Main { period: 10; poster_client_from: pom::Pos; };")
     errors, reporter = check(parse_text(text, "w.gen"))

@@ -383,3 +383,9 @@ def test_rflex_fixture_with_both_spellings():
     assert sonars_member.type == ArrayType(BaseType("short"), [16])
     # the header's types are known, with spans inside the header
     assert description.types["RFLEX_ODO"].span.file.endswith("rflexStruct.h")
+
+
+def test_pragmas_are_kept_and_requires_applies_to_the_module():
+    description = parse('#pragma requires "pocolibs >= 2.0"\n' + SDI)
+    assert [(p.name, p.arguments) for p in description.pragmas] == [("requires", '"pocolibs >= 2.0"')]
+    assert description.components[0].properties["require"] == ["pocolibs >= 2.0"]

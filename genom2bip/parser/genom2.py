@@ -474,9 +474,21 @@ class Genom2Frontend:
             if block.kind == "request":
                 self._guard(self._request, block)
         self._expand_all()
+        self._pragmas()
         self.description.components.append(self.component)
         if self.source.file and self.source.file not in self.description.files:
             self.description.files.append(self.source.file)
+
+    def _pragmas(self) -> None:
+        """``#pragma`` lines are kept on the description; ``requires`` ones also on the module, as in GenoM3."""
+        assert self.component is not None
+        for pragma in getattr(self.source, "pragmas", None) or []:
+            self.description.pragmas.append(pragma)
+            if pragma.name in ("requires", "require"):
+                value = pragma.arguments.strip().strip('"')
+                reqs = self.component.properties.setdefault("require", [])
+                if value and value not in reqs:
+                    reqs.append(value)
 
     def _guard(self, build: Any, block: _Block) -> None:
         try:
