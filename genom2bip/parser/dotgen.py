@@ -114,7 +114,9 @@ def _parse_recovering(source: Preprocessed, reporter: Reporter) -> tuple[Tree | 
         except UnexpectedInput as e:
             problem = explain(e, text, _words())
             offset = problem.offset
-            cascade = last_range is not None and (offset < 0 or offset <= last_range[1])
+            # an error right after the blanked declaration is usually caused by the blanking
+            cascade = last_range is not None and (
+                offset < 0 or offset <= last_range[1] or not text[last_range[1]:offset].strip())
             if not cascade:
                 span = source.span(problem.line, problem.column, problem.end_line, problem.end_column)
                 hint = problem.hint
@@ -669,7 +671,7 @@ class _Builder:
             elif pname == "codel":
                 codel = self.codel(prop)
                 if codel is not None:
-                    if not codel.triggers:
+                    if prop.children[-1].data == "simple_codel":
                         self.error(prop, f"codel '{codel.name}' of task '{name}' has no state",
                                    hint=f"write codel <start> {codel.name}(...) yield ...;")
                         continue
@@ -744,7 +746,7 @@ class _Builder:
                 codel = self.codel(prop)
                 if codel is None:
                     continue
-                if kind == "activity" and not codel.triggers:
+                if kind == "activity" and prop.children[-1].data == "simple_codel":
                     self.error(prop, f"codel '{codel.name}' of activity '{name}' has no state",
                                hint=f"write codel <start> {codel.name}(...) yield ...;")
                     continue

@@ -174,7 +174,7 @@ def explain(e: UnexpectedInput, text: str, words: dict[str, str]) -> SyntaxProbl
         where = f" after {after}" if after else ""
         problem = SyntaxProblem(line, column, end_line, end_column, offset, f"expected {exp}{where}, found {found}")
         expected_words = {words.get(n, n) for n in expected}
-        if last is not None and last.value == ">>" and ">" in expected_words:
+        if ">" in expected_words and _has_shift(stack[-3:]):
             problem.hint = "'>>' is a shift operator here: write '> >' to close two template argument lists"
         elif ";" in expected_words and last is not None and tok.type != "$END" and tok.line > last.end_line:
             problem.hint = f"is a ';' missing after '{last.value}'?"
@@ -191,6 +191,16 @@ def explain(e: UnexpectedInput, text: str, words: dict[str, str]) -> SyntaxProbl
         if after:
             msg += f" after {after}"
     return SyntaxProblem(e.line, e.column, e.line, e.column + 1, e.pos_in_stream, msg)
+
+
+def _has_shift(items: list) -> bool:
+    """Whether a '>>' was just read (as a token, or already reduced into a shift expression)."""
+    for item in items:
+        if isinstance(item, Token) and item.value == ">>":
+            return True
+        if isinstance(item, Tree) and (item.data == "shr" or _has_shift(item.children[-1:])):
+            return True
+    return False
 
 
 def _found(tok: Token) -> str:

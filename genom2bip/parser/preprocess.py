@@ -14,6 +14,7 @@ and the output text therefore never contains markers.
 from __future__ import annotations
 
 import bisect
+import copy
 import io
 import os
 from dataclasses import dataclass, field
@@ -25,6 +26,10 @@ from pcpp.preprocessor import Action, OutputDirective, Preprocessor
 
 from genom2bip.ir import Pragma
 from runtime.diagnostics import Reporter, SourceCache, Span
+
+_NEEDS_ARGUMENT = {"if": "an expression", "elif": "an expression", "ifdef": "a macro name",
+                   "ifndef": "a macro name", "define": "a macro name", "undef": "a macro name",
+                   "include": "a file name"}
 
 # One output token: (output column, original file, original line, original column, exact).
 # ``exact`` is False for tokens made by macro expansion: positions inside them map to the macro use.
@@ -143,11 +148,20 @@ class _Cpp(Preprocessor):
     # ------------------------------------------------------------------ pcpp hooks
 
     def expand_macros(self, tokens, expanding_from=[]):  # noqa: B006 - pcpp's signature
-        before = {id(t) for t in tokens}
+        """Mark tokens made by an expansion, remembering the column of the macro use they replace."""
+        original = list(tokens)  # pcpp rewrites the list in place
+        index = {id(t): i for i, t in enumerate(original)}
         out = super().expand_macros(tokens, expanding_from)
+        pos = 0
         for t in out:
-            if id(t) not in before:
-                t.expanded = True
+            i = index.get(id(t))
+            if i is not None and i >= pos:
+                pos = i + 1
+                continue
+            t.expanded = True
+            if pos < len(original):
+                use = original[pos]
+                t.origin_col = self.column_of(use) or getattr(use, "origin_col", None)
         return out
 
     def on_file_open(self, is_system_include, includepath):
@@ -190,8 +204,22 @@ class _Cpp(Preprocessor):
         raise OutputDirective(Action.IgnoreAndRemove)
 
     def on_directive_handle(self, directive, toks, ifpassthru, precedingtoks):
-        if directive.value == "pragma" and not toks:
-            raise OutputDirective(Action.IgnoreAndRemove)  # pcpp would trip on an empty #pragma
+        # pcpp indexes the arguments of these directives without checking that there are any
+        name = directive.value
+        if not toks and name in _NEEDS_ARGUMENT:
+            self.reporter.error(self.directive_span(directive), f"#{name} needs {_NEEDS_ARGUMENT[name]}")
+            if name in ("if", "elif", "ifdef", "ifndef"):
+                # keep the conditional structure (so that #endif still matches) with a false condition
+                filler = copy.copy(directive)
+                filler.type, filler.value = (self.t_INTEGER, "0") if name in ("if", "elif") else (
+                    self.t_ID, "__genom2bip_missing_macro__")
+                toks.append(filler)
+                if name == "ifndef":
+                    filler.value = "__PCPP__"  # always defined: the block is skipped
+            else:
+                raise OutputDirective(Action.IgnoreAndRemove)
+        if name == "pragma" and not toks:
+            raise OutputDirective(Action.IgnoreAndRemove)
         return super().on_directive_handle(directive, toks, ifpassthru, precedingtoks)
 
     def on_directive_unknown(self, directive, toks, ifpassthru, precedingtoks):
@@ -264,10 +292,18 @@ def _write(cpp: _Cpp) -> tuple[str, list[list[_Origin]]]:
     lines: list[list[_Origin]] = [[]]
     out_col = 1
     last_exact: dict[tuple[str, int], int] = {}
+    last = None
     while True:
-        tok = cpp.token()
+        try:
+            tok = cpp.token()
+        except Exception as exc:  # noqa: BLE001 - pcpp has unchecked corners; report, never crash
+            file = cpp.name_of(getattr(last, "source", None)) if last is not None else "<unknown>"
+            line = getattr(last, "lineno", 1) if last is not None else 1
+            cpp.reporter.error(Span(file, line, 1), f"the preprocessor cannot read this: {exc}")
+            break
         if tok is None:
             break
+        last = tok
         value = tok.value
         if not value:
             continue
@@ -279,7 +315,7 @@ def _write(cpp: _Cpp) -> tuple[str, list[list[_Origin]]]:
         if exact:
             last_exact[(file, line)] = col
         else:
-            col = last_exact.get((file, line), 1)
+            col = getattr(tok, "origin_col", None) or last_exact.get((file, line), 1)
         if not value.isspace():
             lines[-1].append((out_col, file, line, col, exact))
         chunks.append(value)
