@@ -175,6 +175,8 @@ def compound(**changes) -> CompoundType:
     (package(atom(), connectors=[conn(params=[])]), "connector type C: no port parameter"),
     (package(atom(), connectors=[conn(define=DefineGroup([DefinePort("a")], trigger=True))]),
      "connector type C: the whole define expression cannot be a trigger"),
+    (package(atom(), connectors=[conn(data=[DataDecl("int", "t", exported=True)])]),
+     "connector type C, data t: connector data cannot be exported"),
     (package(atom(), connectors=[conn(interactions=[InteractionSpec(["a"])])]),
      "connector type C, on a: no provided, up or down"),
     (package(atom(), connectors=[conn()], compounds=[compound(components=[], connectors=[])]),

@@ -236,6 +236,9 @@ class _Problems:
             self.name(where, "port parameter", p.name)
             self.type_name(where, "port type", p.port_type)
         self.data(where, c.data)
+        for d in c.data:
+            if d.exported:
+                self.add(f"{where}, data {d.name}", "connector data cannot be exported (export a port instead)")
         if c.export is not None:
             w = f"{where}, export port {c.export.name}"
             self.name(w, "port", c.export.name)
