@@ -181,6 +181,10 @@ class Engine:
             values[fp.path] = dict(zip(fp.fields, vals))
         return new, values
 
+    def successors(self, state: State) -> list[tuple[Interaction, State]]:
+        """Every enabled interaction with the state it leads to: one breadth-first expansion."""
+        return [(i, self.fire(state, i)) for i in self.enabled(state)]
+
     def _model_error(self, err: Exception) -> Exception:
         """What a failure inside the generated step becomes: a ModelError saying where it happened."""
         if isinstance(err, ModelError):
