@@ -135,3 +135,28 @@ def test_errors_never_escape_as_tracebacks():
         with pytest.raises(DiagnosticError) as info:
             parse_text(text, "n.gen")
         assert all(d.span.file == "n.gen" and d.span.line >= 1 for d in info.value.diagnostics), text
+
+
+def test_keywords_are_never_read_as_prefixes_of_longer_words():
+    d = one("component c {\n  task t { periods 5 ms; };\n};\n")
+    assert d.message.endswith("found 'periods'") and (d.span.line, d.span.column) == (2, 12)
+    d = one("component c { codels \"x\"; };")
+    assert d.message.endswith("found 'codels'")
+
+
+def test_mutated_descriptions_give_diagnostics_not_tracebacks():
+    import random
+    import re
+
+    src = (Path(__file__).parent / "fixtures" / "genom3" / "demo.gen").read_text()
+    words = list(re.finditer(r"\w+|::|[^\s\w]", src))
+    pieces = [";", "{", "}", "(", ")", "<", ">", "::", ",", "=", ":", "task", "yield", '"', "0", "#if", "[", "@"]
+    rnd = random.Random(2024)
+    for _ in range(60):
+        m = rnd.choice(words)
+        text = src[:m.start()] + (rnd.choice(pieces) + " " if rnd.random() < 0.6 else "") + src[m.end():]
+        try:
+            parse_text(text, "m.gen")
+        except DiagnosticError as e:
+            assert e.diagnostics and all(d.span.file == "m.gen" and d.span.line >= 1 for d in e.diagnostics)
+            e.render()

@@ -141,3 +141,31 @@ def test_defines_select_conditional_text():
 def test_directory_argument_reads_every_gen_file_sorted():
     d = parse_paths([FIXTURES])
     assert [c.name for c in d.components] == ["counter", "demo"]
+
+
+def test_every_node_of_the_demo_has_a_span(demo):
+    from dataclasses import fields, is_dataclass
+
+    from runtime.diagnostics import NOWHERE
+
+    missing = []
+
+    def walk(node, path):
+        if is_dataclass(node) and not isinstance(node, type):
+            for f in fields(node):
+                value = getattr(node, f.name)
+                if f.name == "span":
+                    if value is NOWHERE or value.line < 1:
+                        missing.append(path)
+                elif f.name != "ref_spans":
+                    walk(value, f"{path}.{f.name}")
+        elif isinstance(node, dict):
+            for k, v in node.items():
+                walk(v, f"{path}[{k!r}]")
+        elif isinstance(node, list):
+            for i, v in enumerate(node):
+                walk(v, f"{path}[{i}]")
+
+    d, _ = demo
+    walk(d, "description")
+    assert missing == []

@@ -138,3 +138,9 @@ def test_missing_main_file(tmp_path):
 def test_span_outside_the_text_stays_in_the_file(line, column):
     pre, _ = run("long a;\n\n")
     assert pre.span(line, column).file == "t.gen"
+
+
+def test_nothing_is_printed_by_pcpp(capsys, tmp_path):
+    run('#error stop\n#warning careful\n#if\n#endif\n#include "nope.h"\n#include <nope.h>\n#endif\n#foo\n', tmp_path)
+    out = capsys.readouterr()
+    assert out.out == "" and out.err == ""

@@ -76,11 +76,25 @@ _ARTICLE = {"component": "a component", "interface": "an interface", "task": "a 
             "attribute": "an attribute", "function": "a function", "activity": "an activity"}
 
 
+class _WholeWords:
+    """A pass-through postlexer whose only job is to put IDENT in the lexer of every parser state.
+
+    Without it, a state that accepts the keyword ``codel`` but no identifier
+    would lex ``codels`` as ``codel`` followed by ``s``.
+    """
+
+    always_accept = ("IDENT",)
+
+    def process(self, stream):
+        return stream
+
+
 @lru_cache(maxsize=1)
 def grammar() -> Lark:
     """The dotgen LALR parser (built once per process)."""
     text = resources.files("genom2bip.parser").joinpath("dotgen.lark").read_text(encoding="utf-8")
-    return Lark(text, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=False)
+    return Lark(text, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=False,
+                postlex=_WholeWords())
 
 
 @lru_cache(maxsize=1)

@@ -23,7 +23,6 @@ _CATEGORY = {
     "CODELS_REQUIRE": "codels-require",
     "CLOCK_RATE": "clock-rate",
     "REAL_TIME": "real-time",
-    "UNIT_M": "m",
     "$END": "end of file",
 }
 _UNQUOTED = {"identifier", "integer", "number", "string", "character", "end of file"}
@@ -180,12 +179,23 @@ def explain(e: UnexpectedInput, text: str, words: dict[str, str]) -> SyntaxProbl
             problem.hint = f"is a ';' missing after '{last.value}'?"
             problem.hint_line = last.end_line
         return problem
-    assert isinstance(e, UnexpectedCharacters)
+    if not isinstance(e, UnexpectedCharacters):  # UnexpectedEOF: not raised by LALR, but be safe
+        line = text.count("\n") + 1
+        column = len(text) - (text.rfind("\n") + 1) + 1
+        exp = describe_expected(set(getattr(e, "expected", ()) or ()), words)
+        return SyntaxProblem(line, column, None, None, -1, f"expected {exp}, found end of file")
     ch = e.char
     msg = f"unexpected character '{ch}'"
     if ch == '"':
         msg = "unterminated string"
-    allowed = getattr(e, "allowed", None)
+    allowed = None
+    if ip is not None:
+        try:
+            allowed = ip.accepts()  # what the parser wants, not what the lexer tried
+        except Exception:  # noqa: BLE001 - a description of the error must never fail
+            allowed = None
+    if not allowed:
+        allowed = set(getattr(e, "allowed", None) or ()) - {"IDENT"}
     if allowed:
         msg += f"; expected {describe_expected(set(allowed), words)}"
         if after:
