@@ -112,6 +112,7 @@ class FunctionalLevel:
         for t in (library.timer_type(), library.scheduler_type(), library.poster_type()):
             self._atom_type(t)
         self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"])
+        self.externs["take_request"] = ExternFunction("take_request", None, ["string"])
         self.asm.group((), ident(self.system), comment=f"functional level {self.system}")
         for component in self.description.components:
             self._module(component)

@@ -21,6 +21,7 @@ from runtime.model import (
     Call,
     Const,
     DataDecl,
+    Do,
     ExternFunction,
     InitialTransition,
     PortDecl,
@@ -83,7 +84,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> 
     A permanent activity (the codels of a task) starts at once and has no
     start/finish/abort ports: nobody requests it and nobody waits for it.
     """
-    data = [DataDecl("int", "outcome"), DataDecl("bool", "interrupted")]
+    data = [DataDecl("int", "outcome"), DataDecl("bool", "aborted")]
     places = [ETHER] + [place(s) for s in fsm.states]
     places += [place(s) + "_PAUSED" for s in fsm.paused]
     places += [place(s) + "_YIELD" for s in fsm.states]
@@ -94,7 +95,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> 
         ports.append(PortDecl(PORT, "start", exported=True))
         first = place("start") if "start" in fsm.codel_of else FINISHED
         transitions.append(
-            Transition("start", [ETHER], [first], action=[Assign(Var("interrupted"), Const(False))])
+            Transition("start", [ETHER], [first], action=[Assign(Var("aborted"), Const(False))])
         )
 
     for state in fsm.states:
@@ -123,7 +124,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> 
         running = [place(s) for s in fsm.states if s != "stop"] + [place(s) + "_PAUSED" for s in fsm.paused if s != "stop"]
         target = place("stop") if fsm.has_stop else INTERRUPTED
         for p in running:
-            transitions.append(Transition("abort", [p], [target], action=[Assign(Var("interrupted"), Const(True))]))
+            transitions.append(Transition("abort", [p], [target], action=[Assign(Var("aborted"), Const(True))]))
 
     init = place("start") if permanent and "start" in fsm.codel_of else ETHER
     return AtomType(
@@ -131,7 +132,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> 
         data=data,
         ports=ports,
         places=places,
-        initial=InitialTransition([init], [Assign(Var("outcome"), Const(0)), Assign(Var("interrupted"), Const(False))]),
+        initial=InitialTransition([init], [Assign(Var("outcome"), Const(0)), Assign(Var("aborted"), Const(False))]),
         transitions=transitions,
     )
 
@@ -148,8 +149,8 @@ def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool)
                 out.append(Transition(None, source, [ETHER], guard=is_k))
             else:
                 # Reaching ether after an interruption reports "interrupted", otherwise "finished".
-                out.append(Transition(None, source, [FINISHED], guard=Binary("&&", is_k, Unary("!", Var("interrupted")))))
-                out.append(Transition(None, source, [INTERRUPTED], guard=Binary("&&", is_k, Var("interrupted"))))
+                out.append(Transition(None, source, [FINISHED], guard=Binary("&&", is_k, Unary("!", Var("aborted")))))
+                out.append(Transition(None, source, [INTERRUPTED], guard=Binary("&&", is_k, Var("aborted"))))
         else:
             target = place(y.state) + "_PAUSED" if y.pause else place(y.state)
             out.append(Transition(None, source, [target], guard=is_k))
@@ -212,11 +213,13 @@ def acceptor_type(module: str, requests: list[tuple[str, str]]) -> AtomType:
 
     ``requests`` pairs each port with the service's ``Module.Service`` name;
     ``request_pending("NDD.GoTo")`` is answered by the services interface at
-    run time and by the environment (any request, any time) in exploration.
+    run time and by the environment (any request, any time) in exploration;
+    ``take_request`` tells the interface the request has been consumed.
     """
     ports = [PortDecl(PORT, port, exported=True) for port, _ in requests]
     transitions = [
-        Transition(port, ["READY"], ["READY"], guard=Call("request_pending", (Const(name),)))
+        Transition(port, ["READY"], ["READY"], guard=Call("request_pending", (Const(name),)),
+                   action=[Do(Call("take_request", (Const(name),)))])
         for port, name in requests
     ]
     return AtomType(

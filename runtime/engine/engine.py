@@ -143,7 +143,8 @@ class Engine:
         fc = src.connector
         ports = [self.flat.ports[p] for i, p in enumerate(src.leaves) if mask >> i & 1]
         cut = len(fc.scope) + 1 if fc.scope else 0
-        label = interaction_label(fc.label, [p.path[cut:] for p in ports], mask == src.full and not src.alternatives)
+        label = interaction_label(fc.label, [p.path[cut:] for p in ports], mask == src.full and not src.alternatives,
+                                 fc.named and not src.alternatives)
         return tuple(p.path for p in ports), label, tuple(parts(src.tree, mask))
 
     # -- the semantics ---------------------------------------------------------------------------

@@ -104,6 +104,7 @@ class FlatConnector:
     type: ConnectorType
     params: list[list[Alternative]]
     parents: list[int] = field(default_factory=list)
+    named: bool = False  # the label comes from an @label annotation
 
     @property
     def top(self) -> bool:
@@ -286,11 +287,11 @@ class _Builder:
                 raise FlattenError(f"{_at(ci.span)}{t.name}: name '{ci.name}' declared twice")
             if ci.args:
                 raise FlattenError(f"{_at(ci.span)}{t.name}: connector {ci.name} takes no data arguments")
-            label = _join(path, ci.name)
+            label, named = _join(path, ci.name), False
             for a in ci.annotations:
                 if a.name == "label" and "name" in a.arguments:
-                    label = a.arguments["name"]
-            fc = FlatConnector(len(self.connectors), _join(path, ci.name), path, label, ci, ct, [])
+                    label, named = a.arguments["name"], True
+            fc = FlatConnector(len(self.connectors), _join(path, ci.name), path, label, ci, ct, [], named=named)
             self.connectors.append(fc)
             local[ci.name] = fc
         for ci in t.connectors:

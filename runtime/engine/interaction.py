@@ -54,16 +54,20 @@ class Interaction:
         return f"Interaction({self.index}, {self.label!r})"
 
 
-def interaction_label(base: str | None, ports: list[str], complete: bool) -> str:
+def interaction_label(base: str | None, ports: list[str], complete: bool, named: bool = False) -> str:
     """The one rule that names interactions in traces, LTS exports and property files.
 
-    A lone atom port is ``atom.port``; an interaction of a connector is the
-    connector's label (its ``@label(name=...)`` annotation, else its dotted path)
-    when all of the connector's ports take part, else ``label[a.p,b.q]`` with
-    the ports named relative to the compound that declares the connector.
+    A lone atom port is ``atom.port``.  A connector named by a
+    ``@label(name=...)`` annotation gives that name to every interaction it
+    has (``NDD.Stop:start`` whether or not a running GoTo is aborted with it):
+    the generator names connectors after what they mean; only alternatives
+    through merged exports keep the port suffix.  Otherwise an
+    interaction is the connector's dotted path when all its ports take part,
+    else ``path[a.p,b.q]`` with the ports named relative to the compound that
+    declares the connector.
     """
     if base is None:
         return ports[0]
-    if complete:
+    if complete or named:
         return base
     return f"{base}[{','.join(ports)}]"
