@@ -735,7 +735,6 @@ class _Builder:
         service = Service(str(name), kind, span=self.span(name))
         if rest and isinstance(rest[0], Tree) and rest[0].data == "parameters":
             service.parameters = self.parameters(rest.pop(0), service)
-        states: dict[str, Codel] = {}
         for prop in self.block_items(rest):
             pname = _prop_name(prop)
             if pname == "task" and kind != "activity":
@@ -764,7 +763,7 @@ class _Builder:
                     self.error(prop, f"codel '{codel.name}' of activity '{name}' has no state",
                                hint=f"write codel <start> {codel.name}(...) yield ...;")
                     continue
-                self.add_codel(service.codels, codel, f"service '{name}'", states)
+                self.add_codel(service.codels, codel, f"service '{name}'")
             elif pname in ("interrupts", "before", "after"):
                 self.extend_unique(getattr(service, pname), [str(t) for t in ch[0].children])
                 for t in ch[0].children:
@@ -776,7 +775,7 @@ class _Builder:
                 service.locals.extend(self.members([Tree("member", ch, prop.meta)], f"the locals of '{name}'", known))
         return service
 
-    def add_codel(self, codels: list[Codel], codel: Codel, owner: str, states: dict | None = None) -> None:
+    def add_codel(self, codels: list[Codel], codel: Codel, owner: str) -> None:
         """Add an FSM codel, refusing a state already handled by another codel of the same owner."""
         for other in codels:
             for t in codel.triggers:
