@@ -19,19 +19,15 @@ def _parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="execute a model, choosing among enabled interactions by a policy")
     run.add_argument("model", help="the .bip file (package P lives in P.bip)")
     run.add_argument("--root", default="System()", help="root instance, e.g. 'System()' or 'Sys(3)'")
-    run.add_argument("--seed", type=int, default=None, help="seed of the random policy")
-    run.add_argument("--limit", type=int, default=None, help="stop after this many steps")
-    run.add_argument("--policy", choices=("first", "random", "interactive"), default="random")
-    run.add_argument("--trace", metavar="FILE", help="write the steps as JSON lines to FILE")
+    add_run_options(run)
     run.add_argument("--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions")
-    run.add_argument("--quiet", action="store_true", help="print only the summary line")
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
     return ap
 
 
 def run_command(args, out=None, err=None) -> int:
     from runtime.bip2 import parse_file
-    from runtime.engine import ConsoleTracer, Engine, EngineError, JsonlTracer, MultiTracer, make_policy
+    from runtime.engine import Engine, EngineError
 
     out = out or sys.stdout
     err = err or sys.stderr
@@ -47,6 +43,13 @@ def run_command(args, out=None, err=None) -> int:
     if args.show_source:
         print(engine.source, file=out)
         return 0
+    return execute(engine, args, args.model, out, err)
+
+
+def execute(engine, args, name: str, out, err) -> int:
+    """Run ``engine`` with the policy, limit and tracers asked for in ``args``; print the summary line."""
+    from runtime.engine import ConsoleTracer, JsonlTracer, MultiTracer, make_policy
+
     if args.limit is not None and args.limit < 0:
         print("error: --limit must be >= 0", file=err)
         return 1
@@ -63,9 +66,18 @@ def run_command(args, out=None, err=None) -> int:
     summary = engine.run(policy, args.limit, MultiTracer(*tracers))
     print(summary.line(), file=out)
     if summary.outcome == "error":
-        print(f"{args.model}: model error: {summary.message}", file=err)
+        print(f"{name}: model error: {summary.message}", file=err)
         return 2
     return 0
+
+
+def add_run_options(run: argparse.ArgumentParser) -> None:
+    """Options of every command that runs a model: seed, limit, policy, trace, quiet."""
+    run.add_argument("--seed", type=int, default=None, help="seed of the random policy")
+    run.add_argument("--limit", type=int, default=None, help="stop after this many steps")
+    run.add_argument("--policy", choices=("first", "random", "interactive"), default="random")
+    run.add_argument("--trace", metavar="FILE", help="write the steps as JSON lines to FILE")
+    run.add_argument("--quiet", action="store_true", help="print only the summary line")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -90,14 +90,17 @@ class FunctionalLevel:
         self.constraints: list[Constraint] = []
         self.task_execs: dict[Path, list[Wire]] = {}
         self.wakes: dict[Path, list[End]] = {}
+        self.docs: dict[str, str] = {}  # type name -> one line saying what it stands for
 
     # -- registries ---------------------------------------------------------------------
     def _port_type(self, atom_type: str, port: str) -> str:
         decl = self.atom_types[atom_type].port(port)
         return decl.type if decl else library.PORT
 
-    def _atom_type(self, t: AtomType) -> str:
+    def _atom_type(self, t: AtomType, doc: str = "") -> str:
         self.atom_types.setdefault(t.name, t)
+        if doc:
+            self.docs.setdefault(t.name, doc)
         return t.name
 
     def _connector(self, t: ConnectorType) -> ConnectorType:
@@ -109,8 +112,9 @@ class FunctionalLevel:
 
     # -- the whole level ------------------------------------------------------------------
     def build(self) -> Package:
-        for t in (library.timer_type(), library.scheduler_type(), library.poster_type()):
-            self._atom_type(t)
+        self._atom_type(library.timer_type(), "Timer of a periodic task: a period starts (trigger), then ends (sleep).")
+        self._atom_type(library.scheduler_type(), "Scheduler of a task: opens a period, authorises codels, closes it.")
+        self._atom_type(library.poster_type(), "Poster (GenoM port out): written by the codels that have it as port out.")
         self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"])
         self.externs["take_request"] = ExternFunction("take_request", None, ["string"])
         self.asm.group((), ident(self.system), comment=f"functional level {self.system}")
@@ -132,7 +136,7 @@ class FunctionalLevel:
         root: Path = (m,)
         self.asm.group(root, joined(m, "Module"), comment=f"GenoM component {c.name}")
         requests = [(ident(s.name), f"{c.name}.{s.name}") for s in c.services]
-        self.asm.atom(root + ("requests",), self._atom_type(acceptor_type(m, requests)))
+        self.asm.atom(root + ("requests",), self._atom_type(acceptor_type(m, requests), f"Request acceptor of {c.name}."))
         for port in c.ports:
             if port.direction == "out":
                 self.asm.atom(root + (ident(port.name),), "Poster")
@@ -171,7 +175,8 @@ class FunctionalLevel:
         self.wakes[path] = []
         if task.codels:
             fsm = Fsm.of(task.codels, task.throws)
-            atom = self._atom_type(activity_type(m, name, fsm, permanent=True))
+            atom = self._atom_type(activity_type(m, name, fsm, permanent=True),
+                                   f"Permanent activity of task {m}.{task.name}: states {', '.join(fsm.states)}.")
             self._codel_externs(m, fsm)
             activity = self.asm.atom(path + ("permanent",), atom)
             for state in fsm.states:
@@ -204,8 +209,11 @@ class FunctionalLevel:
         path = self.asm.group(root + (name,), joined(m, name, "Service"), comment=f"{s.kind} {s.name}")
         fsm = Fsm.of(s.codels, list(dict.fromkeys(s.throws + c.throws)))
         constrained = bool(s.after or s.before)
-        control = self.asm.atom(path + ("control",), self._atom_type(controller_type(m, s, constrained)))
-        activity = self.asm.atom(path + ("activity",), self._atom_type(activity_type(m, name, fsm)))
+        control = self.asm.atom(path + ("control",), self._atom_type(
+            controller_type(m, s, constrained), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
+        states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
+        activity = self.asm.atom(path + ("activity",), self._atom_type(
+            activity_type(m, name, fsm), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
         self._codel_externs(m, fsm)
         if s.validate is not None:
             v = s.validate

@@ -6,30 +6,12 @@ through :func:`ident`, so a renamed word is renamed the same way everywhere.
 """
 from __future__ import annotations
 
-import re
-
-#: Every word reserved by some version of the BIP2 grammar (untimed, timed, annotations).
-RESERVED = frozenset(
-    """
-    package end use as extern data type function operator port atom compound connector
-    component define export place initial internal on from to provided do up down if then
-    else fi priority const true false bool int float string native refine
-    error at clock unit sync async resume lazy eager delayable invariant remember ignore
-    urgency urgent last first wait time tick
-    """.split()
-)
-
-_INVALID = re.compile(r"[^A-Za-z0-9_]")
+from genom2bip.back.bip2 import bip_identifier
 
 
 def ident(name: str) -> str:
-    """A BIP identifier for ``name``: invalid characters become ``_``, reserved words get a ``_`` suffix."""
-    out = _INVALID.sub("_", name.replace("::", "_"))
-    if not out or out[0].isdigit():
-        out = "_" + out
-    if out in RESERVED:
-        out += "_"
-    return out
+    """A BIP identifier for ``name``: ``a::b`` → ``a_b``, then the writer's renaming rule (``error`` → ``error_``)."""
+    return bip_identifier(name.replace("::", "_"))
 
 
 def joined(*parts: str) -> str:
