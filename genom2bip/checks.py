@@ -166,20 +166,21 @@ class _Checker:
                            "validate codel" + (" (codel_control)" if comp.dialect == "genom2" else ""),
                            "make it an exec request" if comp.dialect == "genom2" else "make it an activity")
             return
-        if not service.codels:
+        codels = service.fsm_codels()
+        if not codels:
             if service.kind == "activity":
                 self.error(service.span, f"activity '{service.name}' has no codel for state 'start'",
                            "its FSM begins in state 'start'")
             return
-        states = self._fsm_states(service.codels)
+        states = self._fsm_states(codels)
         if "start" not in states:
             self.error(service.span, f"{what} has no codel for state 'start'",
                        f"its FSM begins in state 'start'; declared states: {', '.join(states)}")
-            self._yields(service.codels, states, what, service.span)
+            self._yields(codels, states, what, service.span)
             return
-        if not self._yields(service.codels, states, what, service.span):
+        if not self._yields(codels, states, what, service.span):
             return  # an undeclared state already explains why ether may be unreachable
-        graph = self._graph(service.codels)
+        graph = self._graph(codels)
         if not self._reaches(graph, "start"):
             self.error(service.span, f"no path from start to ether in {what}: it can never finish",
                        "some codel on the way must yield ether")

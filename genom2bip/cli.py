@@ -167,6 +167,37 @@ def verb_check(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _generate_arguments(parser: argparse.ArgumentParser) -> None:
+    add_source_arguments(parser)
+    parser.add_argument("-o", "--output", metavar="DIR", default="gen",
+                        help="directory to write <system>/ into (default: gen)")
+    parser.add_argument("--name", metavar="SYSTEM",
+                        help="name of the system (default: the first PATH's name, e.g. dala)")
+    parser.add_argument("--rules", metavar="FILE", help="inter-module rules (YAML); see docs/rules.md")
+
+
+@verb("generate", help="generate the BIP model (.bip) and a runnable Python package (the default command)",
+      arguments=_generate_arguments)
+def verb_generate(args: argparse.Namespace) -> int:
+    """Parse, check, build the BIP model and write ``<output>/<system>/`` atomically."""
+    from genom2bip.generate import GenerateError, generate, system_name
+
+    description = load(args)
+    system = args.name or system_name(args.paths)
+    sources = " ".join(args.paths)
+    try:
+        result = generate(description, system, Path(args.output), sources, version())
+    except GenerateError as exc:
+        error(str(exc))
+        return EXIT_ERRORS
+    except OSError as exc:
+        error(f"cannot write {args.output}: {exc.strerror or exc}")
+        return EXIT_ERRORS
+    print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "
+          f"{len(result.package.atom_types)} atom types, {len(result.package.connector_types)} connector types")
+    return EXIT_OK
+
+
 # --------------------------------------------------------------------------- entry point
 
 

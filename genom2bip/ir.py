@@ -11,7 +11,7 @@ BIP reserved words happens in the back end.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, fields, is_dataclass
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any
 
 from runtime.diagnostics import NOWHERE, Span
@@ -282,10 +282,15 @@ class Service:
     # "after:Init", "before:X", "throws:e_x": checks point at the offending name, not the service.
     ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
 
+    def fsm_codels(self) -> list[Codel]:
+        """The codels as an automaton: a plain ``codel f()`` (a function's) runs as ``<start> f() yield ether``."""
+        return [c if c.triggers else replace(c, triggers=["start"], yields=[Yield("ether", span=c.span)])
+                for c in self.codels]
+
     def states(self) -> list[str]:
         """The FSM states of the service, in order of first appearance (triggers first)."""
         seen: list[str] = []
-        for codel in self.codels:
+        for codel in self.fsm_codels():
             for t in codel.triggers:
                 if t not in seen:
                     seen.append(t)

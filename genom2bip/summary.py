@@ -67,7 +67,9 @@ def _codel_line(codel: Codel) -> str:
     yields = ", ".join(str(y) for y in codel.yields) or "-"
     wcet = f"  wcet {duration_text(codel.wcet)}" if codel.wcet else ""
     asynchronous = "async " if codel.is_async else ""
-    return f"{'/'.join(codel.triggers) or '?'}: {asynchronous}{codel.name} -> {yields}{wcet}"
+    if not codel.triggers:
+        return f"codel {asynchronous}{codel.name}{wcet}"
+    return f"{'/'.join(codel.triggers)}: {asynchronous}{codel.name} -> {yields}{wcet}"
 
 
 def _task_lines(task: Task) -> list[str]:

@@ -117,7 +117,7 @@ class FunctionalLevel:
         self._atom_type(library.poster_type(), "Poster (GenoM port out): written by the codels that have it as port out.")
         self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"])
         self.externs["take_request"] = ExternFunction("take_request", None, ["string"])
-        self.asm.group((), ident(self.system), comment=f"functional level {self.system}")
+        self.asm.group((), ident(self.system.upper()), comment=f"functional level {self.system}")
         for component in self.description.components:
             self._module(component)
         self._triggers()
@@ -207,7 +207,7 @@ class FunctionalLevel:
     def _service(self, m: str, c: ir.Component, root: Path, s: ir.Service, task: Path) -> None:
         name = ident(s.name)
         path = self.asm.group(root + (name,), joined(m, name, "Service"), comment=f"{s.kind} {s.name}")
-        fsm = Fsm.of(s.codels, list(dict.fromkeys(s.throws + c.throws)))
+        fsm = Fsm.of(s.fsm_codels(), list(dict.fromkeys(s.throws + c.throws)))
         constrained = bool(s.after or s.before)
         control = self.asm.atom(path + ("control",), self._atom_type(
             controller_type(m, s, constrained), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
@@ -223,9 +223,10 @@ class FunctionalLevel:
         self.services[(m, s.name)] = parts
 
         label = parts.label
-        reject = [End(control, "reject")]
-        self.asm.wire(Wire(self._rendezvous(reject), reject, "reject", path, f"{label}:reject",
-                           comment="the validate codel refused the parameters"))
+        if s.validate is not None:
+            reject = [End(control, "reject")]
+            self.asm.wire(Wire(self._rendezvous(reject), reject, "reject", path, f"{label}:reject",
+                               comment=f"the validate codel {s.validate.name} refused the parameters"))
         for port in ("finish", "fail", "interrupted"):
             ends = [End(control, port), End(activity, port)]
             self.asm.wire(Wire(self._rendezvous(ends), ends, port, path, f"{label}:{port}"))

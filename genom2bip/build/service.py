@@ -167,7 +167,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
 
     ``status`` is available in every place and tells constraint connectors
     whether the service has completed (at least once / latest run) and whether
-    it runs now.  ``refuse`` exists when a constraint may refuse a request.
+    it runs now.  ``reject`` exists when a validate codel may refuse the
+    parameters, ``refuse`` when a constraint may refuse a request.
     """
     places = ["IDLE", "CHECK", "ACTIVE"]
     data = [DataDecl("int", "verdict")] + [DataDecl("bool", f) for f in STATUS_FIELDS]
@@ -176,7 +177,6 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
     )
     ports = [
         PortDecl(PORT, "trigger", exported=True),
-        PortDecl(PORT, "reject", exported=True),
         PortDecl(PORT, "start", exported=True),
         PortDecl(PORT, "finish", exported=True),
         PortDecl(PORT, "fail", exported=True),
@@ -186,7 +186,6 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
     ended = [Assign(Var("running"), Const(False))]
     transitions = [
         Transition("trigger", ["IDLE"], ["CHECK"], action=validate),
-        Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0))),
         Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0)),
                    action=[Assign(Var("running"), Const(True))]),
         Transition("finish", ["ACTIVE"], ["IDLE"],
@@ -195,6 +194,9 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
         Transition("interrupted", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
     ]
     transitions += [Transition("status", [p], [p]) for p in places]
+    if service.validate:
+        ports.insert(1, PortDecl(PORT, "reject", exported=True))
+        transitions.insert(1, Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0))))
     if constrained:
         ports.insert(1, PortDecl(PORT, "refuse", exported=True))
         transitions.insert(1, Transition("refuse", ["IDLE"], ["IDLE"]))

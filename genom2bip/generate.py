@@ -1,0 +1,166 @@
+"""``genom2bip descriptions/dala -o gen/``: the BIP model as ``.bip`` text and as a runnable Python package.
+
+Output goes to ``<out>/<system>/``: ``<system>.bip`` (one BIP2 package for the
+whole functional level) and a Python package that imports only ``runtime``
+(``__init__.py``, ``__main__.py``, ``model.py``).  Everything is written into
+a fresh temporary directory first and swapped in at the end, so an error at
+any point leaves the output directory as it was.  The output is
+deterministic: same descriptions, same bytes.
+"""
+from __future__ import annotations
+
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+
+from genom2bip import ir
+from genom2bip.back.bip2 import write_package
+from genom2bip.back.pysource import constructor
+from genom2bip.build.functional import FunctionalLevel
+from genom2bip.build.names import ident
+from runtime.bip2 import validate
+from runtime.model import Package
+
+TEMPLATES = Path(__file__).parent / "templates" / "python"
+
+
+class GenerateError(Exception):
+    """The model could not be generated; nothing was written."""
+
+
+@dataclass
+class Generated:
+    system: str
+    directory: Path
+    files: list[Path]
+    package: Package
+    root: str
+
+
+def system_name(paths: list[str]) -> str:
+    """The system is named after the first path: ``descriptions/dala`` → ``dala``, ``x/NDD.gen`` → ``NDD``."""
+    first = Path(paths[0])
+    return first.stem if first.suffix else first.name
+
+
+def model_of(description: ir.Description, system: str) -> tuple[Package, str, dict[str, str]]:
+    """The package, its root instance and one line of documentation per type."""
+    level = FunctionalLevel(description, system)
+    package = level.build()
+    problems = validate(package)
+    if problems:
+        raise GenerateError("the generated model is invalid (a generator bug):\n" +
+                            "\n".join(f"  {d.message}" for d in problems))
+    root = package.compound_types[-1].name + "()"
+    return package, root, level.docs
+
+
+def _env() -> jinja2.Environment:
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)), undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True)
+    env.filters["pyrepr"] = repr
+    return env
+
+
+def python_files(package: Package, root: str, docs: dict[str, str], module: str, title: str,
+                 sources: str, version: str) -> dict[str, str]:
+    """The generated Python package: file name → text."""
+    import runtime.model as model_api
+
+    used: set[str] = set()
+
+    def item(obj, returns: str, doc: str) -> dict:
+        used.update(_classes(obj))
+        used.add(returns)
+        return {"function": obj.name, "returns": returns, "doc": doc, "source": constructor(obj, 4)}
+
+    sections = [
+        {"title": "Port types", "entries": [item(p, "PortType", f"Port type {p.name}.") for p in package.port_types]},
+        {"title": "Atom types: behaviour", "entries": [
+            item(a, "AtomType", docs.get(a.name, f"Atom type {a.name}.")) for a in package.atom_types]},
+        {"title": "Connector types: interaction", "entries": [
+            item(c, "ConnectorType", _connector_doc(c)) for c in package.connector_types]},
+        {"title": "Compound types: the functional level, module by module", "entries": [
+            item(c, "CompoundType", f"Compound {c.name}.") for c in package.compound_types]},
+    ]
+    for f in package.extern_functions:
+        used.update(_classes(f))
+    used.add("Package")
+    clashes = {i["function"] for s in sections for i in s["entries"]} & set(model_api.__all__)
+    if clashes:
+        raise GenerateError(f"type names clash with runtime.model classes: {', '.join(sorted(clashes))}")
+    env = _env()
+    context = {
+        "title": title, "version": version, "sources": sources, "module": module,
+        "bip_file": f"{package.name}.bip", "root": root, "package_name": package.name, "sections": sections,
+        "imports": sorted(used), "externs": [constructor(f, 12) for f in package.extern_functions],
+        "counts": f"{len(package.atom_types)} atom types, {len(package.connector_types)} connector types, "
+                  f"{len(package.compound_types)} compound types",
+    }
+    return {
+        "__init__.py": env.get_template("init.py.j2").render(context),
+        "__main__.py": env.get_template("main.py.j2").render(context),
+        "model.py": env.get_template("model.py.j2").render(context),
+    }
+
+
+def _connector_doc(c) -> str:
+    kinds = {"Rendezvous": "all ports together", "RendezvousX": "all ports together, offered to an enclosing connector",
+             "Broadcast": "a trigger with optional receivers"}
+    base = c.name.split("_")[0]
+    return f"Connector type {c.name}: {kinds.get(base, 'guarded by the status of other services')}."
+
+
+def _classes(obj) -> set[str]:
+    """Names of the runtime.model classes an object is built from."""
+    from dataclasses import fields, is_dataclass
+
+    out: set[str] = set()
+    if is_dataclass(obj) and not isinstance(obj, type):
+        out.add(type(obj).__name__)
+        for f in fields(obj):
+            out |= _classes(getattr(obj, f.name))
+    elif isinstance(obj, (list, tuple)):
+        for v in obj:
+            out |= _classes(v)
+    elif isinstance(obj, dict):
+        for v in obj.values():
+            out |= _classes(v)
+    out.discard("Span")
+    return out
+
+
+def generate(description: ir.Description, system: str, out: Path, sources: str, version: str) -> Generated:
+    """Write ``<out>/<system>/`` atomically; returns what was written."""
+    name = ident(system.lower())
+    package, root, docs = model_of(description, system)
+    files = {f"{package.name}.bip": write_package(package)}
+    title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
+    files.update(python_files(package, root, docs, name, title, sources, version))
+
+    out.mkdir(parents=True, exist_ok=True)
+    target = out / name
+    staging = Path(tempfile.mkdtemp(prefix=f".{name}.", dir=out))
+    try:
+        for file_name, text in files.items():
+            (staging / file_name).write_text(text, encoding="utf-8")
+        old = None
+        if target.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{name}.old.", dir=out))
+            old.rmdir()
+            target.rename(old)
+        try:
+            staging.rename(target)
+        except BaseException:
+            if old is not None:
+                old.rename(target)
+            raise
+        if old is not None:
+            shutil.rmtree(old)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return Generated(system, target, [target / f for f in files], package, root)
