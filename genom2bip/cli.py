@@ -144,6 +144,32 @@ def load(args: argparse.Namespace, check: bool = True) -> Description:
     return description
 
 
+def rules_file(args: argparse.Namespace) -> Path | None:
+    """``--rules FILE``, else ``rules.yaml`` next to the descriptions (in the first directory given)."""
+    if getattr(args, "rules", None):
+        return Path(args.rules)
+    first = Path(args.paths[0])
+    default = (first if first.is_dir() else first.parent) / "rules.yaml"
+    return default if default.is_file() else None
+
+
+def load_rules(args: argparse.Namespace, description: Description) -> list:
+    """The description's constraints plus the rule file's; print problems and fail on errors."""
+    from genom2bip.rules import all_rules
+
+    reporter = Reporter()
+    path = rules_file(args)
+    if args.rules and not path.is_file():
+        error(f"{args.rules}: no such rule file")
+        raise Failure(EXIT_ERRORS)
+    rules = all_rules(description, path, reporter)
+    if reporter.diagnostics:
+        print_diagnostics(reporter.diagnostics, reporter.sources)
+    if reporter.has_errors:
+        raise Failure(EXIT_ERRORS)
+    return rules
+
+
 # --------------------------------------------------------------------------- verbs
 
 
@@ -173,7 +199,8 @@ def _generate_arguments(parser: argparse.ArgumentParser) -> None:
                         help="directory to write <system>/ into (default: gen)")
     parser.add_argument("--name", metavar="SYSTEM",
                         help="name of the system (default: the first PATH's name, e.g. dala)")
-    parser.add_argument("--rules", metavar="FILE", help="inter-module rules (YAML); see docs/rules.md")
+    parser.add_argument("--rules", metavar="FILE",
+                        help="rules between services (YAML, docs/rules.md); default: rules.yaml next to the descriptions")
 
 
 @verb("generate", help="generate the BIP model (.bip) and a runnable Python package (the default command)",
@@ -183,10 +210,11 @@ def verb_generate(args: argparse.Namespace) -> int:
     from genom2bip.generate import GenerateError, generate, system_name
 
     description = load(args)
+    rules = load_rules(args, description)
     system = args.name or system_name(args.paths)
-    sources = " ".join(args.paths)
+    sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
     try:
-        result = generate(description, system, Path(args.output), sources, version())
+        result = generate(description, system, Path(args.output), sources, version(), rules)
     except GenerateError as exc:
         error(str(exc))
         return EXIT_ERRORS
@@ -219,9 +247,13 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (0 ok, 1 errors in the input, 2 usage, 3 internal error)."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
-        argv.insert(0, DEFAULT_VERB)
     parser = build_parser()
+    if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
+        if not Path(argv[0]).exists():
+            parser.print_usage(sys.stderr)
+            error(f"'{argv[0]}' is neither a command ({', '.join(VERBS)}) nor a file or directory")
+            return EXIT_USAGE
+        argv.insert(0, DEFAULT_VERB)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: --help, --version, usage errors

@@ -21,6 +21,7 @@ from genom2bip.back.bip2 import write_package
 from genom2bip.back.pysource import constructor
 from genom2bip.build.functional import FunctionalLevel
 from genom2bip.build.names import ident
+from genom2bip.rules import Rule
 from runtime.bip2 import validate
 from runtime.model import Package
 
@@ -46,9 +47,14 @@ def system_name(paths: list[str]) -> str:
     return first.stem if first.suffix else first.name
 
 
-def model_of(description: ir.Description, system: str) -> tuple[Package, str, dict[str, str]]:
-    """The package, its root instance and one line of documentation per type."""
-    level = FunctionalLevel(description, system)
+def model_of(description: ir.Description, system: str,
+             rules: list[Rule] | None = None) -> tuple[Package, str, dict[str, str]]:
+    """The package, its root instance and one line of documentation per type.
+
+    ``rules`` are the description's constraints plus a rule file's
+    (genom2bip.rules.all_rules); by default the description's alone.
+    """
+    level = FunctionalLevel(description, system, rules)
     package = level.build()
     problems = validate(package)
     if problems:
@@ -133,10 +139,11 @@ def _classes(obj) -> set[str]:
     return out
 
 
-def generate(description: ir.Description, system: str, out: Path, sources: str, version: str) -> Generated:
+def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,
+             rules: list[Rule] | None = None) -> Generated:
     """Write ``<out>/<system>/`` atomically; returns what was written."""
     name = ident(system.lower())
-    package, root, docs = model_of(description, system)
+    package, root, docs = model_of(description, system, rules)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
     files.update(python_files(package, root, docs, name, title, sources, version))

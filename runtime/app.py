@@ -42,6 +42,9 @@ def describe(package: Package, root: str) -> str:
             if c.label.endswith(":trigger"):
                 module, service = c.label.split(":")[0].split(".", 1)
                 services[module].append(service)
+    order = {a.name: i for i, a in enumerate(flat.atoms)}
+    for module, names in services.items():
+        names.sort(key=lambda n: order.get(f"{module}.{n}.control", len(order)))
     lines = [f"package {package.name}, root {root}"]
     lines.append(f"modules ({len(services)}):")
     for module, names in services.items():

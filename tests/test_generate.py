@@ -63,8 +63,12 @@ def test_generation_is_deterministic(tmp_path):
 def test_bip_output_reads_back_into_the_same_model(tmp_path):
     from genom2bip.generate import model_of
     from genom2bip.parser import parse_paths
+    from genom2bip.rules import all_rules
+    from runtime.diagnostics import Reporter
 
-    package, root, _ = model_of(parse_paths([ROOT / "descriptions" / "dala"]), "dala")
+    description = parse_paths([ROOT / "descriptions" / "dala"])
+    rules = all_rules(description, ROOT / "descriptions" / "dala" / "rules.yaml", Reporter())
+    package, root, _ = model_of(description, "dala", rules)
     assert root == "DALA()"
     assert parse_file(ROOT / "gen" / "dala" / "dala.bip") == package
 
@@ -135,8 +139,10 @@ def test_description_error_writes_nothing(tmp_path, capsys):
 
 def test_missing_input_is_reported_and_nothing_written(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main([str(tmp_path / "nope"), "-o", str(out)]) == 1
-    assert "no such file or directory" in capsys.readouterr().err
+    assert main([str(tmp_path / "nope"), "-o", str(out)]) == 2
+    assert f"'{tmp_path / 'nope'}' is neither a command (check, generate" in capsys.readouterr().err
+    assert main(["generate", str(tmp_path / "nope"), "-o", str(out)]) == 1
+    assert "nope: no such file or directory" in capsys.readouterr().err
     assert not out.exists()
 
 

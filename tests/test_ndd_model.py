@@ -7,8 +7,7 @@ import pytest
 
 from genom2bip.build import build_package
 from genom2bip.parser import parse_paths
-from runtime.codels import any_request, codel_specs
-from runtime.engine import Engine
+from genomkit import engine_for, labels, places, walk
 from runtime.model import Binary, PortData
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -19,45 +18,9 @@ def package():
     return build_package(parse_paths([ROOT / "descriptions/dala/NDD.gen"]), "NDD")
 
 
-class Codels:
-    """Codel externs whose outcome the test sets by codel name (0, the first yield, by default)."""
-
-    def __init__(self, package):
-        self.specs = codel_specs(package)
-        self.next: dict[str, int] = {}
-        self.calls: list[str] = []
-
-    def externs(self) -> dict:
-        out = {}
-        for name, spec in self.specs.items():
-            out[name] = (lambda spec=spec: self._call(spec))
-        out.update(any_request())
-        return out
-
-    def _call(self, spec) -> int:
-        self.calls.append(spec.codel)
-        return self.next.pop(spec.codel, 0)
-
-
 @pytest.fixture
 def run(package):
-    codels = Codels(package)
-    engine = Engine(package, "NDD()", codels.externs())
-    return engine, codels
-
-
-def labels(engine, state) -> list[str]:
-    return [i.label for i in engine.enabled(state)]
-
-
-def walk(engine, state, *steps):
-    for label in steps:
-        state = engine.fire(state, engine.find(state, label))
-    return state
-
-
-def places(engine, state, atom) -> list[str]:
-    return engine.describe_state(state)[atom]["places"]
+    return engine_for(package, "NDD()")
 
 
 # --------------------------------------------------------------------------- structure (Fig. 7)

@@ -174,16 +174,19 @@ def Aspect_SetParams_Control() -> AtomType:
                 'trigger',
                 ['IDLE'],
                 ['CHECK'],
-                action=[Assign(Var('verdict'), Call('Aspect_aspCheckParams'))],
+                action=[
+                    Assign(Var('verdict'), Call('Aspect_aspCheckParams')),
+                    Assign(Var('running'), Const(True)),
+                ],
             ),
-            Transition('reject', ['CHECK'], ['IDLE'], guard=Binary('!=', Var('verdict'), Const(0))),
             Transition(
-                'start',
+                'reject',
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                ['IDLE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('running'), Const(False))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -273,14 +276,13 @@ def Aspect_Run_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -510,14 +512,13 @@ def Aspect_Stop_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -695,16 +696,19 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 'trigger',
                 ['IDLE'],
                 ['CHECK'],
-                action=[Assign(Var('verdict'), Call('LaserRF_lrfCheckConfig'))],
+                action=[
+                    Assign(Var('verdict'), Call('LaserRF_lrfCheckConfig')),
+                    Assign(Var('running'), Const(True)),
+                ],
             ),
-            Transition('reject', ['CHECK'], ['IDLE'], guard=Binary('!=', Var('verdict'), Const(0))),
             Transition(
-                'start',
+                'reject',
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                ['IDLE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('running'), Const(False))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -794,14 +798,13 @@ def LaserRF_Init_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -960,15 +963,14 @@ def LaserRF_Start_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
-            Transition('refuse', ['IDLE'], ['IDLE']),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('refuse', ['IDLE'], ['IDLE']),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1162,14 +1164,13 @@ def LaserRF_Stop_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1414,16 +1415,19 @@ def NDD_SetParams_Control() -> AtomType:
                 'trigger',
                 ['IDLE'],
                 ['CHECK'],
-                action=[Assign(Var('verdict'), Call('NDD_nddCheckParams'))],
+                action=[
+                    Assign(Var('verdict'), Call('NDD_nddCheckParams')),
+                    Assign(Var('running'), Const(True)),
+                ],
             ),
-            Transition('reject', ['CHECK'], ['IDLE'], guard=Binary('!=', Var('verdict'), Const(0))),
             Transition(
-                'start',
+                'reject',
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                ['IDLE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('running'), Const(False))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1518,16 +1522,19 @@ def NDD_SetSpeed_Control() -> AtomType:
                 'trigger',
                 ['IDLE'],
                 ['CHECK'],
-                action=[Assign(Var('verdict'), Call('NDD_nddCheckSpeed'))],
+                action=[
+                    Assign(Var('verdict'), Call('NDD_nddCheckSpeed')),
+                    Assign(Var('running'), Const(True)),
+                ],
             ),
-            Transition('reject', ['CHECK'], ['IDLE'], guard=Binary('!=', Var('verdict'), Const(0))),
             Transition(
-                'start',
+                'reject',
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                ['IDLE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('running'), Const(False))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1617,14 +1624,13 @@ def NDD_SetDataSource_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1750,17 +1756,20 @@ def NDD_GoTo_Control() -> AtomType:
                 'trigger',
                 ['IDLE'],
                 ['CHECK'],
-                action=[Assign(Var('verdict'), Call('NDD_nddCheckGoal'))],
+                action=[
+                    Assign(Var('verdict'), Call('NDD_nddCheckGoal')),
+                    Assign(Var('running'), Const(True)),
+                ],
             ),
             Transition('refuse', ['IDLE'], ['IDLE']),
-            Transition('reject', ['CHECK'], ['IDLE'], guard=Binary('!=', Var('verdict'), Const(0))),
             Transition(
-                'start',
+                'reject',
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                ['IDLE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('running'), Const(False))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1980,14 +1989,13 @@ def NDD_Stop_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2230,14 +2238,13 @@ def POM_Run_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2405,14 +2412,13 @@ def POM_Reset_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2674,14 +2680,13 @@ def RFLEX_Init_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2801,14 +2806,13 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2899,15 +2903,14 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
-            Transition('refuse', ['IDLE'], ['IDLE']),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('refuse', ['IDLE'], ['IDLE']),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -3101,14 +3104,13 @@ def RFLEX_Stop_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -3277,6 +3279,36 @@ def NDD_GoTo_Refuse_after() -> ConnectorType:
     )
 
 
+def NDD_GoTo_Refuse_goto_after_pom_run() -> ConnectorType:
+    """Connector type NDD_GoTo_Refuse_goto_after_pom_run: guarded by the status of other services."""
+    return ConnectorType(
+        'NDD_GoTo_Refuse_goto_after_pom_run',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Status', 'p3')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+        interactions=[InteractionSpec(['p1', 'p2', 'p3'], guard=Unary('!', PortData('p3', 'done')))],
+    )
+
+
+def NDD_GoTo_Refuse_goto_needs_laser_and_map() -> ConnectorType:
+    """Connector type NDD_GoTo_Refuse_goto_needs_laser_and_map: guarded by the status of other services."""
+    return ConnectorType(
+        'NDD_GoTo_Refuse_goto_needs_laser_and_map',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Status', 'p3'),
+            ConnectorParam('Status', 'p4'),
+        ],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3'), DefinePort('p4')]),
+        interactions=[
+            InteractionSpec(
+                ['p1', 'p2', 'p3', 'p4'],
+                guard=Unary('!', Binary('&&', PortData('p3', 'running'), PortData('p4', 'running'))),
+            ),
+        ],
+    )
+
+
 def NDD_GoTo_Trigger() -> ConnectorType:
     """Connector type NDD_GoTo_Trigger: guarded by the status of other services."""
     return ConnectorType(
@@ -3287,6 +3319,10 @@ def NDD_GoTo_Trigger() -> ConnectorType:
             ConnectorParam('Status', 'p3'),
             ConnectorParam('Status', 'p4'),
             ConnectorParam('Status', 'p5'),
+            ConnectorParam('Status', 'p6'),
+            ConnectorParam('Status', 'p7'),
+            ConnectorParam('Status', 'p8'),
+            ConnectorParam('Status', 'p9'),
         ],
         define=DefineGroup(
             [
@@ -3295,18 +3331,44 @@ def NDD_GoTo_Trigger() -> ConnectorType:
                 DefinePort('p3'),
                 DefinePort('p4'),
                 DefinePort('p5'),
+                DefinePort('p6'),
+                DefinePort('p7'),
+                DefinePort('p8'),
+                DefinePort('p9'),
             ],
         ),
         interactions=[
             InteractionSpec(
-                ['p1', 'p2', 'p3', 'p4', 'p5'],
+                ['p1', 'p2', 'p3', 'p4', 'p5', 'p6', 'p7', 'p8', 'p9'],
                 guard=Binary(
                     '&&',
-                    Binary('&&', PortData('p3', 'done'), PortData('p4', 'done')),
-                    PortData('p5', 'done'),
+                    Binary(
+                        '&&',
+                        Binary(
+                            '&&',
+                            Binary(
+                                '&&',
+                                Binary('&&', PortData('p3', 'done'), PortData('p4', 'done')),
+                                PortData('p5', 'done'),
+                            ),
+                            PortData('p6', 'done'),
+                        ),
+                        Binary('&&', PortData('p7', 'running'), PortData('p8', 'running')),
+                    ),
+                    PortData('p9', 'running'),
                 ),
             ),
         ],
+    )
+
+
+def POM_Reset_Trigger() -> ConnectorType:
+    """Connector type POM_Reset_Trigger: guarded by the status of other services."""
+    return ConnectorType(
+        'POM_Reset_Trigger',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Status', 'p3')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+        interactions=[InteractionSpec(['p1', 'p2', 'p3'], guard=Unary('!', PortData('p3', 'running')))],
     )
 
 
@@ -3406,6 +3468,7 @@ def Aspect_Run_Service() -> CompoundType:
             ),
         ],
         ports=[
+            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_fuse', targets=[PortRef('activity', 'exec_fuse')]),
             ExportPort('Port', 'activity_exec_wait', targets=[PortRef('activity', 'exec_wait')]),
@@ -3673,6 +3736,7 @@ def LaserRF_Start_Service() -> CompoundType:
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
@@ -3728,10 +3792,10 @@ def LaserRF_acquisition_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
             ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
             ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
+            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
+            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
         ],
     )
 
@@ -3809,9 +3873,10 @@ def NDD_GoTo_Service() -> CompoundType:
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
+            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
+            ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
         ],
     )
 
@@ -3851,9 +3916,9 @@ def NDD_SetDataSource_Service() -> CompoundType:
             ),
         ],
         ports=[
+            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
-            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
         ],
     )
 
@@ -3900,8 +3965,8 @@ def NDD_SetParams_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
+            ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
 
@@ -3948,8 +4013,8 @@ def NDD_SetSpeed_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
+            ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
 
@@ -3983,9 +4048,9 @@ def NDD_Stop_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
             ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -4029,11 +4094,11 @@ def NDD_motion_Task() -> CompoundType:
                 targets=[PortRef('permanent', 'exec_publish')],
             ),
             ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
+            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
+            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
             ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
             ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
             ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
         ],
     )
 
@@ -4067,10 +4132,10 @@ def POM_Reset_Service() -> CompoundType:
             ),
         ],
         ports=[
+            ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
             ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
-            ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
 
@@ -4110,6 +4175,7 @@ def POM_Run_Service() -> CompoundType:
             ),
         ],
         ports=[
+            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_fix', targets=[PortRef('activity', 'exec_fix')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
@@ -4275,9 +4341,9 @@ def RFLEX_Stop_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
             ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -4322,6 +4388,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_track', targets=[PortRef('activity', 'exec_track')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
@@ -4367,11 +4434,11 @@ def RFLEX_servo_Task() -> CompoundType:
                 targets=[PortRef('permanent', 'exec_odometry')],
             ),
             ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
+            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
+            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
             ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
             ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
             ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
         ],
     )
 
@@ -4436,7 +4503,7 @@ def Aspect_Module() -> CompoundType:
                 'Stop_start',
                 ports=[PortRef('Stop_start_sync', 'ep'), PortRef('Run', 'activity_abort')],
                 annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:start'})],
-                comment='Stop interrupts Run',
+                comment='Stop interrupts Run (Aspect.Stop.interrupts)',
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
@@ -4480,25 +4547,25 @@ def Aspect_Module() -> CompoundType:
                 'Run_exec_start_before_Stop_start',
                 InteractionPattern('Run_exec_start'),
                 InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Run runs another codel',
+                comment='an interruption by Aspect.Stop takes effect before Aspect.Run runs another codel',
             ),
             Priority(
                 'Run_exec_fuse_before_Stop_start',
                 InteractionPattern('Run_exec_fuse'),
                 InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Run runs another codel',
+                comment='an interruption by Aspect.Stop takes effect before Aspect.Run runs another codel',
             ),
             Priority(
                 'Run_exec_wait_before_Stop_start',
                 InteractionPattern('Run_exec_wait'),
                 InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Run runs another codel',
+                comment='an interruption by Aspect.Stop takes effect before Aspect.Run runs another codel',
             ),
             Priority(
                 'Run_exec_stop_before_Stop_start',
                 InteractionPattern('Run_exec_stop'),
                 InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Run runs another codel',
+                comment='an interruption by Aspect.Stop takes effect before Aspect.Run runs another codel',
             ),
             Priority(
                 'map_sleep_before_Run_exec_start',
@@ -4525,6 +4592,7 @@ def Aspect_Module() -> CompoundType:
                 comment='a period ends only when no codel of the task can run',
             ),
         ],
+        ports=[ExportPort('Status', 'Run_control_status', targets=[PortRef('Run', 'control_status')])],
     )
 
 
@@ -4544,70 +4612,6 @@ def LaserRF_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PP',
-                'acquisition_exec_start',
-                ports=[
-                    PortRef('acquisition', 'scheduler_exec'),
-                    PortRef('acquisition', 'permanent_exec_start'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:exec_start'})],
-                comment='codel lrfInitTask of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'Init_exec_start',
-                ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_start'})],
-                comment='codel lrfOpen of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'Init_exec_configure',
-                ports=[
-                    PortRef('acquisition', 'scheduler_exec'),
-                    PortRef('Init', 'activity_exec_configure'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_configure'})],
-                comment='codel lrfConfigure of state configure',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'Start_exec_start',
-                ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Start', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_start'})],
-                comment='codel lrfStartAcquisition of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'Start_exec_acquire',
-                ports=[
-                    PortRef('acquisition', 'scheduler_exec'),
-                    PortRef('Start', 'activity_exec_acquire'),
-                    PortRef('Scan', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_acquire'})],
-                comment='codel lrfAcquire of state acquire',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'Start_exec_stop',
-                ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Start', 'activity_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_stop'})],
-                comment='codel lrfStopAcquisition of state stop',
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
-                'Stop_start_sync',
-                ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_1',
-                'Stop_start',
-                ports=[PortRef('Stop_start_sync', 'ep'), PortRef('Start', 'activity_abort')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
-                comment='Stop interrupts Start',
-            ),
-            ConnectorInstance(
                 'RendezvousX_PP',
                 'acquisition_period_sync',
                 ports=[
@@ -4621,12 +4625,6 @@ def LaserRF_Module() -> CompoundType:
                 ports=[PortRef('acquisition_period_sync', 'ep'), PortRef('Start', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:period'})],
                 comment='a period starts: paused activities wake up',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'acquisition_sleep',
-                ports=[PortRef('acquisition', 'timer_sleep'), PortRef('acquisition', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:sleep'})],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -4649,7 +4647,7 @@ def LaserRF_Module() -> CompoundType:
                     PortRef('Init', 'control_status'),
                 ],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:trigger'})],
-                comment='LaserRF.Start.after: after Init',
+                comment='LaserRF.Start.after: LaserRF.Start only after LaserRF.Init completed',
             ),
             ConnectorInstance(
                 'LaserRF_Start_Refuse_after',
@@ -4663,7 +4661,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:refuse'}),
                     Annotation('rule', arguments={'name': 'LaserRF.Start.after'}),
                 ],
-                comment='rule LaserRF.Start.after: refuse Start after Init',
+                comment='rule LaserRF.Start.after: refuse the request unless LaserRF.Start only after LaserRF.Init completed',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -4672,60 +4670,60 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:trigger'})],
             ),
         ],
-        priorities=[
-            Priority(
-                'Start_exec_start_before_Stop_start',
-                InteractionPattern('Start_exec_start'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Start runs another codel',
+        ports=[
+            ExportPort(
+                'Port',
+                'acquisition_scheduler_exec',
+                targets=[PortRef('acquisition', 'scheduler_exec')],
             ),
-            Priority(
-                'Start_exec_acquire_before_Stop_start',
-                InteractionPattern('Start_exec_acquire'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Start runs another codel',
+            ExportPort(
+                'Port',
+                'acquisition_permanent_exec_start',
+                targets=[PortRef('acquisition', 'permanent_exec_start')],
             ),
-            Priority(
-                'Start_exec_stop_before_Stop_start',
-                InteractionPattern('Start_exec_stop'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before Start runs another codel',
+            ExportPort(
+                'Port',
+                'Init_activity_exec_start',
+                targets=[PortRef('Init', 'activity_exec_start')],
             ),
-            Priority(
-                'acquisition_sleep_before_acquisition_exec_start',
-                InteractionPattern('acquisition_sleep'),
-                InteractionPattern('acquisition_exec_start'),
-                comment='a period ends only when no codel of the task can run',
+            ExportPort(
+                'Port',
+                'Init_activity_exec_configure',
+                targets=[PortRef('Init', 'activity_exec_configure')],
             ),
-            Priority(
-                'acquisition_sleep_before_Init_exec_start',
-                InteractionPattern('acquisition_sleep'),
-                InteractionPattern('Init_exec_start'),
-                comment='a period ends only when no codel of the task can run',
+            ExportPort(
+                'Port',
+                'Start_activity_exec_start',
+                targets=[PortRef('Start', 'activity_exec_start')],
             ),
-            Priority(
-                'acquisition_sleep_before_Init_exec_configure',
-                InteractionPattern('acquisition_sleep'),
-                InteractionPattern('Init_exec_configure'),
-                comment='a period ends only when no codel of the task can run',
+            ExportPort(
+                'Port',
+                'Start_activity_exec_acquire',
+                targets=[PortRef('Start', 'activity_exec_acquire')],
             ),
-            Priority(
-                'acquisition_sleep_before_Start_exec_start',
-                InteractionPattern('acquisition_sleep'),
-                InteractionPattern('Start_exec_start'),
-                comment='a period ends only when no codel of the task can run',
+            ExportPort('Port', 'Scan_write', targets=[PortRef('Scan', 'write')]),
+            ExportPort(
+                'Port',
+                'Start_activity_exec_stop',
+                targets=[PortRef('Start', 'activity_exec_stop')],
             ),
-            Priority(
-                'acquisition_sleep_before_Start_exec_acquire',
-                InteractionPattern('acquisition_sleep'),
-                InteractionPattern('Start_exec_acquire'),
-                comment='a period ends only when no codel of the task can run',
+            ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
+            ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
+            ExportPort('Port', 'Start_activity_abort', targets=[PortRef('Start', 'activity_abort')]),
+            ExportPort(
+                'Port',
+                'acquisition_timer_sleep',
+                targets=[PortRef('acquisition', 'timer_sleep')],
             ),
-            Priority(
-                'acquisition_sleep_before_Start_exec_stop',
-                InteractionPattern('acquisition_sleep'),
-                InteractionPattern('Start_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
+            ExportPort(
+                'Port',
+                'acquisition_scheduler_sleep',
+                targets=[PortRef('acquisition', 'scheduler_sleep')],
+            ),
+            ExportPort(
+                'Status',
+                'Start_control_status',
+                targets=[PortRef('Start', 'control_status')],
             ),
         ],
     )
@@ -4748,39 +4746,6 @@ def NDD_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PPP',
-                'motion_exec_start',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('motion', 'permanent_exec_start'),
-                    PortRef('Speed', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_start'})],
-                comment='codel nddInit of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'motion_exec_publish',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('motion', 'permanent_exec_publish'),
-                    PortRef('Speed', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_publish'})],
-                comment='codel nddPublishIdle of state publish',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'motion_exec_stop',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('motion', 'permanent_exec_stop'),
-                    PortRef('Speed', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_stop'})],
-                comment='codel nddShutdown of state stop',
-            ),
-            ConnectorInstance(
                 'Rendezvous_PP',
                 'SetDataSource_exec_start',
                 ports=[
@@ -4789,46 +4754,6 @@ def NDD_Module() -> CompoundType:
                 ],
                 annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:exec_start'})],
                 comment='codel nddSetDataSource of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'GoTo_exec_start',
-                ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'})],
-                comment='codel nddStartGoTo of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'GoTo_exec_plan',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('GoTo', 'activity_exec_plan'),
-                    PortRef('Speed', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_plan'})],
-                comment='codel nddPlan of state plan',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'GoTo_exec_arrived',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('GoTo', 'activity_exec_arrived'),
-                    PortRef('Speed', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_arrived'})],
-                comment='codel nddArrived of state arrived',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'GoTo_exec_stop',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('GoTo', 'activity_exec_stop'),
-                    PortRef('Speed', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_stop'})],
-                comment='codel nddStopGoTo of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_PPP',
@@ -4840,18 +4765,6 @@ def NDD_Module() -> CompoundType:
                 ],
                 annotations=[Annotation('label', arguments={'name': 'NDD.Stop:exec_start'})],
                 comment='codel nddStop of state start',
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
-                'Stop_start_sync',
-                ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_1',
-                'Stop_start',
-                ports=[PortRef('Stop_start_sync', 'ep'), PortRef('GoTo', 'activity_abort')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:start'})],
-                comment='Stop interrupts GoTo',
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
@@ -4868,12 +4781,6 @@ def NDD_Module() -> CompoundType:
                 ],
                 annotations=[Annotation('label', arguments={'name': 'NDD.motion:period'})],
                 comment='a period starts: paused activities wake up',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'motion_sleep',
-                ports=[PortRef('motion', 'timer_sleep'), PortRef('motion', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:sleep'})],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -4900,19 +4807,6 @@ def NDD_Module() -> CompoundType:
                 annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:trigger'})],
             ),
             ConnectorInstance(
-                'NDD_GoTo_Trigger',
-                'GoTo_trigger',
-                ports=[
-                    PortRef('requests', 'GoTo'),
-                    PortRef('GoTo', 'control_trigger'),
-                    PortRef('SetParams', 'control_status'),
-                    PortRef('SetSpeed', 'control_status'),
-                    PortRef('SetDataSource', 'control_status'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:trigger'})],
-                comment='NDD.GoTo.after: after SetParams, SetSpeed, SetDataSource',
-            ),
-            ConnectorInstance(
                 'NDD_GoTo_Refuse_after',
                 'GoTo_refuse_after',
                 ports=[
@@ -4926,7 +4820,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:refuse'}),
                     Annotation('rule', arguments={'name': 'NDD.GoTo.after'}),
                 ],
-                comment='rule NDD.GoTo.after: refuse GoTo after SetParams, SetSpeed, SetDataSource',
+                comment='rule NDD.GoTo.after: refuse the request unless NDD.GoTo only after NDD.SetParams, NDD.SetSpeed, NDD.SetDataSource completed',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -4936,72 +4830,6 @@ def NDD_Module() -> CompoundType:
             ),
         ],
         priorities=[
-            Priority(
-                'GoTo_exec_start_before_Stop_start',
-                InteractionPattern('GoTo_exec_start'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before GoTo runs another codel',
-            ),
-            Priority(
-                'GoTo_exec_plan_before_Stop_start',
-                InteractionPattern('GoTo_exec_plan'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before GoTo runs another codel',
-            ),
-            Priority(
-                'GoTo_exec_arrived_before_Stop_start',
-                InteractionPattern('GoTo_exec_arrived'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before GoTo runs another codel',
-            ),
-            Priority(
-                'GoTo_exec_stop_before_Stop_start',
-                InteractionPattern('GoTo_exec_stop'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before GoTo runs another codel',
-            ),
-            Priority(
-                'motion_sleep_before_motion_exec_start',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('motion_exec_start'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'motion_sleep_before_motion_exec_publish',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('motion_exec_publish'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'motion_sleep_before_motion_exec_stop',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('motion_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'motion_sleep_before_GoTo_exec_start',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('GoTo_exec_start'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'motion_sleep_before_GoTo_exec_plan',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('GoTo_exec_plan'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'motion_sleep_before_GoTo_exec_arrived',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('GoTo_exec_arrived'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'motion_sleep_before_GoTo_exec_stop',
-                InteractionPattern('motion_sleep'),
-                InteractionPattern('GoTo_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
             Priority(
                 'control_sleep_before_SetDataSource_exec_start',
                 InteractionPattern('control_sleep'),
@@ -5014,6 +4842,77 @@ def NDD_Module() -> CompoundType:
                 InteractionPattern('Stop_exec_start'),
                 comment='a period ends only when no codel of the task can run',
             ),
+        ],
+        ports=[
+            ExportPort(
+                'Port',
+                'motion_scheduler_exec',
+                targets=[PortRef('motion', 'scheduler_exec')],
+            ),
+            ExportPort(
+                'Port',
+                'motion_permanent_exec_start',
+                targets=[PortRef('motion', 'permanent_exec_start')],
+            ),
+            ExportPort('Port', 'Speed_write', targets=[PortRef('Speed', 'write')]),
+            ExportPort(
+                'Port',
+                'motion_permanent_exec_publish',
+                targets=[PortRef('motion', 'permanent_exec_publish')],
+            ),
+            ExportPort(
+                'Port',
+                'motion_permanent_exec_stop',
+                targets=[PortRef('motion', 'permanent_exec_stop')],
+            ),
+            ExportPort(
+                'Port',
+                'GoTo_activity_exec_start',
+                targets=[PortRef('GoTo', 'activity_exec_start')],
+            ),
+            ExportPort(
+                'Port',
+                'GoTo_activity_exec_plan',
+                targets=[PortRef('GoTo', 'activity_exec_plan')],
+            ),
+            ExportPort(
+                'Port',
+                'GoTo_activity_exec_arrived',
+                targets=[PortRef('GoTo', 'activity_exec_arrived')],
+            ),
+            ExportPort(
+                'Port',
+                'GoTo_activity_exec_stop',
+                targets=[PortRef('GoTo', 'activity_exec_stop')],
+            ),
+            ExportPort('Port', 'GoTo_activity_abort', targets=[PortRef('GoTo', 'activity_abort')]),
+            ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
+            ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
+            ExportPort('Port', 'motion_timer_sleep', targets=[PortRef('motion', 'timer_sleep')]),
+            ExportPort(
+                'Port',
+                'motion_scheduler_sleep',
+                targets=[PortRef('motion', 'scheduler_sleep')],
+            ),
+            ExportPort('Port', 'requests_GoTo', targets=[PortRef('requests', 'GoTo')]),
+            ExportPort('Port', 'GoTo_control_trigger', targets=[PortRef('GoTo', 'control_trigger')]),
+            ExportPort(
+                'Status',
+                'SetParams_control_status',
+                targets=[PortRef('SetParams', 'control_status')],
+            ),
+            ExportPort(
+                'Status',
+                'SetSpeed_control_status',
+                targets=[PortRef('SetSpeed', 'control_status')],
+            ),
+            ExportPort(
+                'Status',
+                'SetDataSource_control_status',
+                targets=[PortRef('SetDataSource', 'control_status')],
+            ),
+            ExportPort('Port', 'GoTo_control_refuse', targets=[PortRef('GoTo', 'control_refuse')]),
+            ExportPort('Status', 'GoTo_control_status', targets=[PortRef('GoTo', 'control_status')]),
         ],
     )
 
@@ -5091,7 +4990,7 @@ def POM_Module() -> CompoundType:
                 'Reset_start',
                 ports=[PortRef('Reset_start_sync', 'ep'), PortRef('Run', 'activity_abort')],
                 annotations=[Annotation('label', arguments={'name': 'POM.Reset:start'})],
-                comment='Reset interrupts Run',
+                comment='Reset interrupts Run (POM.Reset.interrupts)',
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
@@ -5127,25 +5026,19 @@ def POM_Module() -> CompoundType:
                 ports=[PortRef('requests', 'Run'), PortRef('Run', 'control_trigger')],
                 annotations=[Annotation('label', arguments={'name': 'POM.Run:trigger'})],
             ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'Reset_trigger',
-                ports=[PortRef('requests', 'Reset'), PortRef('Reset', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Reset:trigger'})],
-            ),
         ],
         priorities=[
             Priority(
                 'Run_exec_start_before_Reset_start',
                 InteractionPattern('Run_exec_start'),
                 InteractionPattern('Reset_start'),
-                comment='an interruption by Reset takes effect before Run runs another codel',
+                comment='an interruption by POM.Reset takes effect before POM.Run runs another codel',
             ),
             Priority(
                 'Run_exec_fix_before_Reset_start',
                 InteractionPattern('Run_exec_fix'),
                 InteractionPattern('Reset_start'),
-                comment='an interruption by Reset takes effect before Run runs another codel',
+                comment='an interruption by POM.Reset takes effect before POM.Run runs another codel',
             ),
             Priority(
                 'fusion_sleep_before_fusion_exec_start',
@@ -5184,6 +5077,15 @@ def POM_Module() -> CompoundType:
                 comment='a period ends only when no codel of the task can run',
             ),
         ],
+        ports=[
+            ExportPort('Status', 'Run_control_status', targets=[PortRef('Run', 'control_status')]),
+            ExportPort('Port', 'requests_Reset', targets=[PortRef('requests', 'Reset')]),
+            ExportPort(
+                'Port',
+                'Reset_control_trigger',
+                targets=[PortRef('Reset', 'control_trigger')],
+            ),
+        ],
     )
 
 
@@ -5203,80 +5105,11 @@ def RFLEX_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PPP',
-                'servo_exec_start',
-                ports=[
-                    PortRef('servo', 'scheduler_exec'),
-                    PortRef('servo', 'permanent_exec_start'),
-                    PortRef('Odo', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_start'})],
-                comment='codel rflexInitOdometry of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PPP',
-                'servo_exec_odometry',
-                ports=[
-                    PortRef('servo', 'scheduler_exec'),
-                    PortRef('servo', 'permanent_exec_odometry'),
-                    PortRef('Odo', 'write'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'})],
-                comment='codel rflexOdometry of state odometry',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'servo_exec_stop',
-                ports=[PortRef('servo', 'scheduler_exec'), PortRef('servo', 'permanent_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_stop'})],
-                comment='codel rflexClose of state stop',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'Init_exec_start',
-                ports=[PortRef('servo', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'})],
-                comment='codel rflexOpen of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'TrackSpeed_exec_start',
-                ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_start'})],
-                comment='codel rflexStartTracking of state start',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'TrackSpeed_exec_track',
-                ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_track')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_track'})],
-                comment='codel rflexTrack of state track',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'TrackSpeed_exec_stop',
-                ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_stop'})],
-                comment='codel rflexBrake of state stop',
-            ),
-            ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_start',
                 ports=[PortRef('control', 'scheduler_exec'), PortRef('Stop', 'activity_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:exec_start'})],
                 comment='codel rflexStop of state start',
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
-                'Stop_start_sync',
-                ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_1',
-                'Stop_start',
-                ports=[PortRef('Stop_start_sync', 'ep'), PortRef('TrackSpeed', 'activity_abort')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
-                comment='Stop interrupts TrackSpeed',
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
@@ -5293,12 +5126,6 @@ def RFLEX_Module() -> CompoundType:
                 ],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:period'})],
                 comment='a period starts: paused activities wake up',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'servo_sleep',
-                ports=[PortRef('servo', 'timer_sleep'), PortRef('servo', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:sleep'})],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -5330,7 +5157,7 @@ def RFLEX_Module() -> CompoundType:
                     PortRef('Init', 'control_status'),
                 ],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:trigger'})],
-                comment='RFLEX.TrackSpeed.after: after Init',
+                comment='RFLEX.TrackSpeed.after: RFLEX.TrackSpeed only after RFLEX.Init completed',
             ),
             ConnectorInstance(
                 'RFLEX_TrackSpeed_Refuse_after',
@@ -5344,7 +5171,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:refuse'}),
                     Annotation('rule', arguments={'name': 'RFLEX.TrackSpeed.after'}),
                 ],
-                comment='rule RFLEX.TrackSpeed.after: refuse TrackSpeed after Init',
+                comment='rule RFLEX.TrackSpeed.after: refuse the request unless RFLEX.TrackSpeed only after RFLEX.Init completed',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5355,70 +5182,67 @@ def RFLEX_Module() -> CompoundType:
         ],
         priorities=[
             Priority(
-                'TrackSpeed_exec_start_before_Stop_start',
-                InteractionPattern('TrackSpeed_exec_start'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before TrackSpeed runs another codel',
-            ),
-            Priority(
-                'TrackSpeed_exec_track_before_Stop_start',
-                InteractionPattern('TrackSpeed_exec_track'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before TrackSpeed runs another codel',
-            ),
-            Priority(
-                'TrackSpeed_exec_stop_before_Stop_start',
-                InteractionPattern('TrackSpeed_exec_stop'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by Stop takes effect before TrackSpeed runs another codel',
-            ),
-            Priority(
-                'servo_sleep_before_servo_exec_start',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('servo_exec_start'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'servo_sleep_before_servo_exec_odometry',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('servo_exec_odometry'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'servo_sleep_before_servo_exec_stop',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('servo_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'servo_sleep_before_Init_exec_start',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('Init_exec_start'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'servo_sleep_before_TrackSpeed_exec_start',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('TrackSpeed_exec_start'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'servo_sleep_before_TrackSpeed_exec_track',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('TrackSpeed_exec_track'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'servo_sleep_before_TrackSpeed_exec_stop',
-                InteractionPattern('servo_sleep'),
-                InteractionPattern('TrackSpeed_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
                 'control_sleep_before_Stop_exec_start',
                 InteractionPattern('control_sleep'),
                 InteractionPattern('Stop_exec_start'),
                 comment='a period ends only when no codel of the task can run',
+            ),
+        ],
+        ports=[
+            ExportPort('Port', 'servo_scheduler_exec', targets=[PortRef('servo', 'scheduler_exec')]),
+            ExportPort(
+                'Port',
+                'servo_permanent_exec_start',
+                targets=[PortRef('servo', 'permanent_exec_start')],
+            ),
+            ExportPort('Port', 'Odo_write', targets=[PortRef('Odo', 'write')]),
+            ExportPort(
+                'Port',
+                'servo_permanent_exec_odometry',
+                targets=[PortRef('servo', 'permanent_exec_odometry')],
+            ),
+            ExportPort(
+                'Port',
+                'servo_permanent_exec_stop',
+                targets=[PortRef('servo', 'permanent_exec_stop')],
+            ),
+            ExportPort(
+                'Port',
+                'Init_activity_exec_start',
+                targets=[PortRef('Init', 'activity_exec_start')],
+            ),
+            ExportPort(
+                'Port',
+                'TrackSpeed_activity_exec_start',
+                targets=[PortRef('TrackSpeed', 'activity_exec_start')],
+            ),
+            ExportPort(
+                'Port',
+                'TrackSpeed_activity_exec_track',
+                targets=[PortRef('TrackSpeed', 'activity_exec_track')],
+            ),
+            ExportPort(
+                'Port',
+                'TrackSpeed_activity_exec_stop',
+                targets=[PortRef('TrackSpeed', 'activity_exec_stop')],
+            ),
+            ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
+            ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
+            ExportPort(
+                'Port',
+                'TrackSpeed_activity_abort',
+                targets=[PortRef('TrackSpeed', 'activity_abort')],
+            ),
+            ExportPort('Port', 'servo_timer_sleep', targets=[PortRef('servo', 'timer_sleep')]),
+            ExportPort(
+                'Port',
+                'servo_scheduler_sleep',
+                targets=[PortRef('servo', 'scheduler_sleep')],
+            ),
+            ExportPort(
+                'Status',
+                'TrackSpeed_control_status',
+                targets=[PortRef('TrackSpeed', 'control_status')],
             ),
         ],
     )
@@ -5435,11 +5259,583 @@ def DALA() -> CompoundType:
             ComponentInstance('POM_Module', 'POM'),
             ComponentInstance('RFLEX_Module', 'RFLEX'),
         ],
+        connectors=[
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'LaserRF_acquisition_exec_start',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
+                    PortRef('LaserRF', 'acquisition_permanent_exec_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:exec_start'})],
+                comment='codel lrfInitTask of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'LaserRF_Init_exec_start',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
+                    PortRef('LaserRF', 'Init_activity_exec_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_start'})],
+                comment='codel lrfOpen of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'LaserRF_Init_exec_configure',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
+                    PortRef('LaserRF', 'Init_activity_exec_configure'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_configure'})],
+                comment='codel lrfConfigure of state configure',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'LaserRF_Start_exec_start',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
+                    PortRef('LaserRF', 'Start_activity_exec_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_start'})],
+                comment='codel lrfStartAcquisition of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'LaserRF_Start_exec_acquire',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
+                    PortRef('LaserRF', 'Start_activity_exec_acquire'),
+                    PortRef('LaserRF', 'Scan_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_acquire'})],
+                comment='codel lrfAcquire of state acquire',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'LaserRF_Start_exec_stop',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
+                    PortRef('LaserRF', 'Start_activity_exec_stop'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_stop'})],
+                comment='codel lrfStopAcquisition of state stop',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'NDD_motion_exec_start',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'motion_permanent_exec_start'),
+                    PortRef('NDD', 'Speed_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_start'})],
+                comment='codel nddInit of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'NDD_motion_exec_publish',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'motion_permanent_exec_publish'),
+                    PortRef('NDD', 'Speed_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_publish'})],
+                comment='codel nddPublishIdle of state publish',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'NDD_motion_exec_stop',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'motion_permanent_exec_stop'),
+                    PortRef('NDD', 'Speed_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_stop'})],
+                comment='codel nddShutdown of state stop',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'NDD_GoTo_exec_start',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'GoTo_activity_exec_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'})],
+                comment='codel nddStartGoTo of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'NDD_GoTo_exec_plan',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'GoTo_activity_exec_plan'),
+                    PortRef('NDD', 'Speed_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_plan'})],
+                comment='codel nddPlan of state plan',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'NDD_GoTo_exec_arrived',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'GoTo_activity_exec_arrived'),
+                    PortRef('NDD', 'Speed_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_arrived'})],
+                comment='codel nddArrived of state arrived',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'NDD_GoTo_exec_stop',
+                ports=[
+                    PortRef('NDD', 'motion_scheduler_exec'),
+                    PortRef('NDD', 'GoTo_activity_exec_stop'),
+                    PortRef('NDD', 'Speed_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_stop'})],
+                comment='codel nddStopGoTo of state stop',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'RFLEX_servo_exec_start',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'servo_permanent_exec_start'),
+                    PortRef('RFLEX', 'Odo_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_start'})],
+                comment='codel rflexInitOdometry of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PPP',
+                'RFLEX_servo_exec_odometry',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'servo_permanent_exec_odometry'),
+                    PortRef('RFLEX', 'Odo_write'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'})],
+                comment='codel rflexOdometry of state odometry',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'RFLEX_servo_exec_stop',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'servo_permanent_exec_stop'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_stop'})],
+                comment='codel rflexClose of state stop',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'RFLEX_Init_exec_start',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'Init_activity_exec_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'})],
+                comment='codel rflexOpen of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'RFLEX_TrackSpeed_exec_start',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'TrackSpeed_activity_exec_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_start'})],
+                comment='codel rflexStartTracking of state start',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'RFLEX_TrackSpeed_exec_track',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'TrackSpeed_activity_exec_track'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_track'})],
+                comment='codel rflexTrack of state track',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'RFLEX_TrackSpeed_exec_stop',
+                ports=[
+                    PortRef('RFLEX', 'servo_scheduler_exec'),
+                    PortRef('RFLEX', 'TrackSpeed_activity_exec_stop'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_stop'})],
+                comment='codel rflexBrake of state stop',
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'LaserRF_Stop_start_sync',
+                ports=[
+                    PortRef('LaserRF', 'Stop_control_start'),
+                    PortRef('LaserRF', 'Stop_activity_start'),
+                ],
+            ),
+            ConnectorInstance(
+                'Broadcast_2',
+                'LaserRF_Stop_start',
+                ports=[
+                    PortRef('LaserRF_Stop_start_sync', 'ep'),
+                    PortRef('LaserRF', 'Start_activity_abort'),
+                    PortRef('NDD', 'GoTo_activity_abort'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
+                comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'NDD_Stop_start_sync',
+                ports=[PortRef('NDD', 'Stop_control_start'), PortRef('NDD', 'Stop_activity_start')],
+            ),
+            ConnectorInstance(
+                'Broadcast_1',
+                'NDD_Stop_start',
+                ports=[PortRef('NDD_Stop_start_sync', 'ep'), PortRef('NDD', 'GoTo_activity_abort')],
+                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:start'})],
+                comment='Stop interrupts GoTo (NDD.Stop.interrupts)',
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'RFLEX_Stop_start_sync',
+                ports=[PortRef('RFLEX', 'Stop_control_start'), PortRef('RFLEX', 'Stop_activity_start')],
+            ),
+            ConnectorInstance(
+                'Broadcast_2',
+                'RFLEX_Stop_start',
+                ports=[
+                    PortRef('RFLEX_Stop_start_sync', 'ep'),
+                    PortRef('RFLEX', 'TrackSpeed_activity_abort'),
+                    PortRef('NDD', 'GoTo_activity_abort'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
+                comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'LaserRF_acquisition_sleep',
+                ports=[
+                    PortRef('LaserRF', 'acquisition_timer_sleep'),
+                    PortRef('LaserRF', 'acquisition_scheduler_sleep'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:sleep'})],
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'NDD_motion_sleep',
+                ports=[PortRef('NDD', 'motion_timer_sleep'), PortRef('NDD', 'motion_scheduler_sleep')],
+                annotations=[Annotation('label', arguments={'name': 'NDD.motion:sleep'})],
+            ),
+            ConnectorInstance(
+                'Rendezvous_PP',
+                'RFLEX_servo_sleep',
+                ports=[PortRef('RFLEX', 'servo_timer_sleep'), PortRef('RFLEX', 'servo_scheduler_sleep')],
+                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:sleep'})],
+            ),
+            ConnectorInstance(
+                'NDD_GoTo_Trigger',
+                'NDD_GoTo_trigger',
+                ports=[
+                    PortRef('NDD', 'requests_GoTo'),
+                    PortRef('NDD', 'GoTo_control_trigger'),
+                    PortRef('NDD', 'SetParams_control_status'),
+                    PortRef('NDD', 'SetSpeed_control_status'),
+                    PortRef('NDD', 'SetDataSource_control_status'),
+                    PortRef('POM', 'Run_control_status'),
+                    PortRef('LaserRF', 'Start_control_status'),
+                    PortRef('Aspect', 'Run_control_status'),
+                    PortRef('RFLEX', 'TrackSpeed_control_status'),
+                ],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:trigger'}),
+                    Annotation('wait', arguments={'rules': 'goto-waits-for-base'}),
+                ],
+                comment='NDD.GoTo.after: NDD.GoTo only after NDD.SetParams, NDD.SetSpeed, NDD.SetDataSource completed; goto-after-pom-run: NDD.GoTo only after POM.Run completed; goto-needs-laser-and-map: NDD.GoTo only while LaserRF.Start, Aspect.Run run; goto-waits-for-base: NDD.GoTo only while RFLEX.TrackSpeed run',
+            ),
+            ConnectorInstance(
+                'NDD_GoTo_Refuse_goto_after_pom_run',
+                'NDD_GoTo_refuse_goto_after_pom_run',
+                ports=[
+                    PortRef('NDD', 'requests_GoTo'),
+                    PortRef('NDD', 'GoTo_control_refuse'),
+                    PortRef('POM', 'Run_control_status'),
+                ],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:refuse'}),
+                    Annotation('rule', arguments={'name': 'goto-after-pom-run'}),
+                ],
+                comment='rule goto-after-pom-run: refuse the request unless NDD.GoTo only after POM.Run completed',
+            ),
+            ConnectorInstance(
+                'NDD_GoTo_Refuse_goto_needs_laser_and_map',
+                'NDD_GoTo_refuse_goto_needs_laser_and_map',
+                ports=[
+                    PortRef('NDD', 'requests_GoTo'),
+                    PortRef('NDD', 'GoTo_control_refuse'),
+                    PortRef('LaserRF', 'Start_control_status'),
+                    PortRef('Aspect', 'Run_control_status'),
+                ],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:refuse'}),
+                    Annotation('rule', arguments={'name': 'goto-needs-laser-and-map'}),
+                ],
+                comment='rule goto-needs-laser-and-map: refuse the request unless NDD.GoTo only while LaserRF.Start, Aspect.Run run',
+            ),
+            ConnectorInstance(
+                'POM_Reset_Trigger',
+                'POM_Reset_trigger',
+                ports=[
+                    PortRef('POM', 'requests_Reset'),
+                    PortRef('POM', 'Reset_control_trigger'),
+                    PortRef('NDD', 'GoTo_control_status'),
+                ],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Reset:trigger'}),
+                    Annotation('wait', arguments={'rules': 'no-reset-while-navigating'}),
+                ],
+                comment='no-reset-while-navigating: POM.Reset never while NDD.GoTo run',
+            ),
+        ],
+        priorities=[
+            Priority(
+                'LaserRF_Start_exec_start_before_Stop_start',
+                InteractionPattern('LaserRF_Start_exec_start'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before LaserRF.Start runs another codel',
+            ),
+            Priority(
+                'LaserRF_Start_exec_acquire_before_Stop_start',
+                InteractionPattern('LaserRF_Start_exec_acquire'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before LaserRF.Start runs another codel',
+            ),
+            Priority(
+                'LaserRF_Start_exec_stop_before_Stop_start',
+                InteractionPattern('LaserRF_Start_exec_stop'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before LaserRF.Start runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_start_before_LaserRF_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_start'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_plan_before_LaserRF_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_plan'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_arrived_before_LaserRF_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_arrived'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_stop_before_LaserRF_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_stop'),
+                InteractionPattern('LaserRF_Stop_start'),
+                comment='an interruption by LaserRF.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_start_before_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_start'),
+                InteractionPattern('NDD_Stop_start'),
+                comment='an interruption by NDD.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_plan_before_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_plan'),
+                InteractionPattern('NDD_Stop_start'),
+                comment='an interruption by NDD.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_arrived_before_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_arrived'),
+                InteractionPattern('NDD_Stop_start'),
+                comment='an interruption by NDD.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_stop_before_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_stop'),
+                InteractionPattern('NDD_Stop_start'),
+                comment='an interruption by NDD.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'RFLEX_TrackSpeed_exec_start_before_Stop_start',
+                InteractionPattern('RFLEX_TrackSpeed_exec_start'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before RFLEX.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'RFLEX_TrackSpeed_exec_track_before_Stop_start',
+                InteractionPattern('RFLEX_TrackSpeed_exec_track'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before RFLEX.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'RFLEX_TrackSpeed_exec_stop_before_Stop_start',
+                InteractionPattern('RFLEX_TrackSpeed_exec_stop'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before RFLEX.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_start_before_RFLEX_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_start'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_plan_before_RFLEX_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_plan'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_arrived_before_RFLEX_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_arrived'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_stop_before_RFLEX_Stop_start',
+                InteractionPattern('NDD_GoTo_exec_stop'),
+                InteractionPattern('RFLEX_Stop_start'),
+                comment='an interruption by RFLEX.Stop takes effect before NDD.GoTo runs another codel',
+            ),
+            Priority(
+                'LaserRF_acquisition_sleep_before_acquisition_exec_start',
+                InteractionPattern('LaserRF_acquisition_sleep'),
+                InteractionPattern('LaserRF_acquisition_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'LaserRF_acquisition_sleep_before_Init_exec_start',
+                InteractionPattern('LaserRF_acquisition_sleep'),
+                InteractionPattern('LaserRF_Init_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'LaserRF_acquisition_sleep_before_Init_exec_configure',
+                InteractionPattern('LaserRF_acquisition_sleep'),
+                InteractionPattern('LaserRF_Init_exec_configure'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'LaserRF_acquisition_sleep_before_Start_exec_start',
+                InteractionPattern('LaserRF_acquisition_sleep'),
+                InteractionPattern('LaserRF_Start_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'LaserRF_acquisition_sleep_before_Start_exec_acquire',
+                InteractionPattern('LaserRF_acquisition_sleep'),
+                InteractionPattern('LaserRF_Start_exec_acquire'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'LaserRF_acquisition_sleep_before_Start_exec_stop',
+                InteractionPattern('LaserRF_acquisition_sleep'),
+                InteractionPattern('LaserRF_Start_exec_stop'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_motion_exec_start',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_motion_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_motion_exec_publish',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_motion_exec_publish'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_motion_exec_stop',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_motion_exec_stop'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_GoTo_exec_start',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_GoTo_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_GoTo_exec_plan',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_GoTo_exec_plan'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_GoTo_exec_arrived',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_GoTo_exec_arrived'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'NDD_motion_sleep_before_GoTo_exec_stop',
+                InteractionPattern('NDD_motion_sleep'),
+                InteractionPattern('NDD_GoTo_exec_stop'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_servo_exec_start',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_servo_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_servo_exec_odometry',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_servo_exec_odometry'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_servo_exec_stop',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_servo_exec_stop'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_Init_exec_start',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_Init_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_TrackSpeed_exec_start',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_TrackSpeed_exec_start'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_TrackSpeed_exec_track',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_TrackSpeed_exec_track'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+            Priority(
+                'RFLEX_servo_sleep_before_TrackSpeed_exec_stop',
+                InteractionPattern('RFLEX_servo_sleep'),
+                InteractionPattern('RFLEX_TrackSpeed_exec_stop'),
+                comment='a period ends only when no codel of the task can run',
+            ),
+        ],
     )
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 12 connector types, 34 compound types."""
+    """The whole model: 48 atom types, 15 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -5883,7 +6279,10 @@ def package() -> Package:
             LaserRF_Start_Refuse_after(),
             LaserRF_Start_Trigger(),
             NDD_GoTo_Refuse_after(),
+            NDD_GoTo_Refuse_goto_after_pom_run(),
+            NDD_GoTo_Refuse_goto_needs_laser_and_map(),
             NDD_GoTo_Trigger(),
+            POM_Reset_Trigger(),
             RFLEX_TrackSpeed_Refuse_after(),
             RFLEX_TrackSpeed_Trigger(),
             RendezvousX_PP(),

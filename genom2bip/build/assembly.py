@@ -61,10 +61,11 @@ class Wire:
 class Rank:
     """A priority: ``low`` may not fire while ``high`` is enabled."""
 
-    name: str
+    name: str  # local name, unique among the ranks of ``owner``
     low: Wire
     high: Wire
     comment: str
+    owner: Path = ()
     guard: Expr | None = None
 
 
@@ -166,7 +167,7 @@ class Assembly:
                 inner = exported
             return PortRef(end.atom[len(at)], inner)
 
-        def local_name(w: Wire, at: Path) -> str:
+        def local_name(w: Wire | Rank, at: Path) -> str:
             extra = w.owner[len(at):] if w.owner[: len(at)] == at else w.owner
             return "_".join(extra + (w.name,))
 
@@ -196,7 +197,7 @@ class Assembly:
             at = scope[id(r.low)]
             priorities[at].append(
                 Priority(
-                    r.name,
+                    local_name(r, at),
                     InteractionPattern(names[id(r.low)]),
                     InteractionPattern(names[id(r.high)]),
                     guard=r.guard,

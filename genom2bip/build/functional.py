@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from genom2bip import ir
+from genom2bip.rules import GUARD_KINDS, Rule, description_rules
 from genom2bip.build import library
 from genom2bip.build.assembly import Assembly, End, Path, Rank, Wire
 from genom2bip.build.names import ident, joined
@@ -32,32 +33,18 @@ from runtime.model.expressions import Expr
 CONTROL_TASK = "control"
 
 
-@dataclass
-class Constraint:
-    """A condition on starting ``service``: the status of ``others`` (``after``: completed; ``before``: not yet).
-
-    ``rule`` names it in reports (``NDD.GoTo.after``); ``refuse`` says
-    whether a violating request is refused (else it waits until allowed).
-    """
-
-    module: str
-    service: str
-    kind: str  # "after" (others completed at least once) or "before" (others never completed)
-    others: list[tuple[str, str]]
-    rule: str
-    refuse: bool = True
-
-    def condition(self, first_param: int) -> Expr:
-        terms: list[Expr] = []
-        for i, _ in enumerate(self.others):
-            done = PortData(f"p{first_param + i}", "done")
-            terms.append(done if self.kind == "after" else Unary("!", done))
-        return library.conjunction(terms)
+def rule_condition(rule: Rule, first_param: int) -> Expr:
+    """The guard a rule puts on its service's trigger, over status ports ``p<first_param>``..."""
+    terms: list[Expr] = []
+    for i, _ in enumerate(rule.others):
+        value = PortData(f"p{first_param + i}", rule.status_field)
+        terms.append(Unary("!", value) if rule.negated else value)
+    return library.conjunction(terms)
 
 
 @dataclass
 class ServiceParts:
-    module: str
+    module: str  # the component's name as written in the description
     service: ir.Service
     path: Path  # the service compound
     task: Path  # the task compound whose scheduler runs its codels
@@ -79,15 +66,15 @@ class ServiceParts:
 class FunctionalLevel:
     """Builds the package for a set of components: one compound per module under one root compound."""
 
-    def __init__(self, description: ir.Description, system: str) -> None:
+    def __init__(self, description: ir.Description, system: str, rules: list[Rule] | None = None) -> None:
         self.description = description
         self.system = system
+        self.rules = description_rules(description) if rules is None else rules
         self.atom_types: dict[str, AtomType] = {}
         self.connector_types: dict[str, ConnectorType] = {}
         self.externs: dict[str, ExternFunction] = {}
         self.asm = Assembly(self._port_type)
-        self.services: dict[tuple[str, str], ServiceParts] = {}
-        self.constraints: list[Constraint] = []
+        self.services: dict[tuple[str, str], ServiceParts] = {}  # (component, service) as written
         self.task_execs: dict[Path, list[Wire]] = {}
         self.wakes: dict[Path, list[End]] = {}
         self.docs: dict[str, str] = {}  # type name -> one line saying what it stands for
@@ -120,6 +107,9 @@ class FunctionalLevel:
         self.asm.group((), ident(self.system.upper()), comment=f"functional level {self.system}")
         for component in self.description.components:
             self._module(component)
+        self._interruptions()
+        for task_path, execs in self.task_execs.items():
+            self._period(task_path[0], task_path, execs)
         self._triggers()
         return Package(
             name=ident(self.system.lower()),
@@ -150,16 +140,6 @@ class FunctionalLevel:
         for s in c.services:
             on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == "activity" else tasks[CONTROL_TASK + "\0"]
             self._service(m, c, root, s, on)
-        self._interruptions(m, c)
-        for task_path, execs in self.task_execs.items():
-            if task_path[0] == m:
-                self._period(m, task_path, execs)
-        for s in c.services:
-            for kind, names in (("after", s.after), ("before", s.before)):
-                if names:
-                    self.constraints.append(
-                        Constraint(m, s.name, kind, [(m, n) for n in names], rule=f"{c.name}.{s.name}.{kind}")
-                    )
 
     def _task(self, m: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
         name = ident(task.name)
@@ -208,7 +188,8 @@ class FunctionalLevel:
         name = ident(s.name)
         path = self.asm.group(root + (name,), joined(m, name, "Service"), comment=f"{s.kind} {s.name}")
         fsm = Fsm.of(s.fsm_codels(), list(dict.fromkeys(s.throws + c.throws)))
-        constrained = bool(s.after or s.before)
+        constrained = any(r.service == (c.name, s.name) and r.kind in GUARD_KINDS and r.on_violation == "reject"
+                          for r in self.rules)
         control = self.asm.atom(path + ("control",), self._atom_type(
             controller_type(m, s, constrained), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
@@ -219,8 +200,8 @@ class FunctionalLevel:
             v = s.validate
             ok = ir.Codel(v.name, yields=[ir.Yield("ok")], params=v.params, wcet=v.wcet)
             self.externs.setdefault(joined(m, v.name), codel_extern(m, ok, s.throws))
-        parts = ServiceParts(m, s, path, task, fsm)
-        self.services[(m, s.name)] = parts
+        parts = ServiceParts(c.name, s, path, task, fsm)
+        self.services[(c.name, s.name)] = parts
 
         label = parts.label
         if s.validate is not None:
@@ -235,29 +216,44 @@ class FunctionalLevel:
         if fsm.paused:
             self.wakes[task].append(End(activity, "wake"))
 
-    def _interruptions(self, m: str, c: ir.Component) -> None:
-        """``start`` of every service; a service that ``interrupts`` others aborts them as it starts (paper: Stop → GoTo)."""
-        names = [s.name for s in c.services]
-        for s in c.services:
-            parts = self.services[(m, s.name)]
-            victims = names if "all" in s.interrupts else [n for n in s.interrupts if n in names]
-            victims = [n for n in victims if n != s.name]
+    def _interruptions(self) -> None:
+        """``start`` of every service; one that interrupts others aborts them as it starts (paper: Stop → GoTo).
+
+        Victims come from the description's ``interrupts`` and from rules, in
+        any module: the connector is placed where the ports meet.
+        """
+        victims: dict[tuple[str, str], list[tuple[str, str]]] = {}
+        reasons: dict[tuple[str, str], list[str]] = {}
+        for r in self.rules:
+            if r.kind == "interrupts":
+                for v in r.others:
+                    if v not in victims.setdefault(r.service, []):
+                        victims[r.service].append(v)
+                reasons.setdefault(r.service, []).append(r.id)
+        for key, parts in self.services.items():
             start = [End(parts.control, "start"), End(parts.activity, "start")]
-            if not victims:
+            mine = victims.get(key, [])
+            if not mine:
                 self.asm.wire(Wire(self._rendezvous(start), start, "start", parts.path, f"{parts.label}:start"))
                 continue
             inner = Wire(self._rendezvous(start, exported=True), start, "start_sync", parts.path)
-            aborts = [End(self.services[(m, v)].activity, "abort") for v in victims]
+            aborts = [End(self.services[v].activity, "abort") for v in mine]
+            names = ", ".join(f"{m}.{n}" if m != key[0] else n for m, n in mine)
             outer = self.asm.wire(
                 Wire(self._connector(library.broadcast_type(len(aborts))), [inner, *aborts], "start", parts.path,
-                     f"{parts.label}:start", comment=f"{s.name} interrupts {', '.join(victims)}")
+                     f"{parts.label}:start", comment=f"{key[1]} interrupts {names} ({', '.join(reasons[key])})")
             )
             self.asm.wires.append(inner)
-            for v in victims:
-                for w in self.task_execs[self.services[(m, v)].task]:
-                    if w.ends[1].atom == self.services[(m, v)].activity:
-                        self.asm.rank(Rank(f"{ident(v)}_{w.name}_before_{ident(s.name)}_start", w, outer,
-                                           comment=f"an interruption by {s.name} takes effect before {v} runs another codel"))
+            for v in mine:
+                victim = self.services[v]
+                for w in self.task_execs[victim.task]:
+                    if w.ends[1].atom == victim.activity:
+                        same = v[0] == key[0]
+                        name = (f"{ident(v[1])}_{w.name}_before_{ident(key[1])}_start" if same else
+                                f"{ident(v[0])}_{ident(v[1])}_{w.name}_before_{ident(key[0])}_{ident(key[1])}_start")
+                        self.asm.rank(Rank(name, w, outer, owner=(ident(v[0]),) if same else (),
+                                           comment=f"an interruption by {key[0]}.{key[1]} takes effect before "
+                                                   f"{v[0]}.{v[1]} runs another codel"))
 
     def _period(self, m: str, task: Path, execs: list[Wire]) -> None:
         """Period start (timer trigger, waking the paused activities) and end (only once no codel can run)."""
@@ -277,37 +273,47 @@ class FunctionalLevel:
         sleep = self.asm.wire(Wire(self._rendezvous(closing), closing, "sleep", task, f"{m}.{tname}:sleep"))
         for w in execs:
             self.asm.rank(Rank(f"{tname}_sleep_before_{w.owner[-1] if len(w.owner) > 1 else m}_{w.name}", sleep, w,
-                               comment="a period ends only when no codel of the task can run"))
+                               owner=(m,), comment="a period ends only when no codel of the task can run"))
 
     # -- requests ---------------------------------------------------------------------------
     def _triggers(self) -> None:
-        """``trigger`` of every service, guarded by its constraints; one ``refuse`` connector per refusing constraint."""
-        for (m, sname), parts in self.services.items():
-            mine = [k for k in self.constraints if (k.module, k.service) == (m, sname)]
-            request = End((m, "requests"), ident(sname))
+        """``trigger`` of every service, guarded by its rules; one ``refuse`` connector per refusing rule.
+
+        A rule with ``on_violation: wait`` has no refuse connector: the request
+        stays in the acceptor until the guard holds; the trigger connector
+        names such rules in ``@wait(rules=...)`` for the reports.
+        """
+        for key, parts in self.services.items():
+            mine = [r for r in self.rules if r.service == key and r.kind in GUARD_KINDS]
+            request = End((ident(key[0]), "requests"), ident(key[1]))
             ends: list[End] = [request, End(parts.control, "trigger")]
             terms: list[Expr] = []
-            for k in mine:
-                terms.append(k.condition(len(ends) + 1))
-                ends += [End(self.services[o].control, "status") for o in k.others]
-            ttype = self._rendezvous(ends) if not terms else self._guarded(f"{m}_{ident(sname)}_Trigger", ends, library.conjunction(terms))
+            for r in mine:
+                terms.append(rule_condition(r, len(ends) + 1))
+                ends += [End(self.services[o].control, "status") for o in r.others]
+            m, name = ident(key[0]), ident(key[1])
+            ttype = self._rendezvous(ends) if not terms else self._guarded(f"{m}_{name}_Trigger", ends,
+                                                                          library.conjunction(terms))
+            waits = [r.id for r in mine if r.on_violation == "wait"]
             self.asm.wire(Wire(ttype, ends, "trigger", parts.path, f"{parts.label}:trigger",
-                               comment="; ".join(f"{k.rule}: {k.kind} {', '.join(o[1] for o in k.others)}" for k in mine) or None))
-            for k in mine:
-                if not k.refuse:
+                               comment="; ".join(f"{r.id}: {r.describe()}" for r in mine) or None,
+                               annotations=[Annotation("wait", {"rules": ",".join(waits)})] if waits else []))
+            for r in mine:
+                if r.on_violation != "reject":
                     continue
-                rends = [request, End(parts.control, "refuse")] + [End(self.services[o].control, "status") for o in k.others]
-                guard = Unary("!", k.condition(3))
-                rtype = self._guarded(f"{m}_{ident(sname)}_Refuse_{k.kind}", rends, guard)
-                self.asm.wire(Wire(rtype, rends, f"refuse_{k.kind}", parts.path, f"{parts.label}:refuse",
-                                   comment=f"rule {k.rule}: refuse {sname} {k.kind} {', '.join(o[1] for o in k.others)}",
-                                   annotations=[Annotation("rule", {"name": k.rule})]))
+                tag = r.id.rsplit(".", 1)[-1] if r.origin == "description" else r.id
+                rends = [request, End(parts.control, "refuse")] + [End(self.services[o].control, "status")
+                                                                    for o in r.others]
+                rtype = self._guarded(f"{m}_{name}_Refuse_{ident(tag)}", rends, Unary("!", rule_condition(r, 3)))
+                self.asm.wire(Wire(rtype, rends, f"refuse_{ident(tag)}", parts.path, f"{parts.label}:refuse",
+                                   comment=f"rule {r.id}: refuse the request unless {r.describe()}",
+                                   annotations=[Annotation("rule", {"name": r.id})]))
 
     def _guarded(self, name: str, ends: list[End], guard: Expr) -> ConnectorType:
         types = tuple(self._port_type(self.asm.atoms[e.atom].type, e.port) for e in ends)
         return self._connector(library.guarded_type(name, types, guard))
 
 
-def build_package(description: ir.Description, system: str) -> Package:
-    """The BIP package of the functional level made of every component of ``description``."""
-    return FunctionalLevel(description, system).build()
+def build_package(description: ir.Description, system: str, rules: list[Rule] | None = None) -> Package:
+    """The BIP package of the functional level; ``rules`` default to the description's own constraints."""
+    return FunctionalLevel(description, system, rules).build()

@@ -167,7 +167,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
 
     ``status`` is available in every place and tells constraint connectors
     whether the service has completed (at least once / latest run) and whether
-    it runs now.  ``reject`` exists when a validate codel may refuse the
+    it runs now: from the moment its request is accepted until it reports, so
+    that two mutually exclusive services can never both be accepted.  ``reject`` exists when a validate codel may refuse the
     parameters, ``refuse`` when a constraint may refuse a request.
     """
     places = ["IDLE", "CHECK", "ACTIVE"]
@@ -185,9 +186,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
     ]
     ended = [Assign(Var("running"), Const(False))]
     transitions = [
-        Transition("trigger", ["IDLE"], ["CHECK"], action=validate),
-        Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0)),
-                   action=[Assign(Var("running"), Const(True))]),
+        Transition("trigger", ["IDLE"], ["CHECK"], action=validate + [Assign(Var("running"), Const(True))]),
+        Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0))),
         Transition("finish", ["ACTIVE"], ["IDLE"],
                    action=ended + [Assign(Var("done"), Const(True)), Assign(Var("ok"), Const(True))]),
         Transition("fail", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
@@ -196,7 +196,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
     transitions += [Transition("status", [p], [p]) for p in places]
     if service.validate:
         ports.insert(1, PortDecl(PORT, "reject", exported=True))
-        transitions.insert(1, Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0))))
+        transitions.insert(1, Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0)),
+                                         action=ended))
     if constrained:
         ports.insert(1, PortDecl(PORT, "refuse", exported=True))
         transitions.insert(1, Transition("refuse", ["IDLE"], ["IDLE"]))

@@ -297,14 +297,13 @@ def counter_GetTicks_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -394,14 +393,13 @@ def counter_SetRunning_Control() -> AtomType:
             ],
         ),
         transitions=[
-            Transition('trigger', ['IDLE'], ['CHECK'], action=[Assign(Var('verdict'), Const(0))]),
             Transition(
-                'start',
+                'trigger',
+                ['IDLE'],
                 ['CHECK'],
-                ['ACTIVE'],
-                guard=Binary('==', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(True))],
+                action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
             ),
+            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
                 'finish',
                 ['ACTIVE'],
