@@ -19,6 +19,7 @@ from runtime.model import (
     DefineGroup,
     DefinePort,
     InitialTransition,
+    InteractionSpec,
     PortDecl,
     PortType,
     Transition,
@@ -120,8 +121,6 @@ def broadcast_type(receivers: int) -> ConnectorType:
 def guarded_type(name: str, types: tuple[str, ...], guard: Expr) -> ConnectorType:
     """A rendezvous whose guard reads status ports (constraints and rules)."""
     names = param_names(len(types))
-    from runtime.model import InteractionSpec
-
     return ConnectorType(
         name=name,
         params=[ConnectorParam(t, n) for t, n in zip(types, names)],

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from lark import Lark, Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from genom2bip.ir import (
     ArrayType,

@@ -10,7 +10,7 @@ from runtime.bip2.interfaces import resolve_export_types
 from runtime.bip2.locator import Locator
 from runtime.bip2.syntax import parse_tree
 from runtime.bip2.validate import validate
-from runtime.diagnostics import DiagnosticError, Reporter, SourceCache, Span
+from runtime.diagnostics import Reporter, SourceCache, Span
 from runtime.model import Package
 
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 from typing import Union
 
 from runtime.diagnostics import Span
-from runtime.model.common import Annotation, DataDecl, DataParam, _span
+from runtime.model.common import Annotation, DataDecl, _span
 from runtime.model.expressions import Expr, Stmt
 
 
