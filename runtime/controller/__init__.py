@@ -1,0 +1,11 @@
+"""The generated controller at run time: real periods, Python codels, posters and requests with reports.
+
+``Controller(package, root, interface, codels)`` runs the engine in a thread
+of its own (``start``/``stop``) and takes requests from any thread
+(``submit``, ``wait``); docs/runtime.md describes the semantics.
+"""
+from runtime.controller.controller import Controller, StepInfo
+from runtime.controller.requests import FINAL, Request, RequestError
+from runtime.controller.timing import MonotonicClock, VirtualClock
+
+__all__ = ["FINAL", "Controller", "MonotonicClock", "Request", "RequestError", "StepInfo", "VirtualClock"]

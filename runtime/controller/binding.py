@@ -1,0 +1,215 @@
+"""Calling Python codels from the model's codel externs: arguments in, outcome index out.
+
+The engine calls ``NDD_nddPlan()`` with no argument and expects the outcome
+index (runtime/codels.py).  The extern made here finds who is running (the
+service or task the firing interaction belongs to, set by the controller in
+:attr:`Binder.scope`), builds the codel's keyword arguments from the ids, the
+request's parameters and locals, and the posters, calls the Python function,
+writes ``out``/``inout`` holders back, and maps the yield (or the exception)
+to the outcome.  Anything wrong becomes :attr:`Binder.failure`, with the
+codel's name, and the undeclared outcome: the service fails, the controller
+keeps running.
+"""
+from __future__ import annotations
+
+import traceback
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from runtime.codels import UNDECLARED, CodelSpec
+from runtime.controller.codels import CodelSource
+from runtime.controller.data import Data, clone, get_path, path_steps, set_path
+from runtime.genom import Ref, Throw
+
+
+@dataclass
+class Arg:
+    """How one argument is made: ``source`` ids/local/port/remote, ``direction``, the variable's path."""
+
+    name: str
+    source: str
+    direction: str
+    steps: list[str | int]
+    port: str = ""
+
+    @classmethod
+    def of(cls, spec: dict[str, Any]) -> "Arg":
+        steps = path_steps(spec["path"])
+        return cls(spec["arg"], spec["source"], spec["direction"], steps, str(steps[0]) if steps else "")
+
+
+@dataclass
+class Scope:
+    """A service or a task of a component: whose codels run, with which argument lists (by extern name)."""
+
+    component: str
+    name: str
+    kind: str  # "service" or "task"
+    codels: dict[str, list[Arg]] = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        return f"{self.component}.{self.name}"
+
+
+def scopes(interface: dict[str, Any]) -> tuple[dict[str, Scope], dict[str, Scope]]:
+    """Services and tasks of the interface as scopes, by ``Component.Name``."""
+    services: dict[str, Scope] = {}
+    tasks: dict[str, Scope] = {}
+    for c, spec in interface["components"].items():
+        for s, svc in spec["services"].items():
+            services[f"{c}.{s}"] = Scope(c, s, "service", {x: [Arg.of(a) for a in k["params"]]
+                                                              for x, k in svc["codels"].items()})
+        for t, task in spec["tasks"].items():
+            tasks[f"{c}.{t}"] = Scope(c, t, "task", {x: [Arg.of(a) for a in k["params"]]
+                                                     for x, k in task["codels"].items()})
+    return services, tasks
+
+
+class Binder:
+    """Makes the codel externs of a model; the controller sets :attr:`scope` and :attr:`locals` before each step.
+
+    ``failure`` is set by a codel call that did not end with a declared
+    outcome (or that threw a declared exception: then it carries the
+    exception's name and detail); the controller takes it after the step.
+    ``on_poster(component, port, value)`` is told about every poster write.
+    """
+
+    def __init__(self, interface: dict[str, Any], data: Data, source: CodelSource,
+                 specs: dict[str, CodelSpec], on_poster: Callable[[str, str, Any], None] | None = None) -> None:
+        self.interface = interface
+        self.data = data
+        self.source = source
+        self.specs = specs
+        self.on_poster = on_poster
+        self.services, self.tasks = scopes(interface)
+        self.scope: Scope | None = None
+        self.locals: dict[str, Any] | None = None
+        self.failure: dict[str, Any] | None = None
+        self.calls = 0
+        self.missing: list[str] = []
+        # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
+        self._anywhere: dict[str, tuple[str, list[Arg]]] = {}
+        for scope in list(self.services.values()) + list(self.tasks.values()):
+            for extern, args in scope.codels.items():
+                self._anywhere.setdefault(extern, (scope.component, args))
+
+    def externs(self) -> dict[str, Callable[[], int]]:
+        """One callable per codel extern of the model."""
+        out = {}
+        for extern, spec in self.specs.items():
+            component = self._anywhere.get(extern, (extern.split("_", 1)[0], []))[0]
+            fn = self.source.find(component, spec.codel)
+            if fn is None:
+                self.missing.append(f"{component}.{spec.codel}")
+                out[extern] = self._missing(spec, self.source.why_missing(component, spec.codel))
+            else:
+                out[extern] = self._caller(extern, spec, component, fn)
+        return out
+
+    def _missing(self, spec: CodelSpec, why: str) -> Callable[[], int]:
+        def call() -> int:
+            self.calls += 1
+            self.failure = {"codel": spec.codel, "error": "missing codel", "message": why}
+            return UNDECLARED
+        return call
+
+    def _caller(self, extern: str, spec: CodelSpec, component: str, fn: Callable) -> Callable[[], int]:
+        validate = spec.yields == ("ok",)
+
+        def call() -> int:
+            self.calls += 1
+            scope = self.scope
+            args = scope.codels.get(extern) if scope is not None else None
+            comp = scope.component if scope is not None and args is not None else component
+            if args is None:
+                args = self._anywhere.get(extern, (component, []))[1]
+            kwargs, holders = self._arguments(comp, args)
+            try:
+                result = fn(**kwargs)
+            except Throw as thrown:
+                if not self._write_back(comp, holders, spec):
+                    return UNDECLARED
+                return self._thrown(spec, thrown)
+            except Exception as err:  # noqa: BLE001 - the codel's bug, reported with its name
+                frame = traceback.extract_tb(err.__traceback__)[-1]
+                self.failure = {"codel": spec.codel, "error": "python exception",
+                                "message": f"codel {spec.codel} raised {type(err).__name__}: {err}",
+                                "where": f"{frame.filename}:{frame.lineno}"}
+                return UNDECLARED
+            if not self._write_back(comp, holders, spec):
+                return UNDECLARED
+            if validate and result in (None, "ok"):
+                return 0
+            if isinstance(result, str) and result in spec.yields:
+                return spec.yields.index(result)
+            declared = ", ".join(spec.yields) or "nothing"
+            self.failure = {"codel": spec.codel, "error": "undeclared yield",
+                            "message": f"codel {spec.codel} returned {result!r}, not a declared yield "
+                                       f"(declared: {declared})"}
+            return UNDECLARED
+
+        call.__name__ = spec.codel
+        return call
+
+    def _thrown(self, spec: CodelSpec, thrown: Throw) -> int:
+        name = thrown.name
+        match = next((t for t in spec.throws if t == name or t.endswith("::" + name.split("::")[-1])), None)
+        if match is None:
+            declared = ", ".join(spec.throws) or "none"
+            self.failure = {"codel": spec.codel, "error": "undeclared exception", "exception": name,
+                            "detail": thrown.detail,
+                            "message": f"codel {spec.codel} threw {name}, which is not declared (declared: {declared})"}
+            return UNDECLARED
+        self.failure = {"codel": spec.codel, "exception": match, "detail": thrown.detail,
+                        "message": f"codel {spec.codel} threw {match}"}
+        return len(spec.yields) + spec.throws.index(match)
+
+    # -- arguments --------------------------------------------------------------------------------
+    def _arguments(self, component: str, args: list[Arg]) -> tuple[dict[str, Any], list[tuple[Arg, Ref]]]:
+        kwargs: dict[str, Any] = {}
+        holders: list[tuple[Arg, Ref]] = []
+        ids = self.data.ids[component]
+        for a in args:
+            if a.source == "port":
+                if a.direction == "in":
+                    kwargs[a.name] = self.data.read_input(component, a.port)
+                else:
+                    ref = Ref(clone(self.data.poster(component, a.port).value))
+                    kwargs[a.name] = ref
+                    holders.append((a, ref))
+                continue
+            if a.source == "ids":
+                value = get_path(ids, a.steps)
+            elif a.source == "local":
+                value = get_path(self.locals, a.steps) if self.locals is not None else None
+            else:  # remote: the IR does not say which component serves it
+                kwargs[a.name] = None
+                continue
+            if a.direction == "in":
+                kwargs[a.name] = clone(value)
+            else:
+                ref = Ref(clone(value))
+                kwargs[a.name] = ref
+                holders.append((a, ref))
+        return kwargs, holders
+
+    def _write_back(self, component: str, holders: list[tuple[Arg, Ref]], spec: CodelSpec) -> bool:
+        """Store what the codel left in its holders; False (and a failure) when a value has nowhere to go."""
+        for a, ref in holders:
+            try:
+                if a.source == "port":
+                    if ref.value is not None:
+                        written = self.data.write_poster(component, a.port, ref.value)
+                        if self.on_poster is not None:
+                            self.on_poster(component, a.port, written)
+                elif a.source == "ids":
+                    set_path(self.data.ids[component], a.steps, ref.value)
+                elif self.locals is not None:
+                    set_path(self.locals, a.steps, ref.value)
+            except (KeyError, IndexError, TypeError) as err:
+                self.failure = {"codel": spec.codel, "error": "bad output",
+                                "message": f"codel {spec.codel}: cannot store argument {a.name} "
+                                           f"({a.source} {'.'.join(map(str, a.steps))}): {type(err).__name__}: {err}"}
+                return False
+        return True

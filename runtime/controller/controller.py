@@ -1,0 +1,509 @@
+"""The generated controller running for real: the engine in its own thread, task periods, Python codels, requests.
+
+Execution uses the engine's own step (``enabled`` then ``fire``), the same
+functions the explorer branches on; what real time adds is only *which*
+enabled interaction fires and *when*: an interaction opening a task's period
+waits for the task's deadline, a due period goes first, other interactions
+fire at once, and when nothing may fire yet the thread sleeps until the next
+deadline or until a request arrives.  Reports come from the labels and ports
+of the interactions that fired (docs/runtime.md).
+"""
+from __future__ import annotations
+
+import random
+import sys
+import threading
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from runtime.codels import codel_specs
+from runtime.controller.binding import Binder, Scope
+from runtime.controller.codels import load_codels
+from runtime.controller.data import Data, PosterValue, clone, get_path, path_steps, set_path
+from runtime.controller.requests import FINAL, Request, RequestError, Service
+from runtime.controller.schema import completed, problems, zero
+from runtime.controller.timing import MonotonicClock, Timer, Timers
+from runtime.engine import Engine, Interaction, ModelError
+from runtime.model import Package
+
+Listener = Callable[[dict[str, Any]], None]
+
+
+@dataclass
+class StepInfo:
+    """What an interaction means at run time, worked out once per interaction from its ports."""
+
+    kind: str | None = None  # the service port it fires: trigger, refuse, reject, start, exec_<s>, finish, fail, interrupted
+    service: Service | None = None
+    scope: Scope | None = None  # a task whose permanent activity runs a codel
+    victims: list[Service] = field(default_factory=list)  # services whose activity it aborts
+    reads: list[Service] = field(default_factory=list)  # services whose status it reads (rules)
+    rule: dict[str, str] | None = None  # the connector's @rule annotation
+    opens: Timer | None = None
+    closes: Timer | None = None
+    lazy_exec: str | None = None  # an untimed period: the exec port of its scheduler
+
+
+class Controller:
+    """``Controller(package, root, interface, codels)``: ``start()``/``run()``, ``submit()``, ``wait()``, ``stop()``.
+
+    ``interface`` is the generated package's ``INTERFACE``; ``codels`` a
+    codels directory, dotted module name, module or dict (see
+    runtime/controller/codels.py).  ``clock`` defaults to the monotonic
+    clock (a :class:`~runtime.controller.timing.VirtualClock` runs as fast as
+    possible); ``seed`` makes the choice among ready interactions random
+    (default: the engine's order); ``keep`` bounds how many ended requests
+    are remembered.
+    """
+
+    def __init__(self, package: Package, root: str, interface: dict[str, Any], codels: Any = None, *,
+                 clock: Any = None, seed: int | None = None, keep: int = 10_000) -> None:
+        self.interface = interface
+        self.types: dict[str, dict[str, Any]] = interface.get("types", {})
+        comps = interface["components"]
+        self.data = Data(interface)
+        self.codels = load_codels(codels, list(comps))
+        self.binder = Binder(interface, self.data, self.codels, codel_specs(package), on_poster=self._poster_written)
+        externs: dict[str, Callable] = dict(self.binder.externs())
+        externs["request_pending"] = self._pending
+        externs["take_request"] = self._take
+        self.engine = Engine(package, root, externs)
+        self.clock = clock or MonotonicClock()
+        self.timers = Timers.of(self.engine.flat, {c["instance"]: c.get("clock_rate_us") for c in comps.values()})
+        self.services: dict[str, Service] = {
+            label: Service(scope, comps[scope.component]["services"][scope.name])
+            for label, scope in self.binder.services.items()}
+        self._roles = self._port_roles()
+        self._info: dict[int, StepInfo] = {}
+        self._connectors = {fc.path: fc for fc in self.engine.flat.connectors}
+        self._lock = threading.RLock()
+        self._wake = threading.Condition(self._lock)
+        self._done = threading.Condition(self._lock)
+        self._epoch = 0
+        self._stopping = False
+        self._rng = random.Random(seed) if seed is not None else None
+        self._last: dict[int, int] = {}  # interaction index -> step when it last fired (fair choice)
+        self.keep = keep
+        self.requests: dict[int, Request] = {}
+        self._ended: deque[int] = deque()
+        self._next_id = 1
+        self.listeners: list[Listener] = []
+        self.state: tuple | None = None
+        self.steps = 0
+        self.status = "ready"  # ready, running, stopped, error
+        self.error: str | None = None
+        self.started_at: float | None = None
+        self._thread: threading.Thread | None = None
+
+    # -- the model's structure ---------------------------------------------------------------------------
+    def _port_roles(self) -> dict[str, tuple[Any, str, str]]:
+        """Atom port path -> (service or task scope, "control"/"activity"/"task", port name)."""
+        by_instance = {svc.spec["instance"]: svc for svc in self.services.values()}
+        tasks = {}
+        for c, spec in self.interface["components"].items():
+            for t, task in spec["tasks"].items():
+                tasks[task["instance"]] = self.binder.tasks[f"{c}.{t}"]
+        roles: dict[str, tuple[Any, str, str]] = {}
+        for fa in self.engine.flat.atoms:
+            base, _, part = fa.name.rpartition(".")
+            if part in ("control", "activity") and base in by_instance:
+                owner, role = by_instance[base], part
+            elif part == "permanent" and base in tasks:
+                owner, role = tasks[base], "task"
+            else:
+                continue
+            for port in fa.ports:
+                roles[f"{fa.name}.{port}"] = (owner, role, port)
+            if part == "control" and all(v in (d.name for d in fa.variables) for v in ("done", "ok", "running")):
+                owner.status_slots = (fa.slot("done"), fa.slot("ok"), fa.slot("running"))
+        return roles
+
+    def info(self, inter: Interaction) -> StepInfo:
+        """The run-time meaning of ``inter`` (cached by its index)."""
+        got = self._info.get(inter.index)
+        if got is not None:
+            return got
+        info = StepInfo()
+        t = self.timers
+        for p in inter.ports:
+            if p in t.by_trigger:
+                info.opens = t.by_trigger[p]
+            elif p in t.by_sleep:
+                info.closes = t.by_sleep[p]
+            elif p in t.lazy:
+                info.lazy_exec = t.lazy[p]
+            role = self._roles.get(p)
+            if role is None:
+                continue
+            owner, kind, port = role
+            if kind == "task":
+                info.scope = owner
+            elif port == "abort":
+                info.victims.append(owner)
+            elif port == "status":
+                info.reads.append(owner)
+            else:
+                info.service, info.kind = owner, port
+        if info.service is not None and inter.connector in self._connectors:
+            for a in self._connectors[inter.connector].instance.annotations:
+                if a.name == "rule":
+                    info.rule = dict(a.arguments)
+        if info.service is not None:
+            info.victims = [v for v in info.victims if v is not info.service]
+        self._info[inter.index] = info
+        return info
+
+    # -- requests (any thread) -------------------------------------------------------------------------
+    def service(self, component: str, service: str) -> Service:
+        comps = self.interface["components"]
+        if component not in comps:
+            raise RequestError(404, f"no component {component!r} (components: {', '.join(comps)})")
+        svc = self.services.get(f"{component}.{service}")
+        if svc is None:
+            names = ", ".join(comps[component]["services"])
+            raise RequestError(404, f"component {component} has no service {service!r} (services: {names})")
+        return svc
+
+    def submit(self, component: str, service: str, inputs: dict[str, Any] | None = None) -> Request:
+        """Queue a request; raises :class:`RequestError` (404 unknown, 422 bad parameters, 409 busy, 503 stopped)."""
+        svc = self.service(component, service)
+        values = self._inputs(svc, {} if inputs is None else inputs)
+        local = {n: clone(spec["initial"]) for n, spec in svc.spec["locals"].items()}
+        for p in svc.spec["parameters"]:
+            local[p["name"]] = clone(values[p["name"]]) if p["name"] in values else zero(p["schema"], self.types)
+        with self._lock:
+            if self.status in ("stopped", "error") or self._stopping:
+                raise RequestError(503, f"the controller is {'stopping' if self._stopping else self.status}; "
+                                        f"request to {svc.label} not accepted")
+            if not svc.reentrant:
+                busy = svc.busy_with()
+                if busy is not None:
+                    others = [s for s, x in self.interface["components"][component]["services"].items()
+                              if service in x["interrupts"] or "all" in x["interrupts"]]
+                    hint = f" or interrupt it ({', '.join(f'{component}.{o}' for o in others)})" if others else ""
+                    raise RequestError(409, f"{svc.label} is busy with request {busy.id} ({busy.status}): an activity "
+                                            f"takes one request at a time; wait for its report{hint}")
+            req = Request(self._next_id, component, service, values, local)
+            self._next_id += 1
+            self.requests[req.id] = req
+            self._report(req, "queued")
+            svc.queue.append(req)
+            self._epoch += 1
+            self._wake.notify()
+        return req
+
+    def _inputs(self, svc: Service, inputs: Any) -> dict[str, Any]:
+        if not isinstance(inputs, dict):
+            raise RequestError(422, f"the parameters of {svc.label} must be a JSON object, not {type(inputs).__name__}")
+        params = [p for p in svc.spec["parameters"] if p["direction"] in ("in", "inout")]
+        names = [p["name"] for p in params]
+        errors = [f"unknown parameter {k!r} (parameters of {svc.label}: {', '.join(names) or 'none'})"
+                  for k in inputs if k not in names]
+        values: dict[str, Any] = {}
+        for p in params:
+            name = p["name"]
+            if name in inputs:
+                value = completed(inputs[name], p.get("default"))
+                errors += problems(value, p["schema"], self.types, name)
+                values[name] = value
+            elif "default" in p:
+                values[name] = clone(p["default"])
+            else:
+                errors.append(f"missing parameter {name!r}" + (f" ({p['doc']})" if p.get("doc") else ""))
+        if errors:
+            raise RequestError(422, f"bad request to {svc.label}: " + "; ".join(errors))
+        return values
+
+    def get(self, request_id: int) -> Request:
+        req = self.requests.get(request_id)
+        if req is None:
+            known = f"requests 1 to {self._next_id - 1}" if self._next_id > 1 else "no request yet"
+            raise RequestError(404, f"no request {request_id} ({known}; the last {self.keep} ended ones are kept)")
+        return req
+
+    def snapshot(self, request_id: int) -> dict[str, Any]:
+        """The request as JSON data, consistent even while the engine thread reports on it."""
+        req = self.get(request_id)
+        with self._lock:
+            return req.as_json()
+
+    def wait(self, request_id: int, timeout: float | None = None) -> Request:
+        """Block until the request has its final report (or ``timeout`` seconds); returns it either way."""
+        req = self.get(request_id)
+        with self._lock:
+            self._done.wait_for(lambda: req.final is not None, timeout)
+        return req
+
+    def poster(self, component: str, port: str) -> PosterValue:
+        comps = self.interface["components"]
+        if component not in comps:
+            raise RequestError(404, f"no component {component!r} (components: {', '.join(comps)})")
+        try:
+            return self.data.poster(component, port)
+        except KeyError:
+            outs = [p for p, x in comps[component]["ports"].items() if x["direction"] == "out"]
+            raise RequestError(404, f"component {component} has no poster {port!r} "
+                                    f"(posters: {', '.join(outs) or 'none'})") from None
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener(event)`` for every report, poster write, overrun and codel error; returns the unsubscribe."""
+        self.listeners = self.listeners + [listener]
+
+        def unsubscribe() -> None:
+            self.listeners = [x for x in self.listeners if x is not listener]
+        return unsubscribe
+
+    # -- the model's externs (engine thread) ----------------------------------------------------------
+    def _pending(self, name: str) -> bool:
+        svc = self.services.get(name)
+        return svc is not None and bool(svc.queue)
+
+    def _take(self, name: str) -> None:
+        svc = self.services.get(name)
+        if svc is not None and svc.queue:
+            with self._lock:
+                svc.current = svc.queue.popleft()
+
+    def _poster_written(self, component: str, port: str, value: PosterValue) -> None:
+        if self.listeners:
+            self._emit({"event": "poster", **value.as_json()})
+
+    # -- running ------------------------------------------------------------------------------------------
+    def start(self, limit: int | None = None, duration: float | None = None,
+              then: Callable[[], None] | None = None) -> None:
+        """Run in a thread of its own (``stop()`` ends it); ``then()`` is called when the run has ended."""
+        def body() -> None:
+            self.run(limit, duration)
+            if then is not None:
+                then()
+        self._thread = threading.Thread(target=body, name="bip-controller", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout: float | None = None) -> None:
+        """End the run after the step (and codel) under way; waits for the thread when there is one."""
+        with self._lock:
+            self._stopping = True
+            self._wake.notify_all()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout)
+
+    def run(self, limit: int | None = None, duration: float | None = None) -> str:
+        """Run until ``stop()``, ``limit`` steps or ``duration`` seconds; returns the final status."""
+        clock = self.clock
+        self.started_at = t0 = clock.now()
+        end = t0 + duration if duration is not None else None
+        self.timers.start(t0)
+        self.status = "running"
+        try:
+            self.state = self.engine.initial_state()
+            while True:
+                with self._lock:
+                    if self._stopping:
+                        break
+                    epoch = self._epoch
+                if limit is not None and self.steps >= limit:
+                    break
+                now = clock.now()
+                if end is not None and now >= end:
+                    break
+                chosen, info, wake_at = self._choose(now)
+                if chosen is not None:
+                    self._fire(chosen, info)
+                    continue
+                if end is not None:
+                    wake_at = end if wake_at is None else min(wake_at, end)
+                if clock.virtual and wake_at is not None:
+                    clock.advance(wake_at)
+                    continue
+                with self._lock:
+                    if self._epoch == epoch and not self._stopping:
+                        self._wake.wait(None if wake_at is None else max(0.0, wake_at - clock.now()))
+        except ModelError as err:
+            self.error = f"model error: {err}"
+        except Exception as err:  # noqa: BLE001 - a bug here must not leave requests without a report
+            self.error = f"internal error: {type(err).__name__}: {err}"
+        self.status = "error" if self.error else "stopped"
+        self._end_pending()
+        self._emit({"event": "controller", "status": self.status, "steps": self.steps, "error": self.error})
+        return self.status
+
+    def _choose(self, now: float) -> tuple[Interaction | None, StepInfo | None, float | None]:
+        """A due period first (earliest deadline), else an untimed interaction, else a period with work to do."""
+        due: tuple[float, Interaction, StepInfo] | None = None
+        ready: list[tuple[Interaction, StepInfo]] = []
+        lazy: list[tuple[Interaction, StepInfo]] = []
+        wake_at = None
+        for inter in self.engine.enabled(self.state):
+            info = self._info.get(inter.index) or self.info(inter)
+            if info.opens is not None:
+                d = info.opens.deadline
+                if d <= now:
+                    if due is None or d < due[0]:
+                        due = (d, inter, info)
+                elif wake_at is None or d < wake_at:
+                    wake_at = d
+            elif info.lazy_exec is not None:
+                lazy.append((inter, info))
+            else:
+                ready.append((inter, info))
+        if due is not None:
+            return due[1], due[2], wake_at
+        if ready:
+            if self._rng is not None:
+                inter, info = ready[self._rng.randrange(len(ready))]
+            else:  # the least recently fired: a module stuck in a loop of codels cannot starve the others
+                last = self._last
+                inter, info = min(ready, key=lambda r: last.get(r[0].index, -1))
+            self._last[inter.index] = self.steps
+            return inter, info, wake_at
+        for inter, info in lazy:
+            after = self.engine.fire(self.state, inter)
+            if any(info.lazy_exec in j.ports for j in self.engine.enabled(after)):
+                return inter, info, wake_at
+        return None, None, wake_at
+
+    def _fire(self, inter: Interaction, info: StepInfo) -> None:
+        b = self.binder
+        b.failure = None
+        svc = info.service
+        req = None
+        if svc is not None:
+            b.scope = svc.scope
+            req = (svc.queue[0] if svc.queue else None) if info.kind in ("trigger", "refuse") else svc.current
+            b.locals = req.locals if req is not None else None
+        else:
+            b.scope, b.locals = info.scope, None
+        self.state = self.engine.fire(self.state, inter)
+        self.steps += 1
+        self._observe(info, req)
+
+    def _observe(self, info: StepInfo, req: Request | None) -> None:
+        """Timers and reports after a step."""
+        now = self.clock.now()
+        if info.opens is not None:
+            info.opens.open(now)
+        if info.closes is not None:
+            overrun = info.closes.close(now)
+            if overrun is not None:
+                print(f"warning: {overrun['message']}", file=sys.stderr)
+                self._emit({"event": "overrun", **overrun})
+        failure = self.binder.failure
+        svc = info.service
+        if svc is None:
+            if info.scope is not None and failure is not None:
+                self._emit({"event": "codel_error", "task": info.scope.label, **failure})
+            return
+        if req is None:
+            return
+        kind = info.kind or ""
+        if failure is not None and (kind == "trigger" or kind.startswith("exec_")):
+            req.failure = failure
+        if kind == "refuse":
+            rule = (info.rule or {}).get("name", "a rule")
+            self._report(req, "rejected", reason="rule", rule=rule, status_of=self._status_of(info.reads),
+                         message=f"{req.label} refused by rule {rule}")
+        elif kind == "reject":
+            f = req.failure or {}
+            self._report(req, "rejected", reason="validate", **self._failure_fields(f),
+                         message=f.get("message", f"{req.label} rejected by its validate codel"))
+        elif kind == "start":
+            self._apply_inputs(svc, req)
+            self._report(req, "started")
+            for victim in info.victims:
+                if victim.current is not None:
+                    victim.current.interrupted_by = (svc.label, req.id)
+        elif kind == "finish":
+            self._report(req, "ok", outputs=self._outputs(svc, req))
+        elif kind == "fail":
+            f = req.failure or {}
+            self._report(req, "failed", **self._failure_fields(f),
+                         message=f.get("message", f"{req.label} failed"))
+        elif kind == "interrupted":
+            by, by_request = req.interrupted_by or (None, None)
+            self._report(req, "interrupted", by=by, by_request=by_request,
+                         message=f"{req.label} interrupted by {by}" if by else f"{req.label} interrupted")
+
+    @staticmethod
+    def _failure_fields(f: dict[str, Any]) -> dict[str, Any]:
+        return {k: f[k] for k in ("exception", "detail", "codel", "error", "where") if k in f}
+
+    def _status_of(self, services: list[Service]) -> dict[str, dict[str, bool]]:
+        out = {}
+        for s in services:
+            if s.status_slots is not None:
+                out[s.label] = {k: bool(self.state[i]) for k, i in zip(("done", "ok", "running"), s.status_slots)}
+        return out
+
+    def _apply_inputs(self, svc: Service, req: Request) -> None:
+        """Parameters bound to ids members are written to the ids once the request is accepted (GenoM attributes)."""
+        ids = self.data.ids[svc.scope.component]
+        for p in svc.spec["parameters"]:
+            if p["source"] == "ids" and p["direction"] in ("in", "inout") and p["name"] in req.locals:
+                steps = path_steps(p.get("member") or p["name"])
+                if steps:
+                    try:
+                        set_path(ids, steps, clone(req.locals[p["name"]]))
+                    except (KeyError, IndexError, TypeError):
+                        pass
+
+    def _outputs(self, svc: Service, req: Request) -> dict[str, Any]:
+        ids = self.data.ids[svc.scope.component]
+        out = {}
+        for p in svc.spec["parameters"]:
+            if p["direction"] in ("out", "inout"):
+                if p["source"] == "ids":
+                    out[p["name"]] = clone(get_path(ids, path_steps(p.get("member") or p["name"])))
+                else:
+                    out[p["name"]] = clone(req.locals.get(p["name"]))
+        return out
+
+    # -- reports --------------------------------------------------------------------------------------------
+    def _report(self, req: Request, status: str, **fields: Any) -> None:
+        now = self.clock.now()
+        report = {"request": req.id, "component": req.component, "service": req.service, "status": status,
+                  "final": status in FINAL, "step": self.steps,
+                  "time": round(now - self.started_at, 6) if self.started_at is not None else 0.0, **fields}
+        with self._lock:
+            req.reports.append(report)
+            if status in FINAL:
+                req.status, req.final = status, report
+                svc = self.services[req.label]
+                if svc.current is req:
+                    svc.current = None
+                self._ended.append(req.id)
+                while len(self._ended) > self.keep:
+                    self.requests.pop(self._ended.popleft(), None)
+                self._done.notify_all()
+            elif status == "started":
+                req.status = "running"
+            self._emit({"event": "report", **report})
+
+    def _end_pending(self) -> None:
+        """Every request still queued or running gets its final report when the controller stops."""
+        why = f"the controller stopped ({self.error})" if self.error else "the controller stopped"
+        for svc in self.services.values():
+            with self._lock:
+                pending = ([svc.current] if svc.current is not None else []) + list(svc.queue)
+                svc.queue.clear()
+            for req in pending:
+                if req.final is None:
+                    self._report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}")
+
+    def _emit(self, event: dict[str, Any]) -> None:
+        for listener in self.listeners:
+            try:
+                listener(event)
+            except Exception as err:  # noqa: BLE001 - a listener's bug must not stop the controller
+                print(f"warning: event listener failed: {type(err).__name__}: {err}", file=sys.stderr)
+
+    # -- what the server shows ------------------------------------------------------------------------------
+    def summary(self) -> dict[str, Any]:
+        counts: dict[str, int] = {}
+        with self._lock:
+            for req in self.requests.values():
+                counts[req.status] = counts.get(req.status, 0) + 1
+        now = self.clock.now()
+        return {"system": self.interface.get("system"), "status": self.status, "error": self.error,
+                "steps": self.steps, "uptime": round(now - self.started_at, 3) if self.started_at else 0.0,
+                "requests": counts, "codels": {"source": self.codels.where or None, "missing": self.binder.missing}}
