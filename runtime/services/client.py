@@ -1,0 +1,182 @@
+"""A Python client of the services interface, on the standard library alone (a decisional layer needs nothing else).
+
+    from runtime.services.client import Client
+
+    ndd = Client("http://127.0.0.1:8080")
+    rid = ndd.send("NDD", "GoTo", goal={"x": 1.0, "y": 0.0, "theta": 0.0})
+    report = ndd.wait(rid)            # {"status": "ok", "outputs": {...}, ...}
+    report = ndd.call("NDD", "SetSpeed", max_speed={"v": 0.2, "w": 0.4})
+    ndd.poster("NDD", "Speed")["value"]
+    for event in ndd.events(types="report"): ...
+
+Each thread gets its own keep-alive connection, so one client may be shared
+by threads.  Every 4xx/5xx answer raises :class:`ServiceError` with the
+server's message.
+"""
+from __future__ import annotations
+
+import http.client
+import json
+import threading
+import time
+from typing import Any, Iterator
+from urllib.parse import quote, urlencode, urlsplit
+
+
+class ServiceError(Exception):
+    """The server refused a call: ``status`` (400, 404, 409, 422, 503...) and its message."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(f"{status}: {message}")
+        self.status = status
+        self.message = message
+
+
+class Client:
+    """Talks to one controller's services interface at ``url`` (``http://127.0.0.1:PORT``)."""
+
+    def __init__(self, url: str, timeout: float = 30.0) -> None:
+        parts = urlsplit(url if "://" in url else f"http://{url}")
+        if parts.scheme != "http" or not parts.hostname:
+            raise ValueError(f"{url!r}: an http://HOST:PORT address expected")
+        self.host = parts.hostname
+        self.port = parts.port or 80
+        self.url = f"http://{self.host}:{self.port}"
+        self.timeout = timeout
+        self._local = threading.local()
+
+    # -- plumbing ------------------------------------------------------------------------------------
+    def _connection(self, timeout: float) -> http.client.HTTPConnection:
+        conn = getattr(self._local, "conn", None)
+        if conn is None:
+            conn = self._local.conn = http.client.HTTPConnection(self.host, self.port, timeout=timeout)
+        conn.timeout = timeout
+        if conn.sock is not None:
+            conn.sock.settimeout(timeout)
+        return conn
+
+    def _call(self, method: str, path: str, body: Any = None, timeout: float | None = None) -> Any:
+        data = None if body is None else json.dumps(body).encode()
+        headers = {"Content-Type": "application/json"} if data is not None else {}
+        timeout = self.timeout if timeout is None else timeout
+        for attempt in (1, 2):
+            conn = self._connection(timeout)
+            try:
+                conn.request(method, path, body=data, headers=headers)
+                response = conn.getresponse()
+                raw = response.read()
+                break
+            except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError):
+                conn.close()  # a kept-alive connection the server had closed: once more on a new one
+                self._local.conn = None
+                if attempt == 2:
+                    raise
+            except OSError:
+                conn.close()
+                self._local.conn = None
+                raise
+        try:
+            payload = json.loads(raw) if raw else None
+        except json.JSONDecodeError:
+            payload = {"error": raw.decode(errors="replace")}
+        if response.status >= 400:
+            message = payload.get("error", str(payload)) if isinstance(payload, dict) else str(payload)
+            raise ServiceError(response.status, message)
+        return payload
+
+    @staticmethod
+    def _service_path(component: str, service: str) -> str:
+        return f"/components/{quote(component, safe='')}/services/{quote(service, safe='')}"
+
+    # -- the interface -----------------------------------------------------------------------------------
+    def info(self) -> dict[str, Any]:
+        """The controller: status, steps, requests by status, codels."""
+        return self._call("GET", "/")
+
+    def components(self) -> list[dict[str, Any]]:
+        return self._call("GET", "/components")
+
+    def component(self, component: str) -> dict[str, Any]:
+        return self._call("GET", f"/components/{quote(component, safe='')}")
+
+    def service(self, component: str, service: str) -> dict[str, Any]:
+        """Kind, inputs and outputs (with JSON schemas), exceptions and constraints of a service."""
+        return self._call("GET", self._service_path(component, service))
+
+    def openapi(self) -> dict[str, Any]:
+        return self._call("GET", "/openapi.json")
+
+    def send(self, component: str, service: str, inputs: dict[str, Any] | None = None, **kw: Any) -> int:
+        """Send a request; returns its id. Inputs as a dict and/or keyword arguments."""
+        body = {**(inputs or {}), **kw}
+        return self._call("POST", self._service_path(component, service), body)["id"]
+
+    def request(self, request_id: int, wait: float | None = None) -> dict[str, Any]:
+        """The request with its reports (``status``, ``final``, ``reports``); ``wait`` s for the final one."""
+        query = f"?wait={wait}" if wait else ""
+        timeout = self.timeout + (wait or 0)
+        return self._call("GET", f"/requests/{int(request_id)}{query}", timeout=timeout)
+
+    def wait(self, request_id: int, timeout: float | None = None) -> dict[str, Any]:
+        """The final report, waiting as long as needed (or ``timeout`` s, then :class:`TimeoutError`)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            left = 30.0 if deadline is None else min(30.0, deadline - time.monotonic())
+            req = self.request(request_id, wait=max(left, 0.0) or None)
+            if req["final"] is not None:
+                return req["final"]
+            if deadline is not None and time.monotonic() >= deadline:
+                raise TimeoutError(f"request {request_id} has no final report after {timeout} s "
+                                   f"(status {req['status']})")
+
+    def call(self, component: str, service: str, inputs: dict[str, Any] | None = None,
+             timeout: float | None = None, **kw: Any) -> dict[str, Any]:
+        """Send a request and wait for its final report."""
+        return self.wait(self.send(component, service, inputs, **kw), timeout)
+
+    def requests(self, status: str | None = None, limit: int = 100) -> list[dict[str, Any]]:
+        query = urlencode({k: v for k, v in (("status", status), ("limit", limit)) if v is not None})
+        return self._call("GET", f"/requests?{query}")
+
+    def poster(self, component: str, port: str) -> dict[str, Any]:
+        """``{"value": ..., "seq": n, "written": bool}``: the poster's last written value."""
+        return self._call("GET", f"/components/{quote(component, safe='')}/ports/{quote(port, safe='')}")
+
+    def tasks(self) -> list[dict[str, Any]]:
+        """Period, periods run, lateness (p50/p99/max ms) and overruns of every task."""
+        return self._call("GET", "/tasks")
+
+    def events(self, types: str | None = None, timeout: float | None = None) -> Iterator[dict[str, Any]]:
+        """The event stream, one dict per event (``{"event": "report", ...}``), on a connection of its own."""
+        conn = http.client.HTTPConnection(self.host, self.port, timeout=timeout)
+        path = "/events" + (f"?{urlencode({'types': types})}" if types else "")
+        try:
+            conn.request("GET", path, headers={"Accept": "text/event-stream"})
+            response = conn.getresponse()
+            if response.status >= 400:
+                raw = response.read()
+                raise ServiceError(response.status, json.loads(raw).get("error", raw.decode()))
+            kind, data = None, []
+            while True:
+                line = response.readline()
+                if not line:
+                    return
+                text = line.decode().rstrip("\r\n")
+                if text == "":
+                    if data and kind != "hello":
+                        yield json.loads("\n".join(data))
+                    kind, data = None, []
+                elif text.startswith("event:"):
+                    kind = text[6:].strip()
+                elif text.startswith("data:"):
+                    data.append(text[5:].strip())
+        finally:
+            conn.close()
+
+
+def parse_target(text: str) -> tuple[str, str]:
+    """``"NDD.GoTo"`` → ``("NDD", "GoTo")``."""
+    component, dot, service = text.partition(".")
+    if not dot or not component or not service:
+        raise ValueError(f"{text!r}: Component.Service expected (e.g. NDD.GoTo)")
+    return component, service

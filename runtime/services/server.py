@@ -1,0 +1,376 @@
+"""The services interface: JSON over HTTP on 127.0.0.1, in the spirit of genomix (Starlette on uvicorn).
+
+Routes (docs/runtime.md has the shapes; ``/openapi.json`` describes them):
+
+    GET  /                                     the controller: status, steps, requests by status, codels
+    GET  /components                           components with their services and posters
+    GET  /components/{c}                       one component: services with parameter schemas, ports, tasks
+    GET  /components/{c}/services/{s}          one service
+    POST /components/{c}/services/{s}          send a request (JSON object of inputs) -> 202 {"id": ...}
+    GET  /requests                             recent requests (?status=running&limit=100)
+    GET  /requests/{id}?wait=SECONDS           a request and its reports; waits for the final one
+    GET  /components/{c}/ports/{p}             a poster's last value
+    GET  /events?types=report,poster           server-sent events: reports, poster writes, overruns, codel errors
+    GET  /tasks                                periods, lateness and overruns of every task
+    GET  /openapi.json                         OpenAPI 3.1 description
+
+The engine runs in its own thread; it tells the event loop about reports
+through ``loop.call_soon_threadsafe``, the only crossing between the two.
+"""
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import socket
+import threading
+import time
+from contextlib import asynccontextmanager
+from typing import Any
+
+import uvicorn
+from starlette.applications import Starlette
+from starlette.exceptions import HTTPException
+from starlette.requests import Request as HttpRequest
+from starlette.responses import Response, StreamingResponse
+from starlette.routing import Route
+
+from runtime.controller import Controller, RequestError
+from runtime.services.openapi import openapi
+from runtime.services.views import component_view, components_view, service_view
+
+#: Longest a client may wait for a report in one HTTP call (s); it asks again for longer waits.
+MAX_WAIT = 60.0
+#: Largest request body accepted (bytes).
+MAX_BODY = 1 << 20
+#: Events kept for a slow event-stream client before it is cut off.
+QUEUE_SIZE = 10_000
+EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller")
+
+
+def _finite(value: Any) -> Any:
+    """JSON has no NaN or infinity: they become null."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value
+
+
+def dumps(data: Any) -> str:
+    try:
+        return json.dumps(data, allow_nan=False)
+    except ValueError:
+        return json.dumps(_finite(data), allow_nan=False)
+
+
+class JSONResponse(Response):
+    media_type = "application/json"
+
+    def render(self, content: Any) -> bytes:
+        return dumps(content).encode()
+
+
+def error(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": message, "status": status}, status_code=status)
+
+
+class Subscriber:
+    """One event-stream client: a bounded queue of events of the kinds it asked for."""
+
+    def __init__(self, kinds: set[str]) -> None:
+        self.kinds = kinds
+        self.queue: asyncio.Queue = asyncio.Queue(maxsize=QUEUE_SIZE)
+
+
+class Hub:
+    """Lives in the event loop: wakes the clients waiting for a request's final report, feeds the event streams."""
+
+    def __init__(self) -> None:
+        self.waiters: dict[int, list[asyncio.Future]] = {}
+        self.subscribers: set[Subscriber] = set()
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.closed = False
+
+    def listener(self, event: dict[str, Any]) -> None:
+        """Called in the engine thread: hand the event to the loop."""
+        loop = self.loop
+        if loop is not None and not self.closed:
+            try:
+                loop.call_soon_threadsafe(self.publish, event)
+            except RuntimeError:  # the loop has closed
+                pass
+
+    def publish(self, event: dict[str, Any]) -> None:
+        if event.get("event") == "report" and event.get("final"):
+            for fut in self.waiters.pop(event["request"], []):
+                if not fut.done():
+                    fut.set_result(None)
+        for sub in list(self.subscribers):
+            if event["event"] not in sub.kinds:
+                continue
+            try:
+                sub.queue.put_nowait(event)
+            except asyncio.QueueFull:
+                self.subscribers.discard(sub)
+                while not sub.queue.empty():
+                    sub.queue.get_nowait()
+                sub.queue.put_nowait({"event": "overflow", "message": f"more than {QUEUE_SIZE} events unread: "
+                                                                       "this stream is closed"})
+                sub.queue.put_nowait(None)
+
+    def close(self) -> None:
+        """End every event stream and long poll (the server is stopping)."""
+        self.closed = True
+        for sub in list(self.subscribers):
+            try:
+                sub.queue.put_nowait(None)
+            except asyncio.QueueFull:
+                pass
+        self.subscribers.clear()
+        for futs in self.waiters.values():
+            for fut in futs:
+                if not fut.done():
+                    fut.set_result(None)
+        self.waiters.clear()
+
+
+def create_app(controller: Controller) -> Starlette:
+    """The ASGI application serving ``controller``."""
+    hub = Hub()
+    interface = controller.interface
+
+    @asynccontextmanager
+    async def lifespan(app):
+        hub.loop = asyncio.get_running_loop()
+        unsubscribe = controller.subscribe(hub.listener)
+        try:
+            yield
+        finally:
+            unsubscribe()
+            hub.close()
+
+    def request_id(text: str) -> int:
+        try:
+            return int(text)
+        except ValueError:
+            raise RequestError(400, f"request id {text!r} is not a number") from None
+
+    def wait_time(request: HttpRequest) -> float | None:
+        text = request.query_params.get("wait")
+        if text is None:
+            return None
+        try:
+            value = float(text) if text not in ("", "true") else MAX_WAIT
+        except ValueError:
+            raise RequestError(400, f"wait={text!r}: a number of seconds expected") from None
+        if not value >= 0:
+            raise RequestError(400, f"wait={text!r}: a number of seconds >= 0 expected")
+        return min(value, MAX_WAIT)
+
+    async def wait_final(rid: int, timeout: float) -> None:
+        req = controller.get(rid)
+        if req.final is not None or timeout <= 0 or hub.closed:
+            return
+        fut = asyncio.get_running_loop().create_future()
+        hub.waiters.setdefault(rid, []).append(fut)
+        try:
+            await asyncio.wait_for(fut, timeout)
+        except asyncio.TimeoutError:
+            pass
+        finally:
+            futs = hub.waiters.get(rid)
+            if futs is not None and fut in futs:
+                futs.remove(fut)
+                if not futs:
+                    del hub.waiters[rid]
+
+    async def index(request: HttpRequest) -> Response:
+        return JSONResponse(controller.summary() | {"links": {
+            "components": "/components", "requests": "/requests", "events": "/events", "tasks": "/tasks",
+            "openapi": "/openapi.json"}})
+
+    async def components(request: HttpRequest) -> Response:
+        return JSONResponse(components_view(interface))
+
+    async def component(request: HttpRequest) -> Response:
+        c = request.path_params["component"]
+        if c not in interface["components"]:
+            raise RequestError(404, f"no component {c!r} (components: {', '.join(interface['components'])})")
+        return JSONResponse(component_view(interface, c))
+
+    async def service(request: HttpRequest) -> Response:
+        c, s = request.path_params["component"], request.path_params["service"]
+        controller.service(c, s)
+        if request.method == "GET":
+            return JSONResponse(service_view(interface, c, s))
+        body = await request.body()
+        if len(body) > MAX_BODY:
+            return error(413, f"request body of {len(body)} bytes: at most {MAX_BODY} accepted")
+        try:
+            inputs = json.loads(body) if body.strip() else {}
+        except (json.JSONDecodeError, UnicodeDecodeError) as err:
+            return error(400, f"malformed JSON in the body of the request to {c}.{s}: {err}")
+        timeout = wait_time(request)
+        req = controller.submit(c, s, inputs)
+        if timeout is None:
+            return JSONResponse({"id": req.id, "status": "queued", "url": f"/requests/{req.id}"}, status_code=202,
+                                headers={"Location": f"/requests/{req.id}"})
+        await wait_final(req.id, timeout)
+        return JSONResponse(controller.snapshot(req.id))
+
+    async def requests_list(request: HttpRequest) -> Response:
+        status = request.query_params.get("status")
+        try:
+            limit = int(request.query_params.get("limit", "100"))
+        except ValueError:
+            raise RequestError(400, "limit: a number expected") from None
+        ids = sorted(controller.requests, reverse=True)
+        rows = []
+        for rid in ids:
+            req = controller.requests.get(rid)
+            if req is None or (status and req.status != status):
+                continue
+            rows.append({"id": req.id, "component": req.component, "service": req.service, "status": req.status})
+            if len(rows) >= limit:
+                break
+        return JSONResponse(rows)
+
+    async def request_one(request: HttpRequest) -> Response:
+        rid = request_id(request.path_params["id"])
+        controller.get(rid)
+        timeout = wait_time(request)
+        if timeout:
+            await wait_final(rid, timeout)
+        return JSONResponse(controller.snapshot(rid))
+
+    async def poster(request: HttpRequest) -> Response:
+        value = controller.poster(request.path_params["component"], request.path_params["port"])
+        return JSONResponse(value.as_json())
+
+    async def tasks(request: HttpRequest) -> Response:
+        return JSONResponse(controller.timers.stats())
+
+    async def spec(request: HttpRequest) -> Response:
+        return JSONResponse(openapi(interface))
+
+    async def events(request: HttpRequest) -> Response:
+        wanted = request.query_params.get("types")
+        kinds = set(EVENT_KINDS) if not wanted else set(wanted.split(","))
+        unknown = kinds - set(EVENT_KINDS)
+        if unknown:
+            raise RequestError(400, f"unknown event type(s) {', '.join(sorted(unknown))} "
+                                    f"(types: {', '.join(EVENT_KINDS)})")
+        sub = Subscriber(kinds)
+        hub.subscribers.add(sub)
+
+        async def stream():
+            try:
+                yield f"event: hello\ndata: {dumps(controller.summary())}\n\n"
+                while True:
+                    try:
+                        event = await asyncio.wait_for(sub.queue.get(), 15.0)
+                    except asyncio.TimeoutError:
+                        yield ": keep-alive\n\n"
+                        continue
+                    if event is None:
+                        break
+                    yield f"event: {event['event']}\ndata: {dumps(event)}\n\n"
+            finally:
+                hub.subscribers.discard(sub)
+
+        return StreamingResponse(stream(), media_type="text/event-stream",
+                                 headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
+
+    async def on_request_error(request: HttpRequest, exc: RequestError) -> Response:
+        return error(exc.status, exc.message)
+
+    async def on_http_error(request: HttpRequest, exc: HTTPException) -> Response:
+        if exc.status_code == 404:
+            return error(404, f"no route {request.url.path} (see /openapi.json)")
+        if exc.status_code == 405:
+            return error(405, f"{request.method} is not allowed on {request.url.path}")
+        return error(exc.status_code, str(exc.detail))
+
+    async def on_crash(request: HttpRequest, exc: Exception) -> Response:
+        return error(500, f"internal error: {type(exc).__name__}: {exc}")
+
+    routes = [
+        Route("/", index),
+        Route("/openapi.json", spec),
+        Route("/components", components),
+        Route("/components/{component}", component),
+        Route("/components/{component}/services/{service}", service, methods=["GET", "POST"]),
+        Route("/components/{component}/ports/{port}", poster),
+        Route("/requests", requests_list),
+        Route("/requests/{id}", request_one),
+        Route("/events", events),
+        Route("/tasks", tasks),
+    ]
+    app = Starlette(routes=routes, lifespan=lifespan, exception_handlers={
+        RequestError: on_request_error, HTTPException: on_http_error, Exception: on_crash})
+    app.state.hub = hub
+    return app
+
+
+class _Uvicorn(uvicorn.Server):
+    """uvicorn, telling the controller and the event streams to end as soon as a stop is asked for."""
+
+    def __init__(self, config: uvicorn.Config, on_exit) -> None:
+        super().__init__(config)
+        self.on_exit = on_exit
+
+    def handle_exit(self, sig, frame) -> None:
+        self.on_exit()
+        super().handle_exit(sig, frame)
+
+
+class ServiceServer:
+    """The HTTP server of a controller on 127.0.0.1: ``port=0`` picks a free port (see :attr:`url`)."""
+
+    def __init__(self, controller: Controller, port: int = 0) -> None:
+        self.controller = controller
+        self.app = create_app(controller)
+        self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.socket.bind(("127.0.0.1", port))
+        self.port = self.socket.getsockname()[1]
+        self.url = f"http://127.0.0.1:{self.port}"
+        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="on",
+                                timeout_graceful_shutdown=3, timeout_keep_alive=30)
+        self.server = _Uvicorn(config, self._exiting)
+        self._thread: threading.Thread | None = None
+
+    def _exiting(self) -> None:
+        """A stop was asked for: the controller ends after its current step, streams and long polls end."""
+        self.controller.stop(timeout=0)
+        hub: Hub = self.app.state.hub
+        if hub.loop is not None:
+            try:
+                hub.loop.call_soon_threadsafe(hub.close)
+            except RuntimeError:
+                pass
+
+    def serve(self) -> None:
+        """Serve in this thread until Ctrl-C / SIGTERM (the main thread) or :meth:`stop`."""
+        self.server.run(sockets=[self.socket])
+
+    def start(self, timeout: float = 10.0) -> "ServiceServer":
+        """Serve in a thread of its own; returns once the server accepts connections."""
+        self._thread = threading.Thread(target=self.serve, name="services-http", daemon=True)
+        self._thread.start()
+        deadline = time.monotonic() + timeout
+        while not self.server.started and self._thread.is_alive() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if not self.server.started:
+            raise RuntimeError("the services interface did not start")
+        return self
+
+    def stop(self, timeout: float = 10.0) -> None:
+        """Stop serving (event streams end); the controller is told to stop too."""
+        self._exiting()
+        self.server.should_exit = True
+        if self._thread is not None:
+            self._thread.join(timeout)
