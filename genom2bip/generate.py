@@ -2,7 +2,8 @@
 
 Output goes to ``<out>/<system>/``: ``<system>.bip`` (one BIP2 package for the
 whole functional level) and a Python package that imports only ``runtime``
-(``__init__.py``, ``__main__.py``, ``model.py``).  Everything is written into
+(``__init__.py``, ``__main__.py``, ``model.py``, and ``interface.py``: the
+data the runtime needs to call codels and serve requests).  Everything is written into
 a fresh temporary directory first and swapped in at the end, so an error at
 any point leaves the output directory as it was.  The output is
 deterministic: same descriptions, same bytes.
@@ -18,6 +19,7 @@ import jinja2
 
 from genom2bip import ir
 from genom2bip.back.bip2 import write_package
+from genom2bip.back.interface import interface_data, literal
 from genom2bip.back.pysource import constructor
 from genom2bip.build.functional import FunctionalLevel
 from genom2bip.build.names import ident
@@ -72,8 +74,8 @@ def _env() -> jinja2.Environment:
 
 
 def python_files(package: Package, root: str, docs: dict[str, str], module: str, title: str,
-                 sources: str, version: str) -> dict[str, str]:
-    """The generated Python package: file name → text."""
+                 sources: str, version: str, interface: dict | None = None) -> dict[str, str]:
+    """The generated Python package: file name → text (``interface.py`` when ``interface`` data is given)."""
     import runtime.model as model_api
 
     used: set[str] = set()
@@ -105,12 +107,17 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
         "imports": sorted(used), "externs": [constructor(f, 12) for f in package.extern_functions],
         "counts": f"{len(package.atom_types)} atom types, {len(package.connector_types)} connector types, "
                   f"{len(package.compound_types)} compound types",
+        "has_interface": interface is not None,
+        "interface": literal(interface) if interface is not None else "",
     }
-    return {
+    files = {
         "__init__.py": env.get_template("init.py.j2").render(context),
         "__main__.py": env.get_template("main.py.j2").render(context),
         "model.py": env.get_template("model.py.j2").render(context),
     }
+    if interface is not None:
+        files["interface.py"] = env.get_template("interface.py.j2").render(context)
+    return files
 
 
 def _connector_doc(c) -> str:
@@ -146,7 +153,8 @@ def generate(description: ir.Description, system: str, out: Path, sources: str, 
     package, root, docs = model_of(description, system, rules)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
-    files.update(python_files(package, root, docs, name, title, sources, version))
+    files.update(python_files(package, root, docs, name, title, sources, version,
+                              interface_data(description, system, sources)))
 
     out.mkdir(parents=True, exist_ok=True)
     target = out / name

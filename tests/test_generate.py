@@ -99,8 +99,8 @@ def test_generated_package_imports_only_runtime():
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_generated_dala_runs_hundreds_of_steps_without_model_error(seed):
-    result = subprocess.run([sys.executable, "-m", "dala", "run", "--limit", "600", "--seed", str(seed), "--quiet"],
-                            cwd=ROOT / "gen", capture_output=True, text=True, timeout=120)
+    result = subprocess.run([sys.executable, "-m", "dala", "simulate", "--limit", "600", "--seed", str(seed),
+                             "--quiet"], cwd=ROOT / "gen", capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "600 steps, step limit reached"
     assert result.stderr == ""

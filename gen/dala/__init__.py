@@ -5,9 +5,12 @@ regenerate with `genom2bip descriptions/dala -o DIR`, DIR being the directory
 that holds this package.
 
 `package()` builds the BIP model (the same as dala.bip); `ROOT` is the
-instance to run. `python -m dala run` executes it on the runtime's
-engine, `python -m dala describe` lists what it contains.
+instance to run; `INTERFACE` describes the components' ids,
+ports, services and codels for the runtime. `python -m dala run`
+runs the controller in real time with its services interface,
+`python -m dala describe` lists what the model contains.
 """
 from .model import ROOT, package
+from .interface import INTERFACE
 
-__all__ = ["ROOT", "package"]
+__all__ = ["INTERFACE", "ROOT", "package"]

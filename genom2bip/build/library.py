@@ -7,6 +7,7 @@ made on demand by arity so that the ``.bip`` output declares only what it uses.
 from __future__ import annotations
 
 from runtime.model import (
+    Annotation,
     Assign,
     AtomType,
     Binary,
@@ -46,10 +47,12 @@ def timer_type() -> AtomType:
 
     ``period`` (µs) is a parameter so that the real-time runtime and the
     timing observers know when ``trigger`` may happen; the untimed semantics
-    ignores it.
+    ignores it.  The ``@timer`` annotation tells the runtime which parameter
+    and ports these are, without knowing the generator (docs/runtime.md).
     """
     return AtomType(
         name="Timer",
+        annotations=[Annotation("timer", {"period": "period", "trigger": "trigger", "sleep": "sleep"})],
         params=[DataParam("int", "period")],
         ports=[PortDecl(PORT, "trigger", exported=True), PortDecl(PORT, "sleep", exported=True)],
         places=["WAIT", "PERIOD"],
@@ -62,9 +65,14 @@ def timer_type() -> AtomType:
 
 
 def scheduler_type() -> AtomType:
-    """Scheduler of a task: ``period`` opens a period, ``exec`` authorises one codel, ``sleep`` closes it."""
+    """Scheduler of a task: ``period`` opens a period, ``exec`` authorises one codel, ``sleep`` closes it.
+
+    ``@scheduler`` names the ports for the runtime: a task without a timer
+    opens a period only when a codel can then run (docs/runtime.md).
+    """
     return AtomType(
         name="Scheduler",
+        annotations=[Annotation("scheduler", {"period": "period", "exec": "exec", "sleep": "sleep"})],
         ports=[
             PortDecl(PORT, "period", exported=True),
             PortDecl(PORT, "exec", exported=True),

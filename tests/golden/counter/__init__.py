@@ -5,9 +5,12 @@ regenerate with `genom2bip tests/fixtures/genom3/counter.gen -o DIR`, DIR being 
 that holds this package.
 
 `package()` builds the BIP model (the same as counter.bip); `ROOT` is the
-instance to run. `python -m counter run` executes it on the runtime's
-engine, `python -m counter describe` lists what it contains.
+instance to run; `INTERFACE` describes the components' ids,
+ports, services and codels for the runtime. `python -m counter run`
+runs the controller in real time with its services interface,
+`python -m counter describe` lists what the model contains.
 """
 from .model import ROOT, package
+from .interface import INTERFACE
 
-__all__ = ["ROOT", "package"]
+__all__ = ["INTERFACE", "ROOT", "package"]

@@ -5,9 +5,12 @@ regenerate with `genom2bip tests/fixtures/genom2/rflex.gen -o DIR`, DIR being th
 that holds this package.
 
 `package()` builds the BIP model (the same as rflex.bip); `ROOT` is the
-instance to run. `python -m rflex run` executes it on the runtime's
-engine, `python -m rflex describe` lists what it contains.
+instance to run; `INTERFACE` describes the components' ids,
+ports, services and codels for the runtime. `python -m rflex run`
+runs the controller in real time with its services interface,
+`python -m rflex describe` lists what the model contains.
 """
 from .model import ROOT, package
+from .interface import INTERFACE
 
-__all__ = ["ROOT", "package"]
+__all__ = ["INTERFACE", "ROOT", "package"]

@@ -67,6 +67,12 @@ def Timer() -> AtomType:
         places=['WAIT', 'PERIOD'],
         initial=InitialTransition(['WAIT']),
         transitions=[Transition('trigger', ['WAIT'], ['PERIOD']), Transition('sleep', ['PERIOD'], ['WAIT'])],
+        annotations=[
+            Annotation(
+                'timer',
+                arguments={'period': 'period', 'trigger': 'trigger', 'sleep': 'sleep'},
+            ),
+        ],
     )
 
 
@@ -86,6 +92,7 @@ def Scheduler() -> AtomType:
             Transition('exec', ['RUN'], ['RUN']),
             Transition('sleep', ['RUN'], ['SLEEP']),
         ],
+        annotations=[Annotation('scheduler', arguments={'period': 'period', 'exec': 'exec', 'sleep': 'sleep'})],
     )
 
 
