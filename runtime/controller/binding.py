@@ -88,6 +88,7 @@ class Binder:
         self.failure: dict[str, Any] | None = None
         self.calls = 0
         self.missing: list[str] = []
+        self._externs: dict[str, Callable[[], int]] | None = None
         # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
         self._anywhere: dict[str, tuple[str, list[Arg]]] = {}
         for scope in list(self.services.values()) + list(self.tasks.values()):
@@ -95,8 +96,10 @@ class Binder:
                 self._anywhere.setdefault(extern, (scope.component, args))
 
     def externs(self) -> dict[str, Callable[[], int]]:
-        """One callable per codel extern of the model."""
-        out = {}
+        """One callable per codel extern of the model (made once)."""
+        if self._externs is not None:
+            return self._externs
+        out = self._externs = {}
         for extern, spec in self.specs.items():
             component = self._anywhere.get(extern, (extern.split("_", 1)[0], []))[0]
             fn = self.source.find(component, spec.codel)

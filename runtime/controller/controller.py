@@ -75,6 +75,7 @@ class Controller:
             label: Service(scope, comps[scope.component]["services"][scope.name])
             for label, scope in self.binder.services.items()}
         self._roles = self._port_roles()
+        self._interrupters = self._who_interrupts()
         self._info: dict[int, StepInfo] = {}
         self._connectors = {fc.path: fc for fc in self.engine.flat.connectors}
         self._lock = threading.RLock()
@@ -118,6 +119,28 @@ class Controller:
             if part == "control" and all(v in (d.name for d in fa.variables) for v in ("done", "ok", "running")):
                 owner.status_slots = (fa.slot("done"), fa.slot("ok"), fa.slot("running"))
         return roles
+
+    def _who_interrupts(self) -> dict[str, list[str]]:
+        """Service label -> the services whose start aborts it (the description's and the rules' interruptions)."""
+        flat = self.engine.flat
+
+        def leaves(fc) -> list[str]:
+            out = []
+            for alts in fc.params:
+                for a in alts:
+                    out += [flat.ports[a.port].path] if hasattr(a, "port") else leaves(flat.connectors[a.connector])
+            return out
+
+        found: dict[str, list[str]] = {}
+        for fc in flat.connectors:
+            if not fc.top:
+                continue
+            roles = [self._roles.get(p) for p in leaves(fc)]
+            starts = [r[0].label for r in roles if r is not None and r[1] == "control" and r[2] == "start"]
+            for r in roles:
+                if r is not None and r[2] == "abort" and starts and r[0].label not in starts:
+                    found.setdefault(r[0].label, []).extend(x for x in starts if x not in found.get(r[0].label, []))
+        return found
 
     def info(self, inter: Interaction) -> StepInfo:
         """The run-time meaning of ``inter`` (cached by its index)."""
@@ -179,9 +202,8 @@ class Controller:
             if not svc.reentrant:
                 busy = svc.busy_with()
                 if busy is not None:
-                    others = [s for s, x in self.interface["components"][component]["services"].items()
-                              if service in x["interrupts"] or "all" in x["interrupts"]]
-                    hint = f" or interrupt it ({', '.join(f'{component}.{o}' for o in others)})" if others else ""
+                    others = self._interrupters.get(svc.label, [])
+                    hint = f" or interrupt it ({', '.join(others)})" if others else ""
                     raise RequestError(409, f"{svc.label} is busy with request {busy.id} ({busy.status}): an activity "
                                             f"takes one request at a time; wait for its report{hint}")
             req = Request(self._next_id, component, service, values, local)
@@ -386,7 +408,6 @@ class Controller:
         if info.closes is not None:
             overrun = info.closes.close(now)
             if overrun is not None:
-                print(f"warning: {overrun['message']}", file=sys.stderr)
                 self._emit({"event": "overrun", **overrun})
         failure = self.binder.failure
         svc = info.service

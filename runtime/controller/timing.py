@@ -56,12 +56,18 @@ class Timer:
     trigger: str  # port paths
     sleep: str
     period: float
-    deadline: float = 0.0
+    base: float = 0.0  # when period 0 started: period k starts at base + k * period (no drift)
+    index: int = 0  # the next period's number
     opened: float | None = None  # ideal start of the period now open
     periods: int = 0
     missed: int = 0
     overruns: int = 0
     lateness: deque = field(default_factory=lambda: deque(maxlen=100_000))
+
+    @property
+    def deadline(self) -> float:
+        """When the next period may start."""
+        return self.base + self.index * self.period
 
     def open(self, now: float) -> None:
         """The period interaction fired at ``now``: record the lateness, skip whole periods missed."""
@@ -70,8 +76,9 @@ class Timer:
         self.periods += 1
         missed = int(late // self.period) if late >= self.period else 0
         self.missed += missed
-        self.opened = self.deadline + missed * self.period
-        self.deadline = self.opened + self.period
+        self.index += missed
+        self.opened = self.deadline
+        self.index += 1
 
     def close(self, now: float) -> dict[str, Any] | None:
         """The period closed at ``now``: an overrun report when it lasted longer than the period."""
@@ -137,8 +144,7 @@ class Timers:
     def start(self, now: float) -> None:
         """Every task's first period starts now."""
         for t in self.timers:
-            t.deadline = now
-            t.opened = None
+            t.base, t.index, t.opened = now, 0, None
 
     def stats(self) -> list[dict[str, Any]]:
         return [t.stats() for t in self.timers]

@@ -1,0 +1,254 @@
+"""The controller at run time, without HTTP: periods on a clock, codel calls, reports, stopping."""
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from runkit import DALA_CODELS, TICK, build, dala
+from runtime.controller import Controller, RequestError, VirtualClock
+from runtime.genom import Ref, Throw
+
+
+@pytest.fixture
+def tick(tmp_path):
+    return build(tmp_path, TICK)
+
+
+def tick_codels(clock=None, calls=None, slow=None):
+    """Codels of the tick component; ``calls`` collects (codel, time); ``slow(seconds)`` runs in tickSlow."""
+    calls = [] if calls is None else calls
+
+    def now():
+        return clock.now() if clock is not None else time.monotonic()
+
+    def tickStart(n):
+        n.value = 0
+        return "count"
+
+    def tickCount(n, Count):
+        calls.append(("tickCount", now()))
+        n.value += 1
+        Count.value = n.value
+        return "pause::count"
+
+    def tickSlow(seconds):
+        calls.append(("tickSlow", now()))
+        if slow is not None:
+            slow(seconds)
+        return "ether"
+
+    def tickWork(add, n, total):
+        n.value += add
+        total.value = n.value
+        return "ether"
+
+    return {"tick": {"tickStart": tickStart, "tickCount": tickCount, "tickSlow": tickSlow, "tickWork": tickWork}}
+
+
+# --------------------------------------------------------------------------- time
+
+
+def test_periods_start_on_the_clock_rate_grid_and_never_early(tick):
+    package, root, interface = tick
+    clock = VirtualClock()
+    calls = []
+    c = Controller(package, root, interface, tick_codels(clock, calls), clock=clock)
+    assert [t.period for t in c.timers.timers] == [0.012]  # 10 ms on a 4 ms clock: 12 ms
+    assert c.run(duration=0.5) == "stopped"
+    times = [t for name, t in calls if name == "tickCount"]
+    assert len(times) == 42  # at 0 (start, then count), 12, 24, ... 492 ms
+    assert all(abs(t / 0.012 - round(t / 0.012)) < 1e-9 for t in times)
+    assert c.timers.stats()[0]["overruns"] == 0
+    assert c.data.poster("tick", "Count").value == 42
+
+
+def test_a_period_longer_than_its_task_period_is_an_overrun(tick):
+    package, root, interface = tick
+    clock = VirtualClock()
+    events = []
+    c = Controller(package, root, interface, tick_codels(clock, slow=lambda s: clock.advance(clock.now() + s)),
+                   clock=clock)
+    c.subscribe(events.append)
+    req = c.submit("tick", "Slow", {"seconds": 0.05})
+    assert c.run(duration=0.5) == "stopped"
+    assert req.status == "ok"
+    overruns = [e for e in events if e["event"] == "overrun"]
+    assert overruns and overruns[0]["task"] == "tick.t" and overruns[0]["took_ms"] > 12
+    assert "overran its 12 ms period" in overruns[0]["message"]
+    stats = c.timers.stats()[0]
+    assert stats["overruns"] >= 1 and stats["missed"] >= 3  # the 50 ms codel swallowed whole periods
+
+
+def test_the_engine_sleeps_between_periods_and_wakes_for_a_request(tick):
+    package, root, interface = tick
+    c = Controller(package, root, interface, tick_codels())
+    cpu = time.process_time()
+    c.start()
+    time.sleep(0.3)
+    steps = c.steps
+    # 3 steps per 12 ms period (period, exec, sleep), no idle spinning of the untimed control task
+    assert steps <= 3 * (0.3 / 0.012 + 2) + 4
+    t = time.monotonic()
+    req = c.submit("tick", "Work", {"add": 5})
+    c.wait(req.id, timeout=2)
+    assert time.monotonic() - t < 0.05  # a request does not wait for the next period
+    c.stop()
+    assert req.final["status"] == "ok" and req.final["outputs"]["total"] >= 5
+    assert time.process_time() - cpu < 0.25
+
+
+def test_stop_lets_the_running_codel_finish_and_reports_what_is_pending(tick):
+    package, root, interface = tick
+    entered, finished = threading.Event(), threading.Event()
+
+    def slow(seconds):
+        entered.set()
+        time.sleep(seconds)
+        finished.set()
+
+    c = Controller(package, root, interface, tick_codels(slow=slow))
+    c.start()
+    req = c.submit("tick", "Slow", {"seconds": 0.3})
+    assert entered.wait(2)
+    queued = c.submit("tick", "Work", {})  # the engine thread is in the codel: this one waits in its queue
+    c.stop()
+    assert finished.is_set()
+    assert c.status == "stopped"
+    for r in (req, queued):
+        assert r.final is not None and r.final["status"] == "interrupted" and r.final["by"] is None
+        assert "controller stopped" in r.final["message"]
+    with pytest.raises(RequestError) as err:
+        c.submit("tick", "Work", {})
+    assert err.value.status == 503
+
+
+# --------------------------------------------------------------------------- codels
+
+
+def test_codels_get_their_declared_arguments_and_write_back_holders():
+    pkg = dala()
+    seen = {}
+
+    def nddStartGoTo(local_goal, ids_goal, navigating):
+        seen["args"] = (dict(local_goal), type(ids_goal), type(navigating))
+        local_goal["x"] = 99.0  # an `in` value is a copy: changing it changes nothing
+        ids_goal.value = {"x": 1.5, "y": 2.5, "theta": 0.0}
+        navigating.value = True
+        return "plan"
+
+    def nddPlan(goal, params, max_speed, Obs, Pos, Speed):
+        seen["plan"] = (goal, params, max_speed, Obs, Pos)
+        Speed.value = {"v": 0.1, "w": 0.0}
+        return "arrived"
+
+    def nddArrived(navigating, Speed):
+        seen["navigating"] = navigating.value
+        navigating.value = False
+        return "ether"
+
+    codels = {"NDD": {"nddStartGoTo": nddStartGoTo, "nddPlan": nddPlan, "nddArrived": nddArrived,
+                      "nddCheckGoal": lambda goal: None}}
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, codels, clock=VirtualClock())
+    c.data.write_poster("POM", "Pos", {"estimate": {"x": 0.0, "y": 0.0, "theta": 0.0}, "covariance": [0, 0, 0],
+                                       "stamp": 1.0})
+    svc = c.services["NDD.GoTo"]
+    req = c.submit("NDD", "GoTo", {"goal": {"x": 1.5, "y": 2.5, "theta": 0.0}})
+    # drive the GoTo by hand on the engine: accept, start, then its codels
+    b = c.binder
+    c.state = c.engine.initial_state()
+    c.timers.start(0.0)
+    svc.current = svc.queue.popleft()
+    b.scope, b.locals = svc.scope, req.locals
+    assert b.externs()["NDD_nddStartGoTo"]() == 0
+    assert seen["args"] == ({"x": 1.5, "y": 2.5, "theta": 0.0}, Ref, Ref)
+    assert req.locals["goal"]["x"] == 1.5
+    assert c.data.ids["NDD"]["goal"] == {"x": 1.5, "y": 2.5, "theta": 0.0}
+    assert c.data.ids["NDD"]["navigating"] is True
+    assert b.externs()["NDD_nddPlan"]() == 1  # "arrived", the second yield
+    goal, params, max_speed, obs, pos = seen["plan"]
+    assert goal == {"x": 1.5, "y": 2.5, "theta": 0.0} and obs is None and pos["stamp"] == 1.0
+    assert params == {"robot_radius": 0.0, "security_distance": 0.0, "goal_tolerance": 0.0}
+    assert c.data.poster("NDD", "Speed").value == {"v": 0.1, "w": 0.0} and c.data.poster("NDD", "Speed").seq == 1
+    assert c.data.read_input("RFLEX", "Speed") == {"v": 0.1, "w": 0.0}  # port in reads the poster of its name
+    assert b.externs()["NDD_nddArrived"]() == 0 and seen["navigating"] is True
+    assert b.failure is None
+
+
+def test_codel_results_map_to_outcomes_and_failures_name_the_codel():
+    pkg = dala()
+
+    class e_no_goal(Throw):
+        pass
+
+    results = iter([e_no_goal(), Throw("NDD::e_blocked", where={"x": 1}), Throw("e_unheard_of"), "somewhere", 12,
+                    KeyError("oops")])
+
+    def nddPlan(**kw):
+        r = next(results)
+        if isinstance(r, Exception):
+            raise r
+        return r
+
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, {"NDD": {"nddPlan": nddPlan}}, clock=VirtualClock())
+    call = c.binder.externs()["NDD_nddPlan"]
+    assert call() == 2 and c.binder.failure["exception"] == "NDD::e_no_goal"
+    assert call() == 3 and c.binder.failure["detail"] == {"where": {"x": 1}}
+    assert call() == -1 and "threw e_unheard_of, which is not declared" in c.binder.failure["message"]
+    assert call() == -1 and "returned 'somewhere', not a declared yield" in c.binder.failure["message"]
+    assert call() == -1 and "returned 12" in c.binder.failure["message"]
+    assert call() == -1 and c.binder.failure["message"] == "codel nddPlan raised KeyError: 'oops'"
+    assert c.binder.failure["where"].endswith("test_runtime_controller.py:" + c.binder.failure["where"].split(":")[-1])
+    missing = c.binder.externs()["NDD_nddArrived"]
+    assert missing() == -1 and c.binder.failure["message"].startswith("codel nddArrived is missing")
+
+
+def test_a_codels_module_that_does_not_import_is_reported_per_codel(tmp_path):
+    pkg = dala()
+    (tmp_path / "NDD.py").write_text("import no_such_module_here\n")
+    (tmp_path / "POM.py").write_text("def pomReset(initialised):\n    return 'ether'\n")
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(tmp_path), clock=VirtualClock())
+    assert "NDD.nddPlan" in c.binder.missing and "POM.pomReset" not in c.binder.missing
+    c.binder.externs()["NDD_nddStop"]()
+    assert "importing" in c.binder.failure["message"] and "No module named 'no_such_module_here'" in \
+        c.binder.failure["message"]
+
+
+def test_dala_stub_codels_are_all_found():
+    pkg = dala()
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS), clock=VirtualClock())
+    assert c.binder.missing == ["POM.pomReset"]  # left out on purpose
+    assert c.run(duration=2.0) == "stopped" and c.error is None
+    assert all(t["periods"] > 10 and t["overruns"] == 0 for t in c.timers.stats())
+
+
+# --------------------------------------------------------------------------- requests
+
+
+@pytest.mark.parametrize("inputs, message", [
+    ({"goal": {"x": 1, "y": 2}}, "goal: missing member 'theta'"),
+    ({"goal": {"x": "far", "y": 0, "theta": 0}}, "goal.x: expected a number, got 'far'"),
+    ({}, "missing parameter 'goal' (Goal in the world frame)"),
+    ({"goal": {"x": 1, "y": 2, "theta": 0}, "speed": 3}, "unknown parameter 'speed' (parameters of NDD.GoTo: goal)"),
+    ([1, 2], "must be a JSON object, not list"),
+])
+def test_bad_parameters_are_refused_with_the_path_of_the_problem(inputs, message):
+    pkg = dala()
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, {}, clock=VirtualClock())
+    with pytest.raises(RequestError) as err:
+        c.submit("NDD", "GoTo", inputs)
+    assert err.value.status == 422 and message in err.value.message
+
+
+def test_partial_structs_take_the_default_members():
+    pkg = dala()
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, {}, clock=VirtualClock())
+    req = c.submit("NDD", "SetSpeed", {"max_speed": {"v": 0.1}})
+    assert req.inputs == {"max_speed": {"v": 0.1, "w": 0.5}}
+    with pytest.raises(RequestError) as err:
+        c.submit("NDX", "GoTo", {})
+    assert err.value.status == 404 and "no component 'NDX'" in err.value.message
+    with pytest.raises(RequestError) as err:
+        c.submit("NDD", "Goto", {})
+    assert err.value.status == 404 and "no service 'Goto'" in err.value.message and "GoTo" in err.value.message
