@@ -338,6 +338,7 @@ class ServiceServer:
         # accepted connections inherit it; without it a response written in two parts waits for a delayed ACK
         self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.socket.bind(("127.0.0.1", port))
+        self.socket.listen(2048)  # clients may connect as soon as the URL is printed; they wait in the backlog
         self.port = self.socket.getsockname()[1]
         self.url = f"http://127.0.0.1:{self.port}"
         config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="on",
