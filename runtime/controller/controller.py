@@ -85,6 +85,7 @@ class Controller:
         self._stopping = False
         self._rng = random.Random(seed) if seed is not None else None
         self._last: dict[int, int] = {}  # interaction index -> step when it last fired (fair choice)
+        self._work: dict[tuple, bool] = {}  # (untimed period, state) -> a codel would run in it
         self.keep = keep
         self.requests: dict[int, Request] = {}
         self._ended: deque[int] = deque()
@@ -380,10 +381,20 @@ class Controller:
             self._last[inter.index] = self.steps
             return inter, info, wake_at
         for inter, info in lazy:
-            after = self.engine.fire(self.state, inter)
-            if any(info.lazy_exec in j.ports for j in self.engine.enabled(after)):
+            if self._has_work(inter, info):
                 return inter, info, wake_at
         return None, None, wake_at
+
+    def _has_work(self, inter: Interaction, info: StepInfo) -> bool:
+        """Would opening this untimed period let one of its task's codels run?  (Memoised by state.)"""
+        key = (inter.index, self.state)
+        got = self._work.get(key)
+        if got is None:
+            after = self.engine.fire(self.state, inter)
+            got = self._work[key] = any(info.lazy_exec in j.ports for j in self.engine.enabled(after))
+            if len(self._work) > 50_000:
+                self._work.clear()
+        return got
 
     def _fire(self, inter: Interaction, info: StepInfo) -> None:
         b = self.binder
@@ -396,13 +407,13 @@ class Controller:
             b.locals = req.locals if req is not None else None
         else:
             b.scope, b.locals = info.scope, None
+        now = self.clock.now()
         self.state = self.engine.fire(self.state, inter)
         self.steps += 1
-        self._observe(info, req)
+        self._observe(info, req, now)
 
-    def _observe(self, info: StepInfo, req: Request | None) -> None:
-        """Timers and reports after a step."""
-        now = self.clock.now()
+    def _observe(self, info: StepInfo, req: Request | None, now: float) -> None:
+        """Timers (``now``: when the step began) and reports after a step."""
         if info.opens is not None:
             info.opens.open(now)
         if info.closes is not None:
