@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from runkit import DALA_CODELS, TICK, build, dala
+from runkit import DALA_CODELS, ROOT, TICK, build, dala
 from runtime.controller import Controller, RequestError, VirtualClock
 from runtime.genom import Ref, Throw
 
@@ -252,3 +252,35 @@ def test_partial_structs_take_the_default_members():
     with pytest.raises(RequestError) as err:
         c.submit("NDD", "Goto", {})
     assert err.value.status == 404 and "no service 'Goto'" in err.value.message and "GoTo" in err.value.message
+
+
+def test_the_simulated_dala_codels_drive_the_robot_to_its_goal():
+    pkg = dala()
+    c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(ROOT / "descriptions" / "dala" / "codels"),
+                   clock=VirtualClock())
+    assert c.binder.missing == []
+    c.start()
+
+    def call(component, service, **inputs):
+        req = c.submit(component, service, inputs)
+        c.wait(req.id, timeout=20)
+        return req
+
+    try:
+        for component, service, inputs in [
+                ("NDD", "SetParams", {}), ("NDD", "SetDataSource", {}), ("NDD", "SetSpeed", {"max_speed": {"v": 1.0}}),
+                ("POM", "Run", {"origin": {"x": 0.0, "y": 0.0, "theta": 0.0}}), ("LaserRF", "Init", {}),
+                ("RFLEX", "Init", {}), ("RFLEX", "SetAcceleration", {"acceleration_max": 1.0})]:
+            assert call(component, service, **inputs).status == "ok", (component, service)
+        running = [c.submit(m, s, {}) for m, s in (("LaserRF", "Start"), ("Aspect", "Run"), ("RFLEX", "TrackSpeed"))]
+        t = time.monotonic()
+        while any(r.status != "running" for r in running):
+            assert time.monotonic() - t < 10
+            time.sleep(0.01)
+        goto = call("NDD", "GoTo", goal={"x": 3.0, "y": 2.0, "theta": 0.0})
+        assert goto.final["status"] == "ok", goto.final
+        where = c.data.poster("POM", "Pos").value["estimate"]
+        assert abs(where["x"] - 3.0) < 0.15 and abs(where["y"] - 2.0) < 0.15
+    finally:
+        c.stop()
+    assert c.error is None
