@@ -284,3 +284,18 @@ def test_the_simulated_dala_codels_drive_the_robot_to_its_goal():
     finally:
         c.stop()
     assert c.error is None
+
+
+def test_a_failing_task_codel_is_an_event_and_ends_the_permanent_activity(tick):
+    package, root, interface = tick
+    clock = VirtualClock()
+    codels = tick_codels(clock)
+    codels["tick"]["tickCount"] = lambda n, Count: "sideways"
+    c = Controller(package, root, interface, codels, clock=clock)
+    events = []
+    c.subscribe(events.append)
+    assert c.run(duration=0.1) == "stopped"
+    errors = [e for e in events if e["event"] == "codel_error"]
+    assert len(errors) == 1 and errors[0]["task"] == "tick.t" and errors[0]["codel"] == "tickCount"
+    assert "returned 'sideways', not a declared yield (declared: pause::count)" in errors[0]["message"]
+    assert c.timers.stats()[0]["periods"] == 9  # the task's periods go on, empty
