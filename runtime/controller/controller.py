@@ -34,7 +34,8 @@ Listener = Callable[[dict[str, Any]], None]
 class StepInfo:
     """What an interaction means at run time, worked out once per interaction from its ports."""
 
-    kind: str | None = None  # the service port it fires: trigger, refuse, reject, start, exec_<s>, finish, fail, interrupted
+    # the service port it fires: trigger, refuse, reject, start, exec_<state>, finish, fail, interrupted
+    kind: str | None = None
     service: Service | None = None
     scope: Scope | None = None  # a task whose permanent activity runs a codel
     victims: list[Service] = field(default_factory=list)  # services whose activity it aborts

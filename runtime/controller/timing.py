@@ -27,7 +27,7 @@ class MonotonicClock:
 
 
 class VirtualClock:
-    """Time that jumps to the next deadline instead of waiting: runs a controller as fast as it can (benchmarks, tests)."""
+    """Time that jumps to the next deadline instead of waiting: runs a controller as fast as it can."""
 
     virtual = True
 
