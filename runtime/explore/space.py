@@ -332,6 +332,37 @@ class StateSpace:
         raise ModelError(f"the trail does not replay: interaction {self.interaction(index).label} with outcomes "
                          f"{list(outcomes)} is not possible in state {sid} (enabled: {enabled})")
 
+    def concrete(self, steps: list[Step]) -> tuple:
+        """The engine's own state at the end of a trace (dead variables as execution leaves them).
+
+        Replays the steps with the engine and the recorded codel outcomes,
+        without the explorer's packing or reduction.
+        """
+        engine, oracle, env = self.engine, self.oracle, self.environment
+        starts = [state for state, _ in outcome_vectors(oracle, engine.initial_state)]
+        error: Exception | None = None
+        for start in starts:
+            state, counts = start, (0,) * len(self.services)
+            try:
+                for step in steps:
+                    env.current = counts
+                    oracle.in_guard = True
+                    try:
+                        enabled = {i.index: i for i in engine.enabled(state)}
+                    finally:
+                        oracle.in_guard = False
+                    inter = enabled.get(step.index)
+                    if inter is None:
+                        raise ModelError(f"step {step.label} is not enabled")
+                    oracle.start([pos for _, pos in step.outcomes])
+                    env.taken.clear()
+                    state = engine.fire(state, inter)
+                    counts = env.after(counts)
+                return state
+            except ModelError as err:
+                error = err
+        raise error if error else ModelError("no initial state")
+
     def replay_markers(self, markers: list[tuple[str, int]]) -> tuple[list[Step], int]:
         """Steps from ``@@i``/``@@o`` markers (a SPIN trail), replayed from the initial state; and the end state."""
         groups: list[tuple[int, list[int]]] = []

@@ -1,0 +1,301 @@
+"""``genom2bip verify MODEL``: deadlocks, properties and LTS/Promela exports, on our explorer or on SPIN.
+
+MODEL is description files or directories (the functional level is built as
+``genom2bip generate`` builds it, rules included) or one ``.bip`` file
+(``--root`` names the root, default the last compound type).  Exit status:
+0 every check passed, 4 a deadlock, a violated property or a model error was
+found, 5 a limit stopped the search before an answer, 1 bad input, 2 usage.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from genom2bip.cli import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, add_source_arguments, error, verb
+
+EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    add_source_arguments(parser)
+    parser.epilog = ("exit status: 0 all checks pass, 4 deadlock/violation/model error found, "
+                     "5 stopped by a limit before an answer, 1 bad input, 2 usage")
+    parser.add_argument("--root", help="root instance of a .bip model (default: the last compound type)")
+    parser.add_argument("--rules", metavar="FILE", help="rule file for descriptions (default: rules.yaml beside them)")
+    parser.add_argument("--no-rules", action="store_true",
+                        help="only the descriptions' own constraints (e.g. to verify one module of a system alone)")
+    parser.add_argument("--name", metavar="SYSTEM", help="system name when building from descriptions")
+    what = parser.add_argument_group("what to check (default: --deadlock)")
+    what.add_argument("--deadlock", action="store_true", help="report every reachable deadlock with a shortest trace")
+    what.add_argument("--property", metavar="FILE", action="append", default=[],
+                      help="check the properties of FILE (MCL-style; docs/verification.md); may be repeated")
+    search = parser.add_argument_group("exploration")
+    search.add_argument("--engine", choices=("explore", "spin"), default="explore",
+                        help="our explorer (default) or SPIN on the Promela translation")
+    search.add_argument("--max-states", type=int, metavar="N", help="stop after N states")
+    search.add_argument("--max-depth", type=int, metavar="N", help="do not expand states deeper than N steps")
+    search.add_argument("--dfs", action="store_true", help="depth-first (traces are then not shortest)")
+    search.add_argument("--requests", type=int, metavar="N",
+                        help="each service receives at most N requests (default: any number, one at a time)")
+    search.add_argument("--no-reduce", action="store_true",
+                        help="keep dead variables (no reset): the exact engine states, a larger state space")
+    search.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions that are not codels")
+    search.add_argument("--progress", action="store_true", help="show progress even when stderr is not a terminal")
+    search.add_argument("--quiet", action="store_true", help="no progress line")
+    out = parser.add_argument_group("exports")
+    out.add_argument("--aut", metavar="FILE", help="write the explored LTS in Aldebaran format (CADP, mCRL2)")
+    out.add_argument("--dot", metavar="FILE", help="write the explored LTS as a Graphviz graph")
+    out.add_argument("--promela", metavar="FILE", help="write the model as Promela (observers of --property included)")
+    spin = parser.add_argument_group("SPIN (--engine spin)")
+    spin.add_argument("--spin-cores", type=int, default=1, metavar="N", help="SPIN's multi-core search on N cores")
+    spin.add_argument("--spin-bitstate", action="store_true", help="bitstate hashing (approximate, little memory)")
+    spin.add_argument("--spin-hash-bits", type=int, default=27, metavar="B", help="hash table / bit array of 2^B")
+    spin.add_argument("--spin-swarm", type=int, metavar="N", help="N bitstate runs with different hashes and orders")
+    spin.add_argument("--spin-dir", metavar="DIR", help="keep SPIN's files (model.pml, pan.c, trails) in DIR")
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def load_model(args: argparse.Namespace):
+    """(package, root, title) from a .bip file or from descriptions."""
+    paths = args.paths
+    if len(paths) == 1 and paths[0].endswith(".bip"):
+        from runtime.bip2 import parse_file
+        from runtime.diagnostics import DiagnosticError
+
+        if not Path(paths[0]).is_file():
+            error(f"{paths[0]}: no such file")
+            raise Failure(EXIT_ERRORS)
+        try:
+            package = parse_file(paths[0])
+        except DiagnosticError as exc:
+            print(exc.render(), file=sys.stderr)
+            raise Failure(EXIT_ERRORS) from None
+        if not package.compound_types and not args.root:
+            error(f"{paths[0]}: no compound type to use as root; give --root")
+            raise Failure(EXIT_ERRORS)
+        root = args.root or package.compound_types[-1].name + "()"
+        return package, root, f"{paths[0]} ({root})"
+    if any(p.endswith(".bip") for p in paths):
+        error("give either one .bip file or description files, not both")
+        raise Failure(EXIT_USAGE)
+    from genom2bip.cli import load, load_rules
+    from genom2bip.generate import GenerateError, model_of, system_name
+
+    description = load(args)
+    if args.no_rules:
+        from genom2bip.rules import all_rules
+        from runtime.diagnostics import Reporter
+
+        reporter = Reporter()
+        rules = all_rules(description, None, reporter)
+        reporter.raise_if_errors()
+    else:
+        rules = load_rules(args, description)
+    system = args.name or system_name(paths)
+    try:
+        package, root, _ = model_of(description, system, rules)
+    except GenerateError as exc:
+        error(str(exc))
+        raise Failure(EXIT_ERRORS) from None
+    if args.root:
+        root = args.root
+    return package, root, f"{system} ({root})"
+
+
+def load_externs(spec: str | None) -> dict[str, Any]:
+    if not spec:
+        return {}
+    from runtime.engine.externs import load_module
+    from runtime.engine.errors import EngineError
+
+    try:
+        module = load_module(spec)
+    except EngineError as exc:
+        error(str(exc))
+        raise Failure(EXIT_ERRORS) from None
+    return {k: getattr(module, k) for k in dir(module) if not k.startswith("_")}
+
+
+# --------------------------------------------------------------------------- printing
+
+
+def print_trace(steps, indent: str = "    ") -> None:
+    if not steps:
+        print(f"{indent}(the initial state)")
+    for n, step in enumerate(steps, 1):
+        print(f"{indent}{n:4d}  {step}")
+
+
+def print_state(engine, state, indent: str = "    ") -> None:
+    for line in engine.format_state(state).splitlines():
+        print(f"{indent}{line}")
+
+
+def _check_options(args) -> None:
+    for name in ("max_states", "max_depth", "requests"):
+        value = getattr(args, name)
+        if value is not None and value < 0:
+            error(f"--{name.replace('_', '-')} must be >= 0")
+            raise Failure(EXIT_USAGE)
+    if args.spin_cores < 1:
+        error("--spin-cores must be >= 1")
+        raise Failure(EXIT_USAGE)
+    if args.engine == "spin" and (args.dfs or args.max_depth is not None or args.aut or args.dot):
+        error("--dfs, --max-depth, --aut and --dot belong to --engine explore")
+        raise Failure(EXIT_USAGE)
+
+
+# --------------------------------------------------------------------------- the verb
+
+
+@verb("verify", help="explore the BIP model: deadlocks, properties (MCL-style), LTS and Promela exports, SPIN",
+      arguments=_arguments)
+def verb_verify(args: argparse.Namespace) -> int:
+    """Build or read the model, then run the checks asked for and print a verdict for each."""
+    from runtime.diagnostics import DiagnosticError
+    from runtime.engine import EngineError, flatten
+    from runtime.props import read_property_file
+
+    _check_options(args)
+    package, root, title = load_model(args)
+    try:
+        flat = flatten(package, root)
+    except EngineError as exc:
+        error(f"{title}: {exc}")
+        return EXIT_ERRORS
+    properties = []
+    for path in args.property:
+        try:
+            props, warnings = read_property_file(path, flat)
+        except DiagnosticError as exc:
+            print(exc.render(), file=sys.stderr)
+            return EXIT_ERRORS
+        for w in warnings:
+            print(w.render(), file=sys.stderr)
+        properties.extend(props)
+    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela)
+    observed = set().union(*(p.observed for p in properties)) if properties else set()
+    from runtime.explore import ExploreError, StateSpace
+
+    try:
+        space = StateSpace(package, root, load_externs(args.externs), args.requests, not args.no_reduce, observed,
+                           keep_edges=bool(properties or args.aut or args.dot), max_states=args.max_states)
+    except (ExploreError, EngineError) as exc:
+        error(f"{title}: {exc}")
+        return EXIT_ERRORS
+    if args.promela:
+        code = _write_promela(space, properties, args.promela)
+        if code != EXIT_OK:
+            return code
+    print(f"model {title}")
+    if args.engine == "spin":
+        from genom2bip.verify_spin import run_spin
+        return run_spin(space, args, deadlock, properties)
+    return _run_explorer(space, args, deadlock, properties)
+
+
+def _write_promela(space, properties, path: str) -> int:
+    from runtime.export.interactions import all_interactions
+    from runtime.export.monitors import build_monitor, spin_shape
+    from runtime.export.promela import PromelaError, write_promela
+
+    monitors = []
+    try:
+        statics = all_interactions(space.engine)
+        for k, p in enumerate(properties):
+            if spin_shape(p) == "observer":
+                monitors.append(build_monitor(p, statics, f"p{k}")[0])
+        text = write_promela(space, monitors)
+        Path(path).write_text(text, encoding="utf-8")
+    except PromelaError as exc:
+        error(f"cannot write Promela: {exc}")
+        return EXIT_ERRORS
+    except OSError as exc:
+        error(f"cannot write {path}: {exc.strerror or exc}")
+        return EXIT_ERRORS
+    print(f"wrote {path} ({len(monitors)} observer(s))")
+    return EXIT_OK
+
+
+def _progress(args):
+    from runtime.explore import Progress
+    return Progress(force=args.progress, enabled=not args.quiet)
+
+
+def _run_explorer(space, args, deadlock: bool, properties) -> int:
+    from runtime.explore import explore
+    from runtime.props import check, describe
+
+    worst = EXIT_OK
+    need_full = deadlock or args.aut or args.dot
+    if need_full:
+        result = explore(space, args.max_depth, args.dfs, _progress(args))
+        print(f"explored: {result.summary()}")
+        if result.error is not None:
+            worst = EXIT_VIOLATED
+            print(f"model error in state {result.error.state}: {result.error.message}")
+            print("  trace to the state where it happens:")
+            print_trace(result.error.trace)
+        if deadlock:
+            worst = max(worst, _report_deadlocks(space, result, args))
+        if not result.complete and worst == EXIT_OK:
+            worst = EXIT_INCONCLUSIVE
+        if args.aut or args.dot:
+            if not result.complete:
+                error("the LTS is not complete (a limit stopped the exploration): not exported")
+                worst = max(worst, EXIT_INCONCLUSIVE)
+            else:
+                worst = max(worst, _export_lts(space, args))
+    for item in properties:
+        verdict = check(space, item, _progress(args))
+        print(f"property {describe(item)}")
+        head = f"  {verdict.word}"
+        stats = f"{verdict.method}, {verdict.states:,} states, {verdict.seconds:.2f} s" if verdict.method else ""
+        print(head + (f" ({stats})" if stats else "") + (f": {verdict.note}" if verdict.note else ""))
+        if verdict.evidence:
+            what = "counterexample" if verdict.evidence == "counterexample" else "witness"
+            print(f"  {what} ({len(verdict.trace)} step{'s' if len(verdict.trace) != 1 else ''}):")
+            print_trace(verdict.trace)
+            if verdict.loop >= 0:
+                print(f"    ... and back to the state after step {verdict.loop}, forever")
+        if verdict.holds is False:
+            worst = max(worst, EXIT_VIOLATED)
+        elif verdict.holds is None and worst == EXIT_OK:
+            worst = EXIT_INCONCLUSIVE
+    return worst
+
+
+def _report_deadlocks(space, result, args) -> int:
+    if not result.deadlocks:
+        print("deadlocks: none reachable" + ("" if result.complete else " in the explored part"))
+        return EXIT_OK
+    n = len(result.deadlocks)
+    shortest = "" if args.dfs else ", each with a shortest trace"
+    print(f"deadlocks: {n} reachable state{'s' if n != 1 else ''} without enabled interaction{shortest}")
+    for k, sid in enumerate(result.deadlocks, 1):
+        trace = space.trace_to(sid)
+        print(f"deadlock {k} of {n} (state {sid}, {len(trace)} steps):")
+        print_trace(trace)
+        print("  state:")
+        print_state(space.engine, space.concrete(trace))
+    return EXIT_VIOLATED
+
+
+def _export_lts(space, args) -> int:
+    from runtime.export.lts import write_aut, write_dot
+
+    for path, writer, what in ((args.aut, write_aut, "Aldebaran LTS"), (args.dot, write_dot, "DOT graph")):
+        if not path:
+            continue
+        try:
+            with open(path, "w", encoding="utf-8") as f:
+                states, transitions = writer(space, f)
+        except OSError as exc:
+            error(f"cannot write {path}: {exc.strerror or exc}")
+            return EXIT_ERRORS
+        print(f"wrote {path} ({what}: {states:,} states, {transitions:,} transitions)")
+    return EXIT_OK
