@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DALA_CODELS = ROOT / "tests" / "fixtures" / "dala_codels"
+ORIGIN = {"x": 0.0, "y": 0.0, "theta": 0.0}
 
 
 def build(tmp_path: Path, text: str, name: str = "tick"):
@@ -55,3 +57,26 @@ component tick {
   };
 };
 """
+
+
+def navigation_ready(client):
+    """Everything the rules ask before a GoTo, except NDD's own settings (rules.yaml next to the descriptions)."""
+    assert client.call("POM", "Run", origin=ORIGIN, timeout=5)["status"] == "ok"
+    assert client.call("LaserRF", "Init", timeout=5)["status"] == "ok"
+    assert client.call("RFLEX", "Init", timeout=5)["status"] == "ok"
+    for component, service in (("LaserRF", "Start"), ("Aspect", "Run"), ("RFLEX", "TrackSpeed")):
+        rid = client.send(component, service)
+        until(lambda: client.request(rid)["status"] == "running")
+
+
+def until(predicate, timeout=5.0):
+    """Poll ``predicate`` until it holds (the controller runs in real time)."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, "condition not reached in time"
+        time.sleep(0.01)
+
+
+def ndd_settings(client):
+    for service in ("SetParams", "SetSpeed", "SetDataSource"):
+        assert client.call("NDD", service, timeout=5)["status"] == "ok"

@@ -9,13 +9,10 @@ from collections import Counter
 
 import pytest
 
-from runkit import DALA_CODELS, dala
+from runkit import DALA_CODELS, ORIGIN, dala, navigation_ready, ndd_settings, until
 from runtime.controller import Controller
 from runtime.services.client import Client, ServiceError
 from runtime.services.server import ServiceServer
-
-ORIGIN = {"x": 0.0, "y": 0.0, "theta": 0.0}
-
 
 @pytest.fixture
 def ctl():
@@ -39,29 +36,6 @@ def raw(server, method, path, body=None):
     data = json.loads(response.read())
     conn.close()
     return response.status, data
-
-
-def navigation_ready(client):
-    """Everything the rules ask before a GoTo, except NDD's own settings (rules.yaml next to the descriptions)."""
-    assert client.call("POM", "Run", origin=ORIGIN, timeout=5)["status"] == "ok"
-    assert client.call("LaserRF", "Init", timeout=5)["status"] == "ok"
-    assert client.call("RFLEX", "Init", timeout=5)["status"] == "ok"
-    for component, service in (("LaserRF", "Start"), ("Aspect", "Run"), ("RFLEX", "TrackSpeed")):
-        rid = client.send(component, service)
-        until(lambda: client.request(rid)["status"] == "running")
-
-
-def until(predicate, timeout=5.0):
-    """Poll ``predicate`` until it holds (the controller runs in real time)."""
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        assert time.monotonic() < deadline, "condition not reached in time"
-        time.sleep(0.01)
-
-
-def ndd_settings(client):
-    for service in ("SetParams", "SetSpeed", "SetDataSource"):
-        assert client.call("NDD", service, timeout=5)["status"] == "ok"
 
 
 def test_goto_is_rejected_until_setparams_setspeed_and_setdatasource_have_completed(ctl):

@@ -25,6 +25,7 @@ from runtime.controller.requests import FINAL, Request, RequestError, Service
 from runtime.controller.schema import completed, problems, zero
 from runtime.controller.timing import MonotonicClock, Timer, Timers
 from runtime.engine import Engine, Interaction, ModelError
+from runtime.engine.flatten import Leaf
 from runtime.model import Package
 
 Listener = Callable[[dict[str, Any]], None]
@@ -79,6 +80,7 @@ class Controller:
         self._interrupters = self._who_interrupts()
         self._info: dict[int, StepInfo] = {}
         self._connectors = {fc.path: fc for fc in self.engine.flat.connectors}
+        self._waits = self._wait_rules()
         self._lock = threading.RLock()
         self._wake = threading.Condition(self._lock)
         self._done = threading.Condition(self._lock)
@@ -358,8 +360,11 @@ class Controller:
         ready: list[tuple[Interaction, StepInfo]] = []
         lazy: list[tuple[Interaction, StepInfo]] = []
         wake_at = None
+        answerable: set[str] = set()  # services whose queued request can be accepted or refused now
         for inter in self.engine.enabled(self.state):
             info = self._info.get(inter.index) or self.info(inter)
+            if info.service is not None and info.kind in ("trigger", "refuse"):
+                answerable.add(info.service.label)
             if info.opens is not None:
                 d = info.opens.deadline
                 if d <= now:
@@ -371,6 +376,8 @@ class Controller:
                 lazy.append((inter, info))
             else:
                 ready.append((inter, info))
+        if self._waits:
+            self._report_held(answerable)
         if due is not None:
             return due[1], due[2], wake_at
         if ready:
@@ -385,6 +392,34 @@ class Controller:
             if self._has_work(inter, info):
                 return inter, info, wake_at
         return None, None, wake_at
+
+    def _wait_rules(self) -> dict[str, tuple[list[str], list[Service]]]:
+        """Service label -> (the rules that hold its requests, the services they read): ``@wait`` on its trigger."""
+        out = {}
+        for fc in self.engine.flat.connectors:
+            if not fc.label.endswith(":trigger"):
+                continue
+            for a in fc.instance.annotations:
+                if a.name == "wait" and a.arguments.get("rules"):
+                    label = fc.label.rsplit(":", 1)[0]
+                    ports = {self.engine.flat.ports[alt.port].path for param in fc.params for alt in param
+                             if isinstance(alt, Leaf)}
+                    reads = [svc for svc in self.services.values() if f"{svc.label}.control.status" in ports]
+                    out[label] = (a.arguments["rules"].split(","), reads)
+        return out
+
+    def _report_held(self, answerable: set[str]) -> None:
+        """A queued request that only a wait rule keeps from starting gets one intermediate ``held`` report."""
+        for label, (rules, reads) in self._waits.items():
+            svc = self.services.get(label)
+            if svc is None or not svc.queue or svc.current is not None or label in answerable:
+                continue
+            head = svc.queue[0]
+            if head.held:
+                continue
+            head.held = True
+            self._report(head, "held", reason="rule", rules=rules, status_of=self._status_of(reads),
+                         message=f"{label} held by rule {', '.join(rules)} until it allows the request")
 
     def _has_work(self, inter: Interaction, info: StepInfo) -> bool:
         """Would opening this untimed period let one of its task's codels run?  (Memoised by state.)"""

@@ -39,6 +39,7 @@ class Request:
     final: dict[str, Any] | None = None
     failure: dict[str, Any] | None = None  # the last codel failure of this request
     interrupted_by: tuple[str, int | None] | None = None
+    held: bool = False  # a "held" report was sent: a wait rule keeps it in its queue
 
     @property
     def label(self) -> str:
