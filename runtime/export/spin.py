@@ -92,7 +92,13 @@ def parse_pan(output: str) -> PanReport:
     r.memory_mb = num(r"([0-9.]+)\s+total actual memory usage")
     r.states_memory_mb = num(r"([0-9.]+)\s+actual memory usage for states")
     r.seconds = num(r"pan: elapsed time ([0-9.e+-]+) seconds")
-    r.messages = re.findall(r"^pan:\d+: (.*?)(?: \(at depth \d+\))?$", output, flags=re.M)
+    r.messages = re.findall(r"^(?:cpu\d+: )?pan:\d+: (.*?)(?: \(at depth \d+\))?$", output, flags=re.M)
+    r.errors = max(r.errors, len(r.messages))
+    if r.states == 0:  # multi-core runs that stop at an error print no summary
+        visited = [int(x) for x in re.findall(r"\((\d+) states visited\)", output)]
+        r.states = max(visited, default=0)
+        if r.errors:
+            r.complete = False
     if "max search depth too small" in output or "out of memory" in output.lower():
         r.complete = False
     return r
@@ -102,7 +108,7 @@ class SpinRun:
     """One SPIN job on a state space's model (its layout, reduction and environment are the explorer's)."""
 
     def __init__(self, space: StateSpace, workdir: str | Path | None = None, cores: int = 1,
-                 bitstate: bool = False, hash_bits: int = 27, keep: bool = False) -> None:
+                 bitstate: bool = False, hash_bits: int = 27, keep: bool = False, opt: str = "-O2") -> None:
         if spin_path() is None:
             raise SpinError("spin is not installed (Debian: apt-get install spin); use --engine explore")
         if shutil.which("gcc") is None and shutil.which("cc") is None:
@@ -111,6 +117,7 @@ class SpinRun:
         self.cores = cores
         self.bitstate = bitstate
         self.hash_bits = hash_bits
+        self.opt = opt  # -O0 compiles pan four times faster: worth it for small models
         self.keep = keep or workdir is not None
         self.dir = Path(workdir) if workdir is not None else Path(tempfile.mkdtemp(prefix="genom2bip-spin-"))
         self.dir.mkdir(parents=True, exist_ok=True)
@@ -127,7 +134,7 @@ class SpinRun:
         gen = self._run(["spin", "-o2", "-a", "model.pml"])  # -o2: keep write-only variables (we reduce ourselves)
         if gen.returncode != 0:
             raise SpinError(f"spin -a failed on the generated model:\n{gen.stdout}{gen.stderr}")
-        flags = ["-O2", "-DSAFETY", "-DNOREDUCE", "-DVECTORSZ=65536"]
+        flags = [self.opt, "-DSAFETY", "-DNOREDUCE", "-DVECTORSZ=65536"]
         if self.cores > 1:
             flags.append(f"-DNCORE={self.cores}")
         if self.bitstate:
@@ -174,14 +181,14 @@ def _markers(output: str) -> list[tuple[str, int]]:
 
 
 def verify_deadlocks(space: StateSpace, cores: int = 1, bitstate: bool = False, hash_bits: int = 27,
-                     max_trails: int = 20, workdir=None, timeout: float | None = None) -> SpinResult:
+                     max_trails: int = 20, workdir=None, timeout: float | None = None, opt: str = "-O2") -> SpinResult:
     """Every invalid end state (deadlock) SPIN finds, with their trails read back (up to ``max_trails``).
 
     Trails are pan's depth-first paths, usually much longer than the
     explorer's shortest traces (pan's own shortening, ``-i``, counts
     statements inside atomic steps, not interactions).
     """
-    run = SpinRun(space, workdir, cores, bitstate, hash_bits)
+    run = SpinRun(space, workdir, cores, bitstate, hash_bits, opt=opt)
     try:
         run.build()
         args = ["-c0", "-e", "-n"]
@@ -196,9 +203,10 @@ def verify_deadlocks(space: StateSpace, cores: int = 1, bitstate: bool = False, 
         run.cleanup()
 
 
-def count_states(space: StateSpace, cores: int = 1, workdir=None, timeout: float | None = None) -> PanReport:
+def count_states(space: StateSpace, cores: int = 1, workdir=None, timeout: float | None = None,
+                 opt: str = "-O2") -> PanReport:
     """A full search ignoring end states: SPIN's count of reachable states."""
-    run = SpinRun(space, workdir, cores)
+    run = SpinRun(space, workdir, cores, opt=opt)
     try:
         run.build()
         return run.pan(["-E", "-n"], timeout)
@@ -207,9 +215,9 @@ def count_states(space: StateSpace, cores: int = 1, workdir=None, timeout: float
 
 
 def verify_safety(space: StateSpace, monitors: list[Monitor], cores: int = 1, bitstate: bool = False,
-                  hash_bits: int = 27, workdir=None, timeout: float | None = None) -> SpinResult:
+                  hash_bits: int = 27, workdir=None, timeout: float | None = None, opt: str = "-O2") -> SpinResult:
     """Assertion violations of the observers (deadlocks ignored); the first trail is read back."""
-    run = SpinRun(space, workdir, cores, bitstate, hash_bits)
+    run = SpinRun(space, workdir, cores, bitstate, hash_bits, opt=opt)
     try:
         run.build(monitors)
         args = ["-E", "-c1", "-n"]
@@ -223,14 +231,14 @@ def verify_safety(space: StateSpace, monitors: list[Monitor], cores: int = 1, bi
 
 
 def swarm(space: StateSpace, runs: int, monitors: list[Monitor] | None = None, hash_bits: int = 24,
-          parallel: int | None = None, timeout: float | None = None) -> SpinResult:
+          parallel: int | None = None, timeout: float | None = None, opt: str = "-O2") -> SpinResult:
     """Several bitstate searches with different hash functions and transition orders; findings merged.
 
     Each run covers a different random part of a state space too large for
     one exhaustive search; together they find errors with high probability.
     The merged state count is the largest of the runs (a lower bound).
     """
-    base = SpinRun(space, None, 1, True, hash_bits)
+    base = SpinRun(space, None, 1, True, hash_bits, opt=opt)
     try:
         base.build(monitors)
         args = (["-E"] if monitors else []) + ["-c1", "-n", f"-w{hash_bits}", "-rhash"]

@@ -1,0 +1,141 @@
+"""SPIN and our explorer on the same models: the same number of states, the same deadlock verdicts.
+
+CI installs SPIN (.ci/run); without it these tests are skipped with that reason.
+"""
+import shutil
+
+import pytest
+
+from runtime.engine import flatten
+from runtime.explore import StateSpace, explore
+from runtime.export import spin
+from runtime.export.interactions import all_interactions
+from runtime.export.monitors import build_monitor, spin_shape
+from runtime.export.promela import PromelaError, write_promela
+from runtime.props import read_properties, read_property_file
+from tests.verifykit import FIXTURES, NDD_NO_AFTER, ndd_model, package, text_space
+
+pytestmark = pytest.mark.skipif(shutil.which("spin") is None or shutil.which("gcc") is None,
+                                reason="SPIN or gcc is not installed (Debian: apt-get install spin; .ci/run does it)")
+
+FAST = "-O0"  # pan compiles four times faster; these models are small
+
+
+def both(pkg, root, **kw):
+    ours = explore(StateSpace(pkg, root, **kw))
+    theirs = spin.verify_deadlocks(StateSpace(pkg, root, **kw), opt=FAST)
+    return ours, theirs
+
+
+@pytest.mark.parametrize("name, root, reduce", [
+    ("Dining", "Table2()", True),
+    ("Dining", "Table3()", True),
+    ("Counters", "Pair()", True),
+    ("Codel", "Main()", True),
+    ("Codel", "Main()", False),
+    ("Mix", "Main()", True),
+    ("Server", "Main()", True),
+])
+def test_same_states_and_deadlock_verdict(name, root, reduce):
+    ours, theirs = both(package(name), root, reduce=reduce)
+    assert theirs.report.states == ours.states
+    assert theirs.report.errors == len(ours.deadlocks)
+    assert theirs.report.complete
+
+
+def test_same_on_the_ndd_module():
+    pkg, root = ndd_model()
+    ours, theirs = both(pkg, root)
+    assert ours.states == theirs.report.states == 55_680
+    assert theirs.report.errors == 0 and ours.deadlocks == []
+
+
+def test_same_with_a_request_budget():
+    pkg, root = ndd_model()
+    ours, theirs = both(pkg, root, requests=1)
+    assert ours.states == theirs.report.states and theirs.report.errors == 0
+
+
+def test_spin_trails_are_replayed_on_the_engine():
+    sp = StateSpace(package("Dining"), "Table2()")
+    result = spin.verify_deadlocks(sp, opt=FAST)
+    (trail,) = result.trails
+    assert trail.message == "invalid end state"
+    assert [s.label for s in trail.steps] == ["left0", "left1"]
+    assert sp.successors(trail.end_state) == ()  # the end of SPIN's trail is a deadlock for our engine too
+
+
+def test_codel_outcomes_come_back_from_the_trail():
+    result = spin.verify_deadlocks(StateSpace(package("Codel"), "Main()", reduce=False), opt=FAST)
+    (trail,) = result.trails
+    assert trail.steps[-1].outcome_names == ("plan -> throw e_fail",)
+
+
+def test_safety_observers_agree_with_the_explorer():
+    pkg, root = ndd_model()
+    items, _ = read_property_file(FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
+    sp = StateSpace(pkg, root)
+    statics = all_interactions(sp.engine)
+    assert spin_shape(items[0]) == "observer" and spin_shape(items[2]) == ""
+    monitor, _ = build_monitor(items[0], statics, "p0")
+    result = spin.verify_safety(sp, [monitor], opt=FAST)
+    assert result.report.errors == 0
+
+    mpkg, mroot = ndd_model(str(NDD_NO_AFTER))
+    items, _ = read_property_file(FIXTURES / "goto_after_setspeed.mcl", flatten(mpkg, mroot))
+    msp = StateSpace(mpkg, mroot)
+    monitor, _ = build_monitor(items[0], all_interactions(msp.engine), "p0")
+    result = spin.verify_safety(msp, [monitor], opt=FAST)
+    assert result.report.errors == 1
+    labels = [s.label for s in result.trails[0].steps]
+    assert labels[-1] == "NDD.GoTo:trigger" and "NDD.SetSpeed:finish" not in labels
+
+
+def test_invariant_observer_reads_places_and_variables():
+    pkg = package("Server")
+    flat = flatten(pkg, "Main()")
+    items, _ = read_properties("a: invariant S.served <= 1; b: invariant not S @ DONE", "p.mcl", flat)
+    observed = set().union(*(i.observed for i in items))
+    for item, violated in zip(items, (False, True)):
+        sp = StateSpace(pkg, "Main()", observed=observed)
+        monitor, _ = build_monitor(item, all_interactions(sp.engine), "p")
+        result = spin.verify_safety(sp, [monitor], opt=FAST)
+        assert (result.report.errors > 0) is violated
+    assert [s.label for s in result.trails[0].steps] == ["S.req", "S.work"]
+
+
+def test_promela_text_has_one_atomic_step_per_interaction():
+    sp = StateSpace(package("Mix"), "Main()")
+    text = write_promela(sp)
+    statics = all_interactions(sp.engine)
+    assert text.count(":: atomic { go") == len(statics)
+    assert "#define mp" in text and "#define go" in text
+    assert "/* bcast */" in text and "/* kick */" in text
+    assert "do\n" in text and "od\n" in text
+
+
+def test_multi_core_and_bitstate_modes_run():
+    pkg = package("Dining")
+    cores = spin.verify_deadlocks(StateSpace(pkg, "Table3()"), cores=2, opt=FAST)
+    assert cores.report.errors == 1 and [s.label for s in cores.trails[0].steps][-1].startswith("left")
+    full = spin.count_states(StateSpace(package("Mix"), "Main()"), cores=2, opt=FAST)
+    assert full.states == 9
+    bits = spin.verify_deadlocks(StateSpace(pkg, "Table3()"), bitstate=True, hash_bits=20, opt=FAST)
+    assert bits.report.states == 14 and bits.report.errors == 1
+    swarm = spin.swarm(StateSpace(pkg, "Table3()"), 2, hash_bits=16, opt=FAST)
+    assert swarm.report.errors >= 1 and swarm.trails and swarm.trails[0].steps
+
+
+def test_python_externs_cannot_be_translated():
+    from tests.test_explore import EXTERN
+    with pytest.raises(PromelaError, match="bound to Python code"):
+        write_promela(text_space(EXTERN, externs={"measure": lambda: 1}))
+
+
+def test_verify_engine_spin_from_the_command_line(capsys):
+    from genom2bip.cli import main
+    code = main(["verify", str(FIXTURES / "Dining.bip"), "--root", "Table2()", "--engine", "spin"])
+    out = capsys.readouterr().out
+    assert code == 4
+    assert "SPIN: 6 states" in out and "deadlocks: 1 invalid end state(s) found by SPIN" in out
+    assert "       1  left0\n       2  left1" in out and "    p0: ONE" in out
