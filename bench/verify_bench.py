@@ -1,0 +1,197 @@
+"""Exploration throughput and memory, our explorer and SPIN side by side on the same models.
+
+Run ``python bench/verify_bench.py [--seconds S] [--max-states N] [--only NAME]``.
+Models: dining philosophers N = 8..12 (left fork, then right: one deadlock),
+the NDD module, and the whole DALA functional level (rules included), whose
+state space no exhaustive search finishes: both tools then run for the same
+budget (our explorer stops at ``--max-states``, SPIN is interrupted after
+``--seconds``) and the rates are compared.  Both tools see the same model:
+the Promela translation has our layout and dead-variable reduction, and the
+exhaustive runs find the same number of states (checked here).
+
+Rates are end to end over the search (ours: numbering, successors, packing;
+SPIN: pan's process including its hash-table set-up), repeated until a run
+has lasted a second so that small models are timed fairly; building the
+engine or compiling pan is not counted.  Bytes per state: ours is the
+visited set (dict of packed ints, numbering, parents) divided by the
+states; SPIN's is pan's "equivalent memory usage for states"
+(stored x (state vector + overhead)) divided by the states it stored.  The
+hash table and the search stack are extra for both.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from runtime.bip2 import parse_text  # noqa: E402
+from runtime.explore import StateSpace, explore  # noqa: E402
+from runtime.export.spin import DEPTH, SpinRun, parse_pan  # noqa: E402
+
+
+def dining(n: int) -> str:
+    """N philosophers who take the left fork, then the right one."""
+    comps = "\n".join(f"    component Phil p{i}()\n    component Fork f{i}()" for i in range(n))
+    conns = "\n".join(
+        f'    @label(name="left{i}")\n    connector Take left{i}(p{i}.takeL, f{i}.take)\n'
+        f'    @label(name="right{i}")\n    connector Take right{i}(p{i}.takeR, f{(i + 1) % n}.take)\n'
+        f'    @label(name="release{i}")\n    connector Release release{i}(p{i}.release, f{i}.put, f{(i + 1) % n}.put)'
+        for i in range(n))
+    return f"""package Dining{n}
+  port type Port()
+  atom type Fork()
+    export port Port take(), put()
+    place FREE, BUSY
+    initial to FREE
+    on take from FREE to BUSY
+    on put from BUSY to FREE
+  end
+  atom type Phil()
+    export port Port takeL(), takeR(), release()
+    place THINK, ONE, EAT
+    initial to THINK
+    on takeL from THINK to ONE
+    on takeR from ONE to EAT
+    on release from EAT to THINK
+  end
+  connector type Take(Port p, Port f)
+    define p f
+  end
+  connector type Release(Port p, Port l, Port r)
+    define p l r
+  end
+  compound type Table()
+{comps}
+{conns}
+  end
+end
+"""
+
+
+def dala_model(modules: list[str] | None = None):
+    from genom2bip.generate import model_of
+    from genom2bip.parser import parse_paths
+    from genom2bip.rules import all_rules
+    from runtime.diagnostics import Reporter
+
+    base = ROOT / "descriptions" / "dala"
+    files = [str(base / f"{m}.gen") for m in modules] if modules else sorted(str(p) for p in base.glob("*.gen"))
+    description = parse_paths(files)
+    rules = None
+    if not modules:
+        reporter = Reporter()
+        rules = all_rules(description, base / "rules.yaml", reporter)
+        reporter.raise_if_errors()
+    package, root, _ = model_of(description, "dala" if not modules else modules[0], rules)
+    return package, root
+
+
+@dataclass
+class Row:
+    model: str
+    ours_states: int
+    ours_rate: float
+    ours_bytes: float
+    ours_complete: bool
+    spin_states: int
+    spin_rate: float
+    spin_bytes: float
+    spin_complete: bool
+
+
+#: A measurement is repeated until its runs add up to this many seconds.
+MIN_SECONDS = 1.0
+
+
+def run_ours(package, root: str, max_states: int | None) -> tuple[int, float, float, bool]:
+    runs, total = 0, 0.0
+    while total < MIN_SECONDS:
+        space = StateSpace(package, root, max_states=max_states)
+        result = explore(space)
+        runs += 1
+        total += result.seconds
+    return result.states, result.states * runs / total, result.bytes_per_state, result.complete
+
+
+def run_spin(package, root: str, seconds: float, states_hint: int) -> tuple[int, float, float, bool]:
+    run = SpinRun(StateSpace(package, root))
+    bits = max(16, min(27, (2 * states_hint).bit_length()))
+    try:
+        run.build()
+        runs, total = 0, 0.0
+        while total < MIN_SECONDS:
+            start = time.perf_counter()
+            proc = subprocess.Popen(["./pan", f"-m{DEPTH}", f"-w{bits}", "-E", "-n"], cwd=run.dir,
+                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            try:
+                out, _ = proc.communicate(timeout=seconds)
+                complete = True
+            except subprocess.TimeoutExpired:
+                proc.send_signal(signal.SIGINT)  # pan prints its statistics when interrupted
+                out, _ = proc.communicate()
+                complete = False
+            total += time.perf_counter() - start
+            runs += 1
+            report = parse_pan(out)
+        equivalent = _equivalent_mb(report.output)
+        per_state = equivalent * 1024 * 1024 / report.states if report.states else 0.0
+        return report.states, report.states * runs / total, per_state, complete and report.complete
+    finally:
+        run.cleanup()
+
+
+def _equivalent_mb(output: str) -> float:
+    import re
+    m = re.search(r"([0-9.]+)\s+equivalent memory usage for states", output)
+    return float(m.group(1)) if m else 0.0
+
+
+def table(rows: list[Row]) -> str:
+    head = ("| model | states (ours / SPIN) | ours states/s | SPIN states/s | SPIN/ours | ours B/state | "
+            "SPIN B/state | ours/SPIN |")
+    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for r in rows:
+        mark = "" if r.ours_complete and r.spin_complete else " (budget)"
+        speed = r.spin_rate / r.ours_rate if r.ours_rate else float("nan")
+        mem = r.ours_bytes / r.spin_bytes if r.spin_bytes else float("nan")
+        lines.append(f"| {r.model}{mark} | {r.ours_states:,} / {r.spin_states:,} | {r.ours_rate:,.0f} | "
+                     f"{r.spin_rate:,.0f} | {speed:,.1f}x | {r.ours_bytes:,.0f} | {r.spin_bytes:,.0f} | {mem:.1f}x |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=20.0, help="SPIN's time budget on models too large to finish")
+    ap.add_argument("--max-states", type=int, default=150_000, help="our state budget on models too large to finish")
+    ap.add_argument("--only", help="run only the models whose name contains this")
+    args = ap.parse_args(argv)
+    models = [(f"dining N={n}", lambda n=n: (parse_text(dining(n), f"Dining{n}.bip"), "Table()"), None)
+              for n in range(8, 13)]
+    models.append(("NDD module", lambda: dala_model(["NDD"]), None))
+    models.append(("DALA (5 modules, rules)", dala_model, args.max_states))
+    rows = []
+    for name, build, budget in models:
+        if args.only and args.only not in name:
+            continue
+        package, root = build()
+        ours = run_ours(package, root, budget)
+        theirs = run_spin(package, root, args.seconds, ours[0])
+        if ours[3] and theirs[3] and ours[0] != theirs[0]:
+            print(f"warning: {name}: ours {ours[0]} states, SPIN {theirs[0]}", file=sys.stderr)
+        rows.append(Row(name, *ours, *theirs))
+        print(f"{name}: done", file=sys.stderr)
+    print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}; SPIN single core, gcc -O2")
+    print(table(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
