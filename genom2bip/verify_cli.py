@@ -41,7 +41,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="each service receives at most N requests (default: any number, one at a time)")
     search.add_argument("--no-reduce", action="store_true",
                         help="keep dead variables (no reset): the exact engine states, a larger state space")
-    search.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions that are not codels")
+    search.add_argument("--externs", metavar="MODULE",
+                        help="Python module binding extern functions that are not codels")
     search.add_argument("--progress", action="store_true", help="show progress even when stderr is not a terminal")
     search.add_argument("--quiet", action="store_true", help="no progress line")
     out = parser.add_argument_group("exports")

@@ -4,7 +4,7 @@ import io
 import pytest
 
 from runtime.engine import Engine
-from runtime.explore import Choice, DomainError, ExploreError, Progress, StateSpace, explore
+from runtime.explore import Choice, ExploreError, Progress, StateSpace, explore
 from runtime.explore.codec import Codec
 from tests.verifykit import package, space, text_space
 

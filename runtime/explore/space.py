@@ -19,7 +19,6 @@ from typing import Any, Iterable
 from runtime.engine import Engine, Interaction
 from runtime.engine.errors import ExternError, ModelError
 from runtime.explore.choices import (
-    Choice,
     Environment,
     ExploreError,
     Oracle,
@@ -399,9 +398,3 @@ class StateSpace:
 
     def edges_memory(self) -> int:
         return sum(sys.getsizeof(t) for t in self.edges.values()) + sys.getsizeof(self.edges)
-
-    def choice_of(self, name: str) -> Choice | None:
-        for c in self.oracle.calls:
-            if c[0].name == name:
-                return c[0]
-        return None

@@ -27,7 +27,7 @@ from runtime.explore.choices import Choice, ExploreError
 from runtime.explore.layout import Slot
 from runtime.explore.space import StateSpace
 from runtime.export.interactions import Static, all_interactions, rule_edges
-from runtime.model.expressions import Assign, Binary, Call, Const, Do, Expr, If, PortData, Stmt, Unary, Var
+from runtime.model.expressions import Assign, Binary, Call, Const, Do, Expr, If, PortData, Unary, Var
 
 #: Most simple paths through guarded priority rules before the translation gives up.
 MAX_PATHS = 10_000
@@ -476,7 +476,6 @@ class PromelaWriter:
     def transfer(self, node: TreeNode, mask: int, ind: str, out: list[str]) -> dict[int, list[str]]:
         """Statements running ``up`` bottom-up and ``down`` top first; returns the values each leaf port receives."""
         received: dict[int, list[str]] = {}
-        frames = []
 
         def up(n: TreeNode) -> tuple:
             pm, chosen = self._layout(n, mask)
@@ -495,16 +494,16 @@ class PromelaWriter:
                 if a.node is None:
                     fp = self.flat.ports[a.port]
                     temps = []
-                    for f, s, ty in zip(fields_, fp.slots, fp.field_types):
+                    for slot, ty in zip(fp.slots, fp.field_types):
                         t = self.temp("bool" if ty == "bool" else "int")
-                        out.append(f"{ind}{t} = {self.names[s]};")
+                        out.append(f"{ind}{t} = {self.names[slot]};")
                         temps.append(t)
                     kids.append((i, a, None, temps))
                 else:
                     child = up(a.node)
                     ex = [child[1].variables[v].text for v in a.node.info.type.export.data]
                     temps = []
-                    for f, src in zip(fields_, ex):
+                    for src in ex:
                         t = self.temp("int")
                         out.append(f"{ind}{t} = {src};")
                         temps.append(t)
@@ -513,15 +512,13 @@ class PromelaWriter:
                     sc.ports[(pname, f)] = Name(t, None)
             if spec is not None and spec.up:
                 out.extend(self.stmts(spec.up, sc, ind))
-            frame = (n, sc, spec, kids)
-            frames.append(frame)
-            return frame
+            return n, sc, spec, kids
 
         def down(frame) -> None:
             n, sc, spec, kids = frame
             if spec is not None and spec.down:
                 out.extend(self.stmts(spec.down, sc, ind))
-            for i, a, child, temps in kids:
+            for _, a, child, temps in kids:
                 if child is None:
                     received[a.port] = temps
                 else:
@@ -544,7 +541,7 @@ class PromelaWriter:
         st = self.statics
         body: list[str] = []
         en, mp = [], []
-        for k, s in enumerate(st):
+        for s in st:
             if s.source.kind == "port":
                 en.append(f"pe{s.source.port.id}")
             else:

@@ -244,7 +244,7 @@ def swarm(space: StateSpace, runs: int, monitors: list[Monitor] | None = None, h
         args = (["-E"] if monitors else []) + ["-c1", "-n", f"-w{hash_bits}", "-rhash"]
         parallel = parallel or os.cpu_count() or 1
         procs: list[tuple[Path, subprocess.Popen]] = []
-        reports: list[PanReport] = []
+        reports: list[tuple[Path, PanReport]] = []
         seeds = list(range(1, runs + 1))
         while seeds or procs:
             while seeds and len(procs) < parallel:
@@ -264,10 +264,10 @@ def swarm(space: StateSpace, runs: int, monitors: list[Monitor] | None = None, h
                 out, _ = p.communicate()
             rep = parse_pan(out)
             rep.trails = sorted(sub.glob("model.pml*.trail"), key=_trail_order)
-            reports.append((sub, rep))  # type: ignore[arg-type]
+            reports.append((sub, rep))
         merged = PanReport()
         trails: list[SpinTrail] = []
-        for sub, rep in reports:  # type: ignore[misc]
+        for sub, rep in reports:
             merged.states = max(merged.states, rep.states)
             merged.transitions = max(merged.transitions, rep.transitions)
             merged.errors += rep.errors

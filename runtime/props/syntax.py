@@ -41,7 +41,8 @@ class RawProperty:
 
 #: What a user reads for each terminal of the grammar in "expected ..." messages.
 TERMINALS = {
-    "NAME": "a name", "STRING": 'a label in double quotes ("M.S:port")', "REGEX": "a regular expression in quotes ('...')",
+    "NAME": "a name", "STRING": 'a label in double quotes ("M.S:port")',
+    "REGEX": "a regular expression in quotes ('...')",
     "TRUE": "true", "FALSE": "false", "INT": "a number", "SIGNED_INT": "a number", "CMP": "a comparison",
     "MU": "mu", "NU": "nu", "LPAR": "'('", "RPAR": "')'", "LSQB": "'['", "RSQB": "']'", "LESSTHAN": "'<'",
     "MORETHAN": "'>'", "LBRACE": "'{'", "RBRACE": "'}'", "DOT": "'.'", "VBAR": "'|'", "STAR": "'*'", "PLUS": "'+'",
