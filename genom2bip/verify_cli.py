@@ -263,7 +263,7 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             print_trace(verdict.trace)
             if verdict.loop >= 0:
                 print(f"    ... and back to the state after step {verdict.loop}, forever")
-        if verdict.holds is False:
+        if verdict.holds is False or verdict.error:
             worst = max(worst, EXIT_VIOLATED)
         elif verdict.holds is None and worst == EXIT_OK:
             worst = EXIT_INCONCLUSIVE

@@ -25,6 +25,11 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
     from runtime.props import describe
 
     worst = EXIT_OK
+    unsupported = [p.name for p in properties if not spin_shape(p)]
+    if unsupported:
+        error(f"--engine spin checks deadlock freedom and safety properties [R] false / [R] {{P}} (never, precedes, "
+              f"invariant); use --engine explore for: {', '.join(unsupported)}")
+        return EXIT_ERRORS
     try:
         if deadlock or any(spin_shape(p) == "deadlock" for p in properties):
             if args.spin_swarm:
@@ -54,10 +59,6 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
             if shape == "deadlock":
                 print("  " + ("violated (see the deadlocks above)" if worst == EXIT_VIOLATED else "holds (SPIN)"))
                 continue
-            if shape != "observer":
-                error(f"property {item.name}: --engine spin checks deadlock freedom and safety properties "
-                      "[R] false / [R] {P} (never, precedes, invariant); use --engine explore for this one")
-                return EXIT_ERRORS
             statics = statics or all_interactions(space.engine)
             monitor, _ = build_monitor(item, statics, f"p{k}")
             if args.spin_swarm:

@@ -182,3 +182,13 @@ def test_limit_gives_an_inconclusive_verdict():
 
 def test_comments_in_property_files():
     assert holds('(* a comment *) <"req"> true -- another one')
+
+
+def test_a_model_error_met_while_checking_is_reported():
+    from tests.test_explore import COUNTER
+    from tests.verifykit import text_space
+
+    sp = text_space(COUNTER.replace("    data int n", '    @domain(range="0..30")\n    data int n'), keep_edges=True)
+    (item,), _ = read_properties("deadlock free", "f.mcl", sp.engine.flat)
+    v = check(sp, item)
+    assert v.holds is None and v.word == "model error" and "left its declared domain 0..30" in v.error

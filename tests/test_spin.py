@@ -139,3 +139,12 @@ def test_verify_engine_spin_from_the_command_line(capsys):
     assert code == 4
     assert "SPIN: 6 states" in out and "deadlocks: 1 invalid end state(s) found by SPIN" in out
     assert "       1  left0\n       2  left1" in out and "    p0: ONE" in out
+
+
+def test_properties_spin_cannot_check_are_refused_before_running(capsys, tmp_path):
+    from genom2bip.cli import main
+    props = tmp_path / "p.mcl"
+    props.write_text('reach: <true* . "S.reply"> true; ok: never "S.fail" . "S.work"')
+    code = main(["verify", str(FIXTURES / "Server.bip"), "--engine", "spin", "--property", str(props)])
+    captured = capsys.readouterr()
+    assert code == 1 and "use --engine explore for: reach" in captured.err and "SPIN:" not in captured.out

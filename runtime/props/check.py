@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache, Span
+from runtime.engine.errors import EngineError
 from runtime.engine.flatten import FlatSystem
 from runtime.explore.space import LimitReached, StateSpace, Step
 from runtime.props.actions import label_matcher, leaves, matcher
@@ -72,9 +73,12 @@ class Verdict:
     states: int = 0
     seconds: float = 0.0
     note: str = ""
+    error: str = ""  # a model error met while checking (the verdict is then None)
 
     @property
     def word(self) -> str:
+        if self.error:
+            return "model error"
         return {True: "holds", False: "violated", None: "inconclusive"}[self.holds]
 
 
@@ -208,6 +212,8 @@ def check(space: StateSpace, item: Checkable, progress=None) -> Verdict:
     except LimitReached:
         verdict = Verdict(prop, None, note=f"the state budget ({space.max_states:,} states) ran out before an answer",
                           method="")
+    except EngineError as err:  # non-determinism, 1-safety, a domain left...: the model is wrong before the property
+        verdict = Verdict(prop, None, note=str(err), error=str(err))
     verdict.states = len(space)
     verdict.seconds = time.perf_counter() - start
     return verdict
