@@ -148,3 +148,50 @@ def test_properties_spin_cannot_check_are_refused_before_running(capsys, tmp_pat
     code = main(["verify", str(FIXTURES / "Server.bip"), "--engine", "spin", "--property", str(props)])
     captured = capsys.readouterr()
     assert code == 1 and "use --engine explore for: reach" in captured.err and "SPIN:" not in captured.out
+
+
+# The engine's own fixtures for priorities and broadcasts, with their counters made finite.
+BOUNDED = {
+    "Priorities": [("t = t + 1;", "t = (t + 1) % 4;")],
+    "AtomPriorities": [("x = x + 1;", "x = (x + 1) % 5;"), ("n = n + 1;", "n = (n + 1) % 3;")],
+    "Broadcast": [("v = v + 1;", "v = (v + 1) % 3;")],
+}
+
+
+@pytest.mark.parametrize("name, root, states", [
+    ("Priorities", "Low()", 16),  # a guarded priority, low side by containment
+    ("Priorities", "High()", 16),  # high side by containment
+    ("Priorities", "Star()", 4),  # *:* on the low side
+    ("Priorities", "Nested()", 16),  # priorities of a sub-compound
+    ("AtomPriorities", "System()", 5),  # guarded atom priorities, closure through a disabled port, '*'
+    ("Broadcast", "System()", 24),
+])
+def test_same_on_the_engines_priority_and_broadcast_fixtures(name, root, states):
+    from pathlib import Path
+    from runtime.bip2 import parse_text
+
+    text = (Path(__file__).parent / "fixtures" / "engine" / f"{name}.bip").read_text()
+    for old, new in BOUNDED[name]:
+        text = text.replace(old, new)
+    ours, theirs = both(parse_text(text, f"{name}.bip"), root)
+    assert ours.states == theirs.report.states == states
+    assert theirs.report.errors == len(ours.deadlocks)
+
+
+IDLE = """package Z
+  port type Port()
+  atom type A()
+    place S
+    initial to S
+  end
+  compound type Main()
+    component A a()
+  end
+end
+"""
+
+
+def test_a_model_without_interactions_is_one_deadlocked_state():
+    assert explore(text_space(IDLE)).deadlocks == [0]
+    result = spin.verify_deadlocks(text_space(IDLE), opt=FAST)
+    assert result.report.states == 1 and result.report.errors == 1

@@ -593,7 +593,7 @@ class PromelaWriter:
         out.extend(self.initial_choice())
         out.extend(self.monitor_start())
         out.append("   do")
-        out.extend(body)
+        out.extend(body or ["   :: atomic { false -> skip }  /* no interaction at all: a deadlock */"])
         out.append("   od")
         out.append("}")
         return "\n".join(out) + "\n"
