@@ -145,12 +145,19 @@ def load(args: argparse.Namespace, check: bool = True) -> Description:
 
 
 def rules_file(args: argparse.Namespace) -> Path | None:
-    """``--rules FILE``, else ``rules.yaml`` next to the descriptions (in the first directory given)."""
+    """``--rules FILE``; else, when descriptions are given as a directory, its ``rules.yaml``.
+
+    A single description file does not pick up the rule file beside it: that
+    file names the other modules of the system (verify one module alone).
+    ``--no-rules`` keeps only the descriptions' own constraints.
+    """
+    if getattr(args, "no_rules", False):
+        return None
     if getattr(args, "rules", None):
         return Path(args.rules)
     first = Path(args.paths[0])
-    default = (first if first.is_dir() else first.parent) / "rules.yaml"
-    return default if default.is_file() else None
+    default = first / "rules.yaml"
+    return default if first.is_dir() and default.is_file() else None
 
 
 def load_rules(args: argparse.Namespace, description: Description) -> list:
@@ -159,7 +166,7 @@ def load_rules(args: argparse.Namespace, description: Description) -> list:
 
     reporter = Reporter()
     path = rules_file(args)
-    if args.rules and not path.is_file():
+    if path is not None and args.rules and not path.is_file():
         error(f"{args.rules}: no such rule file")
         raise Failure(EXIT_ERRORS)
     rules = all_rules(description, path, reporter)
@@ -199,8 +206,15 @@ def _generate_arguments(parser: argparse.ArgumentParser) -> None:
                         help="directory to write <system>/ into (default: gen)")
     parser.add_argument("--name", metavar="SYSTEM",
                         help="name of the system (default: the first PATH's name, e.g. dala)")
+    add_rules_arguments(parser)
+
+
+def add_rules_arguments(parser: argparse.ArgumentParser) -> None:
+    """--rules FILE / --no-rules: what every verb that builds a model takes."""
     parser.add_argument("--rules", metavar="FILE",
-                        help="rules between services (YAML, docs/rules.md); default: rules.yaml next to the descriptions")
+                        help="rules between services (YAML, docs/rules.md); default: rules.yaml in the directory given")
+    parser.add_argument("--no-rules", action="store_true",
+                        help="only the descriptions' own constraints, no rule file")
 
 
 @verb("generate", help="generate the BIP model (.bip) and a runnable Python package (the default command)",

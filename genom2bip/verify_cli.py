@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, error, verb
+from genom2bip.cli import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, add_rules_arguments, error, verb
 
 EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
 
@@ -28,9 +28,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = ("exit status: 0 all checks pass, 4 deadlock/violation/model error found, "
                      "5 stopped by a limit before an answer, 1 bad input, 2 usage")
     parser.add_argument("--root", help="root instance of a .bip model (default: the last compound type)")
-    parser.add_argument("--rules", metavar="FILE", help="rule file for descriptions (default: rules.yaml beside them)")
-    parser.add_argument("--no-rules", action="store_true",
-                        help="only the descriptions' own constraints (e.g. to verify one module of a system alone)")
+    add_rules_arguments(parser)
     parser.add_argument("--name", metavar="SYSTEM", help="system name when building from descriptions")
     what = parser.add_argument_group("what to check (default: --deadlock)")
     what.add_argument("--deadlock", action="store_true", help="report every reachable deadlock with a shortest trace")
@@ -92,15 +90,7 @@ def load_model(args: argparse.Namespace):
     from genom2bip.generate import GenerateError, model_of, system_name
 
     description = load(args)
-    if args.no_rules:
-        from genom2bip.rules import all_rules
-        from runtime.diagnostics import Reporter
-
-        reporter = Reporter()
-        rules = all_rules(description, None, reporter)
-        reporter.raise_if_errors()
-    else:
-        rules = load_rules(args, description)
+    rules = load_rules(args, description)
     system = args.name or system_name(paths)
     try:
         package, root, _ = model_of(description, system, rules)

@@ -277,5 +277,20 @@ def test_dala_rules_are_in_the_generated_model():
     for rule in ("goto-after-pom-run", "goto-needs-laser-and-map"):
         assert f'@rule(name="{rule}")' in bip  # quoted: not an identifier
     assert '@wait(rules="goto-waits-for-base")' in bip
-    assert "connector Broadcast_2 RFLEX_Stop_start(RFLEX_Stop_start_sync.ep, RFLEX.TrackSpeed_activity_abort, " \
-           "NDD.GoTo_activity_abort)" in bip
+    assert "connector Broadcast_4 RFLEX_Stop_start(RFLEX_Stop_start_sync.ep, RFLEX.TrackSpeed_activity_abort, " \
+           "NDD.GoTo_activity_abort, RFLEX.TrackSpeed_control_cancel, NDD.GoTo_control_cancel)" in bip
+
+
+def test_a_single_description_file_does_not_pick_up_the_rule_file_beside_it(tmp_path):
+    import shutil
+
+    src = tmp_path / "robot"
+    src.mkdir()
+    shutil.copy(ARM, src / "arm.gen")
+    (src / "rules.yaml").write_text("rules:\n  - id: names-another-module\n    service: Other.X\n"
+                                    "    requires: [Base.Localise]\n")
+    assert main([str(src / "arm.gen"), "-o", str(tmp_path / "one")]) == 0
+    assert main([str(src), "--no-rules", "-o", str(tmp_path / "none")]) == 0
+    assert "@rule" not in (tmp_path / "none" / "robot" / "robot.bip").read_text()
+    assert main([str(src), "-o", str(tmp_path / "all")]) == 1  # the directory's rule file is read, and wrong
+    assert not (tmp_path / "all").exists()
