@@ -142,28 +142,35 @@ def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool)
     source = [place(state) + "_YIELD"]
     out: list[Transition] = []
     outcome = Var("outcome")
+    spent = [Assign(outcome, Const(0))]  # read once: reset so that states differ only in what matters
     for k, y in enumerate(codel.yields):
         is_k = Binary("==", outcome, Const(k))
         if y.state == "ether":
             if permanent:
-                out.append(Transition(None, source, [ETHER], guard=is_k))
+                out.append(Transition(None, source, [ETHER], guard=is_k, action=spent))
             else:
                 # Reaching ether after an interruption reports "interrupted", otherwise "finished".
-                out.append(Transition(None, source, [FINISHED], guard=Binary("&&", is_k, Unary("!", Var("aborted")))))
-                out.append(Transition(None, source, [INTERRUPTED], guard=Binary("&&", is_k, Var("aborted"))))
+                out.append(Transition(None, source, [FINISHED], guard=Binary("&&", is_k, Unary("!", Var("aborted"))),
+                                      action=spent))
+                out.append(Transition(None, source, [INTERRUPTED], guard=Binary("&&", is_k, Var("aborted")),
+                                      action=spent))
         else:
             target = place(y.state) + "_PAUSED" if y.pause else place(y.state)
-            out.append(Transition(None, source, [target], guard=is_k))
+            out.append(Transition(None, source, [target], guard=is_k, action=spent))
     failed = [ETHER] if permanent else [FAILED]
     n = len(codel.yields)
     thrown = Binary(">=", outcome, Const(n))
     undeclared = Binary("<", outcome, Const(0))
-    out.append(Transition(None, source, failed, guard=Binary("||", thrown, undeclared)))
+    out.append(Transition(None, source, failed, guard=Binary("||", thrown, undeclared), action=spent))
     return out
 
 
-def controller_type(module: str, service: ir.Service, constrained: bool) -> AtomType:
+def controller_type(module: str, service: ir.Service, constrained: bool, interruptible: bool = False) -> AtomType:
     """Execution task of a service (Fig. 6 left): trigger → validate → reject or start → report.
+
+    ``cancel`` exists when another service may interrupt this one: a request
+    accepted but not started yet (being validated) is interrupted too, not
+    left to start after the service that should have stopped it.
 
     ``status`` is available in every place and tells constraint connectors
     whether the service has completed (at least once / latest run) and whether
@@ -187,7 +194,7 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
     ended = [Assign(Var("running"), Const(False))]
     transitions = [
         Transition("trigger", ["IDLE"], ["CHECK"], action=validate + [Assign(Var("running"), Const(True))]),
-        Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0))),
+        Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0))),  # verdict is 0
         Transition("finish", ["ACTIVE"], ["IDLE"],
                    action=ended + [Assign(Var("done"), Const(True)), Assign(Var("ok"), Const(True))]),
         Transition("fail", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
@@ -197,7 +204,10 @@ def controller_type(module: str, service: ir.Service, constrained: bool) -> Atom
     if service.validate:
         ports.insert(1, PortDecl(PORT, "reject", exported=True))
         transitions.insert(1, Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0)),
-                                         action=ended))
+                                         action=ended + [Assign(Var("verdict"), Const(0))]))
+    if interruptible:
+        ports.append(PortDecl(PORT, "cancel", exported=True))
+        transitions.append(Transition("cancel", ["CHECK"], ["IDLE"], action=ended + [Assign(Var("verdict"), Const(0))]))
     if constrained:
         ports.insert(1, PortDecl(PORT, "refuse", exported=True))
         transitions.insert(1, Transition("refuse", ["IDLE"], ["IDLE"]))
