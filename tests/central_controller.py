@@ -85,6 +85,16 @@ class CentralLevel(FunctionalLevel):
             initial=InitialTransition(["READY"], [Assign(Var(d.name), Const(False)) for d in data]),
             transitions=transitions)))
 
+        controls = {parts.control: key for key, parts in self.services.items()}
+        for w in list(self.asm.wires):  # ... and the cancellation of a request accepted but not started
+            for i, e in enumerate(w.ends):
+                if isinstance(e, End) and e.port == "cancel" and controls.get(e.atom) in tracked:
+                    key = controls[e.atom]
+                    seen = [End(central, reports[(key, "reject")])]  # same bookkeeping: ended, not ok
+                    inner = Wire(self._rendezvous([e] + seen, exported=True), [e] + seen, f"cancel_{key[1]}",
+                                 self.services[key].path)
+                    self.asm.wires.append(inner)
+                    w.ends[i] = inner
         for w in self.asm.wires:  # the central controller observes the reports of the services it tracks
             if w.label and ":" in w.label:
                 module, rest = w.label.split(".", 1)

@@ -48,9 +48,9 @@ def _labelled(package, label):
 
 def test_interruption_connector_joins_stop_start_and_goto_abort(package):
     compound, stop_start = _labelled(package, "NDD.Stop:start")
-    assert [str(p) for p in stop_start.ports] == ["Stop_start_sync.ep", "GoTo.activity_abort"]
+    assert [str(p) for p in stop_start.ports] == ["Stop_start_sync.ep", "GoTo.activity_abort", "GoTo.control_cancel"]
     ctype = package.connector_type(stop_start.type)
-    assert [(d.name, d.trigger) for d in ctype.define.items] == [("p1", True), ("p2", False)]
+    assert [(d.name, d.trigger) for d in ctype.define.items] == [("p1", True), ("p2", False), ("p3", False)]
     sync = compound.connector("Stop_start_sync")
     assert [str(p) for p in sync.ports] == ["Stop.control_start", "Stop.activity_start"]
 
@@ -176,3 +176,15 @@ def test_goto_arrives_and_reports_finish(run):
     s = walk(engine, s, "NDD.GoTo:exec_plan", "NDD.GoTo:exec_arrived", "NDD.GoTo:finish")
     control = engine.describe_state(s)["NDD.GoTo.control"]
     assert control["data"]["done"] is True and control["data"]["ok"] is True
+
+
+def test_stop_cancels_a_goto_accepted_but_not_started(run):
+    engine, _ = run
+    s = walk(engine, _ready_for_goto(engine), "NDD.GoTo:trigger", "NDD.Stop:trigger")
+    assert places(engine, s, "NDD.GoTo.control") == ["CHECK"]
+    start = engine.find(s, "NDD.Stop:start")
+    assert "NDD.GoTo.control.cancel" in start.ports and "NDD.GoTo.activity.abort" not in start.ports
+    s = engine.fire(s, start)
+    assert places(engine, s, "NDD.GoTo.control") == ["IDLE"]
+    assert "NDD.GoTo:start" not in labels(engine, s)
+    assert engine.describe_state(s)["NDD.GoTo.control"]["data"]["running"] is False

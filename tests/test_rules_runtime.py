@@ -90,3 +90,45 @@ def test_mutual_exclusion_holds_reset_while_goto_runs(client):
     final = client.wait(reset, timeout=5)
     assert [r["status"] for r in client.request(reset)["reports"]] == ["queued", "held", "started", "failed"]
     assert final["codel"] == "pomReset"
+
+
+CANCEL = """
+component cx {
+  task t { period 10 ms; };
+  activity Move() {
+    task t;
+    validate check();
+    codel <start> mv() yield pause::start, ether;
+  };
+  function Halt() {
+    interrupts Move;
+  };
+};
+"""
+
+
+def test_a_request_accepted_but_not_started_is_interrupted_too(tmp_path):
+    """Halt queued while Move is being validated: Move ends interrupted whichever of the two goes first."""
+    from runkit import build
+    from runtime.controller import VirtualClock
+
+    package, root, interface = build(tmp_path, CANCEL, "cx")
+    seen = set()
+    for seed in range(1, 30):
+        holder = {}
+
+        def check():
+            holder["halt"] = holder["controller"].submit("cx", "Halt")  # arrives while Move is validated
+            return "ok"
+
+        codels = {"cx": {"check": check, "mv": lambda: "pause::start"}}
+        controller = Controller(package, root, interface, codels, clock=VirtualClock(), seed=seed)
+        holder["controller"] = controller
+        move = controller.submit("cx", "Move")
+        controller.run(duration=0.2)
+        assert move.final["status"] == "interrupted" and move.final["by"] == "cx.Halt", move.final
+        assert move.final["by_request"] == holder["halt"].id
+        seen.add(tuple(r["status"] for r in move.reports))
+        if len(seen) == 2:
+            break
+    assert seen == {("queued", "started", "interrupted"), ("queued", "interrupted")}

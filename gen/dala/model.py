@@ -191,7 +191,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -271,6 +271,7 @@ def Aspect_Run_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -315,6 +316,12 @@ def Aspect_Run_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -369,6 +376,7 @@ def Aspect_Run_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FUSE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -379,6 +387,7 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_fuse',
@@ -391,8 +400,15 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FUSE_YIELD'],
                 ['FUSE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
-            Transition(None, ['FUSE_YIELD'], ['WAIT'], guard=Binary('==', Var('outcome'), Const(1))),
+            Transition(
+                None,
+                ['FUSE_YIELD'],
+                ['WAIT'],
+                guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
+            ),
             Transition(
                 None,
                 ['FUSE_YIELD'],
@@ -402,6 +418,7 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_wait',
@@ -414,19 +431,28 @@ def Aspect_Run_Activity() -> AtomType:
                 ['WAIT_YIELD'],
                 ['WAIT_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
-            Transition(None, ['WAIT_YIELD'], ['FUSE'], guard=Binary('==', Var('outcome'), Const(1))),
+            Transition(
+                None,
+                ['WAIT_YIELD'],
+                ['FUSE'],
+                guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
+            ),
             Transition(
                 None,
                 ['WAIT_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['WAIT_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -437,6 +463,7 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(3)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -449,12 +476,14 @@ def Aspect_Run_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -465,6 +494,7 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['FUSE_PAUSED'], ['FUSE']),
             Transition('wake', ['WAIT_PAUSED'], ['WAIT']),
@@ -654,6 +684,7 @@ def LaserRF_acquisition_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -664,6 +695,7 @@ def LaserRF_acquisition_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
         ],
     )
@@ -713,7 +745,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -882,6 +914,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['CONFIGURE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -892,6 +925,7 @@ def LaserRF_Init_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_configure',
@@ -904,12 +938,14 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['CONFIGURE_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['CONFIGURE_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -920,6 +956,7 @@ def LaserRF_Init_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -958,6 +995,7 @@ def LaserRF_Start_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -1003,6 +1041,12 @@ def LaserRF_Start_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -1053,6 +1097,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['ACQUIRE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1063,6 +1108,7 @@ def LaserRF_Start_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_acquire',
@@ -1075,18 +1121,21 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['ACQUIRE_YIELD'],
                 ['ACQUIRE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['ACQUIRE_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['ACQUIRE_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1097,6 +1146,7 @@ def LaserRF_Start_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -1109,12 +1159,14 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1125,6 +1177,7 @@ def LaserRF_Start_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['ACQUIRE_PAUSED'], ['ACQUIRE']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -1328,6 +1381,7 @@ def NDD_motion_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['PUBLISH'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1338,6 +1392,7 @@ def NDD_motion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_publish',
@@ -1350,6 +1405,7 @@ def NDD_motion_Activity() -> AtomType:
                 ['PUBLISH_YIELD'],
                 ['PUBLISH_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1360,6 +1416,7 @@ def NDD_motion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -1372,6 +1429,7 @@ def NDD_motion_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1382,6 +1440,7 @@ def NDD_motion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['PUBLISH_PAUSED'], ['PUBLISH']),
         ],
@@ -1432,7 +1491,7 @@ def NDD_SetParams_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -1539,7 +1598,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -1698,12 +1757,14 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1714,6 +1775,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -1747,6 +1809,7 @@ def NDD_GoTo_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -1774,7 +1837,7 @@ def NDD_GoTo_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -1802,6 +1865,12 @@ def NDD_GoTo_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -1855,6 +1924,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['PLAN'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1865,6 +1935,7 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_plan',
@@ -1877,12 +1948,14 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['PLAN_YIELD'],
                 ['PLAN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['PLAN_YIELD'],
                 ['ARRIVED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1893,6 +1966,7 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_arrived',
@@ -1905,12 +1979,14 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['ARRIVED_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['ARRIVED_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1921,6 +1997,7 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -1933,12 +2010,14 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1949,6 +2028,7 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['PLAN_PAUSED'], ['PLAN']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -2063,12 +2143,14 @@ def NDD_Stop_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2079,6 +2161,7 @@ def NDD_Stop_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -2156,6 +2239,7 @@ def POM_fusion_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['UPDATE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2166,6 +2250,7 @@ def POM_fusion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_update',
@@ -2178,6 +2263,7 @@ def POM_fusion_Activity() -> AtomType:
                 ['UPDATE_YIELD'],
                 ['UPDATE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2188,6 +2274,7 @@ def POM_fusion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -2200,6 +2287,7 @@ def POM_fusion_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2210,6 +2298,7 @@ def POM_fusion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['UPDATE_PAUSED'], ['UPDATE']),
         ],
@@ -2233,6 +2322,7 @@ def POM_Run_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2277,6 +2367,12 @@ def POM_Run_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -2324,8 +2420,15 @@ def POM_Run_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['START_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
-            Transition(None, ['START_YIELD'], ['FIX'], guard=Binary('==', Var('outcome'), Const(1))),
+            Transition(
+                None,
+                ['START_YIELD'],
+                ['FIX'],
+                guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
+            ),
             Transition(
                 None,
                 ['START_YIELD'],
@@ -2335,6 +2438,7 @@ def POM_Run_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_fix',
@@ -2347,12 +2451,14 @@ def POM_Run_Activity() -> AtomType:
                 ['FIX_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['FIX_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2363,6 +2469,7 @@ def POM_Run_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['START_PAUSED'], ['START']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -2486,12 +2593,14 @@ def POM_Reset_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2502,6 +2611,7 @@ def POM_Reset_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -2598,6 +2708,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['ODOMETRY'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2608,6 +2719,7 @@ def RFLEX_servo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_odometry',
@@ -2620,6 +2732,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 ['ODOMETRY_YIELD'],
                 ['ODOMETRY_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2630,6 +2743,7 @@ def RFLEX_servo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -2642,6 +2756,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2652,6 +2767,7 @@ def RFLEX_servo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['ODOMETRY_PAUSED'], ['ODOMETRY']),
         ],
@@ -2754,12 +2870,14 @@ def RFLEX_Init_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -2770,6 +2888,7 @@ def RFLEX_Init_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -2898,6 +3017,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2943,6 +3063,12 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -2993,6 +3119,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['TRACK'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -3003,6 +3130,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_track',
@@ -3015,18 +3143,21 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['TRACK_YIELD'],
                 ['TRACK_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['TRACK_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['TRACK_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -3037,6 +3168,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -3049,12 +3181,14 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -3065,6 +3199,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['TRACK_PAUSED'], ['TRACK']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -3178,12 +3313,14 @@ def RFLEX_Stop_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -3194,6 +3331,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -3227,6 +3365,29 @@ def Broadcast_2() -> ConnectorType:
         'Broadcast_2',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
         define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3')]),
+    )
+
+
+def Broadcast_4() -> ConnectorType:
+    """Connector type Broadcast_4: a trigger with optional receivers."""
+    return ConnectorType(
+        'Broadcast_4',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+        ],
+        define=DefineGroup(
+            [
+                DefinePort('p1', trigger=True),
+                DefinePort('p2'),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+            ],
+        ),
     )
 
 
@@ -3481,6 +3642,7 @@ def Aspect_Run_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_wait', targets=[PortRef('activity', 'exec_wait')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -3743,6 +3905,7 @@ def LaserRF_Start_Service() -> CompoundType:
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
@@ -3880,6 +4043,7 @@ def NDD_GoTo_Service() -> CompoundType:
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
@@ -4186,6 +4350,7 @@ def POM_Run_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_fix', targets=[PortRef('activity', 'exec_fix')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -4395,6 +4560,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_track', targets=[PortRef('activity', 'exec_track')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
@@ -4506,9 +4672,13 @@ def Aspect_Module() -> CompoundType:
                 ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_1',
+                'Broadcast_2',
                 'Stop_start',
-                ports=[PortRef('Stop_start_sync', 'ep'), PortRef('Run', 'activity_abort')],
+                ports=[
+                    PortRef('Stop_start_sync', 'ep'),
+                    PortRef('Run', 'activity_abort'),
+                    PortRef('Run', 'control_cancel'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:start'})],
                 comment='Stop interrupts Run (Aspect.Stop.interrupts)',
             ),
@@ -4717,6 +4887,7 @@ def LaserRF_Module() -> CompoundType:
             ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
             ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
             ExportPort('Port', 'Start_activity_abort', targets=[PortRef('Start', 'activity_abort')]),
+            ExportPort('Port', 'Start_control_cancel', targets=[PortRef('Start', 'control_cancel')]),
             ExportPort(
                 'Port',
                 'acquisition_timer_sleep',
@@ -4893,6 +5064,7 @@ def NDD_Module() -> CompoundType:
                 targets=[PortRef('GoTo', 'activity_exec_stop')],
             ),
             ExportPort('Port', 'GoTo_activity_abort', targets=[PortRef('GoTo', 'activity_abort')]),
+            ExportPort('Port', 'GoTo_control_cancel', targets=[PortRef('GoTo', 'control_cancel')]),
             ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
             ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
             ExportPort('Port', 'motion_timer_sleep', targets=[PortRef('motion', 'timer_sleep')]),
@@ -4993,9 +5165,13 @@ def POM_Module() -> CompoundType:
                 ports=[PortRef('Reset', 'control_start'), PortRef('Reset', 'activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_1',
+                'Broadcast_2',
                 'Reset_start',
-                ports=[PortRef('Reset_start_sync', 'ep'), PortRef('Run', 'activity_abort')],
+                ports=[
+                    PortRef('Reset_start_sync', 'ep'),
+                    PortRef('Run', 'activity_abort'),
+                    PortRef('Run', 'control_cancel'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'POM.Reset:start'})],
                 comment='Reset interrupts Run (POM.Reset.interrupts)',
             ),
@@ -5239,6 +5415,11 @@ def RFLEX_Module() -> CompoundType:
                 'Port',
                 'TrackSpeed_activity_abort',
                 targets=[PortRef('TrackSpeed', 'activity_abort')],
+            ),
+            ExportPort(
+                'Port',
+                'TrackSpeed_control_cancel',
+                targets=[PortRef('TrackSpeed', 'control_cancel')],
             ),
             ExportPort('Port', 'servo_timer_sleep', targets=[PortRef('servo', 'timer_sleep')]),
             ExportPort(
@@ -5485,12 +5666,14 @@ def DALA() -> CompoundType:
                 ],
             ),
             ConnectorInstance(
-                'Broadcast_2',
+                'Broadcast_4',
                 'LaserRF_Stop_start',
                 ports=[
                     PortRef('LaserRF_Stop_start_sync', 'ep'),
                     PortRef('LaserRF', 'Start_activity_abort'),
                     PortRef('NDD', 'GoTo_activity_abort'),
+                    PortRef('LaserRF', 'Start_control_cancel'),
+                    PortRef('NDD', 'GoTo_control_cancel'),
                 ],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
@@ -5501,9 +5684,13 @@ def DALA() -> CompoundType:
                 ports=[PortRef('NDD', 'Stop_control_start'), PortRef('NDD', 'Stop_activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_1',
+                'Broadcast_2',
                 'NDD_Stop_start',
-                ports=[PortRef('NDD_Stop_start_sync', 'ep'), PortRef('NDD', 'GoTo_activity_abort')],
+                ports=[
+                    PortRef('NDD_Stop_start_sync', 'ep'),
+                    PortRef('NDD', 'GoTo_activity_abort'),
+                    PortRef('NDD', 'GoTo_control_cancel'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'NDD.Stop:start'})],
                 comment='Stop interrupts GoTo (NDD.Stop.interrupts)',
             ),
@@ -5513,12 +5700,14 @@ def DALA() -> CompoundType:
                 ports=[PortRef('RFLEX', 'Stop_control_start'), PortRef('RFLEX', 'Stop_activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_2',
+                'Broadcast_4',
                 'RFLEX_Stop_start',
                 ports=[
                     PortRef('RFLEX_Stop_start_sync', 'ep'),
                     PortRef('RFLEX', 'TrackSpeed_activity_abort'),
                     PortRef('NDD', 'GoTo_activity_abort'),
+                    PortRef('RFLEX', 'TrackSpeed_control_cancel'),
+                    PortRef('NDD', 'GoTo_control_cancel'),
                 ],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
                 comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
@@ -5842,7 +6031,7 @@ def DALA() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 15 connector types, 34 compound types."""
+    """The whole model: 48 atom types, 16 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -6283,6 +6472,7 @@ def package() -> Package:
         connector_types=[
             Broadcast_1(),
             Broadcast_2(),
+            Broadcast_4(),
             LaserRF_Start_Refuse_after(),
             LaserRF_Start_Trigger(),
             NDD_GoTo_Refuse_after(),

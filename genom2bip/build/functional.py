@@ -190,8 +190,9 @@ class FunctionalLevel:
         fsm = Fsm.of(s.fsm_codels(), list(dict.fromkeys(s.throws + c.throws)))
         constrained = any(r.service == (c.name, s.name) and r.kind in GUARD_KINDS and r.on_violation == "reject"
                           for r in self.rules)
+        interruptible = any(r.kind == "interrupts" and (c.name, s.name) in r.others for r in self.rules)
         control = self.asm.atom(path + ("control",), self._atom_type(
-            controller_type(m, s, constrained), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
+            controller_type(m, s, constrained, interruptible), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
             activity_type(m, name, fsm), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
@@ -237,7 +238,9 @@ class FunctionalLevel:
                 self.asm.wire(Wire(self._rendezvous(start), start, "start", parts.path, f"{parts.label}:start"))
                 continue
             inner = Wire(self._rendezvous(start, exported=True), start, "start_sync", parts.path)
+            # A running victim is aborted; one accepted but not started yet is cancelled.
             aborts = [End(self.services[v].activity, "abort") for v in mine]
+            aborts += [End(self.services[v].control, "cancel") for v in mine]
             names = ", ".join(f"{m}.{n}" if m != key[0] else n for m, n in mine)
             outer = self.asm.wire(
                 Wire(self._connector(library.broadcast_type(len(aborts))), [inner, *aborts], "start", parts.path,

@@ -40,6 +40,7 @@ class StepInfo:
     service: Service | None = None
     scope: Scope | None = None  # a task whose permanent activity runs a codel
     victims: list[Service] = field(default_factory=list)  # services whose activity it aborts
+    cancelled: list[Service] = field(default_factory=list)  # services whose accepted request it cancels
     reads: list[Service] = field(default_factory=list)  # services whose status it reads (rules)
     rule: dict[str, str] | None = None  # the connector's @rule annotation
     opens: Timer | None = None
@@ -168,6 +169,8 @@ class Controller:
                 info.scope = owner
             elif port == "abort":
                 info.victims.append(owner)
+            elif port == "cancel":
+                info.cancelled.append(owner)
             elif port == "status":
                 info.reads.append(owner)
             else:
@@ -481,6 +484,10 @@ class Controller:
             for victim in info.victims:
                 if victim.current is not None:
                     victim.current.interrupted_by = (svc.label, req.id)
+            for victim in info.cancelled:  # accepted, not started: it ends here
+                if victim.current is not None:
+                    self._report(victim.current, "interrupted", by=svc.label, by_request=req.id,
+                                 message=f"{victim.label} interrupted by {svc.label} before it started")
         elif kind == "finish":
             self._report(req, "ok", outputs=self._outputs(svc, req))
         elif kind == "fail":

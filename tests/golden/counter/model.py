@@ -174,6 +174,7 @@ def counter_clock__Activity() -> AtomType:
                 ['START_YIELD'],
                 ['COUNT'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -184,6 +185,7 @@ def counter_clock__Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_count',
@@ -196,18 +198,21 @@ def counter_clock__Activity() -> AtomType:
                 ['COUNT_YIELD'],
                 ['COUNT_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['COUNT_YIELD'],
                 ['IDLE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['COUNT_YIELD'],
                 ['STOP'],
                 guard=Binary('==', Var('outcome'), Const(2)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -218,6 +223,7 @@ def counter_clock__Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(3)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_idle',
@@ -230,12 +236,14 @@ def counter_clock__Activity() -> AtomType:
                 ['IDLE_YIELD'],
                 ['IDLE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['IDLE_YIELD'],
                 ['COUNT_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -246,6 +254,7 @@ def counter_clock__Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -258,6 +267,7 @@ def counter_clock__Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -268,6 +278,7 @@ def counter_clock__Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['COUNT_PAUSED'], ['COUNT']),
             Transition('wake', ['IDLE_PAUSED'], ['IDLE']),

@@ -183,6 +183,7 @@ def demo_motion_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['MAIN'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -193,6 +194,7 @@ def demo_motion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_main',
@@ -205,8 +207,15 @@ def demo_motion_Activity() -> AtomType:
                 ['MAIN_YIELD'],
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
-            Transition(None, ['MAIN_YIELD'], ['STOP'], guard=Binary('==', Var('outcome'), Const(1))),
+            Transition(
+                None,
+                ['MAIN_YIELD'],
+                ['STOP'],
+                guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
+            ),
             Transition(
                 None,
                 ['MAIN_YIELD'],
@@ -216,6 +225,7 @@ def demo_motion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -228,6 +238,7 @@ def demo_motion_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -238,6 +249,7 @@ def demo_motion_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
         ],
@@ -288,7 +300,7 @@ def demo_SetSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -447,12 +459,14 @@ def demo_Stop_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -463,6 +477,7 @@ def demo_Stop_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -495,6 +510,7 @@ def demo_GoTo_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -521,7 +537,7 @@ def demo_GoTo_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -549,6 +565,12 @@ def demo_GoTo_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -599,18 +621,21 @@ def demo_GoTo_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['DRIVE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -621,6 +646,7 @@ def demo_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_drive',
@@ -633,18 +659,21 @@ def demo_GoTo_Activity() -> AtomType:
                 ['DRIVE_YIELD'],
                 ['DRIVE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['DRIVE_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['DRIVE_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -655,6 +684,7 @@ def demo_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -667,12 +697,14 @@ def demo_GoTo_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -683,6 +715,7 @@ def demo_GoTo_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['DRIVE_PAUSED'], ['DRIVE']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -718,6 +751,7 @@ def demo_MoveDistance_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -763,6 +797,12 @@ def demo_MoveDistance_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -810,6 +850,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['MAIN'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -820,6 +861,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_main',
@@ -832,18 +874,21 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['MAIN_YIELD'],
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['MAIN_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['MAIN_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -854,6 +899,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -885,15 +931,6 @@ def demo_MoveDistance_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def Broadcast_2() -> ConnectorType:
-    """Connector type Broadcast_2: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_2',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
-        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3')]),
-    )
-
-
 def Broadcast_3() -> ConnectorType:
     """Connector type Broadcast_3: a trigger with optional receivers."""
     return ConnectorType(
@@ -906,6 +943,29 @@ def Broadcast_3() -> ConnectorType:
         ],
         define=DefineGroup(
             [DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3'), DefinePort('p4')],
+        ),
+    )
+
+
+def Broadcast_4() -> ConnectorType:
+    """Connector type Broadcast_4: a trigger with optional receivers."""
+    return ConnectorType(
+        'Broadcast_4',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+        ],
+        define=DefineGroup(
+            [
+                DefinePort('p1', trigger=True),
+                DefinePort('p2'),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+            ],
         ),
     )
 
@@ -1017,6 +1077,7 @@ def demo_GoTo_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_drive', targets=[PortRef('activity', 'exec_drive')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -1061,6 +1122,7 @@ def demo_MoveDistance_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_main', targets=[PortRef('activity', 'exec_main')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
@@ -1291,12 +1353,14 @@ def demo_Module() -> CompoundType:
                 ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_2',
+                'Broadcast_4',
                 'Stop_start',
                 ports=[
                     PortRef('Stop_start_sync', 'ep'),
                     PortRef('GoTo', 'activity_abort'),
                     PortRef('MoveDistance', 'activity_abort'),
+                    PortRef('GoTo', 'control_cancel'),
+                    PortRef('MoveDistance', 'control_cancel'),
                 ],
                 annotations=[Annotation('label', arguments={'name': 'demo.Stop:start'})],
                 comment='Stop interrupts GoTo, MoveDistance (demo.Stop.interrupts)',
@@ -1603,8 +1667,8 @@ def package() -> Package:
             demo_MoveDistance_Activity(),
         ],
         connector_types=[
-            Broadcast_2(),
             Broadcast_3(),
+            Broadcast_4(),
             RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),

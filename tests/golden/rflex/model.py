@@ -189,6 +189,7 @@ def rflex_MotorsTask_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -199,6 +200,7 @@ def rflex_MotorsTask_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_main',
@@ -211,6 +213,7 @@ def rflex_MotorsTask_Activity() -> AtomType:
                 ['MAIN_YIELD'],
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -221,6 +224,7 @@ def rflex_MotorsTask_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -233,6 +237,7 @@ def rflex_MotorsTask_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -243,6 +248,7 @@ def rflex_MotorsTask_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
         ],
@@ -272,6 +278,7 @@ def rflex_SonarTask_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -282,6 +289,7 @@ def rflex_SonarTask_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
         ],
     )
@@ -331,7 +339,7 @@ def rflex_Init_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -394,12 +402,14 @@ def rflex_Init_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -410,6 +420,7 @@ def rflex_Init_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -468,7 +479,7 @@ def rflex_SetSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
-                action=[Assign(Var('running'), Const(False))],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -644,6 +655,7 @@ def rflex_TrackSpeed_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -688,6 +700,12 @@ def rflex_TrackSpeed_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -745,24 +763,28 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['END_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -773,6 +795,7 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(3)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_exec',
@@ -785,24 +808,28 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['EXEC_YIELD'],
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['EXEC_YIELD'],
                 ['END_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['EXEC_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['EXEC_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -813,6 +840,7 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(3)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_end',
@@ -825,12 +853,14 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['END_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['END_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -841,6 +871,7 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -853,12 +884,14 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -869,6 +902,7 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_fail',
@@ -881,12 +915,14 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['FAIL_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['FAIL_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -897,6 +933,7 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
             Transition('wake', ['END_PAUSED'], ['END']),
@@ -940,6 +977,7 @@ def rflex_Stop_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
+            PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -984,6 +1022,12 @@ def rflex_Stop_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'cancel',
+                ['CHECK'],
+                ['IDLE'],
+                action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
         ],
     )
 
@@ -1034,18 +1078,21 @@ def rflex_Stop_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1056,6 +1103,7 @@ def rflex_Stop_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_exec',
@@ -1068,18 +1116,21 @@ def rflex_Stop_Activity() -> AtomType:
                 ['EXEC_YIELD'],
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['EXEC_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['EXEC_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1090,6 +1141,7 @@ def rflex_Stop_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(2)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 'exec_stop',
@@ -1102,12 +1154,14 @@ def rflex_Stop_Activity() -> AtomType:
                 ['STOP_YIELD'],
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition(
                 None,
@@ -1118,6 +1172,7 @@ def rflex_Stop_Activity() -> AtomType:
                     Binary('>=', Var('outcome'), Const(1)),
                     Binary('<', Var('outcome'), Const(0)),
                 ),
+                action=[Assign(Var('outcome'), Const(0))],
             ),
             Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -1139,12 +1194,12 @@ def rflex_Stop_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def Broadcast_1() -> ConnectorType:
-    """Connector type Broadcast_1: a trigger with optional receivers."""
+def Broadcast_2() -> ConnectorType:
+    """Connector type Broadcast_2: a trigger with optional receivers."""
     return ConnectorType(
-        'Broadcast_1',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2')]),
+        'Broadcast_2',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3')]),
     )
 
 
@@ -1424,6 +1479,7 @@ def rflex_Stop_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_exec', targets=[PortRef('activity', 'exec_exec')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
             ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
@@ -1469,6 +1525,7 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
             ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
+            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -1629,9 +1686,13 @@ def rflex_Module() -> CompoundType:
                 ports=[PortRef('TrackSpeed', 'control_start'), PortRef('TrackSpeed', 'activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_1',
+                'Broadcast_2',
                 'TrackSpeed_start',
-                ports=[PortRef('TrackSpeed_start_sync', 'ep'), PortRef('Stop', 'activity_abort')],
+                ports=[
+                    PortRef('TrackSpeed_start_sync', 'ep'),
+                    PortRef('Stop', 'activity_abort'),
+                    PortRef('Stop', 'control_cancel'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:start'})],
                 comment='TrackSpeed interrupts Stop (rflex.TrackSpeed.interrupts)',
             ),
@@ -1641,9 +1702,13 @@ def rflex_Module() -> CompoundType:
                 ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
             ),
             ConnectorInstance(
-                'Broadcast_1',
+                'Broadcast_2',
                 'Stop_start',
-                ports=[PortRef('Stop_start_sync', 'ep'), PortRef('TrackSpeed', 'activity_abort')],
+                ports=[
+                    PortRef('Stop_start_sync', 'ep'),
+                    PortRef('TrackSpeed', 'activity_abort'),
+                    PortRef('TrackSpeed', 'control_cancel'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'rflex.Stop:start'})],
                 comment='Stop interrupts TrackSpeed (rflex.Stop.interrupts)',
             ),
@@ -1999,7 +2064,7 @@ def package() -> Package:
             rflex_Stop_Activity(),
         ],
         connector_types=[
-            Broadcast_1(),
+            Broadcast_2(),
             Broadcast_3(),
             RendezvousX_PP(),
             Rendezvous_P(),
