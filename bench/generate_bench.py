@@ -1,4 +1,4 @@
-"""Generation time: DALA, and a synthetic component with 40 services (parse, check, build, write).
+"""Generation time: DALA (with its rules), and a synthetic component with 40 services (parse, check, build, write).
 
 Prints the median of several runs for each phase; not a test.
     python bench/generate_bench.py
@@ -13,6 +13,7 @@ from pathlib import Path
 from genom2bip.checks import check_description
 from genom2bip.generate import generate, model_of
 from genom2bip.parser import parse_paths, parse_text
+from genom2bip.rules import all_rules
 from runtime.diagnostics import Reporter
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,12 +47,13 @@ def timed(fn, runs: int = 5) -> tuple[float, object]:
     return statistics.median(times) * 1000, result
 
 
-def phases(label: str, parse) -> None:
+def phases(label: str, parse, rules_file: Path | None = None) -> None:
     t_parse, description = timed(parse)
     t_check, _ = timed(lambda: check_description(description, Reporter()))
-    t_build, (package, _, _) = timed(lambda: model_of(description, label))
+    rules = all_rules(description, rules_file, Reporter())
+    t_build, (package, _, _) = timed(lambda: model_of(description, label, rules))
     with tempfile.TemporaryDirectory() as out:
-        t_all, _ = timed(lambda: generate(parse(), label, Path(out), label, "bench"))
+        t_all, _ = timed(lambda: generate(parse(), label, Path(out), label, "bench", rules))
     atoms = len(package.atom_types)
     print(f"{label:<12} parse {t_parse:7.1f} ms   check {t_check:6.1f} ms   build {t_build:7.1f} ms   "
           f"end to end (parse..write) {t_all:7.1f} ms   ({atoms} atom types, "
@@ -59,6 +61,6 @@ def phases(label: str, parse) -> None:
 
 
 if __name__ == "__main__":
-    phases("dala", lambda: parse_paths([ROOT / "descriptions" / "dala"]))
+    phases("dala", lambda: parse_paths([ROOT / "descriptions" / "dala"]), ROOT / "descriptions" / "dala" / "rules.yaml")
     text = synthetic(40)
     phases("big-40", lambda: parse_text(text, "big.gen"))
