@@ -58,6 +58,21 @@ def _raisers(errors: list[ErrorSite]) -> dict[str, Callable]:
     return {"_nondet": nondet, "_unsafe": unsafe, "_stuck": plain, "_notenabled": plain}
 
 
+@dataclass(frozen=True)
+class CompiledStep:
+    """The generated step's own entry points, for tools that drive the same semantics in bulk (the explorer).
+
+    ``enabled(state)`` lists the enabled interactions; ``fire[source](state,
+    mask, record)`` fires the interaction ``(source, mask)`` of one source
+    (``record``: None, or a dict that receives the port values);
+    ``interaction(source, mask)`` gives the :class:`Interaction` object.
+    """
+
+    enabled: Callable[[State], list[Interaction]]
+    fire: tuple[Callable[..., State], ...]
+    interaction: Callable[[int, int], Interaction]
+
+
 class Engine:
     """A runnable model. ``Engine(package, root="System()", externs=None)``.
 
@@ -114,6 +129,7 @@ class Engine:
         self._initial = ns["initial"]
         self._enabled = ns["enabled"]
         self._fire = ns["FIRE"]
+        self.step = CompiledStep(self._enabled, tuple(self._fire), self._make)
 
     def _attach(self, node: TreeNode, type_index: dict[str, int], ns) -> None:
         info = node.info

@@ -149,8 +149,8 @@ class StateSpace:
         ]
         self.expand_source = "\n".join(lines) + "\n"
         ns = {"_unpack": self.codec.unpack, "_pack": self.codec.pack, "_env": self.environment,
-              "_oracle": self.oracle, "_enabled": self.engine.namespace["enabled"],
-              "_FIRE": self.engine.namespace["FIRE"], "_calls": self.oracle.calls, "_script": self.oracle.script,
+              "_oracle": self.oracle, "_enabled": self.engine.step.enabled,
+              "_FIRE": self.engine.step.fire, "_calls": self.oracle.calls, "_script": self.oracle.script,
               "_guard": self._guard_error, "_branches": self._branches}
         exec(compile(self.expand_source, "<explorer successors>", "exec"), ns)  # noqa: S102 - generated here
         return ns["expand"]
@@ -163,7 +163,7 @@ class StateSpace:
     def _branches(self, base: tuple, inter: Interaction, out: list) -> None:
         """Every outcome vector of ``inter`` at ``base`` (the odometer), appended to ``out`` packed."""
         counts = self.environment.current
-        fire = self.engine.namespace["FIRE"][inter.source]
+        fire = self.engine.step.fire[inter.source]
         oracle, env = self.oracle, self.environment
         oracle.start()
         while True:
@@ -283,7 +283,7 @@ class StateSpace:
     # -- traces ---------------------------------------------------------------------------------------
     def interaction(self, index: int) -> Interaction:
         n = len(self.engine.sources)
-        return self.engine.namespace["_mk"](index % n, index // n)
+        return self.engine.step.interaction(index % n, index // n)
 
     def step(self, src: int, index: int, dst: int) -> Step:
         """The step from ``src`` to ``dst`` by interaction ``index``, with the codel outcomes that lead there."""

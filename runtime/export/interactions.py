@@ -61,7 +61,7 @@ def all_interactions(engine) -> list[Static]:
     """The interactions of every source of the engine's plan, in source order then mask order."""
     out: list[Static] = []
     nsrc = len(engine.sources)
-    make = engine.namespace["_mk"]
+    make = engine.step.interaction
     rules = engine.flat.priorities
     for src in engine.sources:
         masks = [1] if src.kind == "port" else node_masks(src.tree)
