@@ -25,7 +25,6 @@ import math
 import socket
 import threading
 import time
-from contextlib import asynccontextmanager
 from typing import Any
 
 import uvicorn
@@ -141,16 +140,6 @@ def create_app(controller: Controller) -> Starlette:
     """The ASGI application serving ``controller``."""
     hub = Hub()
     interface = controller.interface
-
-    @asynccontextmanager
-    async def lifespan(app):
-        hub.loop = asyncio.get_running_loop()
-        unsubscribe = controller.subscribe(hub.listener)
-        try:
-            yield
-        finally:
-            unsubscribe()
-            hub.close()
 
     def request_id(text: str) -> int:
         try:
@@ -309,18 +298,40 @@ def create_app(controller: Controller) -> Starlette:
         Route("/events", events),
         Route("/tasks", tasks),
     ]
-    app = Starlette(routes=routes, lifespan=lifespan, exception_handlers={
+    app = Starlette(routes=routes, exception_handlers={
         RequestError: on_request_error, HTTPException: on_http_error, Exception: on_crash})
     app.state.hub = hub
     return app
 
 
 class _Uvicorn(uvicorn.Server):
-    """uvicorn, telling the controller and the event streams to end as soon as a stop is asked for."""
+    """uvicorn, connecting the event hub to the controller while it serves, and ending both on a stop.
 
-    def __init__(self, config: uvicorn.Config, on_exit) -> None:
+    This is done in the server's own startup and shutdown rather than in an
+    ASGI lifespan task: on Ctrl-C uvicorn cancels a pending lifespan task and
+    logs a traceback for it, which a clean stop must not print.
+    """
+
+    def __init__(self, config: uvicorn.Config, controller: Controller, hub: "Hub", on_exit) -> None:
         super().__init__(config)
+        self.controller = controller
+        self.hub = hub
         self.on_exit = on_exit
+        self._unsubscribe = None
+
+    async def startup(self, sockets=None) -> None:
+        self.hub.loop = asyncio.get_running_loop()
+        self._unsubscribe = self.controller.subscribe(self.hub.listener)
+        await super().startup(sockets=sockets)
+
+    async def shutdown(self, sockets=None) -> None:
+        try:
+            await super().shutdown(sockets=sockets)
+        finally:
+            if self._unsubscribe is not None:
+                self._unsubscribe()
+                self._unsubscribe = None
+            self.hub.close()
 
     def handle_exit(self, sig, frame) -> None:
         self.on_exit()
@@ -341,9 +352,9 @@ class ServiceServer:
         self.socket.listen(2048)  # clients may connect as soon as the URL is printed; they wait in the backlog
         self.port = self.socket.getsockname()[1]
         self.url = f"http://127.0.0.1:{self.port}"
-        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="on",
+        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off",
                                 timeout_graceful_shutdown=3, timeout_keep_alive=30)
-        self.server = _Uvicorn(config, self._exiting)
+        self.server = _Uvicorn(config, controller, self.app.state.hub, self._exiting)
         self._thread: threading.Thread | None = None
 
     def _exiting(self) -> None:
