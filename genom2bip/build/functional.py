@@ -78,6 +78,7 @@ class FunctionalLevel:
         self.task_execs: dict[Path, list[Wire]] = {}
         self.wakes: dict[Path, list[End]] = {}
         self.docs: dict[str, str] = {}  # type name -> one line saying what it stands for
+        self.task_labels: dict[Path, str] = {}  # task compound -> "Component.task" as its labels say it
 
     # -- registries ---------------------------------------------------------------------
     def _port_type(self, atom_type: str, port: str) -> str:
@@ -134,19 +135,22 @@ class FunctionalLevel:
         tasks: dict[str, Path] = {}
         taken = {ident(s.name) for s in c.services}
         for task in c.tasks:
-            tasks[task.name] = self._task(m, root, task, taken)
-        tasks[CONTROL_TASK + "\0"] = self._task(m, root, ir.Task(CONTROL_TASK), taken)
+            tasks[task.name] = self._task(c.name, root, task, taken)
+        tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK), taken)
 
         for s in c.services:
             on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == "activity" else tasks[CONTROL_TASK + "\0"]
             self._service(m, c, root, s, on)
 
-    def _task(self, m: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
-        name = ident(task.name)
-        if name in taken:
-            name += "_task"
+    def _task(self, component: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
+        """A task's compound: Timer (when periodic), Scheduler, and its permanent activity (its own codels)."""
+        m = root[0]
+        name, shown = ident(task.name), task.name
+        if name in taken:  # a service has the task's name: both keep labels of their own
+            name, shown = name + "_task", shown + "_task"
         taken.add(name)
         path = self.asm.group(root + (name,), joined(m, name, "Task"), comment=f"task {task.name}")
+        self.task_labels[path] = f"{component}.{shown}"
         if task.period is not None:
             period_us = round(task.period.seconds * 1e6)
             self.asm.atom(path + ("timer",), "Timer", [Const(period_us)])
@@ -160,7 +164,7 @@ class FunctionalLevel:
             self._codel_externs(m, fsm)
             activity = self.asm.atom(path + ("permanent",), atom)
             for state in fsm.states:
-                self._exec(m, f"{m}.{task.name}", path, activity, state, fsm.codel_of[state], owner=path)
+                self._exec(m, self.task_labels[path], path, activity, state, fsm.codel_of[state], owner=path)
             if fsm.paused:
                 self.wakes[path].append(End(activity, "wake"))
         return path
@@ -269,11 +273,11 @@ class FunctionalLevel:
             inner = Wire(self._rendezvous(opening, exported=True), opening, "period_sync", task)
             self.asm.wires.append(inner)
             self.asm.wire(Wire(self._connector(library.broadcast_type(len(wakes))), [inner, *wakes], "period", task,
-                               f"{m}.{tname}:period", comment="a period starts: paused activities wake up"))
+                               f"{self.task_labels[task]}:period", comment="a period starts: paused activities wake up"))
         else:
-            self.asm.wire(Wire(self._rendezvous(opening), opening, "period", task, f"{m}.{tname}:period"))
+            self.asm.wire(Wire(self._rendezvous(opening), opening, "period", task, f"{self.task_labels[task]}:period"))
         closing = ([End(timer, "sleep")] if has_timer else []) + [End(task + ("scheduler",), "sleep")]
-        sleep = self.asm.wire(Wire(self._rendezvous(closing), closing, "sleep", task, f"{m}.{tname}:sleep"))
+        sleep = self.asm.wire(Wire(self._rendezvous(closing), closing, "sleep", task, f"{self.task_labels[task]}:sleep"))
         for w in execs:
             self.asm.rank(Rank(f"{tname}_sleep_before_{w.owner[-1] if len(w.owner) > 1 else m}_{w.name}", sleep, w,
                                owner=(m,), comment="a period ends only when no codel of the task can run"))

@@ -627,7 +627,7 @@ def counter_clock__Task() -> CompoundType:
                 'Broadcast_1',
                 'period',
                 ports=[PortRef('period_sync', 'ep'), PortRef('permanent', 'wake')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock_:period'})],
+                annotations=[Annotation('label', arguments={'name': 'counter.clock:period'})],
                 comment='a period starts: paused activities wake up',
             ),
         ],
@@ -714,7 +714,7 @@ def counter_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'clock__sleep',
                 ports=[PortRef('clock_', 'timer_sleep'), PortRef('clock_', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock_:sleep'})],
+                annotations=[Annotation('label', arguments={'name': 'counter.clock:sleep'})],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
