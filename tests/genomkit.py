@@ -1,6 +1,8 @@
 """Helpers for tests of generated GenoM models on the engine: scripted codels, firing by label."""
 from __future__ import annotations
 
+import enginekit
+from enginekit import labels  # noqa: F401 - the same helper for generated models
 from runtime.codels import any_request, codel_specs
 from runtime.engine import Engine
 
@@ -28,15 +30,9 @@ def engine_for(package, root: str) -> tuple[Engine, Codels]:
     return Engine(package, root, codels.externs()), codels
 
 
-def labels(engine, state) -> list[str]:
-    return [i.label for i in engine.enabled(state)]
-
-
 def walk(engine, state, *steps):
-    """Fire the interactions with these labels in turn."""
-    for label in steps:
-        state = engine.fire(state, engine.find(state, label))
-    return state
+    """Fire the interactions with these labels in turn, from ``state``."""
+    return enginekit.walk(engine, *steps, state=state)
 
 
 def places(engine, state, atom) -> list[str]:
