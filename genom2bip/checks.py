@@ -29,6 +29,7 @@ from genom2bip.ir import (
     Type,
     Typedef,
     UnionType,
+    fsm_states,
 )
 from runtime.diagnostics import NOWHERE, Reporter, Span
 
@@ -116,7 +117,7 @@ class _Checker:
         for name in task.throws:
             self._exception(name, _where(task.ref_spans.get(f"throws:{name}"), task.span), comp)
         if task.codels:
-            states = self._fsm_states(task.codels)
+            states = fsm_states(task.codels)
             if "start" not in states:
                 self.error(task.span, f"task '{task.name}' has codels but none for state 'start'",
                            "the permanent activity of a task begins in state 'start'")
@@ -172,7 +173,7 @@ class _Checker:
                 self.error(service.span, f"activity '{service.name}' has no codel for state 'start'",
                            "its FSM begins in state 'start'")
             return
-        states = self._fsm_states(codels)
+        states = fsm_states(codels)
         if "start" not in states:
             self.error(service.span, f"{what} has no codel for state 'start'",
                        f"its FSM begins in state 'start'; declared states: {', '.join(states)}")
@@ -187,15 +188,6 @@ class _Checker:
         if "stop" in states and not self._reaches(graph, "stop"):
             self.error(service.span, f"no path from stop to ether in {what}: an interruption can never end",
                        "the stop codels must lead to ether")
-
-    @staticmethod
-    def _fsm_states(codels: list[Codel]) -> list[str]:
-        states: list[str] = []
-        for codel in codels:
-            for t in codel.triggers:
-                if t not in states:
-                    states.append(t)
-        return states
 
     def _yields(self, codels: list[Codel], states: list[str], what: str, fallback: Span) -> bool:
         """Report yields to states that no codel handles; True when there are none."""

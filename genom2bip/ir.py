@@ -211,6 +211,16 @@ class Codel:
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
+def fsm_states(codels: list[Codel]) -> list[str]:
+    """The states an automaton of codels has: every trigger, in order of first appearance."""
+    seen: list[str] = []
+    for codel in codels:
+        for t in codel.triggers:
+            if t not in seen:
+                seen.append(t)
+    return seen
+
+
 # --------------------------------------------------------------------------- component parts
 
 
@@ -288,13 +298,8 @@ class Service:
                 for c in self.codels]
 
     def states(self) -> list[str]:
-        """The FSM states of the service, in order of first appearance (triggers first)."""
-        seen: list[str] = []
-        for codel in self.fsm_codels():
-            for t in codel.triggers:
-                if t not in seen:
-                    seen.append(t)
-        return seen
+        """The FSM states of the service, in order of first appearance."""
+        return fsm_states(self.fsm_codels())
 
 
 @dataclass

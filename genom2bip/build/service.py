@@ -44,14 +44,12 @@ class Fsm:
 
     @classmethod
     def of(cls, codels: list[ir.Codel], throws: list[str]) -> "Fsm":
-        states: list[str] = []
         codel_of: dict[str, ir.Codel] = {}
         paused: list[str] = []
         for codel in codels:
             for t in codel.triggers:
-                if t not in codel_of:
-                    states.append(t)
-                    codel_of[t] = codel
+                codel_of.setdefault(t, codel)
+        states = ir.fsm_states(codels)
         for codel in codels:
             for y in codel.yields:
                 if y.pause and y.state != "ether" and y.state not in paused:
