@@ -122,7 +122,7 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
 
 def _connector_doc(c) -> str:
     kinds = {"Rendezvous": "all ports together", "RendezvousX": "all ports together, offered to an enclosing connector",
-             "Broadcast": "a trigger with optional receivers"}
+             "Triggered": "the first ports together as a trigger, each receiver joining if it can"}
     base = c.name.split("_")[0]
     return f"Connector type {c.name}: {kinds.get(base, 'guarded by the status of other services')}."
 

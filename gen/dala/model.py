@@ -11,7 +11,6 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
-    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -3350,47 +3349,6 @@ def RFLEX_Stop_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def Broadcast_1() -> ConnectorType:
-    """Connector type Broadcast_1: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_1',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2')]),
-    )
-
-
-def Broadcast_2() -> ConnectorType:
-    """Connector type Broadcast_2: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_2',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
-        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3')]),
-    )
-
-
-def Broadcast_4() -> ConnectorType:
-    """Connector type Broadcast_4: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_4',
-        params=[
-            ConnectorParam('Port', 'p1'),
-            ConnectorParam('Port', 'p2'),
-            ConnectorParam('Port', 'p3'),
-            ConnectorParam('Port', 'p4'),
-            ConnectorParam('Port', 'p5'),
-        ],
-        define=DefineGroup(
-            [
-                DefinePort('p1', trigger=True),
-                DefinePort('p2'),
-                DefinePort('p3'),
-                DefinePort('p4'),
-                DefinePort('p5'),
-            ],
-        ),
-    )
-
-
 def LaserRF_Start_Refuse_after() -> ConnectorType:
     """Connector type LaserRF_Start_Refuse_after: guarded by the status of other services."""
     return ConnectorType(
@@ -3560,16 +3518,6 @@ def RFLEX_TrackSpeed_Trigger() -> ConnectorType:
     )
 
 
-def RendezvousX_PP() -> ConnectorType:
-    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
-    return ConnectorType(
-        'RendezvousX_PP',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
-        export=ConnectorExport('Port', 'ep'),
-    )
-
-
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -3594,6 +3542,61 @@ def Rendezvous_PPP() -> ConnectorType:
         'Rendezvous_PPP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+    )
+
+
+def Triggered_2_1() -> ConnectorType:
+    """Connector type Triggered_2_1: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True), DefinePort('p3')],
+        ),
+    )
+
+
+def Triggered_2_2() -> ConnectorType:
+    """Connector type Triggered_2_2: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_2',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+            ],
+        ),
+    )
+
+
+def Triggered_2_4() -> ConnectorType:
+    """Connector type Triggered_2_4: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_4',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+            ConnectorParam('Port', 'p6'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+                DefinePort('p6'),
+            ],
+        ),
     )
 
 
@@ -4667,15 +4670,11 @@ def Aspect_Module() -> CompoundType:
                 comment='codel aspStop of state stop',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'Stop_start_sync',
-                ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'Stop_start',
                 ports=[
-                    PortRef('Stop_start_sync', 'ep'),
+                    PortRef('Stop', 'control_start'),
+                    PortRef('Stop', 'activity_start'),
                     PortRef('Run', 'activity_abort'),
                     PortRef('Run', 'control_cancel'),
                 ],
@@ -4683,14 +4682,13 @@ def Aspect_Module() -> CompoundType:
                 comment='Stop interrupts Run (Aspect.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'map_period_sync',
-                ports=[PortRef('map', 'timer_trigger'), PortRef('map', 'scheduler_period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_1',
+                'Triggered_2_1',
                 'map_period',
-                ports=[PortRef('map_period_sync', 'ep'), PortRef('Run', 'activity_wake')],
+                ports=[
+                    PortRef('map', 'timer_trigger'),
+                    PortRef('map', 'scheduler_period'),
+                    PortRef('Run', 'activity_wake'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'Aspect.map:period'})],
                 comment='a period starts: paused activities wake up',
             ),
@@ -4789,17 +4787,13 @@ def LaserRF_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'RendezvousX_PP',
-                'acquisition_period_sync',
+                'Triggered_2_1',
+                'acquisition_period',
                 ports=[
                     PortRef('acquisition', 'timer_trigger'),
                     PortRef('acquisition', 'scheduler_period'),
+                    PortRef('Start', 'activity_wake'),
                 ],
-            ),
-            ConnectorInstance(
-                'Broadcast_1',
-                'acquisition_period',
-                ports=[PortRef('acquisition_period_sync', 'ep'), PortRef('Start', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:period'})],
                 comment='a period starts: paused activities wake up',
             ),
@@ -4945,15 +4939,11 @@ def NDD_Module() -> CompoundType:
                 comment='codel nddStop of state start',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'motion_period_sync',
-                ports=[PortRef('motion', 'timer_trigger'), PortRef('motion', 'scheduler_period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'motion_period',
                 ports=[
-                    PortRef('motion_period_sync', 'ep'),
+                    PortRef('motion', 'timer_trigger'),
+                    PortRef('motion', 'scheduler_period'),
                     PortRef('motion', 'permanent_wake'),
                     PortRef('GoTo', 'activity_wake'),
                 ],
@@ -5160,15 +5150,11 @@ def POM_Module() -> CompoundType:
                 comment='codel pomReset of state start',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'Reset_start_sync',
-                ports=[PortRef('Reset', 'control_start'), PortRef('Reset', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'Reset_start',
                 ports=[
-                    PortRef('Reset_start_sync', 'ep'),
+                    PortRef('Reset', 'control_start'),
+                    PortRef('Reset', 'activity_start'),
                     PortRef('Run', 'activity_abort'),
                     PortRef('Run', 'control_cancel'),
                 ],
@@ -5176,15 +5162,11 @@ def POM_Module() -> CompoundType:
                 comment='Reset interrupts Run (POM.Reset.interrupts)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'fusion_period_sync',
-                ports=[PortRef('fusion', 'timer_trigger'), PortRef('fusion', 'scheduler_period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'fusion_period',
                 ports=[
-                    PortRef('fusion_period_sync', 'ep'),
+                    PortRef('fusion', 'timer_trigger'),
+                    PortRef('fusion', 'scheduler_period'),
                     PortRef('fusion', 'permanent_wake'),
                     PortRef('Run', 'activity_wake'),
                 ],
@@ -5295,15 +5277,11 @@ def RFLEX_Module() -> CompoundType:
                 comment='codel rflexStop of state start',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'servo_period_sync',
-                ports=[PortRef('servo', 'timer_trigger'), PortRef('servo', 'scheduler_period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'servo_period',
                 ports=[
-                    PortRef('servo_period_sync', 'ep'),
+                    PortRef('servo', 'timer_trigger'),
+                    PortRef('servo', 'scheduler_period'),
                     PortRef('servo', 'permanent_wake'),
                     PortRef('TrackSpeed', 'activity_wake'),
                 ],
@@ -5658,18 +5636,11 @@ def DALA() -> CompoundType:
                 comment='codel rflexBrake of state stop',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'LaserRF_Stop_start_sync',
+                'Triggered_2_4',
+                'LaserRF_Stop_start',
                 ports=[
                     PortRef('LaserRF', 'Stop_control_start'),
                     PortRef('LaserRF', 'Stop_activity_start'),
-                ],
-            ),
-            ConnectorInstance(
-                'Broadcast_4',
-                'LaserRF_Stop_start',
-                ports=[
-                    PortRef('LaserRF_Stop_start_sync', 'ep'),
                     PortRef('LaserRF', 'Start_activity_abort'),
                     PortRef('NDD', 'GoTo_activity_abort'),
                     PortRef('LaserRF', 'Start_control_cancel'),
@@ -5679,15 +5650,11 @@ def DALA() -> CompoundType:
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'NDD_Stop_start_sync',
-                ports=[PortRef('NDD', 'Stop_control_start'), PortRef('NDD', 'Stop_activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'NDD_Stop_start',
                 ports=[
-                    PortRef('NDD_Stop_start_sync', 'ep'),
+                    PortRef('NDD', 'Stop_control_start'),
+                    PortRef('NDD', 'Stop_activity_start'),
                     PortRef('NDD', 'GoTo_activity_abort'),
                     PortRef('NDD', 'GoTo_control_cancel'),
                 ],
@@ -5695,15 +5662,11 @@ def DALA() -> CompoundType:
                 comment='Stop interrupts GoTo (NDD.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'RFLEX_Stop_start_sync',
-                ports=[PortRef('RFLEX', 'Stop_control_start'), PortRef('RFLEX', 'Stop_activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_4',
+                'Triggered_2_4',
                 'RFLEX_Stop_start',
                 ports=[
-                    PortRef('RFLEX_Stop_start_sync', 'ep'),
+                    PortRef('RFLEX', 'Stop_control_start'),
+                    PortRef('RFLEX', 'Stop_activity_start'),
                     PortRef('RFLEX', 'TrackSpeed_activity_abort'),
                     PortRef('NDD', 'GoTo_activity_abort'),
                     PortRef('RFLEX', 'TrackSpeed_control_cancel'),
@@ -6031,7 +5994,7 @@ def DALA() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 16 connector types, 34 compound types."""
+    """The whole model: 48 atom types, 15 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -6470,9 +6433,6 @@ def package() -> Package:
             RFLEX_Stop_Activity(),
         ],
         connector_types=[
-            Broadcast_1(),
-            Broadcast_2(),
-            Broadcast_4(),
             LaserRF_Start_Refuse_after(),
             LaserRF_Start_Trigger(),
             NDD_GoTo_Refuse_after(),
@@ -6482,10 +6442,12 @@ def package() -> Package:
             POM_Reset_Trigger(),
             RFLEX_TrackSpeed_Refuse_after(),
             RFLEX_TrackSpeed_Trigger(),
-            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
             Rendezvous_PPP(),
+            Triggered_2_1(),
+            Triggered_2_2(),
+            Triggered_2_4(),
         ],
         compound_types=[
             Aspect_Run_Service(),

@@ -241,16 +241,15 @@ class FunctionalLevel:
             if not mine:
                 self.asm.wire(Wire(self._rendezvous(start), start, "start", parts.path, f"{parts.label}:start"))
                 continue
-            inner = Wire(self._rendezvous(start, exported=True), start, "start_sync", parts.path)
             # A running victim is aborted; one accepted but not started yet is cancelled.
             aborts = [End(self.services[v].activity, "abort") for v in mine]
             aborts += [End(self.services[v].control, "cancel") for v in mine]
             names = ", ".join(f"{m}.{n}" if m != key[0] else n for m, n in mine)
             outer = self.asm.wire(
-                Wire(self._connector(library.broadcast_type(len(aborts))), [inner, *aborts], "start", parts.path,
-                     f"{parts.label}:start", comment=f"{key[1]} interrupts {names} ({', '.join(reasons[key])})")
+                Wire(self._connector(library.triggered_type(len(start), len(aborts))), [*start, *aborts], "start",
+                     parts.path, f"{parts.label}:start",
+                     comment=f"{key[1]} interrupts {names} ({', '.join(reasons[key])})")
             )
-            self.asm.wires.append(inner)
             for v in mine:
                 victim = self.services[v]
                 for w in self.task_execs[victim.task]:
@@ -270,10 +269,9 @@ class FunctionalLevel:
         wakes = self.wakes[task]
         tname = task[-1]
         if wakes:
-            inner = Wire(self._rendezvous(opening, exported=True), opening, "period_sync", task)
-            self.asm.wires.append(inner)
-            self.asm.wire(Wire(self._connector(library.broadcast_type(len(wakes))), [inner, *wakes], "period", task,
-                               f"{self.task_labels[task]}:period", comment="a period starts: paused activities wake up"))
+            self.asm.wire(Wire(self._connector(library.triggered_type(len(opening), len(wakes))), [*opening, *wakes],
+                               "period", task, f"{self.task_labels[task]}:period",
+                               comment="a period starts: paused activities wake up"))
         else:
             self.asm.wire(Wire(self._rendezvous(opening), opening, "period", task, f"{self.task_labels[task]}:period"))
         closing = ([End(timer, "sleep")] if has_timer else []) + [End(task + ("scheduler",), "sleep")]

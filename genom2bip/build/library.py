@@ -116,13 +116,19 @@ def rendezvous_type(types: tuple[str, ...], exported: bool = False) -> Connector
     )
 
 
-def broadcast_type(receivers: int) -> ConnectorType:
-    """A trigger with ``receivers`` synchrons: every subset containing the trigger; maximal progress keeps the largest."""
-    names = param_names(receivers + 1)
+def triggered_type(together: int, receivers: int) -> ConnectorType:
+    """``(p1 .. pk)' q1 .. qn``: the first ``together`` ports fire as one trigger, each receiver joins if it can.
+
+    One connector instead of a rendezvous nested in a broadcast: the same
+    interactions, and the engine enumerates them on its fast path.
+    """
+    names = param_names(together + receivers)
+    head = DefineGroup([DefinePort(n) for n in names[:together]], trigger=True)
+    suffix = f"{together}_{receivers}"
     return ConnectorType(
-        name=f"Broadcast_{receivers}",
+        name=f"Triggered_{suffix}",
         params=[ConnectorParam(PORT, n) for n in names],
-        define=DefineGroup([DefinePort(names[0], trigger=True)] + [DefinePort(n) for n in names[1:]]),
+        define=DefineGroup([head] + [DefinePort(n) for n in names[together:]]),
     )
 
 

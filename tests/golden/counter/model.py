@@ -11,7 +11,6 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
-    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -482,25 +481,6 @@ def counter_SetRunning_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def Broadcast_1() -> ConnectorType:
-    """Connector type Broadcast_1: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_1',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2')]),
-    )
-
-
-def RendezvousX_PP() -> ConnectorType:
-    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
-    return ConnectorType(
-        'RendezvousX_PP',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
-        export=ConnectorExport('Port', 'ep'),
-    )
-
-
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -525,6 +505,17 @@ def Rendezvous_PPP() -> ConnectorType:
         'Rendezvous_PPP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+    )
+
+
+def Triggered_2_1() -> ConnectorType:
+    """Connector type Triggered_2_1: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True), DefinePort('p3')],
+        ),
     )
 
 
@@ -619,14 +610,13 @@ def counter_clock__Task() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'RendezvousX_PP',
-                'period_sync',
-                ports=[PortRef('timer', 'trigger'), PortRef('scheduler', 'period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_1',
+                'Triggered_2_1',
                 'period',
-                ports=[PortRef('period_sync', 'ep'), PortRef('permanent', 'wake')],
+                ports=[
+                    PortRef('timer', 'trigger'),
+                    PortRef('scheduler', 'period'),
+                    PortRef('permanent', 'wake'),
+                ],
                 annotations=[Annotation('label', arguments={'name': 'counter.clock:period'})],
                 comment='a period starts: paused activities wake up',
             ),
@@ -764,7 +754,7 @@ def COUNTER() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 9 atom types, 5 connector types, 6 compound types."""
+    """The whole model: 9 atom types, 4 connector types, 6 compound types."""
     return Package(
         'counter',
         extern_functions=[
@@ -824,11 +814,10 @@ def package() -> Package:
             counter_SetRunning_Activity(),
         ],
         connector_types=[
-            Broadcast_1(),
-            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
             Rendezvous_PPP(),
+            Triggered_2_1(),
         ],
         compound_types=[
             counter_GetTicks_Service(),

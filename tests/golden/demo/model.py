@@ -11,7 +11,6 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
-    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -931,55 +930,6 @@ def demo_MoveDistance_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def Broadcast_3() -> ConnectorType:
-    """Connector type Broadcast_3: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_3',
-        params=[
-            ConnectorParam('Port', 'p1'),
-            ConnectorParam('Port', 'p2'),
-            ConnectorParam('Port', 'p3'),
-            ConnectorParam('Port', 'p4'),
-        ],
-        define=DefineGroup(
-            [DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3'), DefinePort('p4')],
-        ),
-    )
-
-
-def Broadcast_4() -> ConnectorType:
-    """Connector type Broadcast_4: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_4',
-        params=[
-            ConnectorParam('Port', 'p1'),
-            ConnectorParam('Port', 'p2'),
-            ConnectorParam('Port', 'p3'),
-            ConnectorParam('Port', 'p4'),
-            ConnectorParam('Port', 'p5'),
-        ],
-        define=DefineGroup(
-            [
-                DefinePort('p1', trigger=True),
-                DefinePort('p2'),
-                DefinePort('p3'),
-                DefinePort('p4'),
-                DefinePort('p5'),
-            ],
-        ),
-    )
-
-
-def RendezvousX_PP() -> ConnectorType:
-    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
-    return ConnectorType(
-        'RendezvousX_PP',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
-        export=ConnectorExport('Port', 'ep'),
-    )
-
-
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -1004,6 +954,52 @@ def Rendezvous_PPP() -> ConnectorType:
         'Rendezvous_PPP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+    )
+
+
+def Triggered_2_3() -> ConnectorType:
+    """Connector type Triggered_2_3: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_3',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+            ],
+        ),
+    )
+
+
+def Triggered_2_4() -> ConnectorType:
+    """Connector type Triggered_2_4: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_4',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+            ConnectorParam('Port', 'p6'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+                DefinePort('p6'),
+            ],
+        ),
     )
 
 
@@ -1348,15 +1344,11 @@ def demo_Module() -> CompoundType:
                 comment='codel md_main of state main',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'Stop_start_sync',
-                ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_4',
+                'Triggered_2_4',
                 'Stop_start',
                 ports=[
-                    PortRef('Stop_start_sync', 'ep'),
+                    PortRef('Stop', 'control_start'),
+                    PortRef('Stop', 'activity_start'),
                     PortRef('GoTo', 'activity_abort'),
                     PortRef('MoveDistance', 'activity_abort'),
                     PortRef('GoTo', 'control_cancel'),
@@ -1366,15 +1358,11 @@ def demo_Module() -> CompoundType:
                 comment='Stop interrupts GoTo, MoveDistance (demo.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'motion_period_sync',
-                ports=[PortRef('motion', 'timer_trigger'), PortRef('motion', 'scheduler_period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_3',
+                'Triggered_2_3',
                 'motion_period',
                 ports=[
-                    PortRef('motion_period_sync', 'ep'),
+                    PortRef('motion', 'timer_trigger'),
+                    PortRef('motion', 'scheduler_period'),
                     PortRef('motion', 'permanent_wake'),
                     PortRef('GoTo', 'activity_wake'),
                     PortRef('MoveDistance', 'activity_wake'),
@@ -1533,7 +1521,7 @@ def DEMO() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 13 atom types, 8 connector types, 8 compound types."""
+    """The whole model: 13 atom types, 7 connector types, 8 compound types."""
     return Package(
         'demo',
         extern_functions=[
@@ -1667,12 +1655,11 @@ def package() -> Package:
             demo_MoveDistance_Activity(),
         ],
         connector_types=[
-            Broadcast_3(),
-            Broadcast_4(),
-            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
             Rendezvous_PPP(),
+            Triggered_2_3(),
+            Triggered_2_4(),
             demo_MoveDistance_Refuse_after(),
             demo_MoveDistance_Trigger(),
         ],

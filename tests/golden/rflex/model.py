@@ -11,7 +11,6 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
-    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -1194,41 +1193,6 @@ def rflex_Stop_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def Broadcast_2() -> ConnectorType:
-    """Connector type Broadcast_2: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_2',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
-        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3')]),
-    )
-
-
-def Broadcast_3() -> ConnectorType:
-    """Connector type Broadcast_3: a trigger with optional receivers."""
-    return ConnectorType(
-        'Broadcast_3',
-        params=[
-            ConnectorParam('Port', 'p1'),
-            ConnectorParam('Port', 'p2'),
-            ConnectorParam('Port', 'p3'),
-            ConnectorParam('Port', 'p4'),
-        ],
-        define=DefineGroup(
-            [DefinePort('p1', trigger=True), DefinePort('p2'), DefinePort('p3'), DefinePort('p4')],
-        ),
-    )
-
-
-def RendezvousX_PP() -> ConnectorType:
-    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
-    return ConnectorType(
-        'RendezvousX_PP',
-        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
-        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
-        export=ConnectorExport('Port', 'ep'),
-    )
-
-
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -1244,6 +1208,48 @@ def Rendezvous_PP() -> ConnectorType:
         'Rendezvous_PP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+    )
+
+
+def Triggered_2_2() -> ConnectorType:
+    """Connector type Triggered_2_2: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_2',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+            ],
+        ),
+    )
+
+
+def Triggered_2_3() -> ConnectorType:
+    """Connector type Triggered_2_3: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_3',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+            ],
+        ),
     )
 
 
@@ -1681,15 +1687,11 @@ def rflex_Module() -> CompoundType:
                 comment='codel rflexStopInter of state stop',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'TrackSpeed_start_sync',
-                ports=[PortRef('TrackSpeed', 'control_start'), PortRef('TrackSpeed', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'TrackSpeed_start',
                 ports=[
-                    PortRef('TrackSpeed_start_sync', 'ep'),
+                    PortRef('TrackSpeed', 'control_start'),
+                    PortRef('TrackSpeed', 'activity_start'),
                     PortRef('Stop', 'activity_abort'),
                     PortRef('Stop', 'control_cancel'),
                 ],
@@ -1697,15 +1699,11 @@ def rflex_Module() -> CompoundType:
                 comment='TrackSpeed interrupts Stop (rflex.TrackSpeed.interrupts)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'Stop_start_sync',
-                ports=[PortRef('Stop', 'control_start'), PortRef('Stop', 'activity_start')],
-            ),
-            ConnectorInstance(
-                'Broadcast_2',
+                'Triggered_2_2',
                 'Stop_start',
                 ports=[
-                    PortRef('Stop_start_sync', 'ep'),
+                    PortRef('Stop', 'control_start'),
+                    PortRef('Stop', 'activity_start'),
                     PortRef('TrackSpeed', 'activity_abort'),
                     PortRef('TrackSpeed', 'control_cancel'),
                 ],
@@ -1713,15 +1711,11 @@ def rflex_Module() -> CompoundType:
                 comment='Stop interrupts TrackSpeed (rflex.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'MotorsTask_period_sync',
-                ports=[PortRef('MotorsTask', 'timer_trigger'), PortRef('MotorsTask', 'scheduler_period')],
-            ),
-            ConnectorInstance(
-                'Broadcast_3',
+                'Triggered_2_3',
                 'MotorsTask_period',
                 ports=[
-                    PortRef('MotorsTask_period_sync', 'ep'),
+                    PortRef('MotorsTask', 'timer_trigger'),
+                    PortRef('MotorsTask', 'scheduler_period'),
                     PortRef('MotorsTask', 'permanent_wake'),
                     PortRef('TrackSpeed', 'activity_wake'),
                     PortRef('Stop', 'activity_wake'),
@@ -1897,7 +1891,7 @@ def RFLEX() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 16 atom types, 5 connector types, 10 compound types."""
+    """The whole model: 16 atom types, 4 connector types, 10 compound types."""
     return Package(
         'rflex',
         extern_functions=[
@@ -2064,11 +2058,10 @@ def package() -> Package:
             rflex_Stop_Activity(),
         ],
         connector_types=[
-            Broadcast_2(),
-            Broadcast_3(),
-            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
+            Triggered_2_2(),
+            Triggered_2_3(),
         ],
         compound_types=[
             rflex_GetOdo_Service(),
