@@ -118,14 +118,9 @@ class Engine:
             if src.tree is not None:
                 self._attach(src.tree, gen.type_index, ns)
         if self.flat.priorities:
-            tops: dict[int, set[int]] = {}
-            for src in self.sources:
-                if src.tree is not None:
-                    for cid in _connectors(src.tree):
-                        tops.setdefault(cid, set()).add(src.index)
             rules = [(p.text, p.low.entries, p.high.entries, ns.get(f"_pg{r}"))
                      for r, p in enumerate(self.flat.priorities)]
-            ns["_prio"] = support.Priorities(rules, tops).filter
+            ns["_prio"] = support.Priorities(rules, support.top_connectors(self.sources)).filter
         self._initial = ns["initial"]
         self._enabled = ns["enabled"]
         self._fire = ns["FIRE"]
@@ -303,11 +298,3 @@ class Engine:
             tracer.finish(summary)
         return summary
 
-
-def _connectors(node: TreeNode) -> list[int]:
-    out = [node.connector.id]
-    for alts in node.params:
-        for a in alts:
-            if a.node is not None:
-                out.extend(_connectors(a.node))
-    return out

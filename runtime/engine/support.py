@@ -189,8 +189,7 @@ class Priorities:
         self.rules = rules
         self.names = [r[0] for r in rules]
         self.guards = [(i, g) for i, (_, _, _, g) in enumerate(rules) if g is not None]
-        n = len(rules)
-        self.edges = [[j for j in range(n) if _overlap(rules[i][2], rules[j][1], tops)] for i in range(n)]
+        self.edges = rule_edges([(low, high) for _, low, high, _ in rules], tops)
         self.memo: dict[tuple[bool, ...], int] = {}
         self.lmask: dict[int, int] = {}
         self.hmask: dict[int, int] = {}
@@ -258,6 +257,35 @@ def _matches(parts, entries) -> bool:
             if c == cid and m & pm == pm:
                 return True
     return False
+
+
+def top_connectors(sources) -> dict[int, set[int]]:
+    """Connector id -> the top-level sources whose connector tree contains it."""
+    tops: dict[int, set[int]] = {}
+    for src in sources:
+        if src.tree is not None:
+            for cid in connector_ids(src.tree):
+                tops.setdefault(cid, set()).add(src.index)
+    return tops
+
+
+def connector_ids(node) -> list[int]:
+    """Ids of a connector tree's nodes, the root first."""
+    out = [node.connector.id]
+    for alts in node.params:
+        for a in alts:
+            if a.node is not None:
+                out.extend(connector_ids(a.node))
+    return out
+
+
+def rule_edges(rules: list[tuple[tuple, tuple]], tops: dict[int, set[int]]) -> list[list[int]]:
+    """``edges[i]``: rules whose low side can match an interaction that the high side of rule ``i`` matches.
+
+    ``rules`` are ``(low entries, high entries)`` pairs of compound priorities.
+    """
+    n = len(rules)
+    return [[j for j in range(n) if _overlap(rules[i][1], rules[j][0], tops)] for i in range(n)]
 
 
 def _overlap(high, low, tops: dict[int, set[int]]) -> bool:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from itertools import product
 
-from runtime.engine import defines
+from runtime.engine import defines, support
 from runtime.engine.plan import Source, TreeNode, parts
 
 
@@ -84,29 +84,9 @@ def all_interactions(engine) -> list[Static]:
 
 
 def rule_edges(engine) -> list[list[int]]:
-    """``edges[i]``: rules whose low side can match an interaction that the high side of rule i matches."""
-    tops: dict[int, set[int]] = {}
+    """``edges[i]``: rules whose low side can match an interaction that the high side of rule i matches.
 
-    def connectors(node: TreeNode) -> list[int]:
-        ids = [node.connector.id]
-        for alts in node.params:
-            for a in alts:
-                if a.node is not None:
-                    ids.extend(connectors(a.node))
-        return ids
-
-    for src in engine.sources:
-        if src.tree is not None:
-            for cid in connectors(src.tree):
-                tops.setdefault(cid, set()).add(src.index)
-    rules = engine.flat.priorities
-
-    def overlap(high, low) -> bool:
-        for c1, _ in high:
-            for c2, _ in low:
-                if c1 == c2 or tops.get(c1, set()) & tops.get(c2, set()):
-                    return True
-        return False
-
-    return [[j for j in range(len(rules)) if overlap(rules[i].high.entries, rules[j].low.entries)]
-            for i in range(len(rules))]
+    The same graph the engine's priority filter walks (support.rule_edges).
+    """
+    pairs = [(p.low.entries, p.high.entries) for p in engine.flat.priorities]
+    return support.rule_edges(pairs, support.top_connectors(engine.sources))
