@@ -69,6 +69,11 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
     """PATH... (files, or directories of .gen files), -I DIR, -D NAME[=VALUE]: what every reading verb takes."""
     parser.add_argument("paths", metavar="PATH", nargs="+",
                         help="description files (.gen), or directories whose .gen files are read")
+    add_preprocessor_arguments(parser)
+
+
+def add_preprocessor_arguments(parser: argparse.ArgumentParser) -> None:
+    """-I DIR, -D NAME[=VALUE], as cpp takes them."""
     parser.add_argument("-I", dest="include_dirs", metavar="DIR", action="append", default=[],
                         help="add DIR to the #include search path")
     parser.add_argument("-D", dest="defines", metavar="NAME[=VALUE]", action="append", default=[],

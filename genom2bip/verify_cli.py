@@ -13,7 +13,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, add_rules_arguments, error, verb
+from genom2bip.cli import (
+    EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, add_preprocessor_arguments, add_rules_arguments, error, verb,
+)
 
 EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
 
@@ -21,10 +23,7 @@ EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
 def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("paths", metavar="MODEL", nargs="+",
                         help="one .bip file, or description files (.gen) / directories of them")
-    parser.add_argument("-I", dest="include_dirs", metavar="DIR", action="append", default=[],
-                        help="add DIR to the #include search path (descriptions)")
-    parser.add_argument("-D", dest="defines", metavar="NAME[=VALUE]", action="append", default=[],
-                        help="define a preprocessor macro (descriptions)")
+    add_preprocessor_arguments(parser)
     parser.epilog = ("exit status: 0 all checks pass, 4 deadlock/violation/model error found, "
                      "5 stopped by a limit before an answer, 1 bad input, 2 usage")
     parser.add_argument("--root", help="root instance of a .bip model (default: the last compound type)")
