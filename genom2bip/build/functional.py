@@ -94,9 +94,12 @@ class FunctionalLevel:
     def _connector(self, t: ConnectorType) -> ConnectorType:
         return self.connector_types.setdefault(t.name, t)
 
+    def _types(self, ends: list[End]) -> tuple[str, ...]:
+        """The port types of atom ports, in order: the parameters of a connector joining them."""
+        return tuple(self._port_type(self.asm.atoms[e.atom].type, e.port) for e in ends)
+
     def _rendezvous(self, ends: list[End], exported: bool = False) -> ConnectorType:
-        types = tuple(self._port_type(self.asm.atoms[e.atom].type, e.port) for e in ends)
-        return self._connector(library.rendezvous_type(types, exported))
+        return self._connector(library.rendezvous_type(self._types(ends), exported))
 
     # -- the whole level ------------------------------------------------------------------
     def build(self) -> Package:
@@ -315,8 +318,7 @@ class FunctionalLevel:
                                    annotations=[Annotation("rule", {"name": r.id})]))
 
     def _guarded(self, name: str, ends: list[End], guard: Expr) -> ConnectorType:
-        types = tuple(self._port_type(self.asm.atoms[e.atom].type, e.port) for e in ends)
-        return self._connector(library.guarded_type(name, types, guard))
+        return self._connector(library.guarded_type(name, self._types(ends), guard))
 
 
 def build_package(description: ir.Description, system: str, rules: list[Rule] | None = None) -> Package:
