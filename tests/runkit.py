@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -21,6 +22,25 @@ def build(tmp_path: Path, text: str, name: str = "tick"):
     description = parse_paths([path])
     package, root, _ = model_of(description, name)
     return package, root, interface_data(description, name, str(path))
+
+
+@contextmanager
+def serving_dala():
+    """The generated DALA controller with the stub codels, running, its server and a client; stopped after."""
+    from runtime.controller import Controller
+    from runtime.services.client import Client
+    from runtime.services.server import ServiceServer
+
+    pkg = dala()
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
+    controller.start()
+    server = ServiceServer(controller).start()
+    try:
+        yield controller, server, Client(server.url, timeout=10)
+    finally:
+        server.stop()
+        controller.stop()
+    assert controller.error is None
 
 
 def dala():

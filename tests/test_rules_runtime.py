@@ -3,24 +3,16 @@ from __future__ import annotations
 
 import pytest
 
-from runkit import DALA_CODELS, ORIGIN, dala, ndd_settings, until
+from runkit import ORIGIN, ndd_settings, serving_dala, until
 from runtime.controller import Controller
-from runtime.services.client import Client
-from runtime.services.server import ServiceServer
 
 GOAL = {"x": 1000.0, "y": 0.0, "theta": 0.0}  # far away: GoTo keeps running until something stops it
 
 
 @pytest.fixture
 def client():
-    pkg = dala()
-    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
-    controller.start()
-    server = ServiceServer(controller).start()
-    yield Client(server.url, timeout=10)
-    server.stop()
-    controller.stop()
-    assert controller.error is None
+    with serving_dala() as (_, _, running_client):
+        yield running_client
 
 
 def running(client, component, service, **inputs):

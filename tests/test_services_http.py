@@ -9,23 +9,14 @@ from collections import Counter
 
 import pytest
 
-from runkit import DALA_CODELS, ORIGIN, dala, navigation_ready, ndd_settings, until
-from runtime.controller import Controller
+from runkit import ORIGIN, navigation_ready, ndd_settings, serving_dala, until
 from runtime.services.client import Client, ServiceError
-from runtime.services.server import ServiceServer
 
 @pytest.fixture
 def ctl():
     """A running DALA controller, its server and a client; stopped after the test."""
-    pkg = dala()
-    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
-    controller.start()
-    server = ServiceServer(controller).start()
-    client = Client(server.url, timeout=10)
-    yield controller, server, client
-    server.stop()
-    controller.stop()
-    assert controller.error is None
+    with serving_dala() as running:
+        yield running
 
 
 def raw(server, method, path, body=None):
