@@ -51,6 +51,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     out.add_argument("--aut", metavar="FILE", help="write the explored LTS in Aldebaran format (CADP, mCRL2)")
     out.add_argument("--dot", metavar="FILE", help="write the explored LTS as a Graphviz graph")
     out.add_argument("--promela", metavar="FILE", help="write the model as Promela (observers of --property included)")
+    out.add_argument("--trace-picture", metavar="FILE",
+                     help="draw the first counterexample (deadlock, violated property, model error) as a sequence "
+                          "diagram: .svg, .png or .dot")
     spin = parser.add_argument_group("SPIN (--engine spin)")
     spin.add_argument("--spin-cores", type=int, default=1, metavar="N", help="SPIN's multi-core search on N cores")
     spin.add_argument("--spin-bitstate", action="store_true", help="bitstate hashing (approximate, little memory)")
@@ -235,6 +238,7 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             print(f"model error in state {result.error.state}: {result.error.message}")
             print("  trace to the state where it happens:")
             print_trace(result.error.trace)
+            _trace_picture(args, space.engine, result.error.trace, [f"model error: {result.error.message}"])
         if deadlock:
             worst = max(worst, _report_deadlocks(space, result, args))
         if not result.complete and worst == EXIT_OK:
@@ -257,6 +261,9 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             print_trace(verdict.trace)
             if verdict.loop >= 0:
                 print(f"    ... and back to the state after step {verdict.loop}, forever")
+            if verdict.holds is False:
+                _trace_picture(args, space.engine, verdict.trace, [f"violates {describe(item)}"]
+                               + ([f"then back to step {verdict.loop}, forever"] if verdict.loop >= 0 else []))
         if verdict.holds is False or verdict.error:
             worst = max(worst, EXIT_VIOLATED)
         elif verdict.holds is None and worst == EXIT_OK:
@@ -276,8 +283,37 @@ def _report_deadlocks(space, result, args) -> int:
         print(f"deadlock {k} of {n} (state {sid}, {len(trace)} steps):")
         print_trace(trace)
         print("  state:")
-        print_state(space.engine, space.concrete(trace))
+        state = space.concrete(trace)
+        print_state(space.engine, state)
+        if k == 1:
+            _trace_picture(args, space.engine, trace, [f"deadlock {k} of {n}: no interaction enabled"]
+                           + moved_atoms(space.engine, space.concrete([]), state))
     return EXIT_VIOLATED
+
+
+def moved_atoms(engine, initial, state, most: int = 10) -> list[str]:
+    """``atom: PLACE`` for the atoms that are not in their initial places (what a deadlock picture shows)."""
+    first = engine.describe_state(initial)
+    now = engine.describe_state(state)
+    moved = [f"{a}: {','.join(v['places']) or '-'}" for a, v in now.items() if v["places"] != first[a]["places"]]
+    return moved[:most] + ([f"… and {len(moved) - most} more atoms"] if len(moved) > most else [])
+
+
+def _trace_picture(args, engine, steps, ending: list[str]) -> None:
+    """Write ``--trace-picture`` once, for the first counterexample found."""
+    path = getattr(args, "trace_picture", None)
+    if not path or getattr(args, "_trace_picture_done", False):
+        return
+    from runtime.pictures import PictureError, render, sequence
+
+    args._trace_picture_done = True
+    try:
+        render(sequence(engine, steps, ending, title=f"counterexample, {len(steps)} steps"), path,
+               fixed_positions=True)
+    except PictureError as exc:
+        error(str(exc))
+        return
+    print(f"wrote {path} (sequence diagram of this trace)")
 
 
 def _export_lts(space, args) -> int:

@@ -145,6 +145,13 @@ class Engine:
             got = cache[mask] = Interaction(mask * len(self.sources) + src_index, src_index, mask, path, self._describe)
         return got
 
+    def interaction(self, index: int) -> Interaction:
+        """The interaction whose ``index`` a trace step recorded (``mask * sources + source``)."""
+        n = len(self.sources)
+        if index < 0 or index % n >= n:
+            raise KeyError(index)
+        return self._make(index % n, index // n)
+
     def _describe(self, inter: Interaction) -> tuple:
         """Ports, label and parts of an interaction, worked out when first asked for."""
         src: Source = self.sources[inter.source]

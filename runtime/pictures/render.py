@@ -1,0 +1,77 @@
+"""Turn DOT text into the file a user asked for: ``.dot`` as is, ``.svg`` and ``.png`` through a layout engine.
+
+The layout engine is Graphviz's ``dot`` when the machine has it, else the
+``graphviz-pure`` command that the ``graphviz-pure`` package installs with
+genom2bip (docs/dependencies.md says why): pictures render on a fresh machine
+set up with the README's commands, without a Debian package.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+FORMATS = (".dot", ".gv", ".svg", ".png")
+
+
+class PictureError(Exception):
+    """A picture that cannot be written: unknown format, no layout engine, or the engine failed."""
+
+
+def layout_command() -> list[str] | None:
+    """The command that lays out DOT text: ``dot``, else ``graphviz-pure``; None when neither is installed."""
+    for name in ("dot", "graphviz-pure"):
+        found = shutil.which(name)
+        if found:
+            return [found]
+    return None
+
+
+def render(text: str, path: str | Path, *, fixed_positions: bool = False) -> Path:
+    """Write ``text`` (DOT) to ``path`` in the format its suffix names; atomic: a failure leaves no file.
+
+    ``fixed_positions`` keeps the ``pos`` of every node (``neato -n2``), for
+    pictures laid out by us, such as sequence diagrams.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in FORMATS:
+        raise PictureError(f"{path}: unknown picture format {suffix or '(none)'!r}; use one of {', '.join(FORMATS)}")
+    if suffix in (".dot", ".gv"):
+        data = text.encode("utf-8")
+    else:
+        command = layout_command()
+        if command is None:
+            raise PictureError(f"{path}: no Graphviz layout engine found: `pip install graphviz-pure` "
+                               "(installed with genom2bip) or the Debian package graphviz; "
+                               "a .dot file needs neither")
+        command += ["-Kneato", "-n2"] if fixed_positions else []
+        try:
+            done = subprocess.run([*command, f"-T{suffix[1:]}"], input=text.encode("utf-8"),
+                                  capture_output=True, timeout=120)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise PictureError(f"{path}: the layout engine {command[0]} failed: {exc}") from None
+        if done.returncode != 0 or not done.stdout:
+            detail = done.stderr.decode("utf-8", "replace").strip().splitlines()
+            raise PictureError(f"{path}: the layout engine {Path(command[0]).name} failed"
+                               + (f": {detail[-1]}" if detail else f" (exit {done.returncode})"))
+        data = done.stdout
+    _write_atomically(path, data)
+    return path
+
+
+def _write_atomically(path: Path, data: bytes) -> None:
+    """Write beside the target, then rename: a reader never sees half a picture."""
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent if str(path.parent) else ".")
+    except OSError as exc:
+        raise PictureError(f"cannot write {path}: {exc.strerror or exc}") from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise PictureError(f"cannot write {path}: {exc.strerror or exc}") from None
