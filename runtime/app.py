@@ -32,9 +32,11 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     return ap
 
 
-def describe(package: Package, root: str) -> str:
-    """Modules with their services, then every atom instance and every connector label of the flat system."""
+def describe(package: Package, root: str, interface: dict | None = None) -> str:
+    """Modules with their services, every atom and connector label, codels, and the links between services."""
     from runtime.engine import flatten
+    from runtime.pictures.outline import outline
+    from runtime.pictures.structure import structure
 
     flat = flatten(package, root)
     services: dict[str, list[str]] = defaultdict(list)
@@ -59,6 +61,7 @@ def describe(package: Package, root: str) -> str:
     specs = codel_specs(package)
     lines.append(f"codels ({len(specs)}):")
     lines += [f"  {s.codel}: {', '.join(s.outcomes)}" for s in specs.values()]
+    lines += outline(structure(flat, interface))
     return "\n".join(lines)
 
 
@@ -74,7 +77,7 @@ def main(package: Package, root: str, argv: list[str] | None = None, prog: str =
 
     args = _parser(prog).parse_args(argv)
     if args.command == "describe":
-        print(describe(package, root))
+        print(describe(package, root, interface))
         return 0
     if args.command == "run":
         from runtime.services.run import run_controller

@@ -148,7 +148,7 @@ class Engine:
     def interaction(self, index: int) -> Interaction:
         """The interaction whose ``index`` a trace step recorded (``mask * sources + source``)."""
         n = len(self.sources)
-        if index < 0 or index % n >= n:
+        if index < 0:
             raise KeyError(index)
         return self._make(index % n, index // n)
 

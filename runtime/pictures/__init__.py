@@ -7,9 +7,10 @@ level and one module, ``automaton`` one atom, ``sequence`` a trace, and
 """
 from runtime.pictures.architecture import functional_level, module
 from runtime.pictures.automaton import automaton
+from runtime.pictures.outline import outline
 from runtime.pictures.render import PictureError, layout_command, render
 from runtime.pictures.sequence import sequence
 from runtime.pictures.structure import Structure, structure
 
-__all__ = ["PictureError", "Structure", "automaton", "functional_level", "layout_command", "module", "render",
+__all__ = ["PictureError", "Structure", "automaton", "functional_level", "layout_command", "module", "outline", "render",
            "sequence", "structure"]

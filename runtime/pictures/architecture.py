@@ -48,7 +48,7 @@ def functional_level(s: Structure) -> str:
         if a == b or link.kind not in ("constraint", "rule", "interrupts"):
             continue
         what = (f"{_service_of(s, link.tail)} interrupts {_service_of(s, link.head)}" if link.kind == "interrupts"
-                else f"{', '.join(link.rules) or link.label}:\n{_service_of(s, link.head)} needs "
+                else f"{', '.join(link.rules) or link.label}:\n{_service_of(s, link.head)} guarded by "
                      f"{_service_of(s, link.tail)}")
         if what not in crossing[(a, b, link.kind)]:
             crossing[(a, b, link.kind)].append(what)

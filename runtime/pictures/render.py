@@ -71,7 +71,15 @@ def _write_atomically(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except OSError as exc:
         Path(tmp).unlink(missing_ok=True)
         raise PictureError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def _umask() -> int:
+    """The process's umask (mkstemp creates files 0600; a picture is as readable as any file the user writes)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

@@ -10,18 +10,17 @@ from typing import Any, Iterable
 
 from runtime.pictures import style
 from runtime.pictures.dot import Dot
+from runtime.pictures.structure import leaves
 
 X0, DX, Y_HEAD, DY = 90, 190, 60, 42
 
 
 def participants(engine: Any, step: Any) -> list[str]:
-    """The ``atom.port`` names an interaction of ``engine`` binds (the initiator first)."""
-    index = getattr(step, "index", None)
-    if index is not None:
-        return list(engine.interaction(index).ports)
-    label = str(step)
-    return [engine.flat.ports[p].path for c in engine.flat.connectors if c.top and c.label == label
-            for alts in c.params for a in alts if hasattr(a, "port") for p in (a.port,)]
+    """The ``atom.port`` names a trace step binds (the initiator first); a bare label stands for its connectors."""
+    if not isinstance(step, str):
+        return list(engine.interaction(step.index).ports)
+    flat = engine.flat
+    return [flat.ports[p].path for c in flat.connectors if c.top and c.label == str(step) for p in leaves(flat, c)]
 
 
 def _lifeline(port_path: str, by: str) -> str:

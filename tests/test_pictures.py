@@ -1,0 +1,283 @@
+"""Pictures: what each diagram draws is checked against the descriptions and rules it comes from."""
+from __future__ import annotations
+
+import re
+import struct
+import subprocess
+import sys
+import zlib
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+from genomkit import engine_for
+
+from genom2bip.back.interface import interface_data
+from genom2bip.cli import main
+from genom2bip.generate import model_of
+from genom2bip.parser import parse_paths
+from genom2bip.rules import GUARD_KINDS, all_rules
+from runtime.diagnostics import Reporter
+from runtime.engine import flatten
+from runtime.explore import StateSpace, explore
+from runtime.pictures import PictureError, automaton, functional_level, module, outline, render, sequence, structure
+
+ROOT = Path(__file__).resolve().parents[1]
+DALA = ROOT / "descriptions" / "dala"
+COUNTER = ROOT / "tests" / "fixtures" / "genom3" / "counter.gen"
+DINING = ROOT / "tests" / "fixtures" / "verify" / "Dining.bip"
+
+EDGE = re.compile(r'^\s*"([^"]+)" -> "([^"]+)"(?: \[(.*)\])?;$')
+NODE = re.compile(r'^\s*"([^"]+)"(?: \[(.*)\])?;$')
+
+
+def edges(dot: str) -> list[tuple[str, str, str]]:
+    """(tail, head, attribute text) of every edge of our DOT output."""
+    return [m.groups(default="") for line in dot.splitlines() if (m := EDGE.match(line))]
+
+
+def nodes(dot: str) -> set[str]:
+    return {m.group(1) for line in dot.splitlines() if (m := NODE.match(line)) and not m.group(1).startswith("legend:")}
+
+
+@lru_cache(maxsize=None)
+def dala():
+    """(description, rules, flat system, structure) of DALA with its rule file."""
+    description = parse_paths(sorted(str(p) for p in DALA.glob("*.gen")))
+    reporter = Reporter()
+    rules = all_rules(description, DALA / "rules.yaml", reporter)
+    assert not reporter.has_errors
+    package, root, _ = model_of(description, "dala", rules)
+    flat = flatten(package, root)
+    return description, rules, flat, structure(flat, interface_data(description, "dala", "descriptions/dala"))
+
+
+# --------------------------------------------------------------------------- functional level
+
+
+def test_functional_level_draws_every_module_poster_and_reader_of_the_descriptions():
+    description, _, _, s = dala()
+    dot = functional_level(s)
+    drawn = edges(dot)
+    writes = {(c.name, p.name) for c in description.components for p in c.ports if p.direction == "out"}
+    assert {(c, f"{c}.{p}") for c, p in writes} <= {(t, h) for t, h, _ in drawn}
+    reads = {(w, p.name, c.name) for c in description.components for p in c.ports if p.direction == "in"
+             for (w, name) in writes if name == p.name and w != c.name}
+    assert reads and {(f"{w}.{p}", r) for w, p, r in reads} <= {(t, h) for t, h, _ in drawn}
+    nddplan = next(a for t, h, a in drawn if (t, h) == ("Aspect.Obs", "NDD"))
+    assert "nddPlan" in nddplan
+    assert {c.name for c in description.components} <= nodes(dot)
+
+
+def test_functional_level_labels_every_cross_module_rule_with_its_id():
+    _, rules, _, s = dala()
+    drawn = edges(functional_level(s))
+    crossing = [r for r in rules if r.kind in GUARD_KINDS for o in r.others if o[0] != r.service[0]]
+    assert crossing
+    for r in crossing:
+        for o in r.others:
+            if o[0] != r.service[0]:
+                assert any(t == o[0] and h == r.service[0] and r.id in a and "#c0392b" in a for t, h, a in drawn), r.id
+    interrupts = {(r.service[0], o[0]) for r in rules if r.kind == "interrupts" for o in r.others
+                  if o[0] != r.service[0]}
+    assert interrupts and all(any((t, h) == pair and "arrowhead=\"tee\"" in a for t, h, a in drawn)
+                              for pair in interrupts)
+
+
+# --------------------------------------------------------------------------- one module
+
+
+def test_module_picture_has_every_atom_of_the_module_and_the_outside_atoms_its_connectors_bind():
+    _, rules, flat, s = dala()
+    dot = module(s, "NDD")
+    mine = {a.name for a in flat.atoms if a.name.startswith("NDD.")}
+    others = {f"{o[0]}.{o[1]}.control" for r in rules if r.service[0] == "NDD" and r.kind in GUARD_KINDS
+              for o in r.others if o[0] != "NDD"}
+    others |= {f"{r.service[0]}.{r.service[1]}.control" for r in rules if r.kind in (*GUARD_KINDS, "interrupts")
+               for o in r.others if o[0] == "NDD" and r.service[0] != "NDD"}
+    assert mine | others == nodes(dot) - {"__initial__"}
+
+
+def test_module_picture_draws_constraints_rules_and_interruptions_distinctly():
+    _, rules, _, s = dala()
+    drawn = edges(module(s, "NDD"))
+    for r in rules:
+        if r.service[0] != "NDD" or r.kind not in GUARD_KINDS or r.on_violation != "reject":
+            continue
+        colour = "#2e8b57" if r.origin == "description" else "#c0392b"
+        for o in r.others:
+            assert any(t == f"{o[0]}.{o[1]}.control" and h == "NDD.GoTo.control" and r.id in a and colour in a
+                       for t, h, a in drawn), (r.id, o)
+    stop = [a for t, h, a in drawn if (t, h) == ("NDD.Stop.control", "NDD.GoTo.activity")]
+    assert len(stop) == 1 and "interrupts" in stop[0] and "tee" in stop[0]
+    assert not any((t, h) == ("NDD.Stop.control", "NDD.GoTo.control") for t, h, _ in drawn)  # cancel goes with abort
+
+
+def test_a_module_of_a_small_description_of_our_own():
+    description = parse_paths([str(COUNTER)])
+    package, root, _ = model_of(description, "counter")
+    flat = flatten(package, root)
+    s = structure(flat, interface_data(description, "counter", str(COUNTER)))
+    name = description.components[0].name
+    dot = module(s, name)
+    assert {a.name for a in flat.atoms} == nodes(dot) - {"__initial__"}
+    services = {f"{name}.{sv.name}" for sv in description.components[0].services}
+    assert services <= set(s.owners.values())
+
+
+# --------------------------------------------------------------------------- one atom
+
+
+def test_automaton_has_the_places_and_transitions_of_the_atom_type():
+    _, _, flat, _ = dala()
+    atom = next(a for a in flat.atoms if a.name == "NDD.GoTo.activity")
+    dot = automaton(flat, atom.name)
+    assert set(atom.type.places) | {"__initial__"} == nodes(dot)
+    drawn = edges(dot)
+    expected = sum(len(t.sources) * len(t.targets) for t in atom.type.transitions) + len(atom.type.initial.targets)
+    assert len(drawn) == expected
+    plan = [a for t, h, a in drawn if (t, h) == ("PLAN", "PLAN_YIELD")]
+    assert plan and "exec_plan" in plan[0] and "nddPlan" in plan[0]
+    assert any(t == "PLAN_YIELD" and h == "ARRIVED" and "yield arrived" in a for t, h, a in drawn)
+    assert any(t == "PLAN_YIELD" and h == "FAILED" for t, h, _ in drawn)
+
+
+def test_unknown_atom_or_module_is_a_key_error():
+    _, _, flat, s = dala()
+    with pytest.raises(KeyError):
+        automaton(flat, "NDD.Nothing.activity")
+    with pytest.raises(KeyError):
+        module(s, "Nothing")
+
+
+# --------------------------------------------------------------------------- traces
+
+
+def test_sequence_diagram_of_a_deadlock_has_one_step_per_interaction_and_the_state_at_the_end():
+    from runtime.bip2 import parse_file
+
+    space = StateSpace(parse_file(str(DINING)), "Table3()")
+    result = explore(space)
+    trace = space.trace_to(result.deadlocks[0])
+    dot = sequence(space.engine, trace, ["deadlock 1 of 1", "p0: ONE"])
+    steps = [n for n in nodes(dot) if re.fullmatch(r"t\d+", n)]
+    assert len(steps) == len(trace) == 3
+    for k, step in enumerate(trace, 1):
+        assert f'"t{k}" [label="{k}. {step}"' in dot
+    heads = {n.split(":", 1)[1] for n in nodes(dot) if n.startswith("head:")}
+    assert heads == {p.rsplit(".", 1)[0] for step in trace for p in space.engine.interaction(step.index).ports}
+    assert "deadlock 1 of 1\\np0: ONE" in dot
+
+
+def test_sequence_lifelines_are_modules_across_modules_and_services_within_one():
+    _, _, flat, _ = dala()
+    engine, _ = engine_for(flat.package, flat.root)
+    dot = sequence(engine, ["RFLEX.servo:period", "NDD.GoTo:trigger"], [])
+    heads = {n.split(":", 1)[1] for n in nodes(dot) if n.startswith("head:")}
+    assert heads == {"RFLEX", "NDD", "POM", "LaserRF", "Aspect"}
+    dot = sequence(engine, ["NDD.SetSpeed:start"], [])
+    assert {n.split(":", 1)[1] for n in nodes(dot) if n.startswith("head:")} == {"NDD.SetSpeed"}
+
+
+# --------------------------------------------------------------------------- the outline
+
+
+def test_describe_outline_lists_flows_interruptions_constraints_and_rules():
+    _, rules, _, s = dala()
+    text = "\n".join(outline(s))
+    assert "Aspect.Obs -> NDD (read by nddPlan)" in text
+    for r in rules:
+        if r.kind == "interrupts":
+            for o in r.others:
+                assert f"{r.service[0]}.{r.service[1]} interrupts {o[0]}.{o[1]}" in text
+        elif r.kind in GUARD_KINDS:
+            for o in r.others:
+                line = f"{r.service[0]}.{r.service[1]} guarded by the status of {o[0]}.{o[1]} ("
+                assert any(x.strip().startswith(line) and r.id in x for x in text.splitlines()), r.id
+
+
+# --------------------------------------------------------------------------- rendering
+
+
+def _png_pixels(data: bytes) -> tuple[int, int, bytes]:
+    """Width, height and the decompressed scanlines of a PNG."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, width, height = 8, b"", 0, 0
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        chunk = data[pos + 8:pos + 8 + length]
+        if kind == b"IHDR":
+            width, height = struct.unpack(">II", chunk[:8])
+        elif kind == b"IDAT":
+            idat += chunk
+        pos += 12 + length
+    return width, height, zlib.decompress(idat)
+
+
+def test_png_of_the_functional_level_is_a_real_picture(tmp_path):
+    out = render(functional_level(dala()[3]), tmp_path / "dala.png")
+    width, height, pixels = _png_pixels(out.read_bytes())
+    assert width > 1000 and height > 300
+    assert len(set(pixels)) > 50  # many colours and shades, not a blank page
+
+
+def test_svg_of_a_module_names_its_services(tmp_path):
+    out = render(module(dala()[3], "NDD"), tmp_path / "ndd.svg")
+    text = out.read_text()
+    assert text.lstrip().startswith("<?xml") or "<svg" in text[:500]
+    for service in ("GoTo", "SetSpeed", "SetParams", "SetDataSource", "Stop", "motion"):
+        assert f">{service}<" in text
+
+
+def test_unknown_format_and_missing_layout_engine_write_nothing(tmp_path, monkeypatch):
+    with pytest.raises(PictureError, match=r"unknown picture format '\.jpeg'"):
+        render("digraph x {}", tmp_path / "x.jpeg")
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    with pytest.raises(PictureError, match="no Graphviz layout engine found: `pip install graphviz-pure`"):
+        render("digraph x {}", tmp_path / "x.png")
+    assert list(tmp_path.iterdir()) == []
+    assert render("digraph x {}", tmp_path / "x.dot").read_text() == "digraph x {}"
+
+
+def test_a_failing_layout_leaves_no_file(tmp_path):
+    with pytest.raises(PictureError, match="layout engine .* failed"):
+        render("digraph { this is not dot", tmp_path / "x.svg")
+    assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- the command line
+
+
+def test_graph_command_writes_each_view(tmp_path, capsys):
+    for args, name in (([], "dala.svg"), (["--module", "POM"], "pom.svg"), (["--atom", "POM.Run.activity"], "run.svg")):
+        assert main(["graph", str(DALA), *args, "-o", str(tmp_path / name)]) == 0
+        assert (tmp_path / name).stat().st_size > 1000
+    assert main(["graph", str(DALA), "--module", "POM"]) == 0
+    assert capsys.readouterr().out.count('"POM.Run.control"') >= 1
+
+
+def test_graph_command_refuses_unknown_names_with_the_nearest_ones(tmp_path, capsys):
+    assert main(["graph", str(DALA), "--module", "NDX", "-o", str(tmp_path / "x.png")]) == 1
+    assert "no module named 'NDX'; did you mean NDD?" in capsys.readouterr().err
+    assert main(["graph", str(DALA), "--atom", "NDD.GoTo.activty", "-o", str(tmp_path / "x.png")]) == 1
+    assert "did you mean NDD.GoTo.activity" in capsys.readouterr().err
+    assert main(["graph", str(DALA), "-o", str(tmp_path / "x.pdf")]) == 1
+    assert "unknown picture format '.pdf'" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_verify_draws_the_counterexample(tmp_path, capsys):
+    out = tmp_path / "cex.svg"
+    assert main(["verify", str(DINING), "--root", "Table3()", "--quiet", "--trace-picture", str(out)]) == 4
+    assert f"wrote {out} (sequence diagram of this trace)" in capsys.readouterr().out
+    text = out.read_text()
+    assert "deadlock 1 of 1: no interaction enabled" in text and "3. left2" in text
+
+
+def test_generated_package_describe_prints_the_outline():
+    result = subprocess.run([sys.executable, "-m", "dala", "describe"], cwd=ROOT / "gen", capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert "data flow (5):" in result.stdout
+    assert "  NDD.Stop interrupts NDD.GoTo" in result.stdout
+    assert "  NDD.GoTo guarded by the status of POM.Run (goto-after-pom-run)" in result.stdout
