@@ -17,6 +17,7 @@ from runtime.engine.externs import bind_externs, guarded_call
 from runtime.engine.flatten import flatten
 from runtime.engine.interaction import Interaction, interaction_label
 from runtime.engine.plan import Source, TreeNode, parts, plan
+from runtime.engine.source import compile_generated
 from runtime.model import Package
 
 State = tuple
@@ -107,7 +108,7 @@ class Engine:
                 ns[f"_I{src.index}_{src.full}"] = self._make(src.index, src.full)
             if src.kind == "generic":
                 ns[f"_S{src.index}"] = src
-        self.code = compile(self.source, f"<bip step: {package.name} {root}>", "exec")
+        self.code = compile_generated(self.source, f"bip step: {package.name} {root}")
         exec(self.code, ns)  # noqa: S102 - our own generated source
         self.namespace = ns
         slots = tuple(p.slots for p in self.flat.ports)

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from runtime.engine.source import compile_generated
 from runtime.explore.choices import ExploreError
 from runtime.explore.layout import Slot
 
@@ -168,7 +169,7 @@ class Codec:
         for k, table in self.tables.items():
             ns[f"_T{k}"] = table
             ns[f"_V{k}"] = table.values
-        exec(compile(self.source, "<explorer codec>", "exec"), ns)  # noqa: S102 - our own generated source
+        exec(compile_generated(self.source, "explorer codec"), ns)  # noqa: S102 - our own generated source
         self.pack = ns["pack"]
         self.unpack = ns["unpack"]
 

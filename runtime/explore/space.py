@@ -18,6 +18,7 @@ from typing import Any, Iterable
 
 from runtime.engine import Engine, Interaction
 from runtime.engine.errors import ExternError, ModelError
+from runtime.engine.source import compile_generated
 from runtime.explore.choices import (
     Environment,
     ExploreError,
@@ -152,7 +153,7 @@ class StateSpace:
               "_oracle": self.oracle, "_enabled": self.engine.step.enabled,
               "_FIRE": self.engine.step.fire, "_calls": self.oracle.calls, "_script": self.oracle.script,
               "_guard": self._guard_error, "_branches": self._branches}
-        exec(compile(self.expand_source, "<explorer successors>", "exec"), ns)  # noqa: S102 - generated here
+        exec(compile_generated(self.expand_source, "explorer successors"), ns)  # noqa: S102 - generated here
         return ns["expand"]
 
     def _guard_error(self) -> None:
