@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
@@ -253,6 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="genom2bip",
         description="GenoM module descriptions to BIP component models: check, generate, run, verify.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
+    parser.add_argument("--traceback", action="store_true",
+                        help="on an internal error, print the whole traceback (also GENOM2BIP_TRACEBACK=1)")
     sub = parser.add_subparsers(dest="verb", metavar="COMMAND")
     sub.required = True
     for v in VERBS.values():
@@ -266,6 +270,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (0 ok, 1 errors in the input, 2 usage, 3 internal error)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    show_traceback = "--traceback" in argv or os.environ.get("GENOM2BIP_TRACEBACK", "") not in ("", "0")
+    argv = [a for a in argv if a != "--traceback"]
     parser = build_parser()
     if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
         if not Path(argv[0]).exists():
@@ -289,8 +295,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return EXIT_OK
-    except Exception as exc:  # noqa: BLE001 - the last resort: one line, never a traceback
+    except Exception as exc:  # noqa: BLE001 - the last resort: one line, the traceback only when asked for
+        if show_traceback:
+            traceback.print_exc()
         print(f"genom2bip: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        if not show_traceback:
+            print("genom2bip: run again with --traceback (or GENOM2BIP_TRACEBACK=1) to see where", file=sys.stderr)
         return EXIT_INTERNAL
 
 

@@ -148,9 +148,31 @@ def test_unexpected_exception_is_one_line(capsys, monkeypatch):
         raise RuntimeError("kaboom")
 
     monkeypatch.setattr(genom2bip.checks, "check_description", boom)
+    monkeypatch.delenv("GENOM2BIP_TRACEBACK", raising=False)
     code, out, err = run(capsys, "check", RFLEX)
     assert code == 3
-    assert err.strip().splitlines() == ["genom2bip: internal error: RuntimeError: kaboom"]
+    assert err.strip().splitlines() == ["genom2bip: internal error: RuntimeError: kaboom",
+                                        "genom2bip: run again with --traceback (or GENOM2BIP_TRACEBACK=1) to see where"]
+
+
+@pytest.mark.parametrize("how", ["option", "environment"])
+def test_traceback_on_request_shows_where_an_unexpected_exception_came_from(capsys, monkeypatch, how):
+    import genom2bip.checks
+
+    def boom(description, reporter):
+        raise RuntimeError("kaboom")
+
+    monkeypatch.setattr(genom2bip.checks, "check_description", boom)
+    if how == "option":
+        monkeypatch.delenv("GENOM2BIP_TRACEBACK", raising=False)
+        code, out, err = run(capsys, "--traceback", "check", RFLEX)
+    else:
+        monkeypatch.setenv("GENOM2BIP_TRACEBACK", "1")
+        code, out, err = run(capsys, "check", RFLEX)
+    assert code == 3
+    assert err.startswith("Traceback (most recent call last):")
+    assert 'in boom\n    raise RuntimeError("kaboom")' in err
+    assert err.strip().splitlines()[-1] == "genom2bip: internal error: RuntimeError: kaboom"
 
 
 def test_verbs_are_one_function_each():
