@@ -233,7 +233,8 @@ def verb_generate(args: argparse.Namespace) -> int:
     system = args.name or system_name(args.paths)
     sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
     try:
-        result = generate(description, system, Path(args.output), sources, version(), rules)
+        inputs = [*args.paths, *args.include_dirs, *([str(rules_file(args))] if rules_file(args) else [])]
+        result = generate(description, system, Path(args.output), sources, version(), rules, inputs)
     except GenerateError as exc:
         error(str(exc))
         return EXIT_ERRORS
@@ -242,6 +243,11 @@ def verb_generate(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "
           f"{len(result.package.atom_types)} atom types, {len(result.package.connector_types)} connector types")
+    if result.kept:
+        print(f"kept in {result.directory}/, not written by genom2bip: {', '.join(result.kept)}")
+    for path in result.leftovers:
+        print(f"genom2bip: warning: {path}/ was left by an interrupted run and holds files genom2bip did not "
+              f"write; it is kept", file=sys.stderr)
     return EXIT_OK
 
 

@@ -184,3 +184,166 @@ def test_golden_controllers_run_without_model_error(name):
     externs.update(any_request())
     summary = Engine(package, f"{name.upper()}()", externs).run(RandomPolicy(7), limit=800)
     assert (summary.outcome, summary.steps) == ("limit", 800), summary.message
+
+
+# --------------------------------------------------------------------------- only genom2bip's own output is replaced
+
+COUNTER = ROOT / "tests/fixtures/genom3/counter.gen"
+
+
+def test_output_that_is_an_input_directory_is_refused(tmp_path, capsys):
+    import shutil
+
+    shutil.copytree(ROOT / "descriptions" / "dala", tmp_path / "descriptions" / "dala")
+    before = _snapshot(tmp_path)
+    assert main([str(tmp_path / "descriptions" / "dala"), "-o", str(tmp_path / "descriptions")]) == 1
+    err = capsys.readouterr().err
+    assert (f"genom2bip: error: refusing to write {tmp_path}/descriptions/dala: it is the input "
+            f"{tmp_path}/descriptions/dala; choose another -o DIR") in err
+    assert _snapshot(tmp_path) == before
+
+
+def test_output_that_contains_an_input_file_is_refused(tmp_path, capsys):
+    (tmp_path / "out" / "counter").mkdir(parents=True)
+    source = tmp_path / "out" / "counter" / "counter.gen"
+    source.write_bytes(COUNTER.read_bytes())
+    before = _snapshot(tmp_path)
+    assert main([str(source), "-o", str(tmp_path / "out")]) == 1
+    assert f"refusing to write {tmp_path}/out/counter: it contains the input {source}" in capsys.readouterr().err
+    assert _snapshot(tmp_path) == before
+
+
+def test_a_directory_genom2bip_did_not_write_is_not_replaced(tmp_path, capsys):
+    mine = tmp_path / "out" / "counter"
+    mine.mkdir(parents=True)
+    (mine / "thesis.tex").write_text("three years of work")
+    before = _snapshot(tmp_path)
+    assert main([str(COUNTER), "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err
+    assert f"refusing to replace {mine}/: genom2bip did not write it (no .genom2bip marker)" in err
+    assert _snapshot(tmp_path) == before
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["counter"]
+
+
+def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    target = out / "counter"
+    marker = (target / ".genom2bip").read_text()
+    assert "counter.bip" in marker and "model.py" in marker
+    (target / "notes.txt").write_text("my notes")
+    (target / "__pycache__").mkdir()
+    (target / "__pycache__" / "model.cpython.pyc").write_bytes(b"cache")
+    (target / "model.py").unlink()  # a generated file deleted by hand comes back
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    assert "kept in" in capsys.readouterr().out
+    assert (target / "notes.txt").read_text() == "my notes"
+    assert (target / "__pycache__" / "model.cpython.pyc").read_bytes() == b"cache"
+    assert (target / "model.py").is_file()
+    assert (target / ".genom2bip").read_text() == marker
+    assert sorted(p.name for p in out.iterdir()) == ["counter"], "staging or old directories left behind"
+
+
+def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    with open(out / "counter" / "model.py", "a") as f:
+        f.write("# my fix\n")
+    before = _snapshot(tmp_path)
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert (f"refusing to replace {out}/counter/: model.py changed since genom2bip wrote it; "
+            f"move it away to regenerate") in capsys.readouterr().err
+    assert _snapshot(tmp_path) == before
+
+
+def test_a_users_file_named_like_a_new_generated_file_is_not_overwritten(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    marker = out / "counter" / ".genom2bip"
+    marker.write_text("".join(line + "\n" for line in marker.read_text().splitlines() if "interface.py" not in line))
+    (out / "counter" / "interface.py").write_text("mine")
+    before = _snapshot(tmp_path)
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert "interface.py would be overwritten, and genom2bip did not write it" in capsys.readouterr().err
+    assert _snapshot(tmp_path) == before
+
+
+def test_a_symbolic_link_in_place_of_the_output_is_refused(tmp_path, capsys):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "data").write_text("precious")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "counter").symlink_to(elsewhere)
+    assert main([str(COUNTER), "-o", str(tmp_path / "out")]) == 1
+    assert "it is a symbolic link; genom2bip replaces only a directory it wrote itself" in capsys.readouterr().err
+    assert (tmp_path / "out" / "counter").is_symlink()
+    assert sorted(p.name for p in elsewhere.iterdir()) == ["data"]
+
+
+def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    victim = tmp_path / "victim.txt"
+    victim.write_text("not yours")
+    (out / "counter" / "model.py").unlink()
+    (out / "counter" / "model.py").symlink_to(victim)
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert "model.py changed since genom2bip wrote it" in capsys.readouterr().err
+    assert victim.read_text() == "not yours"
+
+
+def test_what_a_killed_run_left_is_cleared_only_when_it_is_all_generated(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    # A run killed after writing its staging directory, and one killed while moving a user's file back.
+    import shutil
+
+    shutil.copytree(out / "counter", out / ".counter.new.abc12345")
+    shutil.copytree(out / "counter", out / ".counter.old.def67890")
+    (out / ".counter.old.def67890" / "notes.txt").write_text("my notes")
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"warning: {out}/.counter.old.def67890/ was left by an interrupted run" in err
+    assert sorted(p.name for p in out.iterdir()) == [".counter.old.def67890", "counter"]
+    assert sorted(p.name for p in (out / ".counter.old.def67890").iterdir()) == ["notes.txt"]
+
+
+def test_an_interrupted_write_leaves_the_previous_output_and_no_staging_directory(tmp_path, monkeypatch):
+    from genom2bip import generate as gen
+    from genom2bip.parser import parse_paths
+
+    description = parse_paths([COUNTER])
+    gen.generate(description, "counter", tmp_path, "counter.gen", "0")
+    (tmp_path / "counter" / "notes.txt").write_text("my notes")
+    before = _snapshot(tmp_path)
+    real = Path.rename
+
+    def interrupted(self, target):
+        if ".new." in self.name:
+            raise KeyboardInterrupt
+        return real(self, target)
+
+    monkeypatch.setattr(Path, "rename", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        gen.generate(description, "counter", tmp_path, "counter.gen", "0")
+    monkeypatch.undo()
+    assert _snapshot(tmp_path) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["counter"]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes anywhere")
+def test_a_read_only_output_directory_is_an_error(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    out.chmod(0o555)
+    try:
+        assert main([str(COUNTER), "-o", str(out)]) == 1
+    finally:
+        out.chmod(0o755)
+    assert f"cannot write {out}: Permission denied" in capsys.readouterr().err
+    assert list(out.iterdir()) == []
