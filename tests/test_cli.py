@@ -166,3 +166,20 @@ def test_the_installed_command_never_prints_a_traceback(tmp_path):
     assert proc.returncode == 1
     assert "Traceback" not in proc.stderr
     assert "bad.gen:5:" in proc.stderr
+
+
+@pytest.mark.parametrize("option", ["--property", "--rules", None])
+def test_binary_input_files_are_input_errors_not_internal_ones(tmp_path, capsys, option):
+    binary = b"\x7fELF\x02\x01\x01\x00\xff\xfe\n"
+    if option is None:
+        path = tmp_path / "M.bip"
+        argv = ["verify", path]
+    else:
+        path = tmp_path / ("p.mcl" if option == "--property" else "rules.yaml")
+        argv = ["verify", DALA / "NDD.gen", option, path, "--max-states", "10"]
+    path.write_bytes(binary)
+    code, out, err = run(capsys, *argv)
+    assert code == 1, err
+    assert err.startswith(f"{path}:1:9: error: not a UTF-8 text file: byte 0xff cannot be read\n"), err
+    assert "internal error" not in err and "Traceback" not in err
+    assert path.read_bytes() == binary

@@ -133,3 +133,15 @@ def test_errors_render_with_the_line_and_a_caret():
         '    mu X. <"S.req"> Y',
         "                    ^",
     ]
+
+
+def test_a_binary_property_file_is_located(tmp_path):
+    from runtime.props import read_property_file
+
+    bad = tmp_path / "bad.mcl"
+    bad.write_bytes(b'[ true* ] true;\n-- r\xe9sum\xe9\n')
+    with pytest.raises(DiagnosticError) as info:
+        read_property_file(bad, flatten(package("Server"), "Main()"))
+    [d] = info.value.diagnostics
+    assert (str(d.span), d.message) == (f"{bad}:2:5", "not a UTF-8 text file: byte 0xe9 cannot be read")
+    assert "    -- r\ufffdsum\ufffd\n        ^" in info.value.render()

@@ -45,6 +45,7 @@ from runtime.props.safety import automaton, search
 from runtime.props.solver import Solver
 from runtime.props.syntax import parse_properties
 from runtime.props.typing import type_properties
+from runtime.textfile import read_text
 
 
 @dataclass
@@ -171,11 +172,7 @@ def _label_hint(leaf, labels: list[str]) -> str | None:
 
 
 def read_property_file(path: str | Path, flat: FlatSystem | None = None) -> tuple[list[Checkable], list[Diagnostic]]:
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as err:
-        raise DiagnosticError([Diagnostic(Span(str(path), 0, 0), f"cannot read the property file: "
-                                                                   f"{err.strerror or err}")]) from None
+    text = read_text(path, "property file")
     return read_properties(text, str(path), flat)
 
 
