@@ -25,6 +25,7 @@ from genom2bip.build.functional import FunctionalLevel
 from genom2bip.build.names import ident
 from genom2bip.output import OutputError, write_tree
 from genom2bip.rules import Rule
+from genom2bip.summary import no_component
 from runtime.bip2 import validate
 from runtime.model import Package
 
@@ -59,6 +60,8 @@ def model_of(description: ir.Description, system: str,
     ``rules`` are the description's constraints plus a rule file's
     (genom2bip.rules.all_rules); by default the description's alone.
     """
+    if not description.components:
+        raise GenerateError(no_component(description) + "; a model needs at least one component (or module)")
     level = FunctionalLevel(description, system, rules)
     package = level.build()
     problems = validate(package)
