@@ -122,6 +122,7 @@ class _Build(Transformer):
     var = _unary_rule("var")
     label = _unary_rule("label")
     regex = _unary_rule("regex")
+    optional = _unary_rule("optional")
 
     @v_args(meta=True)
     def fix(self, meta, items):
