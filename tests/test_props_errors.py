@@ -181,3 +181,16 @@ def test_verify_stops_on_a_misspelt_label_instead_of_saying_holds(tmp_path, caps
                           '              ^^^^^^^^^^^^^^^\n'
                           '    hint: nearest labels: "NDD.Stop:start", "NDD.GoTo:start", "NDD.SetSpeed:start". '
                           'If matching nothing is intended, write optional "NDD.Fly:start"\n')
+
+
+@pytest.mark.parametrize("text,where", [
+    ("(* open\n[ true* ] true\n", "bad.mcl:1:1"),
+    ('-- a (* in a line comment\n[ true* ] true; (* closed *) <"S.req"> true; (* the rest\n"x"', "bad.mcl:2:46"),
+])
+def test_an_unclosed_comment_is_named_where_it_opens(text, where):
+    assert one(text) == (where, "unterminated comment: this '(*' is never closed by '*)'")
+
+
+def test_comment_markers_inside_labels_are_not_comments():
+    where, message = one('<"S.req"> true; <"(*"> true')
+    assert (where, message) == ("bad.mcl:1:18", '"(*" matches no interaction label of the model')
