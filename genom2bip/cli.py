@@ -92,6 +92,9 @@ def description_files(paths: Sequence[str]) -> list[Path]:
                 error(f"{raw}: no {'/'.join(DESCRIPTION_SUFFIXES)} file in this directory")
                 missing.append(raw)
             files.extend(found)
+        elif path.exists() and not path.is_file():
+            error(f"{raw}: not a regular file (a device or a pipe cannot be read as a description)")
+            missing.append(raw)
         elif path.exists():
             files.append(path)
         else:
@@ -228,6 +231,9 @@ def verb_generate(args: argparse.Namespace) -> int:
     """Parse, check, build the BIP model and write ``<output>/<system>/`` atomically."""
     from genom2bip.generate import GenerateError, generate, system_name
 
+    if not args.output:
+        error("-o: give a directory (an empty name would write into the current directory)")
+        return EXIT_USAGE
     description = load(args)
     rules = load_rules(args, description)
     system = args.name or system_name(args.paths)

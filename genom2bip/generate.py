@@ -53,6 +53,23 @@ def system_name(paths: list[str]) -> str:
     return first.stem if first.suffix else first.name
 
 
+def package_name(system: str) -> str:
+    """The generated Python package's name; refused when importing it would be a syntax error or hide a module.
+
+    ``python -m <name>`` puts the output directory first on ``sys.path``: a package named ``runtime`` or
+    ``json`` would then be imported in place of the module the controller needs.
+    """
+    import keyword
+    import sys
+
+    name = ident(system.lower())
+    if keyword.iskeyword(name) or name in ("runtime", "genom2bip") or name in sys.stdlib_module_names:
+        why = "a Python keyword" if keyword.iskeyword(name) else "the name of a module the controller imports"
+        raise GenerateError(f"the system name '{system}' gives the Python package '{name}', {why}; "
+                            f"choose another with --name")
+    return name
+
+
 def model_of(description: ir.Description, system: str,
              rules: list[Rule] | None = None) -> tuple[Package, str, dict[str, str]]:
     """The package, its root instance and one line of documentation per type.
@@ -158,8 +175,8 @@ def generate(description: ir.Description, system: str, out: Path, sources: str, 
 
     ``inputs`` are the paths read (default: the description's files): the output may not be or contain one.
     """
-    name = ident(system.lower())
     package, root, docs = model_of(description, system, rules)
+    name = package_name(system)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
     files.update(python_files(package, root, docs, name, title, sources, version,

@@ -30,9 +30,14 @@ class OutputError(Exception):
     """The output directory cannot be written safely; nothing was changed."""
 
 
-def marker_text(files: dict[str, str]) -> str:
-    """The marker for a directory holding exactly ``files`` (name → text), sorted so that output is deterministic."""
-    lines = [f"{_digest(text.encode('utf-8'))}  {name}\n" for name, text in sorted(files.items())]
+def encode(text: str) -> bytes:
+    """UTF-8; a file name that is not UTF-8 (a surrogate escape) is written as ``\\xff`` rather than failing."""
+    return text.encode("utf-8", "backslashreplace")
+
+
+def marker_text(files: dict[str, bytes]) -> str:
+    """The marker for a directory holding exactly ``files`` (name → bytes), sorted so that output is deterministic."""
+    lines = [f"{_digest(data)}  {name}\n" for name, data in sorted(files.items())]
     return _HEADER + "".join(lines)
 
 
@@ -157,27 +162,28 @@ class Written:
 def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) -> Written:
     """Write ``files`` as ``<out>/<name>/`` atomically, with the marker; refuses (OutputError) what is unsafe."""
     target = out / name
+    data = {file_name: encode(text) for file_name, text in files.items()}
     if os.path.lexists(out) and not out.is_dir():
         raise OutputError(f"cannot write {out}: it is a file, not a directory")
     check_inputs(target, inputs)
     kept = kept_entries(target, files)
     out.mkdir(parents=True, exist_ok=True)
     remaining = leftovers(out, name)
-    marker = marker_text(files)
+    marker = encode(marker_text(data))
     staging = Path(tempfile.mkdtemp(prefix=f".{name}.new.", dir=out))
     try:
         # The marker goes first: a staging directory left by a killed run is then recognised and cleared.
-        (staging / MARKER).write_text(marker, encoding="utf-8")
-        for file_name, text in files.items():
-            (staging / file_name).write_text(text, encoding="utf-8")
+        (staging / MARKER).write_bytes(marker)
+        for file_name, content in data.items():
+            (staging / file_name).write_bytes(content)
         if os.path.lexists(target):
             _swap(staging, target, kept)
         else:
             staging.rename(target)
     except BaseException:
         if staging.is_dir():
-            own = {f: _digest(t.encode("utf-8")) for f, t in files.items()}
-            _remove_own(staging, {**own, MARKER: _digest(marker.encode("utf-8"))})
+            own = {f: _digest(content) for f, content in data.items()}
+            _remove_own(staging, {**own, MARKER: _digest(marker)})
         raise
     return Written(target, kept, remaining)
 

@@ -26,6 +26,8 @@ def decode_error(file: str, data: bytes, err: UnicodeDecodeError) -> Diagnostic:
 def read_text(path: str | Path, what: str) -> str:
     """The text of ``path``; a DiagnosticError naming ``what`` (e.g. "rule file") when it cannot be read as UTF-8."""
     file = str(path)
+    if Path(path).exists() and not Path(path).is_file():
+        raise DiagnosticError([Diagnostic(Span(file, 0, 0), f"cannot read the {what}: not a regular file")])
     try:
         data = Path(path).read_bytes()
     except OSError as err:

@@ -171,7 +171,7 @@ def test_failure_while_writing_keeps_the_previous_output(tmp_path, monkeypatch):
     def broken(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(Path, "write_text", broken)
+    monkeypatch.setattr(Path, "write_bytes", broken)
     with pytest.raises(OSError):
         gen.generate(description, "counter", tmp_path, "counter.gen", "0")
     monkeypatch.undo()
@@ -352,3 +352,56 @@ def test_a_read_only_output_directory_is_an_error(tmp_path, capsys):
         out.chmod(0o755)
     assert f"cannot write {out}: Permission denied" in capsys.readouterr().err
     assert list(out.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- odd names and paths
+
+
+@pytest.mark.parametrize("name,why", [
+    ("class", "a Python keyword"),
+    ("runtime", "the name of a module the controller imports"),
+    ("json", "the name of a module the controller imports"),
+])
+def test_a_system_name_that_cannot_be_a_package_is_refused(tmp_path, capsys, name, why):
+    assert main([str(COUNTER), "-o", str(tmp_path / "out"), "--name", name]) == 1
+    assert (f"genom2bip: error: the system name '{name}' gives the Python package '{name}', {why}; "
+            f"choose another with --name") in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_system_name_with_path_characters_stays_inside_the_output(tmp_path, capsys):
+    out = tmp_path / "deep" / "out"
+    assert main([str(COUNTER), "-o", str(out), "--name", "../../escape me"]) == 0
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_dir()) == ["______escape_me", "deep", "out"]
+
+
+def test_an_empty_output_name_is_a_usage_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main([str(COUNTER), "-o", ""]) == 2
+    assert "-o: give a directory (an empty name would write into the current directory)" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_paths_that_are_not_utf8_or_have_spaces_are_written_and_run(tmp_path, capsys):
+    source = tmp_path / "odd dir é" / os.fsdecode(b"my robot\xff.gen")
+    source.parent.mkdir()
+    source.write_bytes(COUNTER.read_bytes())
+    out = tmp_path / "out ü"
+    assert main([str(source), "-o", str(out)]) == 0, capsys.readouterr().err
+    package = out / "my_robot_"
+    assert "my robot\\udcff.gen" in (package / "__init__.py").read_text()
+    result = subprocess.run([sys.executable, "-m", "my_robot_", "describe"], cwd=out, capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == 0 and "counter: GetTicks, SetRunning" in result.stdout, result.stderr
+
+
+def test_a_pipe_given_as_a_description_is_refused_without_reading_it(tmp_path):
+    fifo = tmp_path / "pipe.gen"
+    os.mkfifo(fifo)
+    # In a subprocess with a timeout: reading the pipe would wait for a writer forever.
+    for argv, message in ((["check", fifo], f"genom2bip: error: {fifo}: not a regular file"),
+                          (["verify", COUNTER, "--property", fifo],
+                           f"{fifo}:0:0: error: cannot read the property file: not a regular file")):
+        result = subprocess.run([sys.executable, "-m", "genom2bip", *map(str, argv)], capture_output=True, text=True,
+                                timeout=60, cwd=ROOT)
+        assert (result.returncode, result.stdout) == (1, "") and message in result.stderr
