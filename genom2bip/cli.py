@@ -94,6 +94,9 @@ def description_files(paths: Sequence[str]) -> list[Path]:
                 error(f"{raw}: no {'/'.join(DESCRIPTION_SUFFIXES)} file in this directory")
                 missing.append(raw)
             files.extend(found)
+        elif path.exists() and not path.is_file():
+            error(f"{raw}: not a regular file (a device or a pipe cannot be read as a description)")
+            missing.append(raw)
         elif path.exists():
             files.append(path)
         else:
@@ -230,12 +233,16 @@ def verb_generate(args: argparse.Namespace) -> int:
     """Parse, check, build the BIP model and write ``<output>/<system>/`` atomically."""
     from genom2bip.generate import GenerateError, generate, system_name
 
+    if not args.output:
+        error("-o: give a directory (an empty name would write into the current directory)")
+        return EXIT_USAGE
     description = load(args)
     rules = load_rules(args, description)
     system = args.name or system_name(args.paths)
     sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
     try:
-        result = generate(description, system, Path(args.output), sources, version(), rules)
+        inputs = [*args.paths, *args.include_dirs, *([str(rules_file(args))] if rules_file(args) else [])]
+        result = generate(description, system, Path(args.output), sources, version(), rules, inputs)
     except GenerateError as exc:
         error(str(exc))
         return EXIT_ERRORS
@@ -244,6 +251,11 @@ def verb_generate(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "
           f"{len(result.package.atom_types)} atom types, {len(result.package.connector_types)} connector types")
+    if result.kept:
+        print(f"kept in {result.directory}/, not written by genom2bip: {', '.join(result.kept)}")
+    for path in result.leftovers:
+        print(f"genom2bip: warning: {path}/ was left by an interrupted run and holds files genom2bip did not "
+              f"write; it is kept", file=sys.stderr)
     return EXIT_OK
 
 

@@ -5,14 +5,14 @@ whole functional level) and a Python package that imports only ``runtime``
 (``__init__.py``, ``__main__.py``, ``model.py``, and ``interface.py``: the
 data the runtime needs to call codels and serve requests).  Everything is written into
 a fresh temporary directory first and swapped in at the end, so an error at
-any point leaves the output directory as it was.  The output is
+any point leaves the output directory as it was; only a directory that
+genom2bip wrote itself (its ``.genom2bip`` marker says so) is ever replaced,
+and files it did not write are kept (genom2bip.output).  The output is
 deterministic: same descriptions, same bytes.
 """
 from __future__ import annotations
 
-import shutil
-import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
@@ -23,7 +23,9 @@ from genom2bip.back.interface import interface_data, literal
 from genom2bip.back.pysource import constructor
 from genom2bip.build.functional import FunctionalLevel
 from genom2bip.build.names import ident
+from genom2bip.output import OutputError, write_tree
 from genom2bip.rules import Rule
+from genom2bip.summary import no_component
 from runtime.bip2 import validate
 from runtime.model import Package
 
@@ -41,12 +43,31 @@ class Generated:
     files: list[Path]
     package: Package
     root: str
+    kept: list[str] = field(default_factory=list)  # entries of the previous output that were carried over
+    leftovers: list[Path] = field(default_factory=list)  # an interrupted run's directories, kept: not all ours
 
 
 def system_name(paths: list[str]) -> str:
     """The system is named after the first path: ``descriptions/dala`` → ``dala``, ``x/NDD.gen`` → ``NDD``."""
     first = Path(paths[0])
     return first.stem if first.suffix else first.name
+
+
+def package_name(system: str) -> str:
+    """The generated Python package's name; refused when importing it would be a syntax error or hide a module.
+
+    ``python -m <name>`` puts the output directory first on ``sys.path``: a package named ``runtime`` or
+    ``json`` would then be imported in place of the module the controller needs.
+    """
+    import keyword
+    import sys
+
+    name = ident(system.lower())
+    if keyword.iskeyword(name) or name in ("runtime", "genom2bip") or name in sys.stdlib_module_names:
+        why = "a Python keyword" if keyword.iskeyword(name) else "the name of a module the controller imports"
+        raise GenerateError(f"the system name '{system}' gives the Python package '{name}', {why}; "
+                            f"choose another with --name")
+    return name
 
 
 def model_of(description: ir.Description, system: str,
@@ -56,6 +77,8 @@ def model_of(description: ir.Description, system: str,
     ``rules`` are the description's constraints plus a rule file's
     (genom2bip.rules.all_rules); by default the description's alone.
     """
+    if not description.components:
+        raise GenerateError(no_component(description) + "; a model needs at least one component (or module)")
     level = FunctionalLevel(description, system, rules)
     package = level.build()
     problems = validate(package)
@@ -147,35 +170,21 @@ def _classes(obj) -> set[str]:
 
 
 def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,
-             rules: list[Rule] | None = None) -> Generated:
-    """Write ``<out>/<system>/`` atomically; returns what was written."""
-    name = ident(system.lower())
+             rules: list[Rule] | None = None, inputs: list[str] | None = None) -> Generated:
+    """Write ``<out>/<system>/`` atomically (genom2bip.output); returns what was written.
+
+    ``inputs`` are the paths read (default: the description's files): the output may not be or contain one.
+    """
     package, root, docs = model_of(description, system, rules)
+    name = package_name(system)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
     files.update(python_files(package, root, docs, name, title, sources, version,
                               interface_data(description, system, sources)))
 
-    out.mkdir(parents=True, exist_ok=True)
-    target = out / name
-    staging = Path(tempfile.mkdtemp(prefix=f".{name}.", dir=out))
     try:
-        for file_name, text in files.items():
-            (staging / file_name).write_text(text, encoding="utf-8")
-        old = None
-        if target.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{name}.old.", dir=out))
-            old.rmdir()
-            target.rename(old)
-        try:
-            staging.rename(target)
-        except BaseException:
-            if old is not None:
-                old.rename(target)
-            raise
-        if old is not None:
-            shutil.rmtree(old)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    return Generated(system, target, [target / f for f in files], package, root)
+        written = write_tree(files, out, name, [Path(p) for p in (inputs if inputs is not None else description.files)])
+    except OutputError as exc:
+        raise GenerateError(str(exc)) from None
+    return Generated(system, written.directory, [written.directory / f for f in files], package, root,
+                     written.kept, written.leftovers)

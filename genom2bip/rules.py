@@ -30,7 +30,8 @@ import networkx as nx
 import yaml
 
 from genom2bip import ir
-from runtime.diagnostics import NOWHERE, Reporter, SourceCache, Span
+from runtime.diagnostics import NOWHERE, DiagnosticError, Reporter, SourceCache, Span
+from runtime.textfile import read_text
 
 Ref = tuple[str, str]  # (component, service)
 
@@ -269,9 +270,9 @@ def load_rules(path: Path, description: ir.Description, reporter: Reporter) -> l
     """Read and check a rule file against the description; problems go to ``reporter``."""
     sources: SourceCache = reporter.sources
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        reporter.error(Span(str(path), 0, 0), f"cannot read rule file: {exc.strerror or exc}")
+        text = read_text(path, "rule file")
+    except DiagnosticError as exc:
+        reporter.diagnostics.extend(exc.diagnostics)
         return []
     sources.add(str(path), text)
     reader = _Reader(str(path), description, reporter)

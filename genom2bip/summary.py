@@ -140,5 +140,16 @@ def component_summary(comp: Component) -> str:
 
 
 def description_summary(description: Description) -> str:
-    """Every component's summary, separated by blank lines."""
+    """Every component's summary, separated by blank lines; a description of types only says so."""
+    if not description.components:
+        return no_component(description) + " (nothing to generate, run or verify)"
     return "\n\n".join(component_summary(c) for c in description.components)
+
+
+def no_component(description: Description) -> str:
+    """``no component in a.gen: 2 types, 1 constant``: what a description without any component holds."""
+    files = ", ".join(description.files) or "the description"
+    counts = [(len(description.types), "type"), (len(description.constants), "constant"),
+              (len(description.exceptions), "exception"), (len(description.interfaces), "interface")]
+    held = ", ".join(f"{n} {word}{'s' if n != 1 else ''}" for n, word in counts if n)
+    return f"no component in {files}" + (f": {held} only" if held else ": the file is empty")

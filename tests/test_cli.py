@@ -188,3 +188,41 @@ def test_the_installed_command_never_prints_a_traceback(tmp_path):
     assert proc.returncode == 1
     assert "Traceback" not in proc.stderr
     assert "bad.gen:5:" in proc.stderr
+
+
+@pytest.mark.parametrize("option", ["--property", "--rules", None])
+def test_binary_input_files_are_input_errors_not_internal_ones(tmp_path, capsys, option):
+    binary = b"\x7fELF\x02\x01\x01\x00\xff\xfe\n"
+    if option is None:
+        path = tmp_path / "M.bip"
+        argv = ["verify", path]
+    else:
+        path = tmp_path / ("p.mcl" if option == "--property" else "rules.yaml")
+        argv = ["verify", DALA / "NDD.gen", option, path, "--max-states", "10"]
+    path.write_bytes(binary)
+    code, out, err = run(capsys, *argv)
+    assert code == 1, err
+    assert err.startswith(f"{path}:1:9: error: not a UTF-8 text file: byte 0xff cannot be read\n"), err
+    assert "internal error" not in err and "Traceback" not in err
+    assert path.read_bytes() == binary
+
+
+@pytest.mark.parametrize("text,held", [
+    ("struct s { long a; };\nconst long N = 3;\n", "1 type, 1 constant only"),  # GenoM3 IDL
+    ("#define MAX 3\ntypedef struct S { long a[MAX]; } S_t;\n", "2 types only"),  # typedef, preprocessor
+    ("/* a description still to be written */\n", "the file is empty"),
+    ("", "the file is empty"),
+])
+def test_a_file_without_component_is_accepted_by_check_and_refused_by_generate(tmp_path, capsys, text, held):
+    gen = tmp_path / "types.gen"
+    gen.write_text(text)
+    code, out, err = run(capsys, "check", gen)
+    assert (code, out, err) == (0, f"no component in {gen}: {held} (nothing to generate, run or verify)\n", "")
+    out_dir = tmp_path / "out"
+    for argv in ([gen, "-o", out_dir], ["verify", gen]):
+        code, out, err = run(capsys, *argv)
+        assert code == 1
+        assert err == (f"genom2bip: error: no component in {gen}: {held}; a model needs at least one component "
+                       f"(or module)\n")
+        assert "generator bug" not in err
+    assert not out_dir.exists()

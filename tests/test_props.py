@@ -5,6 +5,7 @@ back to IDLE); from DONE it replies (S.reply, back to IDLE, served = (served + 1
 """
 import pytest
 
+from runtime.diagnostics import DiagnosticError
 from runtime.engine import flatten
 from runtime.explore import StateSpace
 from runtime.props import check, read_properties
@@ -31,7 +32,7 @@ def holds(text: str) -> bool:
     ('<"S.r*"> true', True),  # wildcard
     ('<"S.?eq"> true', True),
     ("<'S\\.r.q'> true", True),  # regular expression, whole label
-    ("<'r.q'> true", False),  # a regex must match the whole label
+    ("<optional 'r.q'> true", False),  # a regex must match the whole label
     ('<not "req"> true', False),
     ('<not "work"> true', True),
     ('<"req" and "S.req"> true', True),
@@ -152,7 +153,7 @@ def test_counterexample_of_a_greatest_fixed_point():
 def test_universal_answers_show_no_single_path():
     v = verdict("nu X. <true> true and [true] X")
     assert v.holds and v.trace == []
-    v = verdict('mu X. <"nothing"> true or <true> X')
+    v = verdict('mu X. <optional "nothing"> true or <true> X')
     assert v.holds is False and v.trace == [] and "no path" in v.note
 
 
@@ -165,12 +166,16 @@ def test_several_properties_per_file_with_names():
     assert warnings == []
 
 
-def test_label_matching_no_interaction_is_a_warning():
-    pkg = package("Server")
-    (item,), warnings = read_properties('never "S.rpely"', "f.mcl", flatten(pkg, "Main()"))
-    (w,) = warnings
-    assert w.severity == "warning" and "matches no interaction label" in w.message
-    assert str(w.span) == "f.mcl:1:7" and w.hint == 'did you mean "S.reply"?'
+def test_label_matching_no_interaction_is_an_error_unless_optional():
+    flat = flatten(package("Server"), "Main()")
+    with pytest.raises(DiagnosticError) as info:
+        read_properties('never "S.rpely"', "f.mcl", flat)
+    (e,) = info.value.diagnostics
+    assert (e.severity, str(e.span), e.message) == ("error", "f.mcl:1:7", '"S.rpely" matches no interaction label '
+                                                                           "of the model")
+    assert e.hint == 'nearest labels: "S.reply", "S.req". If matching nothing is intended, write optional "S.rpely"'
+    (item,), warnings = read_properties('never optional "S.rpely"', "f.mcl", flat)
+    assert warnings == [] and item.property.pattern == "never"
 
 
 def test_limit_gives_an_inconclusive_verdict():

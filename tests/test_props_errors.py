@@ -133,3 +133,64 @@ def test_errors_render_with_the_line_and_a_caret():
         '    mu X. <"S.req"> Y',
         "                    ^",
     ]
+
+
+def test_a_binary_property_file_is_located(tmp_path):
+    from runtime.props import read_property_file
+
+    bad = tmp_path / "bad.mcl"
+    bad.write_bytes(b'[ true* ] true;\n-- r\xe9sum\xe9\n')
+    with pytest.raises(DiagnosticError) as info:
+        read_property_file(bad, flatten(package("Server"), "Main()"))
+    [d] = info.value.diagnostics
+    assert (str(d.span), d.message) == (f"{bad}:2:5", "not a UTF-8 text file: byte 0xe9 cannot be read")
+    assert "    -- r\ufffdsum\ufffd\n        ^" in info.value.render()
+
+
+def test_a_misspelt_label_is_an_error_with_the_nearest_labels():
+    assert errors('a: [ true* . "S.rpely" ] false;\nb: <"req"> true;\nc: "S.req" precedes "S.wrok"') == [
+        ("bad.mcl:1:14", '"S.rpely" matches no interaction label of the model'),
+        ("bad.mcl:3:21", '"S.wrok" matches no interaction label of the model'),
+    ]
+
+
+def test_a_pattern_matching_nothing_needs_optional():
+    assert errors("never 'S\\.abort.*'") == [("bad.mcl:1:7", "'S\\.abort.*' matches no interaction label of the model")]
+    flat = flatten(package("Server"), "Main()")
+    items, warnings = read_properties("never optional 'S\\.abort.*'; [true* . optional \"*:abort\"] false", "ok.mcl",
+                                      flat)
+    assert len(items) == 2 and warnings == []
+
+
+def test_optional_stands_only_before_a_label_or_a_pattern():
+    where, message = one('[ optional true ] false')
+    assert where == "bad.mcl:1:12" and message.startswith("unexpected 'true'")
+
+
+def test_verify_stops_on_a_misspelt_label_instead_of_saying_holds(tmp_path, capsys):
+    from genom2bip.cli import main
+    from tests.verifykit import NDD
+
+    prop = tmp_path / "fly.mcl"
+    prop.write_text('[ true* . "NDD.Fly:start" ] false\n')
+    assert main(["verify", str(NDD), "--property", str(prop)]) == 1
+    out, err = capsys.readouterr()
+    assert "holds" not in out
+    assert err.startswith(f'{prop}:1:11: error: "NDD.Fly:start" matches no interaction label of the model\n'
+                          '    [ true* . "NDD.Fly:start" ] false\n'
+                          '              ^^^^^^^^^^^^^^^\n'
+                          '    hint: nearest labels: "NDD.Stop:start", "NDD.GoTo:start", "NDD.SetSpeed:start". '
+                          'If matching nothing is intended, write optional "NDD.Fly:start"\n')
+
+
+@pytest.mark.parametrize("text,where", [
+    ("(* open\n[ true* ] true\n", "bad.mcl:1:1"),
+    ('-- a (* in a line comment\n[ true* ] true; (* closed *) <"S.req"> true; (* the rest\n"x"', "bad.mcl:2:46"),
+])
+def test_an_unclosed_comment_is_named_where_it_opens(text, where):
+    assert one(text) == (where, "unterminated comment: this '(*' is never closed by '*)'")
+
+
+def test_comment_markers_inside_labels_are_not_comments():
+    where, message = one('<"S.req"> true; <"(*"> true')
+    assert (where, message) == ("bad.mcl:1:18", '"(*" matches no interaction label of the model')

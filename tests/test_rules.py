@@ -295,3 +295,15 @@ def test_a_single_description_file_does_not_pick_up_the_rule_file_beside_it(tmp_
     assert "@rule" not in (tmp_path / "none" / "robot" / "robot.bip").read_text()
     assert main([str(src), "-o", str(tmp_path / "all")]) == 1  # the directory's rule file is read, and wrong
     assert not (tmp_path / "all").exists()
+
+
+def test_a_binary_rule_file_is_located_and_writes_nothing(tmp_path, capsys):
+    rules = tmp_path / "rules.yaml"
+    rules.write_bytes(b"rules:\n  - id: r\xff\xfe\x00\n")
+    out = tmp_path / "out"
+    assert main([str(ARM), "--rules", str(rules), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"{rules}:2:10: error: not a UTF-8 text file: byte 0xff cannot be read" in err
+    assert "      - id: r\ufffd\ufffd?\n             ^\n" in err and "save it as UTF-8 text" in err
+    assert "internal error" not in err
+    assert not out.exists()

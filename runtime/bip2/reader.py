@@ -10,8 +10,9 @@ from runtime.bip2.interfaces import resolve_export_types
 from runtime.bip2.locator import Locator
 from runtime.bip2.syntax import parse_tree
 from runtime.bip2.validate import validate
-from runtime.diagnostics import Reporter, SourceCache, Span
+from runtime.diagnostics import DiagnosticError, Reporter, SourceCache, Span
 from runtime.model import Package
+from runtime.textfile import decode_error
 
 
 def parse_text(text: str, filename: str = "<string>") -> Package:
@@ -31,10 +32,14 @@ def parse_file(path) -> Package:
     sources = SourceCache()
     reporter = Reporter(sources)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
+        data = path.read_bytes()
+    except OSError as err:
         reporter.error(Span(filename, 0, 0), f"cannot read BIP2 file: {err}")
         reporter.raise_if_errors()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise DiagnosticError([decode_error(filename, data, err)]) from None
     sources.add(filename, text)
     package = _read(text, filename, reporter)
     if package is not None and path.suffix == ".bip" and package.name != path.stem:

@@ -1,8 +1,8 @@
 """Reading property files against a model, and checking each property on the fly with evidence.
 
 ``read_properties`` parses, types and statically checks a file (every problem
-with ``file:line:column``), binds state predicates to the model and warns
-about labels no interaction has.  ``check`` answers one property on a
+with ``file:line:column``), binds state predicates to the model and refuses
+labels no interaction has (unless written ``optional``).  ``check`` answers one property on a
 :class:`~runtime.explore.space.StateSpace`: safety shapes ``[R] F`` / ``<R> F``
 (F without fixed points) by a breadth-first product search with shortest
 traces, anything else by the local fixed-point solver.
@@ -45,6 +45,7 @@ from runtime.props.safety import automaton, search
 from runtime.props.solver import Solver
 from runtime.props.syntax import parse_properties
 from runtime.props.typing import type_properties
+from runtime.textfile import read_text
 
 
 @dataclass
@@ -144,12 +145,7 @@ def read_properties(text: str, file: str, flat: FlatSystem | None = None) -> tup
                 bind(flat, p, problems)
                 observed |= variables_read(flat, p)
             for a in _actions(prop.formula):
-                for leaf in leaves(a):
-                    m = label_matcher(leaf.text) if isinstance(leaf, ALabel) else matcher(leaf)
-                    if labels and not any(m(lab) for lab in labels):
-                        text_ = f'"{leaf.text}"' if isinstance(leaf, ALabel) else f"'{leaf.pattern}'"
-                        problems.append(Diagnostic(leaf.span, f"{text_} matches no interaction label of the model",
-                                                   "warning", _label_hint(leaf, labels)))
+                problems.extend(_unmatched(a, labels))
         out.append(Checkable(prop, normal, observed))
     errors = [d for d in problems if d.severity == "error"]
     if errors:
@@ -161,21 +157,41 @@ def read_properties(text: str, file: str, flat: FlatSystem | None = None) -> tup
     return out, [d for d in problems if d.severity == "warning"]
 
 
-def _label_hint(leaf, labels: list[str]) -> str | None:
+def _unmatched(a, labels: list[str]) -> list[Diagnostic]:
+    """An error for each label or pattern of ``a`` that no label of the model matches, unless it is ``optional``.
+
+    A misspelt label would otherwise make ``[ ... "NDD.Fly:start" ] false`` hold without saying anything.
+    """
+    out = []
+    for leaf in leaves(a):
+        if leaf.optional or not labels:
+            continue
+        m = label_matcher(leaf.text) if isinstance(leaf, ALabel) else matcher(leaf)
+        if not any(m(lab) for lab in labels):
+            text = f'"{leaf.text}"' if isinstance(leaf, ALabel) else f"'{leaf.pattern}'"
+            out.append(Diagnostic(leaf.span, f"{text} matches no interaction label of the model", "error",
+                                  _label_hint(leaf, labels, text)))
+    return out
+
+
+def _label_hint(leaf, labels: list[str], text: str) -> str:
+    """The nearest labels of the model, and how to say that matching nothing is intended."""
     import difflib
-    if isinstance(leaf, ALabel):
-        near = difflib.get_close_matches(leaf.text, labels, n=1, cutoff=0.5)
-        if near:
-            return f"did you mean \"{near[0]}\"?"
-    return None
+
+    word = leaf.text if isinstance(leaf, ALabel) else leaf.pattern
+    near = difflib.get_close_matches(word, labels, n=3, cutoff=0.5)
+    if not near:  # the paper's writing, without the module: compare with the labels' tails
+        tails = {lab.partition(".")[2]: lab for lab in labels if "." in lab}
+        near = [tails[t] for t in difflib.get_close_matches(word, list(tails), n=3, cutoff=0.5)]
+    if not near:
+        near = difflib.get_close_matches(word, labels, n=3, cutoff=0.0)
+    known = ", ".join(f'"{lab}"' for lab in near)
+    lead = f"did you mean {known}?" if len(near) == 1 else f"nearest labels: {known}."
+    return f"{lead} If matching nothing is intended, write optional {text}"
 
 
 def read_property_file(path: str | Path, flat: FlatSystem | None = None) -> tuple[list[Checkable], list[Diagnostic]]:
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as err:
-        raise DiagnosticError([Diagnostic(Span(str(path), 0, 0), f"cannot read the property file: "
-                                                                   f"{err.strerror or err}")]) from None
+    text = read_text(path, "property file")
     return read_properties(text, str(path), flat)
 
 

@@ -24,6 +24,7 @@ class ALabel:
 
     text: str
     span: Span = _span()
+    optional: bool = False  # written ``optional "text"``: matching no label of the model is intended
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,7 @@ class ARegex:
 
     pattern: str
     span: Span = _span()
+    optional: bool = False  # written ``optional 're'``
 
 
 @dataclass(frozen=True)

@@ -122,6 +122,7 @@ class _Build(Transformer):
     var = _unary_rule("var")
     label = _unary_rule("label")
     regex = _unary_rule("regex")
+    optional = _unary_rule("optional")
 
     @v_args(meta=True)
     def fix(self, meta, items):
@@ -218,7 +219,12 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
     try:
         tree: Tree = parser().parse(text)
     except UnexpectedInput as err:
-        if isinstance(err, UnexpectedToken) and err.token.type == "$END":
+        opened = _unclosed_comment(text)
+        if opened is not None:
+            diag = Diagnostic(Span(file, *opened, opened[0], opened[1] + 2),
+                              "unterminated comment: this '(*' is never closed by '*)'",
+                              hint="close it with '*)'; until then the rest of the file is a comment")
+        elif isinstance(err, UnexpectedToken) and err.token.type == "$END":
             lines = text.rstrip().splitlines() or [""]
             diag = Diagnostic(Span(file, len(lines), len(lines[-1]) + 1),
                               f"unexpected end of the file; expected {_expected(err.expected)}")
@@ -230,6 +236,28 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
     for k, p in enumerate(props, 1):
         out.append(RawProperty(p.name or f"property {k}", p.body, p.span, _slice(text, p.body.span)))
     return out
+
+
+def _unclosed_comment(text: str) -> tuple[int, int] | None:
+    """Line and column of a ``(*`` that no ``*)`` closes (outside strings and ``--`` comments), or None."""
+    i = 0
+    while i < len(text):
+        if text.startswith("(*", i):
+            end = text.find("*)", i + 2)
+            if end < 0:
+                return text.count("\n", 0, i) + 1, i - text.rfind("\n", 0, i)
+            i = end + 2
+        elif text.startswith("--", i):
+            end = text.find("\n", i)
+            i = len(text) if end < 0 else end
+        elif text[i] in "\"'":
+            quote, i = text[i], i + 1
+            while i < len(text) and text[i] not in (quote, "\n"):
+                i += 2 if text[i] == "\\" else 1
+            i += 1
+        else:
+            i += 1
+    return None
 
 
 def _slice(text: str, span: Span) -> str:

@@ -58,16 +58,26 @@ class TypeProblem(Exception):
 
 
 def _what(raw: Raw) -> str:
-    return {"label": "a label", "regex": "a regular expression on labels", "var": f"the variable {raw.args[0]}",
+    return {"label": "a label", "regex": "a regular expression on labels", "optional": "an optional label", "var": f"the variable {raw.args[0]}",
             "state": "a state predicate", "diamond": "a <...> modality", "box": "a [...] modality",
             "mu": "a mu fixed point", "nu": "a nu fixed point", "implies": "'implies'"}.get(
         raw.op, REGULAR_OPS.get(raw.op, raw.op))
+
+
+def _quoted(raw: Raw) -> str:
+    """The source form of a label, a regular expression or an optional one."""
+    if raw.op == "optional":
+        return "optional " + _quoted(raw.args[0])
+    return f'"{raw.args[0]}"' if raw.op == "label" else f"'{raw.args[0]}'"
 
 
 def action(raw: Raw) -> Action:
     op, a, sp = raw.op, raw.args, raw.span
     if op == "label":
         return ALabel(a[0], sp)
+    if op == "optional":
+        inner = action(a[0])
+        return ALabel(inner.text, sp, True) if isinstance(inner, ALabel) else ARegex(inner.pattern, sp, True)
     if op == "regex":
         try:
             re.compile(a[0])
@@ -141,8 +151,8 @@ def state(raw: Raw) -> State:
             raise TypeProblem(name_span, f"'{name}' means {'true' if name == 'T' else 'false'} and cannot name a "
                                          "variable")
         return SFix(op, name, state(body), sp, name_span)
-    if op in ("label", "regex"):
-        text = f'"{a[0]}"' if op == "label" else f"'{a[0]}'"
+    if op in ("label", "regex", "optional"):
+        text = _quoted(raw)
         raise TypeProblem(sp, f"{text} is an action formula, but a state formula is expected here "
                               f"(write <{text}> true for 'possible next', [{text}] false for 'impossible next')")
     if op in REGULAR_OPS:
