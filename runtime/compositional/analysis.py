@@ -53,6 +53,7 @@ class Potential:
     reason: str = ""
     trace: list = field(default_factory=list)
     waits: list[list[str]] = field(default_factory=list)  # wait-for cycles among atoms
+    checked: bool = False  # not refuted by invariants: a candidate for the explorer
 
 
 @dataclass
@@ -74,7 +75,7 @@ class Analysis:
 
     @property
     def candidates(self) -> list[Potential]:
-        return [p for p in self.potentials if p.verdict != "unreachable" or p.method.startswith("explor")]
+        return [p for p in self.potentials if p.checked]
 
     @property
     def verdict(self) -> str:
@@ -161,7 +162,7 @@ def analyse(flat: FlatSystem, solver: str = DEFAULT_SOLVER, use_traps: bool = Tr
                 analysis.potentials.append(Potential(state, "unreachable", "restricted search",
                                                      f"the atoms {names} cannot be in these states together"))
                 continue
-            analysis.potentials.append(Potential(state, "candidate", waits=wait_cycles(analysis, state)))
+            analysis.potentials.append(Potential(state, "candidate", waits=wait_cycles(analysis, state), checked=True))
             formula.block(dict(enumerate(state)))
             if sum(p.verdict == "candidate" for p in analysis.potentials) >= max_candidates:
                 analysis.complete = False

@@ -50,7 +50,7 @@ def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int
         if p is None:
             p = Potential(list(abstract), "reachable", "exploration",
                           "UNSOUND ANALYSIS: a reachable deadlock that is not among the potential deadlocks",
-                          trace)
+                          trace, checked=True)
             analysis.potentials.append(p)
             by_state[abstract] = p
         elif p.verdict == "candidate":
