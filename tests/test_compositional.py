@@ -141,3 +141,40 @@ def test_an_unbounded_counter_in_a_guard_is_never_called_deadlock_free():
 def test_every_solver_gives_the_same_verdicts(solver):
     assert judged("Philosophers", "Ordered3()", solver=solver).verdict == "deadlock-free"
     assert judged("Philosophers", "Circle3()", solver=solver).verdict == "deadlock"
+
+
+# --- the paper's potential deadlock of NDD ----------------------------------------------------------------
+
+def test_the_papers_potential_deadlock_is_no_deadlock_of_our_ndd_model():
+    from runtime.compositional.analysis import refuting_trap, surely_enabled
+    from tests.verifykit import NDD
+    from genom2bip.generate import model_of
+    from genom2bip.parser import parse_paths
+
+    package, root, _ = model_of(parse_paths([str(NDD)]), "NDD", None)
+    analysis = analyse(flatten(package, root))
+    assert analysis.verdict == "deadlock-free" and analysis.potentials == []
+
+    def pick(atom, words):
+        a = next(x for x in analysis.atoms if x.atom.name == atom)
+        return next(k for k in range(len(a.states)) if a.describe(k).startswith(words))
+
+    # Basu et al. IV-B: every service in EXEC (our control atom ACTIVE), every activity in ETHER,
+    # the control task in Q0 (our control scheduler SLEEP); the rest as initially
+    state = []
+    for a in analysis.atoms:
+        name = a.atom.name
+        if name.endswith(".control") and name != "NDD.control":
+            state.append(pick(name, "ACTIVE"))
+        elif name.endswith(".activity"):
+            state.append(pick(name, "ETHER"))
+        else:
+            state.append(a.initial[0])
+    assert analysis.describe(state)[5:8] == ["NDD.control.scheduler: SLEEP",
+                                             "NDD.SetParams.control: ACTIVE verdict=0 done=false ok=false running=true",
+                                             "NDD.SetParams.activity: ETHER outcome=0 aborted=false"]
+    # not a deadlock here: the control task's period is a connector of the scheduler alone ...
+    assert "NDD.control:period" in surely_enabled(analysis, state)
+    # ... and not reachable either: a service's control is ACTIVE only while its activity has left ETHER
+    trap = refuting_trap(analysis, state)
+    assert trap is not None and trap.startswith("an initially marked trap stays marked")

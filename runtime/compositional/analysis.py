@@ -63,6 +63,7 @@ class Analysis:
     flat: FlatSystem
     atoms: list[AtomAbstraction]
     interactions: list[StaticInteraction]
+    enablings: list = field(default_factory=list)
     phases: list[Phase] = field(default_factory=list)
     potentials: list[Potential] = field(default_factory=list)
     traps: int = 0
@@ -125,7 +126,7 @@ def analyse(flat: FlatSystem, solver: str = DEFAULT_SOLVER, use_traps: bool = Tr
                f"{len(atoms)} atoms, {local} local states, {untracked} variables untracked", progress)
 
     constants = dict(flat.constants)
-    enablings = [enabling(i, atoms, constants) for i in inters]
+    enablings = analysis.enablings = [enabling(i, atoms, constants) for i in inters]
     formula = Formula(atoms, enablings, solver)
     finder = TrapFinder(atoms, inters, solver) if use_traps else None
     if finder is not None and store is not None:
@@ -175,6 +176,31 @@ def analyse(flat: FlatSystem, solver: str = DEFAULT_SOLVER, use_traps: bool = Tr
     _timed(analysis, "SAT", t, f"{analysis.sat_calls} calls, {analysis.traps} traps, "
            f"{len(analysis.potentials) - n} potential deadlocks refuted, {n} candidates", progress)
     return analysis
+
+
+def surely_enabled(analysis: Analysis, state: list[int]) -> list[str]:
+    """Labels of the interactions surely enabled at an abstract global state (DIS is false there if any)."""
+    out = []
+    for inter, en in zip(analysis.interactions, analysis.enablings):
+        if not all(state[a] in analysis.atoms[a].certain.get(p, ()) for a, p in en.plain):
+            continue
+        if en.combos is None:
+            ok = all(state[a] in analysis.atoms[a].certain.get(p, ()) for a, p in en.read)
+        else:
+            ok = any(all(state[a] in states for (a, _), states in zip(en.read, combo)) for combo in en.combos)
+        if ok:
+            out.append(inter.label)
+    return out
+
+
+def refuting_trap(analysis: Analysis, state: list[int]) -> str | None:
+    """An initially marked trap that the state leaves empty, described; None when there is none."""
+    finder = TrapFinder(analysis.atoms, analysis.interactions, analysis.solver)
+    try:
+        trap = finder.exclude(state)
+        return None if trap is None else _trap_text(analysis, trap)
+    finally:
+        finder.delete()
 
 
 def _trap_text(analysis: Analysis, trap) -> str:
