@@ -230,9 +230,14 @@ def _refute(atoms, inters, state: list[int], neighbours: list[set[int]],
         hood = tuple(sorted(neighbours[i] | {i}))
         if len(hood) > 2:
             tried.append(hood)
+    by_atom: dict[int, list[int]] = {}
+    for n, inter in enumerate(inters):
+        for a in set(inter.atoms):
+            by_atom.setdefault(a, []).append(n)
     for subset in tried:
         if subset not in cache:
-            cache[subset] = restricted_reach(atoms, inters, subset)
+            touching = sorted(set().union(*(by_atom.get(i, ()) for i in subset)))
+            cache[subset] = restricted_reach(atoms, [inters[n] for n in touching], subset)
         reach = cache[subset]
         if reach is not None and tuple(state[i] for i in subset) not in reach:
             return subset

@@ -29,6 +29,9 @@ from pysat.solvers import Solver
 from runtime.compositional.interactions import StaticInteraction
 from runtime.compositional.local import AtomAbstraction
 
+#: Places of a trap tried for removal (one SAT call each): enough to reach small traps, bounded on big ones.
+SHRINK = 24
+
 Place = tuple[int, int]  # (atom index, local state)
 Named = frozenset  # of (atom path, local state description)
 
@@ -109,10 +112,27 @@ class TrapFinder:
         return self.solver.solve(assumptions=assumptions)
 
     def exclude(self, state: list[int]) -> set[Place] | None:
-        """A trap containing none of the local states of ``state`` (one per atom), or None."""
+        """A small trap containing none of the local states of ``state`` (one per atom), or None.
+
+        Places are dropped while it stays a trap (up to ``SHRINK`` tries):
+        a smaller trap is a stronger invariant, excluding more states, so
+        fewer rounds are needed.
+        """
         self.calls += 1
-        if not self.solver.solve(assumptions=[-self.var[(i, k)] for i, k in enumerate(state)]):
+        base = [-self.var[(i, k)] for i, k in enumerate(state)]
+        if not self.solver.solve(assumptions=base):
             return None
+        trap = self._trap()
+        for place in sorted(trap)[:SHRINK]:
+            if place not in trap or len(trap) == 1:
+                continue
+            outside = [-v for p, v in self.var.items() if p not in trap]
+            self.calls += 1
+            if self.solver.solve(assumptions=base + outside + [-self.var[place]]):
+                trap = self._trap()
+        return trap
+
+    def _trap(self) -> set[Place]:
         model = set(v for v in self.solver.get_model() if v > 0)
         return {p for p, v in self.var.items() if v in model}
 
