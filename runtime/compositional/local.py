@@ -179,15 +179,9 @@ def _explore(flat: FlatSystem, atom: FlatAtom, externs, written: set[int], untra
         stack = [Local(marking, env)]
         while stack:
             cur = stack.pop()
-            ev = make(cur.env)
             surely = False
-            for src, dst, tr in internals:
-                if cur.marking & src != src:
-                    continue
-                tv = truths(ev.value(tr.guard))
-                if True not in tv:
-                    continue
-                surely = surely or tv == {True}
+            for src, dst, tr, sure in _offered(cur, internals, make):
+                surely = surely or sure
                 for e in run(tr.action, cur.env):
                     nxt = Local((cur.marking & ~src) | dst, e)
                     if nxt not in seen:
@@ -228,16 +222,10 @@ def _explore(flat: FlatSystem, atom: FlatAtom, externs, written: set[int], untra
         k = done
         done += 1
         cur = states[k]
-        ev = make(cur.env)
         for port, trs in by_port.items():
-            for src, dst, tr in trs:
-                if cur.marking & src != src:
-                    continue
-                tv = truths(ev.value(tr.guard))
-                if True not in tv:
-                    continue
+            for src, dst, tr, sure in _offered(cur, trs, make):
                 possible[port].add(k)
-                if tv == {True}:
+                if sure:
                     certain[port].add(k)
                 env = cur.env
                 pid = port_ids.get(port)
@@ -252,6 +240,16 @@ def _explore(flat: FlatSystem, atom: FlatAtom, externs, written: set[int], untra
             return widest
     _atom_priorities(atom, states, certain, possible)
     return AtomAbstraction(atom, states, initial, _dedup(edges), untracked, certain, possible, index)
+
+
+def _offered(cur: Local, transitions, make):
+    """The transitions possibly enabled in a local state, each with whether it surely is."""
+    ev = make(cur.env)
+    for src, dst, tr in transitions:
+        if cur.marking & src == src:
+            tv = truths(ev.value(tr.guard))
+            if True in tv:
+                yield src, dst, tr, tv == {True}
 
 
 def _free(atom: FlatAtom, port: str, env: Env) -> Env:
