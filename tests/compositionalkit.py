@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 def models(draw) -> str:
     """A package ``R`` with root ``Top()``: 2-4 atoms with a bool flag, rendezvous and broadcast connectors,
     guards on the flag (through ports and in atoms), a ``down`` that writes a flag, internal transitions,
-    compound priorities, an unbounded counter read by a guard, lone ports."""
+    compound and atom priorities, an unbounded counter read by a guard, lone ports."""
     n_atoms = draw(st.integers(2, 4))
     atoms, ports_of = [], []
     for a in range(n_atoms):
@@ -37,10 +37,17 @@ def models(draw) -> str:
             src = draw(st.integers(0, n_places - 1))
             lines.append(f"    on q from {places[src]} to {places[draw(st.integers(0, n_places - 1))]}"
                          f" provided (c < 3) do {{ c = c + 1; }}")
+        if n_ports >= 2 and draw(st.integers(0, 3)) == 0:  # an atom priority, low index below high: no cycle
+            lo = draw(st.integers(0, n_ports - 2))
+            lines_priority = f"    priority ap p{lo} < p{draw(st.integers(lo + 1, n_ports - 1))}"
+        else:
+            lines_priority = ""
         if draw(st.booleans()):
             src = draw(st.integers(0, n_places - 2))
             dst = draw(st.integers(src + 1, n_places - 1))  # forward only: no livelock
             lines.append(f"    internal from {places[src]} to {places[dst]} provided (f)")
+        if lines_priority:
+            lines.append(lines_priority)
         lines.append("  end")
         atoms.append("\n".join(lines))
         ports_of.append(n_ports)

@@ -96,3 +96,12 @@ def test_usage_errors(capsys, tmp_path, extra, message):
     assert message in err
     assert out == ""
     assert not (tmp_path / "g.dot").exists() and not Path("g.dot").exists()
+
+
+@pytest.mark.parametrize("model", ["descriptions/dala", "descriptions/arm/Arm.gen"])
+def test_whole_functional_levels_are_concluded_without_exploring(capsys, model):
+    path = Path(__file__).resolve().parents[1] / model
+    code, out, err = run(capsys, "verify", str(path), "--deadlock", "--method", "compositional")
+    assert code == 0, err
+    assert "check: " not in out and "explored" not in out
+    assert out.splitlines()[-1].startswith("deadlock-free (compositional, ")
