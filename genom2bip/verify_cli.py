@@ -60,6 +60,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     spin.add_argument("--spin-hash-bits", type=int, default=27, metavar="B", help="hash table / bit array of 2^B")
     spin.add_argument("--spin-swarm", type=int, metavar="N", help="N bitstate runs with different hashes and orders")
     spin.add_argument("--spin-dir", metavar="DIR", help="keep SPIN's files (model.pml, pan.c, trails) in DIR")
+    from genom2bip.verify_compositional import add_arguments as add_compositional_arguments
+    add_compositional_arguments(parser)
 
 
 # --------------------------------------------------------------------------- loading
@@ -159,12 +161,22 @@ def verb_verify(args: argparse.Namespace) -> int:
     from runtime.props import read_property_file
 
     _check_options(args)
+    from genom2bip.verify_compositional import check_arguments as check_compositional
+    check_compositional(args)
     package, root, title = load_model(args)
     try:
         flat = flatten(package, root)
     except EngineError as exc:
         error(f"{title}: {exc}")
         return EXIT_ERRORS
+    compositional = EXIT_OK
+    if args.method != "explore":
+        from genom2bip.verify_compositional import run as run_compositional
+        print(f"model {title}")
+        compositional = run_compositional(flat, package, root, args, load_externs(args.externs))
+        if args.method == "compositional":
+            return compositional
+        print("exploration")
     properties = []
     for path in args.property:
         try:
@@ -189,11 +201,12 @@ def verb_verify(args: argparse.Namespace) -> int:
         code = _write_promela(space, properties, args.promela)
         if code != EXIT_OK:
             return code
-    print(f"model {title}")
+    if args.method == "explore":
+        print(f"model {title}")
     if args.engine == "spin":
         from genom2bip.verify_spin import run_spin
         return run_spin(space, args, deadlock, properties)
-    return _run_explorer(space, args, deadlock, properties)
+    return max(compositional, _run_explorer(space, args, deadlock, properties))
 
 
 def _write_promela(space, properties, path: str) -> int:

@@ -45,3 +45,14 @@ def test_runtime_imports_in_a_process_without_genom2bip():
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "ok"
+
+
+def test_the_controller_never_imports_the_compositional_analysis():
+    # verification only: what runs the robot (engine, controller, services, generated code) stays without it
+    offenders = []
+    for folder in ("runtime/engine", "runtime/controller", "runtime/services", "gen"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            bad = {m for m in _imported_modules(path) if m.startswith("runtime.compositional")}
+            if bad:
+                offenders.append(f"{path.relative_to(ROOT)}: {sorted(bad)}")
+    assert offenders == []
