@@ -145,7 +145,11 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
 
 def _connector_doc(c) -> str:
     kinds = {"Rendezvous": "all ports together", "RendezvousX": "all ports together, offered to an enclosing connector",
-             "Triggered": "the first ports together as a trigger, each receiver joining if it can"}
+             "Triggered": "the first ports together as a trigger, each receiver joining if it can",
+             "TriggeredX": "the first ports together, each other joining if it can, offered to an enclosing connector",
+             "BroadcastX": "any of the ports that can, together, offered to an enclosing connector"}
+    if c.export is not None and c.export.data:
+        return f"Connector type {c.name}: all ports together, their status carried up to an enclosing guard."
     base = c.name.split("_")[0]
     return f"Connector type {c.name}: {kinds.get(base, 'guarded by the status of other services')}."
 

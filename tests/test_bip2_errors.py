@@ -199,8 +199,6 @@ VALIDATION = [
     ("  extern function int f(int)\n", "  extern function int f(int)\n  const data int N\n",
      "constant 'N' needs a value", "N\n"),
     ("    data int x = 0\n", "    data int x = 0\n    data const int z\n", "const data 'z' needs a value", "z\n"),
-    ("on a b provided (a.v > 0) up { t = a.v; } down { b.v = t; }", "on a b", "'on a b' in connector type C has no "
-                                                                              "provided, up or down", "on a b"),
     ("    on q from T to S\n", "    on q from T to S\n    priority both * < *\n",
      "priority both of atom type A has '*' on both sides", "both"),
     ("    on q from T to S\n", "    on q from T to S\n    priority bad p < z\n", "unknown port 'z' in priority bad",
@@ -214,6 +212,17 @@ VALIDATION = [
     ("data int x = 0", "data int x = 0, error", "'error' is a reserved word of BIP2", "error"),
     ("export port c.e as e", "export port Port e is c.e",
      "exported port 'e' of compound type K is Port, but c.e is IntPort", "c.e\n"),
+    # Verimag: noSideEffectInGuards
+    ("provided (x < k)", "provided (f(x) < k)", "atom type A: the guard calls 'f', whose parameters are not all const",
+     "f(x) <"),
+    ("on a b provided (a.v > 0)", "on a b provided (f(a.v) > 0)",
+     "connector type C, on a b: the guard calls 'f', whose parameters are not all const", "f(a.v)"),
+    ("provided (a1.y > 0)", "provided (f(a1.y) > 0)", "priority pr of compound type K: the guard calls 'f'", "f(a1.y)"),
+    # Verimag: connectorDoesNotBindTheSameComponentMoreThanOnce
+    ("  compound type K()\n    component A a1(1), a2(2)\n",
+     "  compound type L()\n    component A b1(1), b2(2)\n    export port b1.p as p1\n    export port b2.p as p2\n  end\n"
+     "  compound type K()\n    component A a1(1), a2(2)\n    component L l()\n    connector R twice(l.p1, l.p2)\n",
+     "connector 'twice' in compound type K binds component 'l' more than once", "twice("),
 ]
 
 
@@ -245,3 +254,56 @@ def test_validate_names_the_declaration_of_a_model_built_in_code():
                                             transitions=[Transition(None, ["S"], ["X"], Var("nope"))])])
     messages = [d.message for d in validate(pkg)]
     assert messages == ["unknown place 'X' in atom type A", "unknown variable 'nope' in atom type A"]
+
+
+def test_a_guard_may_call_a_function_whose_parameters_are_all_const():
+    text = BASE.replace("extern function int f(int)", "extern function int f(const int)")
+    text = text.replace("provided (x < k)", "provided (f(x) < k)")
+    assert parse_text(text).extern_functions[0].param_const == [True]
+    hint = errors(BASE.replace("provided (x < k)", "provided (f(x) < k)"))[0].hint
+    assert hint == "declare it extern function int f(const int)"
+
+
+BINDS_THROUGH_SUB_CONNECTORS = """package P
+  port type Port()
+  connector type R(Port a, Port b)
+    define a b
+  end
+  connector type RX(Port a, Port b)
+    export port Port e()
+    define a b
+  end
+  atom type A()
+    export port Port p()
+    place S
+    initial to S
+    on p from S to S
+  end
+  compound type K()
+    component A c1(), c2(), c3()
+    connector RX x(c1.p, c2.p), y(c2.p, c3.p)
+    connector R top(x.e, y.e)
+  end
+end
+"""
+
+
+def test_a_connector_reaches_a_component_twice_through_its_sub_connectors():
+    """Verimag's own case: c2 is bound once by x and once by y; only the connector that fires is checked."""
+    d = assert_one(BINDS_THROUGH_SUB_CONNECTORS, "connector 'top' in compound type K binds component 'c2' more than "
+                                                 "once", "top(")
+    assert d.hint == "join those ports in a connector inside the component and export its port"
+    fixed = BINDS_THROUGH_SUB_CONNECTORS.replace("connector R top(x.e, y.e)", "connector R top(x.e, c3.p)")
+    fixed = fixed.replace("connector RX x(c1.p, c2.p), y(c2.p, c3.p)", "connector RX x(c1.p, c2.p), y(c2.p, c3.p)")
+    assert parse_text(fixed).compound_types[0].name == "K"
+
+
+def test_an_interaction_block_may_have_no_guard_and_no_action():
+    """``on a b`` alone is legal BIP2 (bipc accepts it): the interaction, with no guard and nothing to do."""
+    text = BASE.replace("on a b provided (a.v > 0) up { t = a.v; } down { b.v = t; }", "on a b")
+    pkg = parse_text(text)
+    spec = pkg.connector_type("C").interactions[0]
+    assert (spec.ports, spec.guard, spec.up, spec.down) == (["a", "b"], None, [], [])
+    from genom2bip.back.bip2 import write_package
+    written = write_package(pkg)
+    assert "    on a b\n" in written and parse_text(written) == pkg

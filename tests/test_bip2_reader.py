@@ -20,7 +20,7 @@ def read(name):
 
 def guard_of(text):
     """The guard of one transition, read from a minimal package."""
-    pkg = parse_text(f"package P extern function int f(int) atom type A() data int x data int y "
+    pkg = parse_text(f"package P extern function int f(const int) atom type A() data int x data int y "
                      f"port type_ q() place S initial to S internal from S to S provided ({text}) end end"
                      .replace("port type_ q()", ""))
     return pkg.atom_types[0].transitions[0].guard
@@ -104,7 +104,11 @@ def test_externs_constants_and_annotations():
     assert pkg.extern_type_annotations == {"Pose": [Annotation("cpp", {"include": "pose.hpp"})]}
     log = [f for f in pkg.extern_functions if f.name == "log"]
     assert [(f.return_type, f.param_types) for f in log] == [(None, ["string"]), (None, ["string", "int"])]
+    near = next(f for f in pkg.extern_functions if f.name == "near")
+    assert near.param_types == ["Pose", "Pose", "float"] and near.param_const == [True, True, True]
+    assert [(p.name, p.const) for p in pkg.port_type("Reading").params] == [("v", True), ("error_bound", False)]
     step = next(f for f in pkg.extern_functions if f.name == "step")
+    assert step.param_const == [False, False]
     assert step.annotations == [Annotation("outcomes", {"ok": "", "fail": ""})]
     robot = pkg.atom_type("Robot")
     assert robot.params[1].type == "float"

@@ -149,8 +149,8 @@ def statements():
 def host(guard, action) -> Package:
     return Package(
         "Random",
-        extern_functions=[ExternFunction("f", "int", ["int", "int"]), ExternFunction("g", "int", ["int"]),
-                          ExternFunction("h", None, ["int"])],
+        extern_functions=[ExternFunction("f", "int", ["int", "int"], param_const=[True, True]),
+                          ExternFunction("g", "int", ["int"], param_const=[True]), ExternFunction("h", None, ["int"])],
         atom_types=[AtomType("A", data=[DataDecl("int", n) for n in "abc"], places=["S"],
                              initial=InitialTransition(["S"]),
                              transitions=[Transition(None, ["S"], ["S"], guard, action)])],

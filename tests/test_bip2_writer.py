@@ -177,8 +177,6 @@ def compound(**changes) -> CompoundType:
      "connector type C: the whole define expression cannot be a trigger"),
     (package(atom(), connectors=[conn(data=[DataDecl("int", "t", exported=True)])]),
      "connector type C, data t: connector data cannot be exported"),
-    (package(atom(), connectors=[conn(interactions=[InteractionSpec(["a"])])]),
-     "connector type C, on a: no provided, up or down"),
     (package(atom(), connectors=[conn()], compounds=[compound(components=[], connectors=[])]),
      "compound type K: no component and no connector"),
     (package(atom(), connectors=[conn()],

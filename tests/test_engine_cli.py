@@ -68,7 +68,9 @@ def test_same_atom_twice_in_a_connector_is_a_message(tmp_path):
     path = tmp_path / "Dining.bip"
     path.write_text(text)
     r = cli(path, "--root", "Table3()")
-    assert r.returncode == 1 and "atom f0 is reached through both parameters l and r" in r.stderr
+    line = text[:text.index("eat0(f0.take, p0.eat, f0.put)")].count("\n") + 1
+    assert r.returncode == 1 and f"Dining.bip:{line}:" in r.stderr
+    assert "connector 'eat0' in compound type Table3 binds component 'f0' more than once" in r.stderr
 
 
 def test_show_source():

@@ -46,14 +46,27 @@ def _labelled(package, label):
     raise AssertionError(f"no connector labelled {label}")
 
 
+def _compound(package, name):
+    return next(c for c in package.compound_types if c.name == name)
+
+
 def test_interruption_connector_joins_stop_start_and_goto_abort(package):
-    _, stop_start = _labelled(package, "NDD.Stop:start")
-    assert [str(p) for p in stop_start.ports] == [
-        "Stop.control_start", "Stop.activity_start", "GoTo.activity_abort", "GoTo.control_cancel"]
+    """Stop's start aborts GoTo: the ports of each service meet in a sub-connector, bound once from the module."""
+    module, stop_start = _labelled(package, "NDD.Stop:start")
+    assert module.name == "NDD_Module"
+    assert [str(p) for p in stop_start.ports] == ["Stop.start", "GoTo.Stop_start"]
     define = package.connector_type(stop_start.type).define.items
-    # (p1 p2)' p3 p4: Stop's own start is the trigger; GoTo's abort or cancel joins when it can
-    assert define[0].trigger and [d.name for d in define[0].items] == ["p1", "p2"]
-    assert [(d.name, d.trigger) for d in define[1:]] == [("p3", False), ("p4", False)]
+    # (p1)' p2: Stop's own start is the trigger; GoTo's abort or cancel joins when it can
+    assert define[0].trigger and [d.name for d in define[0].items] == ["p1"]
+    assert [(d.name, d.trigger) for d in define[1:]] == [("p2", False)]
+    stop, goto = _compound(package, "NDD_Stop_Service"), _compound(package, "NDD_GoTo_Service")
+    start = next(c for c in stop.connectors if c.name == "start")
+    assert [str(p) for p in start.ports] == ["control.start", "activity.start"]
+    assert not package.connector_type(start.type).define.items[0].trigger  # both, or nothing
+    victim = next(c for c in goto.connectors if c.name == "Stop_start")
+    assert [str(p) for p in victim.ports] == ["activity.abort", "control.cancel"]
+    assert all(d.trigger for d in package.connector_type(victim.type).define.items)  # whichever can
+    assert [(str(e.targets[0]), e.name) for e in goto.ports if e.name == "Stop_start"] == [("Stop_start.ep", "Stop_start")]
 
 
 def test_goto_constraint_connector_reads_the_three_status_ports(package):

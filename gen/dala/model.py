@@ -11,6 +11,7 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
+    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -52,6 +53,14 @@ def Status() -> PortType:
     return PortType(
         'Status',
         params=[DataParam('bool', 'done'), DataParam('bool', 'ok'), DataParam('bool', 'running')],
+    )
+
+
+def Bools3() -> PortType:
+    """Port type Bools3."""
+    return PortType(
+        'Bools3',
+        params=[DataParam('bool', 'v1'), DataParam('bool', 'v2'), DataParam('bool', 'v3')],
     )
 
 
@@ -3349,6 +3358,26 @@ def RFLEX_Stop_Activity() -> AtomType:
 # Connector types: interaction
 
 
+def BroadcastX_1() -> ConnectorType:
+    """Connector type BroadcastX_1: any of the ports that can, together, offered to an enclosing connector."""
+    return ConnectorType(
+        'BroadcastX_1',
+        params=[ConnectorParam('Port', 'p1')],
+        define=DefineGroup([DefinePort('p1', trigger=True)]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def BroadcastX_2() -> ConnectorType:
+    """Connector type BroadcastX_2: any of the ports that can, together, offered to an enclosing connector."""
+    return ConnectorType(
+        'BroadcastX_2',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2', trigger=True)]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
 def LaserRF_Start_Refuse_after() -> ConnectorType:
     """Connector type LaserRF_Start_Refuse_after: guarded by the status of other services."""
     return ConnectorType(
@@ -3415,6 +3444,16 @@ def NDD_GoTo_Refuse_goto_after_pom_run() -> ConnectorType:
     )
 
 
+def NDD_GoTo_Refuse_goto_after_pom_run_001() -> ConnectorType:
+    """Connector type NDD_GoTo_Refuse_goto_after_pom_run_001: guarded by the status of other services."""
+    return ConnectorType(
+        'NDD_GoTo_Refuse_goto_after_pom_run_001',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Status', 'p2')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+        interactions=[InteractionSpec(['p1', 'p2'], guard=Unary('!', PortData('p2', 'done')))],
+    )
+
+
 def NDD_GoTo_Refuse_goto_needs_laser_and_map() -> ConnectorType:
     """Connector type NDD_GoTo_Refuse_goto_needs_laser_and_map: guarded by the status of other services."""
     return ConnectorType(
@@ -3430,6 +3469,25 @@ def NDD_GoTo_Refuse_goto_needs_laser_and_map() -> ConnectorType:
             InteractionSpec(
                 ['p1', 'p2', 'p3', 'p4'],
                 guard=Unary('!', Binary('&&', PortData('p3', 'running'), PortData('p4', 'running'))),
+            ),
+        ],
+    )
+
+
+def NDD_GoTo_Refuse_goto_needs_laser_and_map_0012() -> ConnectorType:
+    """Connector type NDD_GoTo_Refuse_goto_needs_laser_and_map_0012: guarded by the status of other services."""
+    return ConnectorType(
+        'NDD_GoTo_Refuse_goto_needs_laser_and_map_0012',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Status', 'p2'),
+            ConnectorParam('Status', 'p3'),
+        ],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+        interactions=[
+            InteractionSpec(
+                ['p1', 'p2', 'p3'],
+                guard=Unary('!', Binary('&&', PortData('p2', 'running'), PortData('p3', 'running'))),
             ),
         ],
     )
@@ -3488,6 +3546,86 @@ def NDD_GoTo_Trigger() -> ConnectorType:
     )
 
 
+def NDD_GoTo_Trigger_000001234() -> ConnectorType:
+    """Connector type NDD_GoTo_Trigger_000001234: guarded by the status of other services."""
+    return ConnectorType(
+        'NDD_GoTo_Trigger_000001234',
+        params=[
+            ConnectorParam('Bools3', 'p1'),
+            ConnectorParam('Status', 'p2'),
+            ConnectorParam('Status', 'p3'),
+            ConnectorParam('Status', 'p4'),
+            ConnectorParam('Status', 'p5'),
+        ],
+        define=DefineGroup(
+            [
+                DefinePort('p1'),
+                DefinePort('p2'),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+            ],
+        ),
+        interactions=[
+            InteractionSpec(
+                ['p1', 'p2', 'p3', 'p4', 'p5'],
+                guard=Binary(
+                    '&&',
+                    Binary(
+                        '&&',
+                        Binary(
+                            '&&',
+                            Binary(
+                                '&&',
+                                Binary('&&', PortData('p1', 'v1'), PortData('p1', 'v2')),
+                                PortData('p1', 'v3'),
+                            ),
+                            PortData('p2', 'done'),
+                        ),
+                        Binary('&&', PortData('p3', 'running'), PortData('p4', 'running')),
+                    ),
+                    PortData('p5', 'running'),
+                ),
+            ),
+        ],
+    )
+
+
+def NDD_GoTo_Trigger_000001234_1() -> ConnectorType:
+    """Connector type NDD_GoTo_Trigger_000001234_1: all ports together, their status carried up to an enclosing guard."""
+    return ConnectorType(
+        'NDD_GoTo_Trigger_000001234_1',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Status', 'p3'),
+            ConnectorParam('Status', 'p4'),
+            ConnectorParam('Status', 'p5'),
+        ],
+        define=DefineGroup(
+            [
+                DefinePort('p1'),
+                DefinePort('p2'),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+            ],
+        ),
+        data=[DataDecl('bool', 'v1'), DataDecl('bool', 'v2'), DataDecl('bool', 'v3')],
+        export=ConnectorExport('Bools3', 'ep', data=['v1', 'v2', 'v3']),
+        interactions=[
+            InteractionSpec(
+                ['p1', 'p2', 'p3', 'p4', 'p5'],
+                up=[
+                    Assign(Var('v1'), PortData('p3', 'done')),
+                    Assign(Var('v2'), PortData('p4', 'done')),
+                    Assign(Var('v3'), PortData('p5', 'done')),
+                ],
+            ),
+        ],
+    )
+
+
 def POM_Reset_Trigger() -> ConnectorType:
     """Connector type POM_Reset_Trigger: guarded by the status of other services."""
     return ConnectorType(
@@ -3495,6 +3633,16 @@ def POM_Reset_Trigger() -> ConnectorType:
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Status', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
         interactions=[InteractionSpec(['p1', 'p2', 'p3'], guard=Unary('!', PortData('p3', 'running')))],
+    )
+
+
+def POM_Reset_Trigger_001() -> ConnectorType:
+    """Connector type POM_Reset_Trigger_001: guarded by the status of other services."""
+    return ConnectorType(
+        'POM_Reset_Trigger_001',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Status', 'p2')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+        interactions=[InteractionSpec(['p1', 'p2'], guard=Unary('!', PortData('p2', 'running')))],
     )
 
 
@@ -3515,6 +3663,36 @@ def RFLEX_TrackSpeed_Trigger() -> ConnectorType:
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Status', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
         interactions=[InteractionSpec(['p1', 'p2', 'p3'], guard=PortData('p3', 'done'))],
+    )
+
+
+def RendezvousX_P() -> ConnectorType:
+    """Connector type RendezvousX_P: all ports together, offered to an enclosing connector."""
+    return ConnectorType(
+        'RendezvousX_P',
+        params=[ConnectorParam('Port', 'p1')],
+        define=DefineGroup([DefinePort('p1')]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def RendezvousX_PP() -> ConnectorType:
+    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
+    return ConnectorType(
+        'RendezvousX_PP',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def RendezvousX_PPP() -> ConnectorType:
+    """Connector type RendezvousX_PPP: all ports together, offered to an enclosing connector."""
+    return ConnectorType(
+        'RendezvousX_PPP',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+        export=ConnectorExport('Port', 'ep'),
     )
 
 
@@ -3542,6 +3720,67 @@ def Rendezvous_PPP() -> ConnectorType:
         'Rendezvous_PPP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+    )
+
+
+def TriggeredX_1_1() -> ConnectorType:
+    """Connector type TriggeredX_1_1: the first ports together, each other joining if it can, offered to an enclosing connector."""
+    return ConnectorType(
+        'TriggeredX_1_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefineGroup([DefinePort('p1')], trigger=True), DefinePort('p2')]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def TriggeredX_2_1() -> ConnectorType:
+    """Connector type TriggeredX_2_1: the first ports together, each other joining if it can, offered to an enclosing connector."""
+    return ConnectorType(
+        'TriggeredX_2_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True), DefinePort('p3')],
+        ),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def TriggeredX_2_2() -> ConnectorType:
+    """Connector type TriggeredX_2_2: the first ports together, each other joining if it can, offered to an enclosing connector."""
+    return ConnectorType(
+        'TriggeredX_2_2',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+            ],
+        ),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def Triggered_1_0() -> ConnectorType:
+    """Connector type Triggered_1_0: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_1_0',
+        params=[ConnectorParam('Port', 'p1')],
+        define=DefineGroup([DefineGroup([DefinePort('p1')], trigger=True)]),
+    )
+
+
+def Triggered_1_1() -> ConnectorType:
+    """Connector type Triggered_1_1: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_1_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefineGroup([DefinePort('p1')], trigger=True), DefinePort('p2')]),
     )
 
 
@@ -3614,6 +3853,11 @@ def Aspect_Run_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -3644,8 +3888,7 @@ def Aspect_Run_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_fuse', targets=[PortRef('activity', 'exec_fuse')]),
             ExportPort('Port', 'activity_exec_wait', targets=[PortRef('activity', 'exec_wait')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -3707,6 +3950,11 @@ def Aspect_Stop_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -3726,8 +3974,7 @@ def Aspect_Stop_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -3763,12 +4010,22 @@ def Aspect_map_Task() -> CompoundType:
             ComponentInstance('Timer', 'timer', args=[Const(100000)]),
             ComponentInstance('Scheduler', 'scheduler'),
         ],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'period',
+                ports=[PortRef('timer', 'trigger'), PortRef('scheduler', 'period')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+        ],
         ports=[
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
         ],
     )
 
@@ -3875,6 +4132,11 @@ def LaserRF_Start_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -3907,8 +4169,7 @@ def LaserRF_Start_Service() -> CompoundType:
                 targets=[PortRef('activity', 'exec_acquire')],
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
@@ -3926,6 +4187,11 @@ def LaserRF_Stop_Service() -> CompoundType:
             ComponentInstance('LaserRF_Stop_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
@@ -3946,8 +4212,7 @@ def LaserRF_Stop_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -3962,13 +4227,28 @@ def LaserRF_acquisition_Task() -> CompoundType:
             ComponentInstance('Scheduler', 'scheduler'),
             ComponentInstance('LaserRF_acquisition_Activity', 'permanent'),
         ],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'period',
+                ports=[PortRef('timer', 'trigger'), PortRef('scheduler', 'period')],
+            ),
+        ],
         ports=[
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
         ],
     )
 
@@ -4004,6 +4284,21 @@ def NDD_GoTo_Service() -> CompoundType:
             ComponentInstance('NDD_GoTo_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'BroadcastX_2',
+                'LaserRF_Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
+                'BroadcastX_2',
+                'RFLEX_Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'reject',
@@ -4045,8 +4340,9 @@ def NDD_GoTo_Service() -> CompoundType:
                 targets=[PortRef('activity', 'exec_arrived')],
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'LaserRF_Stop_start', targets=[PortRef('LaserRF_Stop_start', 'ep')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
+            ExportPort('Port', 'RFLEX_Stop_start', targets=[PortRef('RFLEX_Stop_start', 'ep')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
@@ -4203,6 +4499,11 @@ def NDD_Stop_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -4222,8 +4523,7 @@ def NDD_Stop_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -4259,20 +4559,44 @@ def NDD_motion_Task() -> CompoundType:
             ComponentInstance('Scheduler', 'scheduler'),
             ComponentInstance('NDD_motion_Activity', 'permanent'),
         ],
-        ports=[
-            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort(
-                'Port',
-                'permanent_exec_publish',
-                targets=[PortRef('permanent', 'exec_publish')],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
             ),
-            ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
-            ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_publish',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_publish')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_stop',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_2_1',
+                'period',
+                ports=[
+                    PortRef('timer', 'trigger'),
+                    PortRef('scheduler', 'period'),
+                    PortRef('permanent', 'wake'),
+                ],
+            ),
+        ],
+        ports=[
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
+            ExportPort('Port', 'exec_publish', targets=[PortRef('exec_publish', 'ep')]),
+            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
+            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
         ],
     )
 
@@ -4286,6 +4610,11 @@ def POM_Reset_Service() -> CompoundType:
             ComponentInstance('POM_Reset_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
@@ -4308,8 +4637,7 @@ def POM_Reset_Service() -> CompoundType:
         ports=[
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
         ],
     )
 
@@ -4323,6 +4651,11 @@ def POM_Run_Service() -> CompoundType:
             ComponentInstance('POM_Run_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'BroadcastX_2',
+                'Reset_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
@@ -4352,8 +4685,7 @@ def POM_Run_Service() -> CompoundType:
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_fix', targets=[PortRef('activity', 'exec_fix')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'Reset_start', targets=[PortRef('Reset_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -4389,20 +4721,44 @@ def POM_fusion_Task() -> CompoundType:
             ComponentInstance('Scheduler', 'scheduler'),
             ComponentInstance('POM_fusion_Activity', 'permanent'),
         ],
-        ports=[
-            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort(
-                'Port',
-                'permanent_exec_update',
-                targets=[PortRef('permanent', 'exec_update')],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
             ),
-            ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
-            ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_update',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_update')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_stop',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_2_1',
+                'period',
+                ports=[
+                    PortRef('timer', 'trigger'),
+                    PortRef('scheduler', 'period'),
+                    PortRef('permanent', 'wake'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+        ],
+        ports=[
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
+            ExportPort('Port', 'exec_update', targets=[PortRef('exec_update', 'ep')]),
+            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
+            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
         ],
     )
 
@@ -4497,6 +4853,11 @@ def RFLEX_Stop_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -4516,8 +4877,7 @@ def RFLEX_Stop_Service() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -4533,6 +4893,11 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
             ComponentInstance('RFLEX_TrackSpeed_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
@@ -4562,8 +4927,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_track', targets=[PortRef('activity', 'exec_track')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
@@ -4601,20 +4965,44 @@ def RFLEX_servo_Task() -> CompoundType:
             ComponentInstance('Scheduler', 'scheduler'),
             ComponentInstance('RFLEX_servo_Activity', 'permanent'),
         ],
-        ports=[
-            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort(
-                'Port',
-                'permanent_exec_odometry',
-                targets=[PortRef('permanent', 'exec_odometry')],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
             ),
-            ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
-            ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_odometry',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_odometry')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_stop',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_2_1',
+                'period',
+                ports=[
+                    PortRef('timer', 'trigger'),
+                    PortRef('scheduler', 'period'),
+                    PortRef('permanent', 'wake'),
+                ],
+            ),
+        ],
+        ports=[
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
+            ExportPort('Port', 'exec_odometry', targets=[PortRef('exec_odometry', 'ep')]),
+            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
+            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
         ],
     )
 
@@ -4670,32 +5058,23 @@ def Aspect_Module() -> CompoundType:
                 comment='codel aspStop of state stop',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'Stop_start',
-                ports=[
-                    PortRef('Stop', 'control_start'),
-                    PortRef('Stop', 'activity_start'),
-                    PortRef('Run', 'activity_abort'),
-                    PortRef('Run', 'control_cancel'),
-                ],
+                ports=[PortRef('Stop', 'start'), PortRef('Run', 'Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:start'})],
                 comment='Stop interrupts Run (Aspect.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'Triggered_2_1',
+                'Triggered_1_1',
                 'map_period',
-                ports=[
-                    PortRef('map', 'timer_trigger'),
-                    PortRef('map', 'scheduler_period'),
-                    PortRef('Run', 'activity_wake'),
-                ],
+                ports=[PortRef('map', 'period'), PortRef('Run', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'Aspect.map:period'})],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'map_sleep',
-                ports=[PortRef('map', 'timer_sleep'), PortRef('map', 'scheduler_sleep')],
+                ports=[PortRef('map', 'sleep')],
                 annotations=[Annotation('label', arguments={'name': 'Aspect.map:sleep'})],
             ),
             ConnectorInstance(
@@ -4787,13 +5166,56 @@ def LaserRF_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Triggered_2_1',
-                'acquisition_period',
+                'RendezvousX_P',
+                'acquisition_exec_start',
+                ports=[PortRef('acquisition', 'exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'Init_exec_start',
+                ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'Init_exec_configure',
                 ports=[
-                    PortRef('acquisition', 'timer_trigger'),
-                    PortRef('acquisition', 'scheduler_period'),
-                    PortRef('Start', 'activity_wake'),
+                    PortRef('acquisition', 'scheduler_exec'),
+                    PortRef('Init', 'activity_exec_configure'),
                 ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'Start_exec_start',
+                ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Start', 'activity_exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PPP',
+                'Start_exec_acquire',
+                ports=[
+                    PortRef('acquisition', 'scheduler_exec'),
+                    PortRef('Start', 'activity_exec_acquire'),
+                    PortRef('Scan', 'write'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'Start_exec_stop',
+                ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Start', 'activity_exec_stop')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_1_1',
+                'Stop_start',
+                ports=[PortRef('Stop', 'start'), PortRef('Start', 'Stop_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_P',
+                'acquisition_sleep',
+                ports=[PortRef('acquisition', 'sleep')],
+            ),
+            ConnectorInstance(
+                'Triggered_1_1',
+                'acquisition_period',
+                ports=[PortRef('acquisition', 'period'), PortRef('Start', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:period'})],
                 comment='a period starts: paused activities wake up',
             ),
@@ -4844,54 +5266,20 @@ def LaserRF_Module() -> CompoundType:
         ports=[
             ExportPort(
                 'Port',
-                'acquisition_scheduler_exec',
-                targets=[PortRef('acquisition', 'scheduler_exec')],
+                'acquisition_exec_start',
+                targets=[PortRef('acquisition_exec_start', 'ep')],
             ),
+            ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
                 'Port',
-                'acquisition_permanent_exec_start',
-                targets=[PortRef('acquisition', 'permanent_exec_start')],
+                'Init_exec_configure',
+                targets=[PortRef('Init_exec_configure', 'ep')],
             ),
-            ExportPort(
-                'Port',
-                'Init_activity_exec_start',
-                targets=[PortRef('Init', 'activity_exec_start')],
-            ),
-            ExportPort(
-                'Port',
-                'Init_activity_exec_configure',
-                targets=[PortRef('Init', 'activity_exec_configure')],
-            ),
-            ExportPort(
-                'Port',
-                'Start_activity_exec_start',
-                targets=[PortRef('Start', 'activity_exec_start')],
-            ),
-            ExportPort(
-                'Port',
-                'Start_activity_exec_acquire',
-                targets=[PortRef('Start', 'activity_exec_acquire')],
-            ),
-            ExportPort('Port', 'Scan_write', targets=[PortRef('Scan', 'write')]),
-            ExportPort(
-                'Port',
-                'Start_activity_exec_stop',
-                targets=[PortRef('Start', 'activity_exec_stop')],
-            ),
-            ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
-            ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
-            ExportPort('Port', 'Start_activity_abort', targets=[PortRef('Start', 'activity_abort')]),
-            ExportPort('Port', 'Start_control_cancel', targets=[PortRef('Start', 'control_cancel')]),
-            ExportPort(
-                'Port',
-                'acquisition_timer_sleep',
-                targets=[PortRef('acquisition', 'timer_sleep')],
-            ),
-            ExportPort(
-                'Port',
-                'acquisition_scheduler_sleep',
-                targets=[PortRef('acquisition', 'scheduler_sleep')],
-            ),
+            ExportPort('Port', 'Start_exec_start', targets=[PortRef('Start_exec_start', 'ep')]),
+            ExportPort('Port', 'Start_exec_acquire', targets=[PortRef('Start_exec_acquire', 'ep')]),
+            ExportPort('Port', 'Start_exec_stop', targets=[PortRef('Start_exec_stop', 'ep')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
+            ExportPort('Port', 'acquisition_sleep', targets=[PortRef('acquisition_sleep', 'ep')]),
             ExportPort(
                 'Status',
                 'Start_control_status',
@@ -4918,6 +5306,90 @@ def NDD_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'motion_exec_start',
+                ports=[PortRef('motion', 'exec_start'), PortRef('Speed', 'write')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'motion_exec_publish',
+                ports=[PortRef('motion', 'exec_publish'), PortRef('Speed', 'write')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'motion_exec_stop',
+                ports=[PortRef('motion', 'exec_stop'), PortRef('Speed', 'write')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'GoTo_exec_start',
+                ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PPP',
+                'GoTo_exec_plan',
+                ports=[
+                    PortRef('motion', 'scheduler_exec'),
+                    PortRef('GoTo', 'activity_exec_plan'),
+                    PortRef('Speed', 'write'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PPP',
+                'GoTo_exec_arrived',
+                ports=[
+                    PortRef('motion', 'scheduler_exec'),
+                    PortRef('GoTo', 'activity_exec_arrived'),
+                    PortRef('Speed', 'write'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PPP',
+                'GoTo_exec_stop',
+                ports=[
+                    PortRef('motion', 'scheduler_exec'),
+                    PortRef('GoTo', 'activity_exec_stop'),
+                    PortRef('Speed', 'write'),
+                ],
+            ),
+            ConnectorInstance(
+                'BroadcastX_1',
+                'LaserRF_Stop_start',
+                ports=[PortRef('GoTo', 'LaserRF_Stop_start')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_1_1',
+                'Stop_start',
+                ports=[PortRef('Stop', 'start'), PortRef('GoTo', 'Stop_start')],
+            ),
+            ConnectorInstance(
+                'BroadcastX_1',
+                'RFLEX_Stop_start',
+                ports=[PortRef('GoTo', 'RFLEX_Stop_start')],
+            ),
+            ConnectorInstance('RendezvousX_P', 'motion_sleep', ports=[PortRef('motion', 'sleep')]),
+            ConnectorInstance(
+                'NDD_GoTo_Trigger_000001234_1',
+                'GoTo_trigger',
+                ports=[
+                    PortRef('requests', 'GoTo'),
+                    PortRef('GoTo', 'control_trigger'),
+                    PortRef('SetParams', 'control_status'),
+                    PortRef('SetSpeed', 'control_status'),
+                    PortRef('SetDataSource', 'control_status'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'GoTo_refuse_goto_after_pom_run',
+                ports=[PortRef('requests', 'GoTo'), PortRef('GoTo', 'control_refuse')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'GoTo_refuse_goto_needs_laser_and_map',
+                ports=[PortRef('requests', 'GoTo'), PortRef('GoTo', 'control_refuse')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'SetDataSource_exec_start',
                 ports=[
@@ -4939,14 +5411,9 @@ def NDD_Module() -> CompoundType:
                 comment='codel nddStop of state start',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'motion_period',
-                ports=[
-                    PortRef('motion', 'timer_trigger'),
-                    PortRef('motion', 'scheduler_period'),
-                    PortRef('motion', 'permanent_wake'),
-                    PortRef('GoTo', 'activity_wake'),
-                ],
+                ports=[PortRef('motion', 'period'), PortRef('GoTo', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.motion:period'})],
                 comment='a period starts: paused activities wake up',
             ),
@@ -5012,75 +5479,32 @@ def NDD_Module() -> CompoundType:
             ),
         ],
         ports=[
+            ExportPort('Port', 'motion_exec_start', targets=[PortRef('motion_exec_start', 'ep')]),
             ExportPort(
                 'Port',
-                'motion_scheduler_exec',
-                targets=[PortRef('motion', 'scheduler_exec')],
+                'motion_exec_publish',
+                targets=[PortRef('motion_exec_publish', 'ep')],
             ),
+            ExportPort('Port', 'motion_exec_stop', targets=[PortRef('motion_exec_stop', 'ep')]),
+            ExportPort('Port', 'GoTo_exec_start', targets=[PortRef('GoTo_exec_start', 'ep')]),
+            ExportPort('Port', 'GoTo_exec_plan', targets=[PortRef('GoTo_exec_plan', 'ep')]),
+            ExportPort('Port', 'GoTo_exec_arrived', targets=[PortRef('GoTo_exec_arrived', 'ep')]),
+            ExportPort('Port', 'GoTo_exec_stop', targets=[PortRef('GoTo_exec_stop', 'ep')]),
+            ExportPort('Port', 'LaserRF_Stop_start', targets=[PortRef('LaserRF_Stop_start', 'ep')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
+            ExportPort('Port', 'RFLEX_Stop_start', targets=[PortRef('RFLEX_Stop_start', 'ep')]),
+            ExportPort('Port', 'motion_sleep', targets=[PortRef('motion_sleep', 'ep')]),
+            ExportPort('Bools3', 'GoTo_trigger', targets=[PortRef('GoTo_trigger', 'ep')]),
             ExportPort(
                 'Port',
-                'motion_permanent_exec_start',
-                targets=[PortRef('motion', 'permanent_exec_start')],
-            ),
-            ExportPort('Port', 'Speed_write', targets=[PortRef('Speed', 'write')]),
-            ExportPort(
-                'Port',
-                'motion_permanent_exec_publish',
-                targets=[PortRef('motion', 'permanent_exec_publish')],
-            ),
-            ExportPort(
-                'Port',
-                'motion_permanent_exec_stop',
-                targets=[PortRef('motion', 'permanent_exec_stop')],
-            ),
-            ExportPort(
-                'Port',
-                'GoTo_activity_exec_start',
-                targets=[PortRef('GoTo', 'activity_exec_start')],
+                'GoTo_refuse_goto_after_pom_run',
+                targets=[PortRef('GoTo_refuse_goto_after_pom_run', 'ep')],
             ),
             ExportPort(
                 'Port',
-                'GoTo_activity_exec_plan',
-                targets=[PortRef('GoTo', 'activity_exec_plan')],
+                'GoTo_refuse_goto_needs_laser_and_map',
+                targets=[PortRef('GoTo_refuse_goto_needs_laser_and_map', 'ep')],
             ),
-            ExportPort(
-                'Port',
-                'GoTo_activity_exec_arrived',
-                targets=[PortRef('GoTo', 'activity_exec_arrived')],
-            ),
-            ExportPort(
-                'Port',
-                'GoTo_activity_exec_stop',
-                targets=[PortRef('GoTo', 'activity_exec_stop')],
-            ),
-            ExportPort('Port', 'GoTo_activity_abort', targets=[PortRef('GoTo', 'activity_abort')]),
-            ExportPort('Port', 'GoTo_control_cancel', targets=[PortRef('GoTo', 'control_cancel')]),
-            ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
-            ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
-            ExportPort('Port', 'motion_timer_sleep', targets=[PortRef('motion', 'timer_sleep')]),
-            ExportPort(
-                'Port',
-                'motion_scheduler_sleep',
-                targets=[PortRef('motion', 'scheduler_sleep')],
-            ),
-            ExportPort('Port', 'requests_GoTo', targets=[PortRef('requests', 'GoTo')]),
-            ExportPort('Port', 'GoTo_control_trigger', targets=[PortRef('GoTo', 'control_trigger')]),
-            ExportPort(
-                'Status',
-                'SetParams_control_status',
-                targets=[PortRef('SetParams', 'control_status')],
-            ),
-            ExportPort(
-                'Status',
-                'SetSpeed_control_status',
-                targets=[PortRef('SetSpeed', 'control_status')],
-            ),
-            ExportPort(
-                'Status',
-                'SetDataSource_control_status',
-                targets=[PortRef('SetDataSource', 'control_status')],
-            ),
-            ExportPort('Port', 'GoTo_control_refuse', targets=[PortRef('GoTo', 'control_refuse')]),
             ExportPort('Status', 'GoTo_control_status', targets=[PortRef('GoTo', 'control_status')]),
         ],
     )
@@ -5100,27 +5524,28 @@ def POM_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PP',
+                'RendezvousX_PP',
+                'Reset_trigger',
+                ports=[PortRef('requests', 'Reset'), PortRef('Reset', 'control_trigger')],
+            ),
+            ConnectorInstance(
+                'Rendezvous_P',
                 'fusion_exec_start',
-                ports=[PortRef('fusion', 'scheduler_exec'), PortRef('fusion', 'permanent_exec_start')],
+                ports=[PortRef('fusion', 'exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_start'})],
                 comment='codel pomInitTask of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_PP',
                 'fusion_exec_update',
-                ports=[
-                    PortRef('fusion', 'scheduler_exec'),
-                    PortRef('fusion', 'permanent_exec_update'),
-                    PortRef('Pos', 'write'),
-                ],
+                ports=[PortRef('fusion', 'exec_update'), PortRef('Pos', 'write')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_update'})],
                 comment='codel pomUpdate of state update',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'fusion_exec_stop',
-                ports=[PortRef('fusion', 'scheduler_exec'), PortRef('fusion', 'permanent_exec_stop')],
+                ports=[PortRef('fusion', 'exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_stop'})],
                 comment='codel pomEnd of state stop',
             ),
@@ -5150,33 +5575,23 @@ def POM_Module() -> CompoundType:
                 comment='codel pomReset of state start',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'Reset_start',
-                ports=[
-                    PortRef('Reset', 'control_start'),
-                    PortRef('Reset', 'activity_start'),
-                    PortRef('Run', 'activity_abort'),
-                    PortRef('Run', 'control_cancel'),
-                ],
+                ports=[PortRef('Reset', 'start'), PortRef('Run', 'Reset_start')],
                 annotations=[Annotation('label', arguments={'name': 'POM.Reset:start'})],
                 comment='Reset interrupts Run (POM.Reset.interrupts)',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'fusion_period',
-                ports=[
-                    PortRef('fusion', 'timer_trigger'),
-                    PortRef('fusion', 'scheduler_period'),
-                    PortRef('fusion', 'permanent_wake'),
-                    PortRef('Run', 'activity_wake'),
-                ],
+                ports=[PortRef('fusion', 'period'), PortRef('Run', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:period'})],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'fusion_sleep',
-                ports=[PortRef('fusion', 'timer_sleep'), PortRef('fusion', 'scheduler_sleep')],
+                ports=[PortRef('fusion', 'sleep')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:sleep'})],
             ),
             ConnectorInstance(
@@ -5244,12 +5659,7 @@ def POM_Module() -> CompoundType:
         ],
         ports=[
             ExportPort('Status', 'Run_control_status', targets=[PortRef('Run', 'control_status')]),
-            ExportPort('Port', 'requests_Reset', targets=[PortRef('requests', 'Reset')]),
-            ExportPort(
-                'Port',
-                'Reset_control_trigger',
-                targets=[PortRef('Reset', 'control_trigger')],
-            ),
+            ExportPort('Port', 'Reset_trigger', targets=[PortRef('Reset_trigger', 'ep')]),
         ],
     )
 
@@ -5270,6 +5680,47 @@ def RFLEX_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'servo_exec_start',
+                ports=[PortRef('servo', 'exec_start'), PortRef('Odo', 'write')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'servo_exec_odometry',
+                ports=[PortRef('servo', 'exec_odometry'), PortRef('Odo', 'write')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_P',
+                'servo_exec_stop',
+                ports=[PortRef('servo', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'Init_exec_start',
+                ports=[PortRef('servo', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'TrackSpeed_exec_start',
+                ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'TrackSpeed_exec_track',
+                ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_track')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'TrackSpeed_exec_stop',
+                ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_stop')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_1_1',
+                'Stop_start',
+                ports=[PortRef('Stop', 'start'), PortRef('TrackSpeed', 'Stop_start')],
+            ),
+            ConnectorInstance('RendezvousX_P', 'servo_sleep', ports=[PortRef('servo', 'sleep')]),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_start',
                 ports=[PortRef('control', 'scheduler_exec'), PortRef('Stop', 'activity_exec_start')],
@@ -5277,14 +5728,9 @@ def RFLEX_Module() -> CompoundType:
                 comment='codel rflexStop of state start',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'servo_period',
-                ports=[
-                    PortRef('servo', 'timer_trigger'),
-                    PortRef('servo', 'scheduler_period'),
-                    PortRef('servo', 'permanent_wake'),
-                    PortRef('TrackSpeed', 'activity_wake'),
-                ],
+                ports=[PortRef('servo', 'period'), PortRef('TrackSpeed', 'activity_wake')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:period'})],
                 comment='a period starts: paused activities wake up',
             ),
@@ -5350,61 +5796,31 @@ def RFLEX_Module() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'servo_scheduler_exec', targets=[PortRef('servo', 'scheduler_exec')]),
+            ExportPort('Port', 'servo_exec_start', targets=[PortRef('servo_exec_start', 'ep')]),
             ExportPort(
                 'Port',
-                'servo_permanent_exec_start',
-                targets=[PortRef('servo', 'permanent_exec_start')],
+                'servo_exec_odometry',
+                targets=[PortRef('servo_exec_odometry', 'ep')],
             ),
-            ExportPort('Port', 'Odo_write', targets=[PortRef('Odo', 'write')]),
+            ExportPort('Port', 'servo_exec_stop', targets=[PortRef('servo_exec_stop', 'ep')]),
+            ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
                 'Port',
-                'servo_permanent_exec_odometry',
-                targets=[PortRef('servo', 'permanent_exec_odometry')],
-            ),
-            ExportPort(
-                'Port',
-                'servo_permanent_exec_stop',
-                targets=[PortRef('servo', 'permanent_exec_stop')],
+                'TrackSpeed_exec_start',
+                targets=[PortRef('TrackSpeed_exec_start', 'ep')],
             ),
             ExportPort(
                 'Port',
-                'Init_activity_exec_start',
-                targets=[PortRef('Init', 'activity_exec_start')],
+                'TrackSpeed_exec_track',
+                targets=[PortRef('TrackSpeed_exec_track', 'ep')],
             ),
             ExportPort(
                 'Port',
-                'TrackSpeed_activity_exec_start',
-                targets=[PortRef('TrackSpeed', 'activity_exec_start')],
+                'TrackSpeed_exec_stop',
+                targets=[PortRef('TrackSpeed_exec_stop', 'ep')],
             ),
-            ExportPort(
-                'Port',
-                'TrackSpeed_activity_exec_track',
-                targets=[PortRef('TrackSpeed', 'activity_exec_track')],
-            ),
-            ExportPort(
-                'Port',
-                'TrackSpeed_activity_exec_stop',
-                targets=[PortRef('TrackSpeed', 'activity_exec_stop')],
-            ),
-            ExportPort('Port', 'Stop_control_start', targets=[PortRef('Stop', 'control_start')]),
-            ExportPort('Port', 'Stop_activity_start', targets=[PortRef('Stop', 'activity_start')]),
-            ExportPort(
-                'Port',
-                'TrackSpeed_activity_abort',
-                targets=[PortRef('TrackSpeed', 'activity_abort')],
-            ),
-            ExportPort(
-                'Port',
-                'TrackSpeed_control_cancel',
-                targets=[PortRef('TrackSpeed', 'control_cancel')],
-            ),
-            ExportPort('Port', 'servo_timer_sleep', targets=[PortRef('servo', 'timer_sleep')]),
-            ExportPort(
-                'Port',
-                'servo_scheduler_sleep',
-                targets=[PortRef('servo', 'scheduler_sleep')],
-            ),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
+            ExportPort('Port', 'servo_sleep', targets=[PortRef('servo_sleep', 'ep')]),
             ExportPort(
                 'Status',
                 'TrackSpeed_control_status',
@@ -5427,284 +5843,189 @@ def DALA() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'LaserRF_acquisition_exec_start',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
-                    PortRef('LaserRF', 'acquisition_permanent_exec_start'),
-                ],
+                ports=[PortRef('LaserRF', 'acquisition_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:exec_start'})],
                 comment='codel lrfInitTask of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'LaserRF_Init_exec_start',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
-                    PortRef('LaserRF', 'Init_activity_exec_start'),
-                ],
+                ports=[PortRef('LaserRF', 'Init_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_start'})],
                 comment='codel lrfOpen of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'LaserRF_Init_exec_configure',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
-                    PortRef('LaserRF', 'Init_activity_exec_configure'),
-                ],
+                ports=[PortRef('LaserRF', 'Init_exec_configure')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_configure'})],
                 comment='codel lrfConfigure of state configure',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'LaserRF_Start_exec_start',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
-                    PortRef('LaserRF', 'Start_activity_exec_start'),
-                ],
+                ports=[PortRef('LaserRF', 'Start_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_start'})],
                 comment='codel lrfStartAcquisition of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'LaserRF_Start_exec_acquire',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
-                    PortRef('LaserRF', 'Start_activity_exec_acquire'),
-                    PortRef('LaserRF', 'Scan_write'),
-                ],
+                ports=[PortRef('LaserRF', 'Start_exec_acquire')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_acquire'})],
                 comment='codel lrfAcquire of state acquire',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'LaserRF_Start_exec_stop',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_scheduler_exec'),
-                    PortRef('LaserRF', 'Start_activity_exec_stop'),
-                ],
+                ports=[PortRef('LaserRF', 'Start_exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_stop'})],
                 comment='codel lrfStopAcquisition of state stop',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'NDD_motion_exec_start',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'motion_permanent_exec_start'),
-                    PortRef('NDD', 'Speed_write'),
-                ],
+                ports=[PortRef('NDD', 'motion_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_start'})],
                 comment='codel nddInit of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'NDD_motion_exec_publish',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'motion_permanent_exec_publish'),
-                    PortRef('NDD', 'Speed_write'),
-                ],
+                ports=[PortRef('NDD', 'motion_exec_publish')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_publish'})],
                 comment='codel nddPublishIdle of state publish',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'NDD_motion_exec_stop',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'motion_permanent_exec_stop'),
-                    PortRef('NDD', 'Speed_write'),
-                ],
+                ports=[PortRef('NDD', 'motion_exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_stop'})],
                 comment='codel nddShutdown of state stop',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'NDD_GoTo_exec_start',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'GoTo_activity_exec_start'),
-                ],
+                ports=[PortRef('NDD', 'GoTo_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'})],
                 comment='codel nddStartGoTo of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'NDD_GoTo_exec_plan',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'GoTo_activity_exec_plan'),
-                    PortRef('NDD', 'Speed_write'),
-                ],
+                ports=[PortRef('NDD', 'GoTo_exec_plan')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_plan'})],
                 comment='codel nddPlan of state plan',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'NDD_GoTo_exec_arrived',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'GoTo_activity_exec_arrived'),
-                    PortRef('NDD', 'Speed_write'),
-                ],
+                ports=[PortRef('NDD', 'GoTo_exec_arrived')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_arrived'})],
                 comment='codel nddArrived of state arrived',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'NDD_GoTo_exec_stop',
-                ports=[
-                    PortRef('NDD', 'motion_scheduler_exec'),
-                    PortRef('NDD', 'GoTo_activity_exec_stop'),
-                    PortRef('NDD', 'Speed_write'),
-                ],
+                ports=[PortRef('NDD', 'GoTo_exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_stop'})],
                 comment='codel nddStopGoTo of state stop',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'RFLEX_servo_exec_start',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'servo_permanent_exec_start'),
-                    PortRef('RFLEX', 'Odo_write'),
-                ],
+                ports=[PortRef('RFLEX', 'servo_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_start'})],
                 comment='codel rflexInitOdometry of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_P',
                 'RFLEX_servo_exec_odometry',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'servo_permanent_exec_odometry'),
-                    PortRef('RFLEX', 'Odo_write'),
-                ],
+                ports=[PortRef('RFLEX', 'servo_exec_odometry')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'})],
                 comment='codel rflexOdometry of state odometry',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'RFLEX_servo_exec_stop',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'servo_permanent_exec_stop'),
-                ],
+                ports=[PortRef('RFLEX', 'servo_exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_stop'})],
                 comment='codel rflexClose of state stop',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'RFLEX_Init_exec_start',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'Init_activity_exec_start'),
-                ],
+                ports=[PortRef('RFLEX', 'Init_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'})],
                 comment='codel rflexOpen of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'RFLEX_TrackSpeed_exec_start',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'TrackSpeed_activity_exec_start'),
-                ],
+                ports=[PortRef('RFLEX', 'TrackSpeed_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_start'})],
                 comment='codel rflexStartTracking of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'RFLEX_TrackSpeed_exec_track',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'TrackSpeed_activity_exec_track'),
-                ],
+                ports=[PortRef('RFLEX', 'TrackSpeed_exec_track')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_track'})],
                 comment='codel rflexTrack of state track',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'RFLEX_TrackSpeed_exec_stop',
-                ports=[
-                    PortRef('RFLEX', 'servo_scheduler_exec'),
-                    PortRef('RFLEX', 'TrackSpeed_activity_exec_stop'),
-                ],
+                ports=[PortRef('RFLEX', 'TrackSpeed_exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_stop'})],
                 comment='codel rflexBrake of state stop',
             ),
             ConnectorInstance(
-                'Triggered_2_4',
+                'Triggered_1_1',
                 'LaserRF_Stop_start',
-                ports=[
-                    PortRef('LaserRF', 'Stop_control_start'),
-                    PortRef('LaserRF', 'Stop_activity_start'),
-                    PortRef('LaserRF', 'Start_activity_abort'),
-                    PortRef('NDD', 'GoTo_activity_abort'),
-                    PortRef('LaserRF', 'Start_control_cancel'),
-                    PortRef('NDD', 'GoTo_control_cancel'),
-                ],
+                ports=[PortRef('LaserRF', 'Stop_start'), PortRef('NDD', 'LaserRF_Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_0',
                 'NDD_Stop_start',
-                ports=[
-                    PortRef('NDD', 'Stop_control_start'),
-                    PortRef('NDD', 'Stop_activity_start'),
-                    PortRef('NDD', 'GoTo_activity_abort'),
-                    PortRef('NDD', 'GoTo_control_cancel'),
-                ],
+                ports=[PortRef('NDD', 'Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.Stop:start'})],
                 comment='Stop interrupts GoTo (NDD.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'Triggered_2_4',
+                'Triggered_1_1',
                 'RFLEX_Stop_start',
-                ports=[
-                    PortRef('RFLEX', 'Stop_control_start'),
-                    PortRef('RFLEX', 'Stop_activity_start'),
-                    PortRef('RFLEX', 'TrackSpeed_activity_abort'),
-                    PortRef('NDD', 'GoTo_activity_abort'),
-                    PortRef('RFLEX', 'TrackSpeed_control_cancel'),
-                    PortRef('NDD', 'GoTo_control_cancel'),
-                ],
+                ports=[PortRef('RFLEX', 'Stop_start'), PortRef('NDD', 'RFLEX_Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
                 comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'LaserRF_acquisition_sleep',
-                ports=[
-                    PortRef('LaserRF', 'acquisition_timer_sleep'),
-                    PortRef('LaserRF', 'acquisition_scheduler_sleep'),
-                ],
+                ports=[PortRef('LaserRF', 'acquisition_sleep')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:sleep'})],
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'NDD_motion_sleep',
-                ports=[PortRef('NDD', 'motion_timer_sleep'), PortRef('NDD', 'motion_scheduler_sleep')],
+                ports=[PortRef('NDD', 'motion_sleep')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.motion:sleep'})],
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'RFLEX_servo_sleep',
-                ports=[PortRef('RFLEX', 'servo_timer_sleep'), PortRef('RFLEX', 'servo_scheduler_sleep')],
+                ports=[PortRef('RFLEX', 'servo_sleep')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:sleep'})],
             ),
             ConnectorInstance(
-                'NDD_GoTo_Trigger',
+                'NDD_GoTo_Trigger_000001234',
                 'NDD_GoTo_trigger',
                 ports=[
-                    PortRef('NDD', 'requests_GoTo'),
-                    PortRef('NDD', 'GoTo_control_trigger'),
-                    PortRef('NDD', 'SetParams_control_status'),
-                    PortRef('NDD', 'SetSpeed_control_status'),
-                    PortRef('NDD', 'SetDataSource_control_status'),
+                    PortRef('NDD', 'GoTo_trigger'),
                     PortRef('POM', 'Run_control_status'),
                     PortRef('LaserRF', 'Start_control_status'),
                     PortRef('Aspect', 'Run_control_status'),
@@ -5717,11 +6038,10 @@ def DALA() -> CompoundType:
                 comment='NDD.GoTo.after: NDD.GoTo only after NDD.SetParams, NDD.SetSpeed, NDD.SetDataSource completed; goto-after-pom-run: NDD.GoTo only after POM.Run completed; goto-needs-laser-and-map: NDD.GoTo only while LaserRF.Start, Aspect.Run run; goto-waits-for-base: NDD.GoTo only while RFLEX.TrackSpeed run',
             ),
             ConnectorInstance(
-                'NDD_GoTo_Refuse_goto_after_pom_run',
+                'NDD_GoTo_Refuse_goto_after_pom_run_001',
                 'NDD_GoTo_refuse_goto_after_pom_run',
                 ports=[
-                    PortRef('NDD', 'requests_GoTo'),
-                    PortRef('NDD', 'GoTo_control_refuse'),
+                    PortRef('NDD', 'GoTo_refuse_goto_after_pom_run'),
                     PortRef('POM', 'Run_control_status'),
                 ],
                 annotations=[
@@ -5731,11 +6051,10 @@ def DALA() -> CompoundType:
                 comment='rule goto-after-pom-run: refuse the request unless NDD.GoTo only after POM.Run completed',
             ),
             ConnectorInstance(
-                'NDD_GoTo_Refuse_goto_needs_laser_and_map',
+                'NDD_GoTo_Refuse_goto_needs_laser_and_map_0012',
                 'NDD_GoTo_refuse_goto_needs_laser_and_map',
                 ports=[
-                    PortRef('NDD', 'requests_GoTo'),
-                    PortRef('NDD', 'GoTo_control_refuse'),
+                    PortRef('NDD', 'GoTo_refuse_goto_needs_laser_and_map'),
                     PortRef('LaserRF', 'Start_control_status'),
                     PortRef('Aspect', 'Run_control_status'),
                 ],
@@ -5746,13 +6065,9 @@ def DALA() -> CompoundType:
                 comment='rule goto-needs-laser-and-map: refuse the request unless NDD.GoTo only while LaserRF.Start, Aspect.Run run',
             ),
             ConnectorInstance(
-                'POM_Reset_Trigger',
+                'POM_Reset_Trigger_001',
                 'POM_Reset_trigger',
-                ports=[
-                    PortRef('POM', 'requests_Reset'),
-                    PortRef('POM', 'Reset_control_trigger'),
-                    PortRef('NDD', 'GoTo_control_status'),
-                ],
+                ports=[PortRef('POM', 'Reset_trigger'), PortRef('NDD', 'GoTo_control_status')],
                 annotations=[
                     Annotation('label', arguments={'name': 'POM.Reset:trigger'}),
                     Annotation('wait', arguments={'rules': 'no-reset-while-navigating'}),
@@ -5994,7 +6309,7 @@ def DALA() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 15 connector types, 34 compound types."""
+    """The whole model: 48 atom types, 30 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -6378,10 +6693,15 @@ def package() -> Package:
                     ),
                 ],
             ),
-            ExternFunction('request_pending', return_type='bool', param_types=['string']),
-            ExternFunction('take_request', param_types=['string']),
+            ExternFunction(
+                'request_pending',
+                return_type='bool',
+                param_types=['string'],
+                param_const=[True],
+            ),
+            ExternFunction('take_request', param_types=['string'], param_const=[True]),
         ],
-        port_types=[Port(), Status()],
+        port_types=[Port(), Status(), Bools3()],
         atom_types=[
             Timer(),
             Scheduler(),
@@ -6433,18 +6753,33 @@ def package() -> Package:
             RFLEX_Stop_Activity(),
         ],
         connector_types=[
+            BroadcastX_1(),
+            BroadcastX_2(),
             LaserRF_Start_Refuse_after(),
             LaserRF_Start_Trigger(),
             NDD_GoTo_Refuse_after(),
             NDD_GoTo_Refuse_goto_after_pom_run(),
+            NDD_GoTo_Refuse_goto_after_pom_run_001(),
             NDD_GoTo_Refuse_goto_needs_laser_and_map(),
+            NDD_GoTo_Refuse_goto_needs_laser_and_map_0012(),
             NDD_GoTo_Trigger(),
+            NDD_GoTo_Trigger_000001234(),
+            NDD_GoTo_Trigger_000001234_1(),
             POM_Reset_Trigger(),
+            POM_Reset_Trigger_001(),
             RFLEX_TrackSpeed_Refuse_after(),
             RFLEX_TrackSpeed_Trigger(),
+            RendezvousX_P(),
+            RendezvousX_PP(),
+            RendezvousX_PPP(),
             Rendezvous_P(),
             Rendezvous_PP(),
             Rendezvous_PPP(),
+            TriggeredX_1_1(),
+            TriggeredX_2_1(),
+            TriggeredX_2_2(),
+            Triggered_1_0(),
+            Triggered_1_1(),
             Triggered_2_1(),
             Triggered_2_2(),
             Triggered_2_4(),

@@ -150,6 +150,8 @@ class _Problems:
             self.name(w, "function", f.name)
             for t in ([f.return_type] if f.return_type else []) + f.param_types:
                 self.type_name(w, "type", t)
+            if len(f.param_const) != len(f.param_types):
+                self.add(w, f"{len(f.param_const)} const flag(s) for {len(f.param_types)} parameter(s)")
             self.annotations(w, f.annotations)
         for pt in pkg.port_types:
             w = f"port type {pt.name}"
@@ -256,8 +258,6 @@ class _Problems:
                 self.add(where, "an interaction names no port")
             for p in spec.ports:
                 self.name(w, "port", p)
-            if spec.guard is None and not spec.up and not spec.down:
-                self.add(w, "no provided, up or down: BIP2 rejects an empty interaction block; drop it")
             if spec.guard is not None:
                 self.expr(w, spec.guard)
             self.stmts(w, spec.up)

@@ -1,5 +1,9 @@
 """Component-based assembly: atoms in a tree of compounds, connectors placed where their ports meet.
 
+A connector never binds two ports of one component of its compound (a BIP2
+rule): ends that meet in a sub-compound are joined there by a sub-connector
+whose port the sub-compound exports.
+
 The builders describe *what* synchronises (a :class:`Wire` between atom ports,
 a :class:`Rank` between two wires) without caring in which compound the
 connector must live.  :meth:`Assembly.compounds` places every connector in the
@@ -23,9 +27,12 @@ from runtime.model import (
     ExportPort,
     InteractionPattern,
     PortRef,
+    PortType,
     Priority,
 )
 from runtime.model.expressions import Expr
+
+from genom2bip.build.split import SplitError, split_connector
 
 Path = tuple[str, ...]
 
@@ -101,8 +108,11 @@ def _common_prefix(paths: list[Path]) -> Path:
 class Assembly:
     """Collects groups, atoms, wires and ranks; turns them into BIP compound types."""
 
-    def __init__(self, port_type: "Callable[[str, str], str]") -> None:
+    def __init__(self, port_type: "Callable[[str, str], str]",
+                 register: "Callable[[ConnectorType], ConnectorType]" = lambda t: t) -> None:
         self.port_type = port_type  # (atom type name, port name) -> port type name, for exports
+        self.register = register  # records a connector type the placement creates; returns the one to use
+        self.port_types: dict[str, PortType] = {}  # port types the placement creates (data carried up)
         self.groups: dict[Path, Group] = {}
         self.atoms: dict[Path, AtomInstance] = {}
         self.children: dict[Path, list[Path]] = {}
@@ -173,18 +183,54 @@ class Assembly:
 
         connectors: dict[Path, list[ConnectorInstance]] = {p: [] for p in self.groups}
 
+        def join(w: Wire, ctype: ConnectorType, ends: list[End], at: Path) -> tuple[ConnectorType, list[PortRef]]:
+            """The connector type and ports joining ``ends`` from ``at``, binding each component of ``at`` once.
+
+            Ends that meet in one sub-compound are joined there by a
+            sub-connector whose port that compound exports (genom2bip.build.split).
+            """
+            groups: dict[str, list[int]] = {}
+            for i, e in enumerate(ends):
+                groups.setdefault(e.atom[len(at)], []).append(i)
+            if all(len(g) == 1 for g in groups.values()):
+                return ctype, [ref(e, at) for e in ends]
+            keys = list(groups)
+            sp = split_connector(ctype, list(groups.values()), self.port_types)
+            refs: list[PortRef] = []
+            for key, g, sub in zip(keys, groups.values(), sp.subs):
+                if sub is None:
+                    refs.append(ref(ends[g[0]], at))
+                    continue
+                child = at + (key,)
+                if child not in self.groups:
+                    raise SplitError(f"connector {local_name(w, at)} binds atom {'.'.join(child)} twice")
+                sub = self.register(sub)
+                name = sub_name(w, child)
+                inner_type, inner = join(w, sub, [ends[i] for i in g], child)
+                connectors[child].append(ConnectorInstance(inner_type.name, name, inner))
+                if name in exports[child]:
+                    raise SplitError(f"compound {'.'.join(child)} already exports a port named {name}")
+                exports[child][name] = ExportPort(sub.export.port_type, name, [PortRef(name, sub.export.name)])
+                refs.append(PortRef(key, name))
+            return self.register(sp.outer), [refs[k] for k in sp.order]
+
+        def sub_name(w: Wire, at: Path) -> str:
+            """A sub-connector's name: the wire's name relative to the compound both it and ``at`` are in."""
+            common = _common_prefix([w.owner, at])
+            return "_".join(w.owner[len(common):] + (w.name,))
+
         def place(w: Wire, at: Path) -> str:
-            ports = []
-            for e in w.ends:
-                if isinstance(e, Wire):
-                    ports.append(PortRef(place(e, at), e.type.export.name))
-                else:
-                    ports.append(ref(e, at))
             name = local_name(w, at)
+            if any(isinstance(e, Wire) for e in w.ends):
+                ctype = w.type
+                ports = [PortRef(place(e, at), e.type.export.name) if isinstance(e, Wire) else ref(e, at)
+                         for e in w.ends]
+            else:
+                ctype, ports = join(w, w.type, list(w.ends), at)
             annotations = list(w.annotations)
             if w.label:
                 annotations.insert(0, Annotation("label", {"name": w.label}))
-            connectors[at].append(ConnectorInstance(w.type.name, name, ports, annotations=annotations, comment=w.comment))
+            connectors[at].append(ConnectorInstance(ctype.name, name, ports, annotations=annotations, comment=w.comment))
             names[id(w)] = name
             return name
 

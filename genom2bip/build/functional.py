@@ -73,7 +73,7 @@ class FunctionalLevel:
         self.atom_types: dict[str, AtomType] = {}
         self.connector_types: dict[str, ConnectorType] = {}
         self.externs: dict[str, ExternFunction] = {}
-        self.asm = Assembly(self._port_type)
+        self.asm = Assembly(self._port_type, self._connector)
         self.services: dict[tuple[str, str], ServiceParts] = {}  # (component, service) as written
         self.task_execs: dict[Path, list[Wire]] = {}
         self.wakes: dict[Path, list[End]] = {}
@@ -106,8 +106,9 @@ class FunctionalLevel:
         self._atom_type(library.timer_type(), "Timer of a periodic task: a period starts (trigger), then ends (sleep).")
         self._atom_type(library.scheduler_type(), "Scheduler of a task: opens a period, authorises codels, closes it.")
         self._atom_type(library.poster_type(), "Poster (GenoM port out): written by the codels that have it as port out.")
-        self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"])
-        self.externs["take_request"] = ExternFunction("take_request", None, ["string"])
+        # const: a guard may call only functions that cannot change their arguments (BIP2).
+        self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"], param_const=[True])
+        self.externs["take_request"] = ExternFunction("take_request", None, ["string"], param_const=[True])
         self.asm.group((), ident(self.system.upper()), comment=f"functional level {self.system}")
         for component in self.description.components:
             self._module(component)
@@ -115,13 +116,14 @@ class FunctionalLevel:
         for task_path, execs in self.task_execs.items():
             self._period(task_path[0], task_path, execs)
         self._triggers()
+        compounds = self.asm.compounds()  # may add connector and port types: before the package lists them
         return Package(
             name=ident(self.system.lower()),
             extern_functions=sorted(self.externs.values(), key=lambda f: f.name),
-            port_types=library.port_types(),
+            port_types=library.port_types() + sorted(self.asm.port_types.values(), key=lambda t: t.name),
             atom_types=list(self.atom_types.values()),
             connector_types=sorted(self.connector_types.values(), key=lambda c: c.name),
-            compound_types=self.asm.compounds(),
+            compound_types=compounds,
         )
 
     # -- one module -----------------------------------------------------------------------

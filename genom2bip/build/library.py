@@ -116,7 +116,7 @@ def rendezvous_type(types: tuple[str, ...], exported: bool = False) -> Connector
     )
 
 
-def triggered_type(together: int, receivers: int) -> ConnectorType:
+def triggered_type(together: int, receivers: int, exported: bool = False) -> ConnectorType:
     """``(p1 .. pk)' q1 .. qn``: the first ``together`` ports fire as one trigger, each receiver joins if it can.
 
     One connector instead of a rendezvous nested in a broadcast: the same
@@ -126,9 +126,21 @@ def triggered_type(together: int, receivers: int) -> ConnectorType:
     head = DefineGroup([DefinePort(n) for n in names[:together]], trigger=True)
     suffix = f"{together}_{receivers}"
     return ConnectorType(
-        name=f"Triggered_{suffix}",
+        name=f"{'TriggeredX' if exported else 'Triggered'}_{suffix}",
         params=[ConnectorParam(PORT, n) for n in names],
         define=DefineGroup([head] + [DefinePort(n) for n in names[together:]]),
+        export=ConnectorExport(PORT, "ep") if exported else None,
+    )
+
+
+def broadcast_type(n: int, exported: bool = False) -> ConnectorType:
+    """``p1' .. pn'``: any non-empty set of the ports that can, together (receivers gathered in one component)."""
+    names = param_names(n)
+    return ConnectorType(
+        name=f"{'BroadcastX' if exported else 'Broadcast'}_{n}",
+        params=[ConnectorParam(PORT, x) for x in names],
+        define=DefineGroup([DefinePort(x, trigger=True) for x in names]),
+        export=ConnectorExport(PORT, "ep") if exported else None,
     )
 
 

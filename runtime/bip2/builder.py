@@ -160,24 +160,25 @@ class Builder(Transformer):
     def extern_function(self, children):
         annotations, ret, name, *params = children
         params = self._present(params)
-        f = ExternFunction(name.value, ret.text if ret else None, [p.text for p in params],
-                           annotations=annotations, span=self.span(name))
+        f = ExternFunction(name.value, ret.text if ret else None, [t.text for _, t in params],
+                           annotations=annotations, param_const=[c for c, _ in params], span=self.span(name))
         if ret:
             self.locator.note(f, ret.span, "return_type")
-        for i, p in enumerate(params):
-            self.locator.note(f, p.span, ("param_types", i))
+        for i, (_, t) in enumerate(params):
+            self.locator.note(f, t.span, ("param_types", i))
         return f
 
     def proto_param(self, children):
-        return children[0]  # parameter names document the prototype only
+        const, type_, _ = children  # parameter names document the prototype only
+        return const is not None, type_
 
     def port_type(self, children):
         annotations, name, *params = children
         return PortType(name.value, self._present(params), annotations=annotations, span=self.span(name))
 
     def data_param(self, children):
-        type_, name = children
-        p = DataParam(type_.text, name.value, span=self.span(name))
+        const, type_, name = children
+        p = DataParam(type_.text, name.value, const=const is not None, span=self.span(name))
         self.locator.note(p, type_.span, "type")
         return p
 

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import difflib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from runtime.bip2.locator import Locator
@@ -23,6 +23,7 @@ class Scope:
     variables: dict[str, str]
     assignable: set[str] = field(default_factory=set)
     port_data: Callable[[PortData], str | None] | None = None
+    guard: bool = False  # a guard may call only functions whose parameters are all const
 
 
 def suggestion(name: str, known) -> str | None:
@@ -40,6 +41,10 @@ class ExpressionChecker:
         self.loc = locator
         self.rep = reporter
         self.lenient_calls = lenient_calls  # functions may come from a used package we do not read
+
+    def guard(self, e, scope: Scope, at: Span) -> None:
+        """A guard: an expression in a constant context."""
+        self.expr(e, replace(scope, guard=True), at)
 
     def expr(self, e, scope: Scope, at: Span, value_needed: bool = True) -> None:
         if isinstance(e, Const):
@@ -77,6 +82,13 @@ class ExpressionChecker:
                 self.rep.error(span, f"extern function '{c.function}' takes {counts} argument(s), {len(c.args)} given")
             elif value_needed and all(p.return_type is None for p in matching):
                 self.rep.error(span, f"extern function '{c.function}' returns nothing and cannot be used in an expression")
+            elif scope.guard and c.args and not any(all(p.param_const) for p in matching):
+                # Verimag's rule noSideEffectInGuards: a guard must not hand data to a parameter that may change it.
+                proto = matching[0]
+                self.rep.error(span, f"{scope.where}: the guard calls '{c.function}', whose parameters are not all "
+                                     f"const (BIP2 forbids side effects in guards)",
+                               hint=f"declare it extern function {proto.return_type + ' ' if proto.return_type else ''}"
+                                    f"{c.function}({', '.join('const ' + t for t in proto.param_types)})")
         for a in c.args:
             self.expr(a, scope, at)
 

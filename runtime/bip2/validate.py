@@ -221,7 +221,7 @@ class _Checker:
             self._places(a, t, "sources", t.sources)
             self._places(a, t, "targets", t.targets)
             if t.guard is not None:
-                self.exprs.expr(t.guard, scope, at)
+                self.exprs.guard(t.guard, scope, at)
             self.exprs.stmts(t.action, scope, at)
         self.unique(a.priorities, "priority", where)
         for pr in a.priorities:
@@ -233,7 +233,7 @@ class _Checker:
             if pr.low == "*" and pr.high == "*":
                 self.error(self.loc.at(pr), f"priority {pr.name} of {where} has '*' on both sides")
             if pr.guard is not None:
-                self.exprs.expr(pr.guard, Scope(where, variables), self.loc.at(pr))
+                self.exprs.guard(pr.guard, Scope(where, variables), self.loc.at(pr))
 
     def _atom_port(self, a: AtomType, p, where: str, variables: dict[str, str]) -> None:
         decls = {d.name: d.type for d in a.params + a.data}
@@ -324,9 +324,6 @@ class _Checker:
             self.error(at, f"'on {text}' is not an interaction that the define of {where} allows")
         if not spec.ports:
             self.error(at, f"an interaction of {where} names no port")
-        if spec.guard is None and not spec.up and not spec.down:
-            self.error(at, f"'on {text}' in {where} has no provided, up or down",
-                       hint="BIP2 rejects an empty interaction block; drop it")
 
         def port_data(ref: PortData) -> str | None:
             if ref.port not in params:
@@ -341,7 +338,7 @@ class _Checker:
 
         scope = Scope(f"{where}, on {text}", variables, assignable, port_data)
         if spec.guard is not None:
-            self.exprs.expr(spec.guard, scope, at)
+            self.exprs.guard(spec.guard, scope, at)
         self.exprs.stmts(spec.up, scope, at)
         self.exprs.stmts(spec.down, scope, at)
 
@@ -361,6 +358,7 @@ class _Checker:
                 self.exprs.expr(arg, Scope(where, variables), self.loc.at(inst))
         for conn in k.connectors:
             self._connector_instance(k, conn, where)
+        self._binds_once(k, where)
         self._priorities(k, where, variables)
         self._exports(k, where)
 
@@ -393,6 +391,42 @@ class _Checker:
                            f"port type mismatch: parameter '{param.name}' of connector type {ctype.name} is "
                            f"{param.port_type}, but {ref} is {actual}")
 
+    def _binds_once(self, k: CompoundType, where: str) -> None:
+        """A connector that fires on its own reaches each component once, through sub-connectors too.
+
+        Verimag's rule ``connectorDoesNotBindTheSameComponentMoreThanOnce``:
+        only connectors without an exported port are checked, and a port
+        reached through another connector's exported port counts for the
+        components that connector binds.
+        """
+        components = {c.name for c in k.components}
+        local = {c.name: c for c in k.connectors if c.name not in components}
+        for conn in k.connectors:
+            ctype = self.pkg.connector_type(conn.type)
+            if ctype is None or ctype.export is not None:
+                continue
+            if len({(r.component, r.port) for r in conn.ports}) < len(conn.ports) or len(ctype.params) != len(conn.ports):
+                continue  # reported as a port given twice, or as a wrong port count
+            seen: set[str] = set()
+            twice: list[str] = []
+            todo, visited = [conn], {conn.name}
+            while todo:
+                for ref in todo.pop().ports:
+                    sub = local.get(ref.component)
+                    if sub is not None:
+                        if sub.name not in visited:
+                            visited.add(sub.name)
+                            todo.append(sub)
+                    elif ref.component in seen:
+                        twice.append(ref.component)
+                    else:
+                        seen.add(ref.component)
+            if twice:
+                self.error(self.loc.at(conn), f"connector '{conn.name}' in {where} binds component "
+                                              f"'{twice[0]}' more than once (BIP2 lets a connector reach a component "
+                                              f"through one port only)",
+                           hint="join those ports in a connector inside the component and export its port")
+
     def _priorities(self, k: CompoundType, where: str, variables: dict[str, str]) -> None:
         self.unique(k.priorities, "priority", where)
 
@@ -405,7 +439,7 @@ class _Checker:
             if pr.low.connector == "*" and pr.high.connector == "*":
                 self.error(self.loc.at(pr), f"priority {pr.name} of {where} has '*:*' on both sides")
             if pr.guard is not None:
-                self.exprs.expr(pr.guard, Scope(f"priority {pr.name} of {where}", variables, set(), port_data),
+                self.exprs.guard(pr.guard, Scope(f"priority {pr.name} of {where}", variables, set(), port_data),
                                 self.loc.at(pr))
 
     def _pattern(self, k: CompoundType, pr, pattern, where: str) -> None:

@@ -125,17 +125,18 @@ class Controller:
                 owner.status_slots = (fa.slot("done"), fa.slot("ok"), fa.slot("running"))
         return roles
 
+    def _leaves(self, fc) -> list[str]:
+        """Atom ports under a connector, through its sub-connectors."""
+        flat = self.engine.flat
+        out = []
+        for alts in fc.params:
+            for a in alts:
+                out += [flat.ports[a.port].path] if isinstance(a, Leaf) else self._leaves(flat.connectors[a.connector])
+        return out
+
     def _who_interrupts(self) -> dict[str, list[str]]:
         """Service label -> the services whose start aborts it (the description's and the rules' interruptions)."""
-        flat = self.engine.flat
-
-        def leaves(fc) -> list[str]:
-            out = []
-            for alts in fc.params:
-                for a in alts:
-                    out += [flat.ports[a.port].path] if hasattr(a, "port") else leaves(flat.connectors[a.connector])
-            return out
-
+        leaves = self._leaves
         found: dict[str, list[str]] = {}
         for fc in flat.connectors:
             if not fc.top:
@@ -405,8 +406,7 @@ class Controller:
             for a in fc.instance.annotations:
                 if a.name == "wait" and a.arguments.get("rules"):
                     label = fc.label.rsplit(":", 1)[0]
-                    ports = {self.engine.flat.ports[alt.port].path for param in fc.params for alt in param
-                             if isinstance(alt, Leaf)}
+                    ports = set(self._leaves(fc))
                     reads = [svc for svc in self.services.values() if f"{svc.label}.control.status" in ports]
                     out[label] = (a.arguments["rules"].split(","), reads)
         return out

@@ -25,10 +25,11 @@ class Annotation:
 
 @dataclass
 class DataParam:
-    """A typed formal parameter: of a port type, an atom/compound type, or an extern function."""
+    """A typed formal parameter of a port type or an atom/compound type; ``const`` as in ``(const int v)``."""
 
     type: str
     name: str
+    const: bool = False
     span: Span = _span()
 
 

@@ -80,13 +80,22 @@ class CompoundType:
 
 @dataclass
 class ExternFunction:
-    """``extern function [T] f(T1, T2)``: bound to a Python callable by name when the model runs."""
+    """``extern function [T] f(const T1, T2)``: bound to a Python callable by name when the model runs.
+
+    ``param_const`` says which parameters are ``const`` (one flag per parameter);
+    BIP2 lets a guard call only functions whose parameters are all ``const``.
+    """
 
     name: str
     return_type: str | None = None
     param_types: list[str] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)  # e.g. the outcomes of a codel
+    param_const: list[bool] = field(default_factory=list)
     span: Span = _span()
+
+    def __post_init__(self) -> None:
+        if not self.param_const:
+            self.param_const = [False] * len(self.param_types)
 
 
 @dataclass

@@ -11,6 +11,7 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
+    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -481,6 +482,16 @@ def counter_SetRunning_Activity() -> AtomType:
 # Connector types: interaction
 
 
+def RendezvousX_PP() -> ConnectorType:
+    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
+    return ConnectorType(
+        'RendezvousX_PP',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -610,6 +621,31 @@ def counter_clock__Task() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_count',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_count')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_idle',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_idle')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_stop',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+            ConnectorInstance(
                 'Triggered_2_1',
                 'period',
                 ports=[
@@ -622,13 +658,11 @@ def counter_clock__Task() -> CompoundType:
             ),
         ],
         ports=[
-            ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort('Port', 'permanent_exec_count', targets=[PortRef('permanent', 'exec_count')]),
-            ExportPort('Port', 'permanent_exec_idle', targets=[PortRef('permanent', 'exec_idle')]),
-            ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
+            ExportPort('Port', 'exec_count', targets=[PortRef('exec_count', 'ep')]),
+            ExportPort('Port', 'exec_idle', targets=[PortRef('exec_idle', 'ep')]),
+            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
         ],
     )
 
@@ -669,41 +703,37 @@ def counter_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'clock__exec_start',
-                ports=[PortRef('clock_', 'scheduler_exec'), PortRef('clock_', 'permanent_exec_start')],
+                ports=[PortRef('clock_', 'exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_start'})],
                 comment='codel clock_init of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_PP',
                 'clock__exec_count',
-                ports=[
-                    PortRef('clock_', 'scheduler_exec'),
-                    PortRef('clock_', 'permanent_exec_count'),
-                    PortRef('Ticks', 'write'),
-                ],
+                ports=[PortRef('clock_', 'exec_count'), PortRef('Ticks', 'write')],
                 annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_count'})],
                 comment='codel clock_count of state count',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'clock__exec_idle',
-                ports=[PortRef('clock_', 'scheduler_exec'), PortRef('clock_', 'permanent_exec_idle')],
+                ports=[PortRef('clock_', 'exec_idle')],
                 annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_idle'})],
                 comment='codel clock_idle of state idle',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'clock__exec_stop',
-                ports=[PortRef('clock_', 'scheduler_exec'), PortRef('clock_', 'permanent_exec_stop')],
+                ports=[PortRef('clock_', 'exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_stop'})],
                 comment='codel clock_stop of state stop',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'clock__sleep',
-                ports=[PortRef('clock_', 'timer_sleep'), PortRef('clock_', 'scheduler_sleep')],
+                ports=[PortRef('clock_', 'sleep')],
                 annotations=[Annotation('label', arguments={'name': 'counter.clock:sleep'})],
             ),
             ConnectorInstance(
@@ -754,7 +784,7 @@ def COUNTER() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 9 atom types, 4 connector types, 6 compound types."""
+    """The whole model: 9 atom types, 5 connector types, 6 compound types."""
     return Package(
         'counter',
         extern_functions=[
@@ -798,8 +828,13 @@ def package() -> Package:
                     ),
                 ],
             ),
-            ExternFunction('request_pending', return_type='bool', param_types=['string']),
-            ExternFunction('take_request', param_types=['string']),
+            ExternFunction(
+                'request_pending',
+                return_type='bool',
+                param_types=['string'],
+                param_const=[True],
+            ),
+            ExternFunction('take_request', param_types=['string'], param_const=[True]),
         ],
         port_types=[Port(), Status()],
         atom_types=[
@@ -814,6 +849,7 @@ def package() -> Package:
             counter_SetRunning_Activity(),
         ],
         connector_types=[
+            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
             Rendezvous_PPP(),

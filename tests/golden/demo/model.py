@@ -11,6 +11,7 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
+    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -930,6 +931,26 @@ def demo_MoveDistance_Activity() -> AtomType:
 # Connector types: interaction
 
 
+def BroadcastX_2() -> ConnectorType:
+    """Connector type BroadcastX_2: any of the ports that can, together, offered to an enclosing connector."""
+    return ConnectorType(
+        'BroadcastX_2',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2', trigger=True)]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def RendezvousX_PP() -> ConnectorType:
+    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
+    return ConnectorType(
+        'RendezvousX_PP',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -954,6 +975,29 @@ def Rendezvous_PPP() -> ConnectorType:
         'Rendezvous_PPP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
+    )
+
+
+def TriggeredX_2_1() -> ConnectorType:
+    """Connector type TriggeredX_2_1: the first ports together, each other joining if it can, offered to an enclosing connector."""
+    return ConnectorType(
+        'TriggeredX_2_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True), DefinePort('p3')],
+        ),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def Triggered_1_2() -> ConnectorType:
+    """Connector type Triggered_1_2: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_1_2',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1')], trigger=True), DefinePort('p2'), DefinePort('p3')],
+        ),
     )
 
 
@@ -1037,6 +1081,11 @@ def demo_GoTo_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
@@ -1072,8 +1121,7 @@ def demo_GoTo_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_drive', targets=[PortRef('activity', 'exec_drive')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -1089,6 +1137,11 @@ def demo_MoveDistance_Service() -> CompoundType:
             ComponentInstance('demo_MoveDistance_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
@@ -1117,8 +1170,7 @@ def demo_MoveDistance_Service() -> CompoundType:
         ports=[
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_main', targets=[PortRef('activity', 'exec_main')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
             ExportPort('Port', 'control_refuse', targets=[PortRef('control', 'refuse')]),
@@ -1184,6 +1236,11 @@ def demo_Stop_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -1204,8 +1261,7 @@ def demo_Stop_Service() -> CompoundType:
         ],
         ports=[
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -1240,16 +1296,44 @@ def demo_motion_Task() -> CompoundType:
             ComponentInstance('Scheduler', 'scheduler'),
             ComponentInstance('demo_motion_Activity', 'permanent'),
         ],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_main',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_main')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_stop',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_2_1',
+                'period',
+                ports=[
+                    PortRef('timer', 'trigger'),
+                    PortRef('scheduler', 'period'),
+                    PortRef('permanent', 'wake'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+        ],
         ports=[
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
+            ExportPort('Port', 'exec_main', targets=[PortRef('exec_main', 'ep')]),
+            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort('Port', 'permanent_exec_main', targets=[PortRef('permanent', 'exec_main')]),
-            ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
-            ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
         ],
     )
 
@@ -1270,27 +1354,23 @@ def demo_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'motion_exec_start',
-                ports=[PortRef('motion', 'scheduler_exec'), PortRef('motion', 'permanent_exec_start')],
+                ports=[PortRef('motion', 'exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'demo.motion:exec_start'})],
                 comment='codel motion_start of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PPP',
+                'Rendezvous_PP',
                 'motion_exec_main',
-                ports=[
-                    PortRef('motion', 'scheduler_exec'),
-                    PortRef('motion', 'permanent_exec_main'),
-                    PortRef('Mobile', 'write'),
-                ],
+                ports=[PortRef('motion', 'exec_main'), PortRef('Mobile', 'write')],
                 annotations=[Annotation('label', arguments={'name': 'demo.motion:exec_main'})],
                 comment='codel motion_main of state main',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'motion_exec_stop',
-                ports=[PortRef('motion', 'scheduler_exec'), PortRef('motion', 'permanent_exec_stop')],
+                ports=[PortRef('motion', 'exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'demo.motion:exec_stop'})],
                 comment='codel motion_stop of state stop',
             ),
@@ -1344,26 +1424,21 @@ def demo_Module() -> CompoundType:
                 comment='codel md_main of state main',
             ),
             ConnectorInstance(
-                'Triggered_2_4',
+                'Triggered_1_2',
                 'Stop_start',
                 ports=[
-                    PortRef('Stop', 'control_start'),
-                    PortRef('Stop', 'activity_start'),
-                    PortRef('GoTo', 'activity_abort'),
-                    PortRef('MoveDistance', 'activity_abort'),
-                    PortRef('GoTo', 'control_cancel'),
-                    PortRef('MoveDistance', 'control_cancel'),
+                    PortRef('Stop', 'start'),
+                    PortRef('GoTo', 'Stop_start'),
+                    PortRef('MoveDistance', 'Stop_start'),
                 ],
                 annotations=[Annotation('label', arguments={'name': 'demo.Stop:start'})],
                 comment='Stop interrupts GoTo, MoveDistance (demo.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'Triggered_2_3',
+                'Triggered_1_2',
                 'motion_period',
                 ports=[
-                    PortRef('motion', 'timer_trigger'),
-                    PortRef('motion', 'scheduler_period'),
-                    PortRef('motion', 'permanent_wake'),
+                    PortRef('motion', 'period'),
                     PortRef('GoTo', 'activity_wake'),
                     PortRef('MoveDistance', 'activity_wake'),
                 ],
@@ -1371,9 +1446,9 @@ def demo_Module() -> CompoundType:
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'motion_sleep',
-                ports=[PortRef('motion', 'timer_sleep'), PortRef('motion', 'scheduler_sleep')],
+                ports=[PortRef('motion', 'sleep')],
                 annotations=[Annotation('label', arguments={'name': 'demo.motion:sleep'})],
             ),
             ConnectorInstance(
@@ -1521,7 +1596,7 @@ def DEMO() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 13 atom types, 7 connector types, 8 compound types."""
+    """The whole model: 13 atom types, 11 connector types, 8 compound types."""
     return Package(
         'demo',
         extern_functions=[
@@ -1635,8 +1710,13 @@ def package() -> Package:
                     ),
                 ],
             ),
-            ExternFunction('request_pending', return_type='bool', param_types=['string']),
-            ExternFunction('take_request', param_types=['string']),
+            ExternFunction(
+                'request_pending',
+                return_type='bool',
+                param_types=['string'],
+                param_const=[True],
+            ),
+            ExternFunction('take_request', param_types=['string'], param_const=[True]),
         ],
         port_types=[Port(), Status()],
         atom_types=[
@@ -1655,9 +1735,13 @@ def package() -> Package:
             demo_MoveDistance_Activity(),
         ],
         connector_types=[
+            BroadcastX_2(),
+            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
             Rendezvous_PPP(),
+            TriggeredX_2_1(),
+            Triggered_1_2(),
             Triggered_2_3(),
             Triggered_2_4(),
             demo_MoveDistance_Refuse_after(),

@@ -11,6 +11,7 @@ from runtime.model import (
     Call,
     ComponentInstance,
     CompoundType,
+    ConnectorExport,
     ConnectorInstance,
     ConnectorParam,
     ConnectorType,
@@ -1193,6 +1194,26 @@ def rflex_Stop_Activity() -> AtomType:
 # Connector types: interaction
 
 
+def BroadcastX_2() -> ConnectorType:
+    """Connector type BroadcastX_2: any of the ports that can, together, offered to an enclosing connector."""
+    return ConnectorType(
+        'BroadcastX_2',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1', trigger=True), DefinePort('p2', trigger=True)]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def RendezvousX_PP() -> ConnectorType:
+    """Connector type RendezvousX_PP: all ports together, offered to an enclosing connector."""
+    return ConnectorType(
+        'RendezvousX_PP',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
 def Rendezvous_P() -> ConnectorType:
     """Connector type Rendezvous_P: all ports together."""
     return ConnectorType(
@@ -1208,6 +1229,38 @@ def Rendezvous_PP() -> ConnectorType:
         'Rendezvous_PP',
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2')]),
+    )
+
+
+def TriggeredX_2_1() -> ConnectorType:
+    """Connector type TriggeredX_2_1: the first ports together, each other joining if it can, offered to an enclosing connector."""
+    return ConnectorType(
+        'TriggeredX_2_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True), DefinePort('p3')],
+        ),
+        export=ConnectorExport('Port', 'ep'),
+    )
+
+
+def Triggered_1_1() -> ConnectorType:
+    """Connector type Triggered_1_1: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_1_1',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2')],
+        define=DefineGroup([DefineGroup([DefinePort('p1')], trigger=True), DefinePort('p2')]),
+    )
+
+
+def Triggered_1_2() -> ConnectorType:
+    """Connector type Triggered_1_2: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_1_2',
+        params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Port', 'p3')],
+        define=DefineGroup(
+            [DefineGroup([DefinePort('p1')], trigger=True), DefinePort('p2'), DefinePort('p3')],
+        ),
     )
 
 
@@ -1352,16 +1405,44 @@ def rflex_MotorsTask_Task() -> CompoundType:
             ComponentInstance('Scheduler', 'scheduler'),
             ComponentInstance('rflex_MotorsTask_Activity', 'permanent'),
         ],
+        connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_start',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_main',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_main')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'exec_stop',
+                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+            ),
+            ConnectorInstance(
+                'TriggeredX_2_1',
+                'period',
+                ports=[
+                    PortRef('timer', 'trigger'),
+                    PortRef('scheduler', 'period'),
+                    PortRef('permanent', 'wake'),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'sleep',
+                ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+            ),
+        ],
         ports=[
+            ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
+            ExportPort('Port', 'exec_main', targets=[PortRef('exec_main', 'ep')]),
+            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
-            ExportPort('Port', 'permanent_exec_start', targets=[PortRef('permanent', 'exec_start')]),
-            ExportPort('Port', 'permanent_exec_main', targets=[PortRef('permanent', 'exec_main')]),
-            ExportPort('Port', 'permanent_exec_stop', targets=[PortRef('permanent', 'exec_stop')]),
-            ExportPort('Port', 'timer_trigger', targets=[PortRef('timer', 'trigger')]),
-            ExportPort('Port', 'scheduler_period', targets=[PortRef('scheduler', 'period')]),
-            ExportPort('Port', 'permanent_wake', targets=[PortRef('permanent', 'wake')]),
-            ExportPort('Port', 'timer_sleep', targets=[PortRef('timer', 'sleep')]),
-            ExportPort('Port', 'scheduler_sleep', targets=[PortRef('scheduler', 'sleep')]),
+            ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
+            ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
         ],
     )
 
@@ -1462,6 +1543,16 @@ def rflex_Stop_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'BroadcastX_2',
+                'TrackSpeed_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
@@ -1484,10 +1575,8 @@ def rflex_Stop_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_exec', targets=[PortRef('activity', 'exec_exec')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
+            ExportPort('Port', 'TrackSpeed_start', targets=[PortRef('TrackSpeed_start', 'ep')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -1503,6 +1592,16 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ComponentInstance('rflex_TrackSpeed_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
+                'BroadcastX_2',
+                'Stop_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
@@ -1528,10 +1627,8 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_end', targets=[PortRef('activity', 'exec_end')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_exec_fail', targets=[PortRef('activity', 'exec_fail')]),
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
-            ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
-            ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
+            ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -1579,32 +1676,23 @@ def rflex_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'MotorsTask_exec_start',
-                ports=[
-                    PortRef('MotorsTask', 'scheduler_exec'),
-                    PortRef('MotorsTask', 'permanent_exec_start'),
-                ],
+                ports=[PortRef('MotorsTask', 'exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_start'})],
                 comment='codel rflexMotorsInit of state start',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'MotorsTask_exec_main',
-                ports=[
-                    PortRef('MotorsTask', 'scheduler_exec'),
-                    PortRef('MotorsTask', 'permanent_exec_main'),
-                ],
+                ports=[PortRef('MotorsTask', 'exec_main')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_main'})],
                 comment='codel rflexMotorsMain of state main',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'MotorsTask_exec_stop',
-                ports=[
-                    PortRef('MotorsTask', 'scheduler_exec'),
-                    PortRef('MotorsTask', 'permanent_exec_stop'),
-                ],
+                ports=[PortRef('MotorsTask', 'exec_stop')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_stop'})],
                 comment='codel rflexMotorsEnd of state stop',
             ),
@@ -1687,36 +1775,24 @@ def rflex_Module() -> CompoundType:
                 comment='codel rflexStopInter of state stop',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'TrackSpeed_start',
-                ports=[
-                    PortRef('TrackSpeed', 'control_start'),
-                    PortRef('TrackSpeed', 'activity_start'),
-                    PortRef('Stop', 'activity_abort'),
-                    PortRef('Stop', 'control_cancel'),
-                ],
+                ports=[PortRef('TrackSpeed', 'start'), PortRef('Stop', 'TrackSpeed_start')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:start'})],
                 comment='TrackSpeed interrupts Stop (rflex.TrackSpeed.interrupts)',
             ),
             ConnectorInstance(
-                'Triggered_2_2',
+                'Triggered_1_1',
                 'Stop_start',
-                ports=[
-                    PortRef('Stop', 'control_start'),
-                    PortRef('Stop', 'activity_start'),
-                    PortRef('TrackSpeed', 'activity_abort'),
-                    PortRef('TrackSpeed', 'control_cancel'),
-                ],
+                ports=[PortRef('Stop', 'start'), PortRef('TrackSpeed', 'Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.Stop:start'})],
                 comment='Stop interrupts TrackSpeed (rflex.Stop.interrupts)',
             ),
             ConnectorInstance(
-                'Triggered_2_3',
+                'Triggered_1_2',
                 'MotorsTask_period',
                 ports=[
-                    PortRef('MotorsTask', 'timer_trigger'),
-                    PortRef('MotorsTask', 'scheduler_period'),
-                    PortRef('MotorsTask', 'permanent_wake'),
+                    PortRef('MotorsTask', 'period'),
                     PortRef('TrackSpeed', 'activity_wake'),
                     PortRef('Stop', 'activity_wake'),
                 ],
@@ -1724,9 +1800,9 @@ def rflex_Module() -> CompoundType:
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
-                'Rendezvous_PP',
+                'Rendezvous_P',
                 'MotorsTask_sleep',
-                ports=[PortRef('MotorsTask', 'timer_sleep'), PortRef('MotorsTask', 'scheduler_sleep')],
+                ports=[PortRef('MotorsTask', 'sleep')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:sleep'})],
             ),
             ConnectorInstance(
@@ -1891,11 +1967,16 @@ def RFLEX() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 16 atom types, 4 connector types, 10 compound types."""
+    """The whole model: 16 atom types, 9 connector types, 10 compound types."""
     return Package(
         'rflex',
         extern_functions=[
-            ExternFunction('request_pending', return_type='bool', param_types=['string']),
+            ExternFunction(
+                'request_pending',
+                return_type='bool',
+                param_types=['string'],
+                param_const=[True],
+            ),
             ExternFunction(
                 'rflex_rflexInitCheck',
                 return_type='int',
@@ -2036,7 +2117,7 @@ def package() -> Package:
                     ),
                 ],
             ),
-            ExternFunction('take_request', param_types=['string']),
+            ExternFunction('take_request', param_types=['string'], param_const=[True]),
         ],
         port_types=[Port(), Status()],
         atom_types=[
@@ -2058,8 +2139,13 @@ def package() -> Package:
             rflex_Stop_Activity(),
         ],
         connector_types=[
+            BroadcastX_2(),
+            RendezvousX_PP(),
             Rendezvous_P(),
             Rendezvous_PP(),
+            TriggeredX_2_1(),
+            Triggered_1_1(),
+            Triggered_1_2(),
             Triggered_2_2(),
             Triggered_2_3(),
         ],
