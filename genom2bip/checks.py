@@ -13,6 +13,7 @@ import difflib
 from collections import deque
 from typing import Any, Iterable, Iterator
 
+from genom2bip.check_async import check_async
 from genom2bip.ir import (
     ArrayType,
     Codel,
@@ -34,6 +35,7 @@ from genom2bip.ir import (
 from runtime.diagnostics import NOWHERE, Reporter, Span
 
 ETHER = "ether"
+ALL = "all"  # in ``interrupts``: every service of the component (a name no service may take)
 
 
 def check_description(description: Description, reporter: Reporter) -> None:
@@ -61,8 +63,8 @@ class _Checker:
     def __init__(self, description: Description, reporter: Reporter) -> None:
         self.d = description
         self.reporter = reporter
-        self._type_keys = set(description.types)
-        self._type_tails = {k.rsplit("::", 1)[-1] for k in description.types}
+        self._type_keys = set(description.types) | set(description.exceptions)  # genom3: exceptions are types
+        self._type_tails = {k.rsplit("::", 1)[-1] for k in self._type_keys}
         self._exceptions = self._exception_names(description.exceptions)
         self._reported_types: set[tuple[str, Span]] = set()
 
@@ -88,9 +90,13 @@ class _Checker:
         for task in comp.tasks:
             self._task(comp, task)
         for service in comp.services:
+            if service.name == ALL:
+                self.error(service.span, f"'{ALL}' is a reserved service name", "'interrupts all' names every service")
             self._service(comp, service)
         for member in comp.ids:
             self._type_refs(member.type, member.span, comp)
+        if comp.dialect == "genom3":
+            check_async(comp, self.reporter)
         for port in comp.ports:
             self._type_refs(port.type, port.span, comp, in_port=port.direction == "in")
 
@@ -117,11 +123,12 @@ class _Checker:
         for name in task.throws:
             self._exception(name, _where(task.ref_spans.get(f"throws:{name}"), task.span), comp)
         if task.codels:
+            # genom3 needs no start state in a permanent activity: codels that neither
+            # start nor stop reaches are reported by the connectivity rule instead
             states = fsm_states(task.codels)
-            if "start" not in states:
-                self.error(task.span, f"task '{task.name}' has codels but none for state 'start'",
-                           "the permanent activity of a task begins in state 'start'")
-            self._yields(task.codels, states, f"task '{task.name}'", task.span)
+            what = f"task '{task.name}'"
+            if self._yields(task.codels, states, what, task.span):
+                self._connected(task.codels, what, task.span, comp.dialect == "genom3")
         for codel in task.codels:
             self._codel_params(comp, codel, None)
 
@@ -140,7 +147,7 @@ class _Checker:
                        _suggest(service.task, [t.name for t in comp.tasks], "tasks"))
         for relation in ("interrupts", "after", "before"):
             for other in getattr(service, relation):
-                if other not in names:
+                if other not in names and not (relation == "interrupts" and other == ALL):
                     self.error(_where(service.ref_spans.get(f"{relation}:{other}"), service.span),
                                f"unknown service '{other}' in '{relation}' of {what}",
                                _suggest(other, names, "services"))
@@ -158,8 +165,10 @@ class _Checker:
     def _fsm(self, comp: Component, service: Service) -> None:
         what = f"{service.kind} '{service.name}'"
         if service.kind == "attribute" or (service.kind == "function" and comp.dialect == "genom2"):
-            if service.codels:
-                codel = service.codels[0]
+            # genom3 (since 2.99.x) lets an attribute run simple codels; never an automaton
+            fsm = [c for c in service.codels if c.triggers or comp.dialect == "genom2"]
+            if fsm:
+                codel = fsm[0]
                 kind = "control request" if comp.dialect == "genom2" else service.kind
                 self.error(_where(codel.span, service.span),
                            f"{kind} '{service.name}' has FSM codel '{codel.name}' (state "
@@ -181,13 +190,28 @@ class _Checker:
             return
         if not self._yields(codels, states, what, service.span):
             return  # an undeclared state already explains why ether may be unreachable
+        self._connected(codels, what, service.span, comp.dialect == "genom3")
+
+    def _connected(self, codels: list[Codel], what: str, fallback: Span, all_reached: bool) -> None:
+        """genom3's rules (codel.c, codel_fsmcreate): ``stop`` must lead to ether; every codel is reached.
+
+        The start state need not lead to ether: an activity that loops until it
+        is interrupted ends through its stop codel (or at once when it has none).
+        """
         graph = self._graph(codels)
-        if not self._reaches(graph, "start"):
-            self.error(service.span, f"no path from start to ether in {what}: it can never finish",
-                       "some codel on the way must yield ether")
-        if "stop" in states and not self._reaches(graph, "stop"):
-            self.error(service.span, f"no path from stop to ether in {what}: an interruption can never end",
-                       "the stop codels must lead to ether")
+        stop = next((c for c in codels if "stop" in c.triggers), None)
+        if stop is not None and not self._reaches(graph, "stop"):
+            self.error(_where(stop.span, fallback),
+                       f"no path from stop to ether in {what}: an interruption can never end",
+                       "codel<stop> must eventually yield to ether")
+        if not all_reached:  # GenoM2: 'fail' is entered by a throw, task 'main2' never
+            return
+        reached = self._reachable(graph, "start") | self._reachable(graph, "stop")
+        for codel in codels:  # genom3 judges a codel, not a state: one reached trigger suffices
+            if codel.triggers and not reached.intersection(codel.triggers):
+                self.error(_where(codel.span, fallback),
+                           f"codel<{', '.join(codel.triggers)}> '{codel.name}' of {what} is never reached",
+                           "no codel yields to it from start or stop")
 
     def _yields(self, codels: list[Codel], states: list[str], what: str, fallback: Span) -> bool:
         """Report yields to states that no codel handles; True when there are none."""
@@ -209,19 +233,23 @@ class _Checker:
                 graph.setdefault(t, set()).update(y.state for y in codel.yields)
         return graph
 
+    @classmethod
+    def _reaches(cls, graph: dict[str, set[str]], origin: str) -> bool:
+        return ETHER in cls._reachable(graph, origin)
+
     @staticmethod
-    def _reaches(graph: dict[str, set[str]], origin: str) -> bool:
+    def _reachable(graph: dict[str, set[str]], origin: str) -> set[str]:
+        """The states reachable from ``origin`` (itself included when it has a codel)."""
+        if origin not in graph:
+            return set()
         seen = {origin}
         todo = deque([origin])
         while todo:
-            state = todo.popleft()
-            if state == ETHER:
-                return True
-            for nxt in graph.get(state, ()):
+            for nxt in graph.get(todo.popleft(), ()):
                 if nxt not in seen:
                     seen.add(nxt)
                     todo.append(nxt)
-        return False
+        return seen
 
     # ------------------------------------------------------------------ codel parameters
 

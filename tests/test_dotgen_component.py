@@ -283,7 +283,7 @@ def test_several_files_share_one_description(tmp_path):
     ("port out long P { period 5 ms; };", "'period' is not a property of a port", 27),
     ("task t { validate v(); };", "'validate' is not a property of a task", 18),
     ("function f() { task t; };", "'task' is not a property of a function", 24),
-    ("attribute a() { codel <start> f() yield ether; };", "'codel' is not a property of an attribute", 25),
+    ("attribute a() { codel <start> f() yield ether; };", "attribute 'a' cannot have state machine codels", 25),
     ("period 5 ms;", "'period' is not a property of a component", 9),
     ("activity a() { codel f(); };", "codel 'f' of activity 'a' has no state", 24),
     ("task t { codel f(); };", "codel 'f' of task 't' has no state", 18),
@@ -314,6 +314,14 @@ def test_errors_the_parser_can_know(body, message):
     assert e.message == message
 
 
-def test_duplicate_component():
-    (e,) = errors("component c;\ncomponent c;")
-    assert e.message == "component 'c' is already defined" and e.span.line == 2 and e.hint == "first defined at t.gen:1:11"
+def test_a_component_declared_twice_is_reopened():
+    # genom3's comp_push reopens a component; the second body adds to the first
+    d = parse_text("component c { task t; };\ncomponent c { function f(); };", "t.gen")
+    (c,) = d.components
+    assert [t.name for t in c.tasks] == ["t"] and [s.name for s in c.services] == ["f"]
+
+
+def test_a_component_and_an_interface_cannot_share_a_name():
+    (e,) = errors("interface c;\ncomponent c;")
+    assert e.message == "conflicting declarations of 'c': already declared as interface"
+    assert (e.span.line, e.span.column) == (2, 11) and e.hint == "first declared at t.gen:1:11"

@@ -117,7 +117,8 @@ def test_permanent_activity_component():
 
 def test_includes_guards_pragmas_and_provided_interface():
     d = parse_paths([FIXTURES / "include" / "main.gen"], include_dirs=[str(FIXTURES / "include" / "idl")])
-    assert set(d.types) == {"geo::point", "geo::path"}  # one copy despite three inclusions
+    # one copy despite three inclusions; each ids block is a struct type of its scope
+    assert set(d.types) == {"geo::point", "geo::path", "navigation::ids", "rover::ids"}
     assert [(p.name, p.arguments) for p in d.pragmas] == [("requires", '"geometry >= 2.0"')]
     assert Path(d.pragmas[0].span.file).name == "types.idl" and d.pragmas[0].span.line == 4
     c = d.component("rover")

@@ -11,9 +11,9 @@ INTERFACE = {
     'system': 'dala',
     'codels': 'descriptions/dala/codels',
     'types': {
-        'NDD::params': {
+        'NDD::ids::params': {
             'type': 'object',
-            'title': 'NDD::params',
+            'title': 'NDD::ids::params',
             'properties': {
                 'robot_radius': {'type': 'number'},
                 'security_distance': {'type': 'number'},
@@ -386,7 +386,7 @@ INTERFACE = {
             'clock_rate_us': None,
             'ids': {
                 'params': {
-                    'schema': {'$ref': 'NDD::params'},
+                    'schema': {'$ref': 'NDD::ids::params'},
                     'initial': {'robot_radius': 0.0, 'security_distance': 0.0, 'goal_tolerance': 0.0},
                 },
                 'max_speed': {'schema': {'$ref': 'dala::twist'}, 'initial': {'v': 0.0, 'w': 0.0}},
@@ -451,7 +451,7 @@ INTERFACE = {
                         {
                             'name': 'params',
                             'direction': 'in',
-                            'schema': {'$ref': 'NDD::params'},
+                            'schema': {'$ref': 'NDD::ids::params'},
                             'source': 'ids',
                             'member': 'params',
                             'default': {'robot_radius': 0.35, 'security_distance': 0.3, 'goal_tolerance': 0.1},

@@ -57,6 +57,9 @@ from runtime.diagnostics import NOWHERE, Reporter, Span
 
 MAX_SYNTAX_ERRORS = 20
 
+# kinds of names that open a scope; genom3 (scope.c, scope_push) reopens one of them by name
+_SCOPES = {"module", "interface", "component"}
+
 _TIME_UNITS = {"s": 1, "ms": 1_000, "us": 1_000_000}
 _SIZE_UNITS = {"k": 1024, "m": 1024 * 1024, "M": 1024 * 1024}
 
@@ -68,7 +71,7 @@ _ALLOWED = {
     "interface": _COMPONENT_PROPS | {"extends"},
     "task": {"doc", "period", "delay", "priority", "scheduling", "stack", "codel", "throws"},
     "port": {"doc"},
-    "attribute": {"doc", "validate", "throws", "interrupts", "before", "after"},
+    "attribute": {"doc", "validate", "codel", "throws", "interrupts", "before", "after"},
     "function": {"doc", "validate", "codel", "throws", "interrupts", "before", "after", "local"},
     "activity": {"doc", "validate", "codel", "throws", "interrupts", "before", "after", "local", "task"},
 }
@@ -181,6 +184,7 @@ class _Builder:
         self.scope: list[str] = []
         self.symbols: dict[str, _Symbol] = {}
         self.components: list[Component] = []
+        self.extended: dict[str, list[str]] = {}  # interface -> the interfaces already merged into it
 
     # ------------------------------------------------------------------ helpers
 
@@ -266,7 +270,7 @@ class _Builder:
         sym = self.symbols.get(full)
         if sym is None:
             self.symbols[full] = _Symbol("module", self.span(name))
-        elif sym.kind != "module":  # modules may be reopened, nothing else may share their name
+        elif sym.kind not in _SCOPES:  # scopes may be reopened (an IDL module and an interface share one)
             self.error(name, f"'{full}' is already defined", hint=f"first defined at {sym.span}")
         self.scope.append(str(name))
         for item in items:
@@ -348,7 +352,7 @@ class _Builder:
             return BaseType(" ".join(str(t) for t in node.children), span=span)
         if kind == "named_type":
             (name,) = node.children
-            full = self.resolve(name, {"type", "forward"})
+            full = self.resolve(name, {"type", "forward", "exception"})
             return NamedType(full or self.written(name).lstrip(":"), span=span)
         if kind == "sequence_type":
             elem = self.type(node.children[0])
@@ -539,27 +543,48 @@ class _Builder:
 
     def st_component(self, node: Tree) -> None:
         name, *body = node.children
-        comp = Component(str(name), "genom3", file=self.span(name).file, span=self.span(name))
-        old = self.desc.component(str(name))
-        if old is not None:
-            self.error(name, f"component '{name}' is already defined", hint=f"first defined at {old.span}")
-        self.symbols.setdefault(self.qualify(str(name)), _Symbol("component", self.span(name)))
+        if not self.open_scope(name, "component", self.desc.interfaces):
+            return
+        comp = self.desc.component(str(name))
+        if comp is None:  # else reopened, as genom3's comp_push does
+            comp = Component(str(name), "genom3", file=self.span(name).file, span=self.span(name))
+            self.desc.components.append(comp)
+        if comp not in self.components:
+            self.components.append(comp)
         self.body(comp, "component", body[0] if body else None)
-        self.components.append(comp)
-        self.desc.components.append(comp)
 
     def st_interface(self, node: Tree) -> None:
         name, *body = node.children
-        iface = Interface(str(name), span=self.span(name))
-        self.declare(str(name), "interface", name)
+        if not self.open_scope(name, "interface", {c.name: c for c in self.desc.components}):
+            return
+        iface = self.desc.interfaces.get(str(name))
+        if iface is None:  # else reopened
+            iface = Interface(str(name), span=self.span(name))
+            self.desc.interfaces[str(name)] = iface
         self.body(iface, "interface", body[0] if body else None)
+        merged = self.extended.setdefault(str(name), [])
         for base in iface.properties.get("extends", []):
             other = self.desc.interfaces.get(base)
             if other is None:
                 self.error(iface.span, f"interface '{name}' extends unknown interface '{base}'")
                 continue
-            self.merge(iface, other)
-        self.desc.interfaces[str(name)] = iface
+            if base in merged:
+                continue
+            merged.append(base)
+            self.merge_checked(iface, other, f"interface '{name}'", iface.span)
+
+    def open_scope(self, name: Token, kind: str, others: dict) -> bool:
+        """Register a component or interface scope; False (reported) when the name is the other kind's."""
+        full = self.qualify(str(name))
+        sym = self.symbols.get(full)
+        if str(name) in others or (sym is not None and sym.kind not in _SCOPES):
+            first = sym.span if sym is not None else others[str(name)].span
+            self.error(name, f"conflicting declarations of '{full}': already declared as "
+                             f"{sym.kind if sym is not None else 'another kind'}", hint=f"first declared at {first}")
+            return False
+        if sym is None or sym.kind == "module":
+            self.symbols[full] = _Symbol(kind, self.span(name))
+        return True
 
     def body(self, owner: Component | Interface, kind: str, body: Tree | None) -> None:
         """The items of a component or interface body, in order."""
@@ -570,7 +595,7 @@ class _Builder:
         for item in body.children:
             data = item.data
             if data == "ids":
-                owner.ids.extend(self.members(item.children, f"the ids of '{owner.name}'", ids_seen))
+                self.ids(owner, item, ids_seen)
             elif data == "task":
                 task = self.task(item)
                 self.add_unique(owner.tasks, task, "task", item.children[0])
@@ -585,6 +610,19 @@ class _Builder:
                 self.component_property(owner, kind, item)
             else:
                 self.statement(item)
+        self.scope.pop()
+
+    def ids(self, owner: Component | Interface, node: Tree, seen: dict[str, Member]) -> None:
+        """An ``ids`` block: a struct type named ``C::ids`` whose scope holds the types declared inside."""
+        full = self.qualify("ids")
+        if full not in self.desc.types:
+            self.symbols[full] = _Symbol("type", self.span(node))
+            # the members list is the component's own, so provided interfaces' members join the type too
+            self.desc.types[full] = StructType(full, owner.ids, span=self.span(node))
+        if not seen:
+            seen.update((m.name, m) for m in owner.ids)
+        self.scope.append("ids")
+        owner.ids.extend(self.members(node.children, f"the ids of '{owner.name}'", seen))
         self.scope.pop()
 
     def add_unique(self, items: list, item: Any, what: str, node: Any) -> None:
@@ -763,6 +801,10 @@ class _Builder:
                     self.error(prop, f"codel '{codel.name}' of activity '{name}' has no state",
                                hint=f"write codel <start> {codel.name}(...) yield ...;")
                     continue
+                if kind == "attribute" and codel.triggers:  # genom3 service.c: no state machine codels
+                    self.error(prop, f"attribute '{name}' cannot have state machine codels",
+                               hint=f"write codel {codel.name}(...); or make it a function")
+                    continue
                 self.add_codel(service.codels, codel, f"service '{name}'")
             elif pname in ("interrupts", "before", "after"):
                 self.extend_unique(getattr(service, pname), [str(t) for t in ch[0].children])
@@ -837,6 +879,9 @@ class _Builder:
                     path += f"[{index}]"
             param = Parameter(direction, alias or last_name, None, source="ids", member=path, span=span)
         if init:
+            target = param.type if param.type is not None else self.ids_type(param.member or "")
+            if target is not None and init[0].data != "init_only_doc":
+                self.check_init(init[0].children[0], target, param.name)
             value, doc, docs = self.initializer(init[0], top=True)
             if value is not None and param.type is not None:
                 try:
@@ -848,6 +893,70 @@ class _Builder:
         return param
 
     # ------------------------------------------------------------------ initializers
+
+    def ids_type(self, member: str) -> Type | None:
+        """The declared type of an ids member named by a parameter (the whole ids for ''), if known here."""
+        ids = self.desc.types.get(self.qualify("ids"))
+        if not isinstance(ids, StructType):
+            return None
+        if not member:
+            return ids
+        head = member.replace("[", ".").split(".")[0]
+        found = next((m for m in ids.members if m.name == head), None)
+        return found.type if found is not None and head == member else None
+
+    def resolved(self, t: Type) -> Type:
+        """A type through named types and typedefs."""
+        for _ in range(20):
+            if not isinstance(t, NamedType):
+                return t
+            target = self.desc.types.get(t.name)
+            if isinstance(target, Typedef):
+                t = target.type
+            elif isinstance(target, Type):
+                return target
+            else:
+                return t
+        return t
+
+    def check_init(self, node: Tree, t: Type, what: str) -> None:
+        """genom3's initializer.c: braces give no more elements than the type has, and only its members."""
+        if node.data != "init_list":
+            return
+        t = self.resolved(t)
+        items = node.children[0].children if node.children else []
+        if isinstance(t, StructType):
+            names = [m.name for m in t.members]
+            index = 0
+            for item in items:
+                inner = item.children[0] if item.data != "init_only_doc" else None
+                if inner is not None and inner.data == "init_field":
+                    name = str(inner.children[0])
+                    if name not in names:
+                        self.error(inner, f"unknown member '{name}' in struct {t.name}",
+                                   hint=f"its members: {', '.join(names)}")
+                        continue
+                    index = names.index(name) + 1
+                    member = t.members[index - 1]
+                    if len(inner.children) > 1:
+                        self.check_init(inner.children[1], member.type, f"{what}.{name}")
+                    continue
+                if inner is not None and inner.data == "init_index":
+                    self.error(inner, f"an index designator cannot initialize struct {t.name}")
+                    continue
+                if index >= len(names):
+                    self.error(item, f"too many initializers for struct {t.name} in '{what}'",
+                               hint=f"it has {len(names)} member{'s' if len(names) != 1 else ''}")
+                    return
+                if inner is not None:
+                    self.check_init(inner, t.members[index].type, f"{what}.{names[index]}")
+                index += 1
+        elif isinstance(t, ArrayType) and len(t.dims) == 1:
+            positional = [i for i in items if i.data == "init_only_doc" or i.children[0].data not in (
+                "init_field", "init_index")]
+            if len(positional) > t.dims[0]:
+                self.error(positional[t.dims[0]], f"too many initializers for array '{what}'",
+                           hint=f"it has {t.dims[0]} element{'s' if t.dims[0] != 1 else ''}")
 
     def initializer(self, node: Tree, top: bool = False, path: str = "") -> tuple[Any, str | None, dict[str, str]]:
         """(value, doc, docs of parts): ``{ .x = 1 : "doc" }`` gives ({'x': 1}, None, {'x': 'doc'})."""
@@ -993,7 +1102,32 @@ class _Builder:
                 self.error(spans.get(name, comp.span), f"component '{comp.name}' provides unknown interface '{name}'",
                            hint="declare or #include the interface before the component")
                 continue
-            self.merge(comp, iface)
+            self.merge_checked(comp, iface, f"component '{comp.name}'", spans.get(name, comp.span))
+
+    def merge_checked(self, target: Component | Interface, iface: Interface, what: str, where: Span) -> None:
+        """Merge ``iface`` into ``target``, refusing what genom3's prop_merge and comp_addids refuse.
+
+        An ids member declared on both sides must have the same named type; a
+        clock rate, a stack size or a language declared on both sides must agree.
+        """
+        mine = {m.name: m for m in target.ids}
+        for m in iface.ids:
+            old = mine.get(m.name)
+            if old is not None and not (isinstance(old.type, NamedType) and old.type == m.type):
+                self.error(where, f"{what} gets ids member '{m.name}' from interface '{iface.name}' but declares "
+                                  f"it too", hint=f"the two declarations: {old.span} and {m.span}")
+        for key in ("clock-rate", "stack", "lang"):
+            ours = target.clock_rate if key == "clock-rate" and isinstance(target, Component) \
+                else target.properties.get(key)
+            theirs = iface.properties.get(key)
+            if ours is not None and theirs is not None and ours != theirs:
+                self.error(where, f"conflicting {key} in {what}: {ours} here, {theirs} in interface '{iface.name}'")
+            elif theirs is not None and ours is None:
+                if key == "clock-rate" and isinstance(target, Component):
+                    target.clock_rate = theirs
+                else:
+                    target.properties[key] = theirs
+        self.merge(target, iface)
 
     @staticmethod
     def merge(target: Component | Interface, iface: Interface) -> None:

@@ -19,6 +19,7 @@ INTERFACE = {
             'ids': {
                 'ticks': {'schema': {'type': 'integer', 'minimum': 0, 'maximum': 4294967295}, 'initial': 0},
                 'running': {'schema': {'type': 'boolean'}, 'initial': False},
+                'started': {'schema': {'type': 'integer', 'minimum': 0, 'maximum': 4294967295}, 'initial': 0},
             },
             'ports': {
                 'Ticks': {
@@ -36,8 +37,7 @@ INTERFACE = {
                             'codel': 'clock_init',
                             'role': 'fsm',
                             'params': [
-                                {'arg': 'ticks', 'source': 'ids', 'direction': 'out', 'path': 'ticks'},
-                                {'arg': 'running', 'source': 'ids', 'direction': 'out', 'path': 'running'},
+                                {'arg': 'started', 'source': 'ids', 'direction': 'out', 'path': 'started'},
                             ],
                         },
                         'counter_clock_count': {
