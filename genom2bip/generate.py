@@ -50,13 +50,14 @@ def system_name(paths: list[str]) -> str:
 
 
 def model_of(description: ir.Description, system: str,
-             rules: list[Rule] | None = None) -> tuple[Package, str, dict[str, str]]:
+             rules: list[Rule] | None = None, time=None) -> tuple[Package, str, dict[str, str]]:
     """The package, its root instance and one line of documentation per type.
 
     ``rules`` are the description's constraints plus a rule file's
     (genom2bip.rules.all_rules); by default the description's alone.
+    ``time`` (genom2bip.build.timed.TimeOptions) adds ticks, clocks and observers.
     """
-    level = FunctionalLevel(description, system, rules)
+    level = FunctionalLevel(description, system, rules, time)
     package = level.build()
     problems = validate(package)
     if problems:
@@ -147,10 +148,10 @@ def _classes(obj) -> set[str]:
 
 
 def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,
-             rules: list[Rule] | None = None) -> Generated:
+             rules: list[Rule] | None = None, time=None) -> Generated:
     """Write ``<out>/<system>/`` atomically; returns what was written."""
     name = ident(system.lower())
-    package, root, docs = model_of(description, system, rules)
+    package, root, docs = model_of(description, system, rules, time)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
     files.update(python_files(package, root, docs, name, title, sources, version,
