@@ -236,7 +236,7 @@ def verb_generate(args: argparse.Namespace) -> int:
     sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
     from genom2bip.verify_timed import time_options, warn_untimed
     time = time_options(args, description)
-    sources += " --timed" if time is not None else ""
+    sources += (" --timed" if time.ticks else " --monitor") if time is not None else ""
     try:
         result = generate(description, system, Path(args.output), sources, version(), rules, time)
     except DiagnosticError as exc:

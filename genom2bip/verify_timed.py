@@ -30,6 +30,10 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
                       help="WCET of a codel that declares none (default: 0, with a warning naming it)")
     time.add_argument("--observers", metavar="FILE",
                       help="latency observers (YAML); default: observers.yaml in the directory given")
+    if not verify:
+        time.add_argument("--monitor", action="store_true",
+                          help="add the observers without ticks: the controller measures them in real time "
+                               "(docs/runtime.md, Online monitoring)")
     if verify:
         time.add_argument("--schedulability", action="store_true",
                           help="check the period observers: is an overrun of each periodic task reachable?")
@@ -61,9 +65,14 @@ def time_options(args: argparse.Namespace, description):
     from genom2bip.build.timed import DEFAULT_WCET_US, TimeOptions
     from genom2bip.observers import load_observers
 
-    if not getattr(args, "timed", False):
+    timed, monitor = getattr(args, "timed", False), getattr(args, "monitor", False)
+    if timed and monitor:
+        error("--timed and --monitor exclude each other: a timed model is verified, a monitored one runs")
+        raise Failure(2)
+    if not (timed or monitor):
         if getattr(args, "schedulability", False) or getattr(args, "observers", None):
-            error("--schedulability and --observers need --timed")
+            error("--schedulability and --observers need --timed" + ("" if hasattr(args, "schedulability")
+                                                                     else " or --monitor"))
             raise Failure(2)
         return None
     tick = _duration(args.tick, "tick")
@@ -83,7 +92,7 @@ def time_options(args: argparse.Namespace, description):
             print_diagnostics(reporter.diagnostics, reporter.sources)
         if reporter.has_errors:
             raise Failure(EXIT_ERRORS)
-    return TimeOptions(tick, DEFAULT_WCET_US if default is None else default, latencies)
+    return TimeOptions(tick, DEFAULT_WCET_US if default is None else default, latencies, ticks=timed)
 
 
 def warn_untimed(package) -> None:

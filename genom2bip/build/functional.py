@@ -123,7 +123,8 @@ class FunctionalLevel:
         if self.time is not None:
             from genom2bip.build import timed
             self.timing = timed.apply(self, self.time)
-            port_types.append(timed.cost_port_type())
+            if self.timing.ticks:
+                port_types.append(timed.cost_port_type())
             annotations.append(self.timing.annotation())
         return Package(
             name=ident(self.system.lower()),

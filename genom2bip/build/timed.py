@@ -82,6 +82,7 @@ class TimeOptions:
     tick_us: int | None = None  # None: the gcd of every period, WCET and observer bound
     default_wcet_us: int = DEFAULT_WCET_US
     latencies: list[LatencySpec] = field(default_factory=list)
+    ticks: bool = True  # False: observers only, for a controller that measures real time
 
 
 @dataclass
@@ -104,10 +105,13 @@ class Timing:
     untimed_codels: list[str]  # codels that got the default WCET
     default_wcet_us: int
     costs: dict[str, int]  # exec label -> ticks
+    ticks: bool = True
 
     def annotation(self) -> Annotation:
-        """``@timed(tick_us=..., ...)`` on the package: a ``.bip`` read back knows its resolution."""
+        """``@timed(tick_us=...)`` (or ``@monitored`` without ticks) on the package: a ``.bip`` knows its resolution."""
         args = {"tick_us": str(self.tick_us)}
+        if not self.ticks:
+            return Annotation("monitored", args)
         if self.untimed_codels:
             args.update(untimed=",".join(self.untimed_codels), default_wcet_us=str(self.default_wcet_us))
         return Annotation("timed", args)
@@ -209,7 +213,7 @@ def overrun_type() -> AtomType:
     c, p = Var("c"), Var("p")
     return AtomType(
         name="PeriodObserver",
-        annotations=[Annotation("observer", {"kind": "overrun", "open": "period", "close": "sleep"})],
+        annotations=[Annotation("observer", {"kind": "overrun", "open": "period", "close": "sleep", "bound": "p"})],
         params=[DataParam("int", "p")],
         data=[DataDecl("int", "c")],
         ports=[PortDecl(library.PORT, n, exported=True) for n in ("period", "sleep", "tick")],
@@ -221,7 +225,10 @@ def overrun_type() -> AtomType:
             Transition("tick", ["IDLE"], ["IDLE"]),
             Transition("tick", ["RUN"], ["RUN"], action=[Assign(c, Binary("+", c, Const(1)))]),
             Transition(None, ["RUN"], [ERROR], guard=Binary(">", c, p)),
-            *[Transition(n, [ERROR], [ERROR]) for n in ("period", "sleep", "tick")],
+            # Once reported, observing goes on: the next period is watched afresh.
+            Transition("period", [ERROR], ["RUN"], action=[Assign(c, Const(0))]),
+            Transition("sleep", [ERROR], ["IDLE"]),
+            Transition("tick", [ERROR], [ERROR]),
         ],
     )
 
@@ -235,7 +242,7 @@ def latency_type() -> AtomType:
     c, bound = Var("c"), Var("bound")
     return AtomType(
         name="LatencyObserver",
-        annotations=[Annotation("observer", {"kind": "latency", "open": "begin", "close": "end"})],
+        annotations=[Annotation("observer", {"kind": "latency", "open": "begin", "close": "end", "bound": "bound"})],
         params=[DataParam("int", "bound")],
         data=[DataDecl("int", "c")],
         ports=[PortDecl(library.PORT, n, exported=True) for n in ("begin", "end", "tick")],
@@ -249,7 +256,10 @@ def latency_type() -> AtomType:
             Transition("tick", ["IDLE"], ["IDLE"]),
             Transition("tick", ["WAIT"], ["WAIT"], action=[Assign(c, Binary("+", c, Const(1)))]),
             Transition(None, ["WAIT"], [ERROR], guard=Binary(">", c, bound)),
-            *[Transition(n, [ERROR], [ERROR]) for n in ("begin", "end", "tick")],
+            # Once reported, observing goes on: the late answer ends the wait, a new event starts one.
+            Transition("begin", [ERROR], ["WAIT"], action=[Assign(c, Const(0))]),
+            Transition("end", [ERROR], ["IDLE"]),
+            Transition("tick", [ERROR], [ERROR]),
         ],
     )
 
@@ -301,7 +311,12 @@ def _codel_of(level, end: End) -> tuple[str, int | None]:
 
 
 def apply(level, options: TimeOptions) -> Timing:
-    """Add time to ``level`` (a FunctionalLevel whose wires are all built); returns what was chosen."""
+    """Add time to ``level`` (a FunctionalLevel whose wires are all built); returns what was chosen.
+
+    With ``options.ticks`` false only the observers are added (no tick, no
+    clock moves): the model a controller runs, whose monitor measures real
+    time instead (runtime/controller/monitor.py); bounds are then in µs.
+    """
     execs: list[tuple[Wire, str, int | None]] = []
     for task, wires in level.task_execs.items():
         for w in wires:
@@ -313,21 +328,24 @@ def apply(level, options: TimeOptions) -> Timing:
     constants += [spec.within_us for spec in options.latencies]
     if untimed:
         constants.append(options.default_wcet_us)
-    tick = options.tick_us or reduce(math.gcd, [c for c in constants if c > 0], 0) or options.default_wcet_us
+    tick = options.tick_us or reduce(math.gcd, [c for c in constants if c > 0], 0) or options.default_wcet_us or 1
+    if not options.ticks:
+        tick, untimed = 1, []
+    periods = {path: max(1, inst.args[0].value // tick) for path, inst in timers.items()}  # rounded down
 
-    level.atom_types["Timer"] = timer_type()
-    level.atom_types["Scheduler"] = scheduler_type()
     ticking: list[End] = []
-    for path, inst in timers.items():
-        inst.args.append(Const(max(1, inst.args[0].value // tick)))  # a period rounded down: never more lenient
-        ticking.append(End(path, "tick"))
-    ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
-
     costs: dict[str, int] = {}
-    for w, name, wcet in execs:
-        cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
-        w.type = level._connector(exec_type(w.type, cost))
-        costs[w.label] = cost
+    if options.ticks:
+        level.atom_types["Timer"] = timer_type()
+        level.atom_types["Scheduler"] = scheduler_type()
+        for path, inst in timers.items():
+            inst.args.append(Const(periods[path]))
+            ticking.append(End(path, "tick"))
+        ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
+        for w, name, wcet in execs:
+            cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
+            w.type = level._connector(exec_type(w.type, cost))
+            costs[w.label] = cost
 
     observers: list[Observer] = []
     extra: dict[int, tuple[Wire, list[End]]] = {}
@@ -335,12 +353,12 @@ def apply(level, options: TimeOptions) -> Timing:
     def watch(wire: Wire, end: End) -> None:
         extra.setdefault(id(wire), (wire, []))[1].append(end)
 
-    if any(path[:-1] + ("timer",) == path for path in timers):
+    if timers:
         level.atom_types["PeriodObserver"] = overrun_type()
         level.docs.setdefault("PeriodObserver", "Period observer (paper Fig. 8): ERROR when a period overruns.")
     for path in timers:
         task = path[:-1]
-        ticks = level.asm.atoms[path].args[1].value
+        ticks = periods[path]
         atom = level.asm.atom(task + ("overrun",), "PeriodObserver", [Const(ticks)])
         label = level.task_labels[task]
         for w in level.asm.wires:
@@ -348,7 +366,7 @@ def apply(level, options: TimeOptions) -> Timing:
                 watch(w, End(atom, w.label.rsplit(":", 1)[1]))
         ticking.append(End(atom, "tick"))
         observers.append(Observer(f"{label}:overrun", ".".join(atom), "overrun", ticks,
-                                  f"a period of {label} ({ticks} ticks) never lasts longer than the period"))
+                                  f"a period of {label} never lasts longer than the period"))
     if options.latencies:
         level.atom_types["LatencyObserver"] = latency_type()
         level.docs.setdefault("LatencyObserver", "Latency observer: ERROR when an answer comes too late.")
@@ -362,10 +380,11 @@ def apply(level, options: TimeOptions) -> Timing:
             watch(w, End(atom, "end"))
         ticking.append(End(atom, "tick"))
         observers.append(Observer(spec.name, ".".join(atom), "latency", bound,
-                                  f"after {spec.begin}, {spec.end} within {bound} ticks"))
+                                  f"after {spec.begin}, {spec.end} within {spec.within_us / 1000:g} ms"))
     for wire, ends in extra.values():
         wire.ends = list(wire.ends) + ends
         wire.type = level._connector(observed(wire.type, len(ends)))
-    level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
-                        comment="time passes by one tick for every timed atom at once"))
-    return Timing(tick, observers, untimed, options.default_wcet_us, costs)
+    if options.ticks:
+        level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
+                            comment="time passes by one tick for every timed atom at once"))
+    return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks)
