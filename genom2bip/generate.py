@@ -97,6 +97,7 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
     ]
     for f in package.extern_functions:
         used.update(_classes(f))
+    used.update(_classes(package.annotations))
     used.add("Package")
     clashes = {i["function"] for s in sections for i in s["entries"]} & set(model_api.__all__)
     if clashes:
@@ -106,6 +107,7 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
         "title": title, "version": version, "sources": sources, "module": module,
         "bip_file": f"{package.name}.bip", "root": root, "package_name": package.name, "sections": sections,
         "imports": sorted(used), "externs": [constructor(f, 12) for f in package.extern_functions],
+        "package_annotations": [constructor(a, 12) for a in package.annotations],
         "counts": f"{len(package.atom_types)} atom types, {len(package.connector_types)} connector types, "
                   f"{len(package.compound_types)} compound types",
         "has_interface": interface is not None,

@@ -174,3 +174,25 @@ def test_bad_recovery_bindings_are_refused(watched, item, message):
     with pytest.raises(RecoveryError, match=message.replace("(", r"\(").replace(")", r"\)")):
         on_violation(c, [item])
     assert c.monitor.actions == {}
+
+
+def test_a_violation_is_a_line_of_the_runs_output():
+    from runtime.services.run import _line
+
+    assert _line({"event": "observer", "message": "observer x violated: period overran after 31.0 ms"}) == \
+        "observer: observer x violated: period overran after 31.0 ms"
+
+
+def test_the_generated_package_keeps_the_models_annotations(tmp_path):
+    import subprocess
+    import sys
+
+    from genom2bip.cli import main
+
+    assert main([str(Path(__file__).parent / "fixtures/timed/Cruise.gen"), "-o", str(tmp_path), "--monitor"]) == 0
+    code = ("import cruise; p = cruise.package(); "
+            "print([(a.name, a.arguments) for a in p.annotations], sorted(a.name for a in p.atom_types))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True,
+                         env={**__import__("os").environ, "PYTHONPATH": f"{tmp_path}:{Path(__file__).parents[1]}"})
+    assert "[('monitored', {'tick_us': '1'})]" in out.stdout
+    assert "'PeriodObserver'" in out.stdout

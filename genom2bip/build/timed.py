@@ -234,31 +234,31 @@ def overrun_type() -> AtomType:
 
 
 def latency_type() -> AtomType:
-    """Latency observer: after ``begin``, ``end`` must come within ``bound`` ticks, else ERROR.
+    """Latency observer: after ``cause``, ``effect`` must come within ``bound`` ticks, else ERROR.
 
-    A second ``begin`` while waiting keeps the first one's clock: the oldest
+    A second ``cause`` while waiting keeps the first one's clock: the oldest
     unanswered event is the one that can miss its deadline.
     """
     c, bound = Var("c"), Var("bound")
     return AtomType(
         name="LatencyObserver",
-        annotations=[Annotation("observer", {"kind": "latency", "open": "begin", "close": "end", "bound": "bound"})],
+        annotations=[Annotation("observer", {"kind": "latency", "open": "cause", "close": "effect", "bound": "bound"})],
         params=[DataParam("int", "bound")],
         data=[DataDecl("int", "c")],
-        ports=[PortDecl(library.PORT, n, exported=True) for n in ("begin", "end", "tick")],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("cause", "effect", "tick")],
         places=["IDLE", "WAIT", ERROR],
         initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
         transitions=[
-            Transition("begin", ["IDLE"], ["WAIT"], action=[Assign(c, Const(0))]),
-            Transition("begin", ["WAIT"], ["WAIT"]),
-            Transition("end", ["IDLE"], ["IDLE"]),
-            Transition("end", ["WAIT"], ["IDLE"]),
+            Transition("cause", ["IDLE"], ["WAIT"], action=[Assign(c, Const(0))]),
+            Transition("cause", ["WAIT"], ["WAIT"]),
+            Transition("effect", ["IDLE"], ["IDLE"]),
+            Transition("effect", ["WAIT"], ["IDLE"]),
             Transition("tick", ["IDLE"], ["IDLE"]),
             Transition("tick", ["WAIT"], ["WAIT"], action=[Assign(c, Binary("+", c, Const(1)))]),
             Transition(None, ["WAIT"], [ERROR], guard=Binary(">", c, bound)),
             # Once reported, observing goes on: the late answer ends the wait, a new event starts one.
-            Transition("begin", [ERROR], ["WAIT"], action=[Assign(c, Const(0))]),
-            Transition("end", [ERROR], ["IDLE"]),
+            Transition("cause", [ERROR], ["WAIT"], action=[Assign(c, Const(0))]),
+            Transition("effect", [ERROR], ["IDLE"]),
             Transition("tick", [ERROR], [ERROR]),
         ],
     )
@@ -375,9 +375,9 @@ def apply(level, options: TimeOptions) -> Timing:
         begin, end = _resolve(level, spec)
         atom = level.asm.atom((ident(spec.name.replace("-", "_")),), "LatencyObserver", [Const(bound)])
         for w in begin:
-            watch(w, End(atom, "begin"))
+            watch(w, End(atom, "cause"))
         for w in end:
-            watch(w, End(atom, "end"))
+            watch(w, End(atom, "effect"))
         ticking.append(End(atom, "tick"))
         observers.append(Observer(spec.name, ".".join(atom), "latency", bound,
                                   f"after {spec.begin}, {spec.end} within {spec.within_us / 1000:g} ms"))
