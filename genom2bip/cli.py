@@ -217,6 +217,8 @@ def _generate_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--name", metavar="SYSTEM",
                         help="name of the system (default: the first PATH's name, e.g. dala)")
     add_rules_arguments(parser)
+    from genom2bip.verify_timed import add_time_arguments
+    add_time_arguments(parser)
 
 
 def add_rules_arguments(parser: argparse.ArgumentParser) -> None:
@@ -240,15 +242,22 @@ def verb_generate(args: argparse.Namespace) -> int:
     rules = load_rules(args, description)
     system = args.name or system_name(args.paths)
     sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
+    from genom2bip.verify_timed import time_options, warn_untimed
+    time = time_options(args, description)
+    sources += (" --timed" if time.ticks else " --monitor") if time is not None else ""
     try:
         inputs = [*args.paths, *args.include_dirs, *([str(rules_file(args))] if rules_file(args) else [])]
-        result = generate(description, system, Path(args.output), sources, version(), rules, inputs)
+        result = generate(description, system, Path(args.output), sources, version(), rules, inputs, time)
+    except DiagnosticError as exc:
+        print(exc.render(), file=sys.stderr)
+        return EXIT_ERRORS
     except GenerateError as exc:
         error(str(exc))
         return EXIT_ERRORS
     except OSError as exc:
         error(f"cannot write {args.output}: {exc.strerror or exc}")
         return EXIT_ERRORS
+    warn_untimed(result.package)
     print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "
           f"{len(result.package.atom_types)} atom types, {len(result.package.connector_types)} connector types")
     if result.kept:

@@ -71,15 +71,16 @@ def package_name(system: str) -> str:
 
 
 def model_of(description: ir.Description, system: str,
-             rules: list[Rule] | None = None) -> tuple[Package, str, dict[str, str]]:
+             rules: list[Rule] | None = None, time=None) -> tuple[Package, str, dict[str, str]]:
     """The package, its root instance and one line of documentation per type.
 
     ``rules`` are the description's constraints plus a rule file's
     (genom2bip.rules.all_rules); by default the description's alone.
+    ``time`` (genom2bip.build.timed.TimeOptions) adds ticks, clocks and observers.
     """
     if not description.components:
         raise GenerateError(no_component(description) + "; a model needs at least one component (or module)")
-    level = FunctionalLevel(description, system, rules)
+    level = FunctionalLevel(description, system, rules, time)
     package = level.build()
     problems = validate(package)
     if problems:
@@ -119,6 +120,7 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
     ]
     for f in package.extern_functions:
         used.update(_classes(f))
+    used.update(_classes(package.annotations))
     used.add("Package")
     clashes = {i["function"] for s in sections for i in s["entries"]} & set(model_api.__all__)
     if clashes:
@@ -128,6 +130,7 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
         "title": title, "version": version, "sources": sources, "module": module,
         "bip_file": f"{package.name}.bip", "root": root, "package_name": package.name, "sections": sections,
         "imports": sorted(used), "externs": [constructor(f, 12) for f in package.extern_functions],
+        "package_annotations": [constructor(a, 12) for a in package.annotations],
         "counts": f"{len(package.atom_types)} atom types, {len(package.connector_types)} connector types, "
                   f"{len(package.compound_types)} compound types",
         "has_interface": interface is not None,
@@ -174,12 +177,13 @@ def _classes(obj) -> set[str]:
 
 
 def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,
-             rules: list[Rule] | None = None, inputs: list[str] | None = None) -> Generated:
+             rules: list[Rule] | None = None, inputs: list[str] | None = None, time=None) -> Generated:
     """Write ``<out>/<system>/`` atomically (genom2bip.output); returns what was written.
 
     ``inputs`` are the paths read (default: the description's files): the output may not be or contain one.
+    ``time`` (genom2bip.build.timed.TimeOptions) adds ticks, clocks and observers.
     """
-    package, root, docs = model_of(description, system, rules)
+    package, root, docs = model_of(description, system, rules, time)
     name = package_name(system)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"

@@ -62,6 +62,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     spin.add_argument("--spin-dir", metavar="DIR", help="keep SPIN's files (model.pml, pan.c, trails) in DIR")
     from genom2bip.verify_compositional import add_arguments as add_compositional_arguments
     add_compositional_arguments(parser)
+    from genom2bip.verify_timed import add_time_arguments
+    add_time_arguments(parser, verify=True)
 
 
 # --------------------------------------------------------------------------- loading
@@ -92,15 +94,21 @@ def load_model(args: argparse.Namespace):
         raise Failure(EXIT_USAGE)
     from genom2bip.cli import load, load_rules
     from genom2bip.generate import GenerateError, model_of, system_name
+    from genom2bip.verify_timed import time_options, warn_untimed
+    from runtime.diagnostics import DiagnosticError
 
     description = load(args)
     rules = load_rules(args, description)
     system = args.name or system_name(paths)
     try:
-        package, root, _ = model_of(description, system, rules)
+        package, root, _ = model_of(description, system, rules, time_options(args, description))
     except GenerateError as exc:
         error(str(exc))
         raise Failure(EXIT_ERRORS) from None
+    except DiagnosticError as exc:
+        print(exc.render(), file=sys.stderr)
+        raise Failure(EXIT_ERRORS) from None
+    warn_untimed(package)
     if args.root:
         root = args.root
     return package, root, f"{system} ({root})"
@@ -187,7 +195,8 @@ def verb_verify(args: argparse.Namespace) -> int:
         for w in warnings:
             print(w.render(), file=sys.stderr)
         properties.extend(props)
-    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela)
+    observers = _observer_kinds(args)
+    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers)
     observed = set().union(*(p.observed for p in properties)) if properties else set()
     from runtime.explore import ExploreError, StateSpace
 
@@ -206,7 +215,18 @@ def verb_verify(args: argparse.Namespace) -> int:
     if args.engine == "spin":
         from genom2bip.verify_spin import run_spin
         return run_spin(space, args, deadlock, properties)
-    return max(compositional, _run_explorer(space, args, deadlock, properties))
+    worst = max(compositional, _run_explorer(space, args, deadlock, properties))
+    if observers:
+        from genom2bip.verify_timed import check_observers
+        worst = max(worst, check_observers(space, flat, package, root, observers, _progress(args)))
+    return worst
+
+
+def _observer_kinds(args) -> set[str]:
+    """The observers ``--timed`` checks: every one, or the period observers alone with --schedulability."""
+    if not getattr(args, "timed", False):
+        return set()
+    return {"overrun"} if args.schedulability and not args.observers else {"overrun", "latency"}
 
 
 def _write_promela(space, properties, path: str) -> int:

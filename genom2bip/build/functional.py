@@ -66,8 +66,11 @@ class ServiceParts:
 class FunctionalLevel:
     """Builds the package for a set of components: one compound per module under one root compound."""
 
-    def __init__(self, description: ir.Description, system: str, rules: list[Rule] | None = None) -> None:
+    def __init__(self, description: ir.Description, system: str, rules: list[Rule] | None = None,
+                 time=None) -> None:
         self.description = description
+        self.time = time  # genom2bip.build.timed.TimeOptions: add symbolic time (docs/verification.md, Time)
+        self.timing = None  # what the time transformation chose, once built
         self.system = system
         self.rules = description_rules(description) if rules is None else rules
         self.atom_types: dict[str, AtomType] = {}
@@ -116,11 +119,21 @@ class FunctionalLevel:
         for task_path, execs in self.task_execs.items():
             self._period(task_path[0], task_path, execs)
         self._triggers()
+        port_types = library.port_types()
+        annotations = []
+        if self.time is not None:
+            from genom2bip.build import timed
+            self.timing = timed.apply(self, self.time)
+            if self.timing.ticks:
+                port_types.append(timed.cost_port_type())
+            annotations.append(self.timing.annotation())
         compounds = self.asm.compounds()  # may add connector and port types: before the package lists them
+        port_types += sorted(self.asm.port_types.values(), key=lambda t: t.name)
         return Package(
             name=ident(self.system.lower()),
+            annotations=annotations,
             extern_functions=sorted(self.externs.values(), key=lambda f: f.name),
-            port_types=library.port_types() + sorted(self.asm.port_types.values(), key=lambda t: t.name),
+            port_types=port_types,
             atom_types=list(self.atom_types.values()),
             connector_types=sorted(self.connector_types.values(), key=lambda c: c.name),
             compound_types=compounds,

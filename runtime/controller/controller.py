@@ -21,6 +21,7 @@ from runtime.codels import codel_specs
 from runtime.controller.binding import Binder, Scope
 from runtime.controller.codels import load_codels
 from runtime.controller.data import Data, PosterValue, clone, get_path, path_steps, set_path
+from runtime.controller.monitor import Monitor
 from runtime.controller.requests import FINAL, Request, RequestError, Service
 from runtime.controller.schema import completed, problems, zero
 from runtime.controller.timing import MonotonicClock, Timer, Timers
@@ -74,6 +75,7 @@ class Controller:
         self.engine = Engine(package, root, externs)
         self.clock = clock or MonotonicClock()
         self.timers = Timers.of(self.engine.flat, {c["instance"]: c.get("clock_rate_us") for c in comps.values()})
+        self.monitor = Monitor.of(self.engine.flat, package)  # the model's observers on this clock (None: none)
         self.services: dict[str, Service] = {
             label: Service(scope, comps[scope.component]["services"][scope.name])
             for label, scope in self.binder.services.items()}
@@ -324,6 +326,8 @@ class Controller:
         self.started_at = t0 = clock.now()
         end = t0 + duration if duration is not None else None
         self.timers.start(t0)
+        if self.monitor is not None:
+            self.monitor.start(t0)
         self.status = "running"
         try:
             self.state = self.engine.initial_state()
@@ -450,6 +454,9 @@ class Controller:
         self.state = self.engine.fire(self.state, inter)
         self.steps += 1
         self._observe(info, req, now)
+        if self.monitor is not None:
+            for event in self.monitor.step(inter.ports, inter.label, now, self.clock.now()):
+                self._emit(event)
 
     def _observe(self, info: StepInfo, req: Request | None, now: float) -> None:
         """Timers (``now``: when the step began) and reports after a step."""

@@ -27,6 +27,9 @@ def add_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--seed", type=int, help="choose among ready interactions at random with this seed "
                                               "(default: the least recently fired)")
     run.add_argument("--quiet", action="store_true", help="print only the start and the end")
+    run.add_argument("--on-violation", metavar="OBSERVER=C.S", action="append", default=[],
+                     help="when OBSERVER (its instance path) is violated, request service S of component C "
+                          "(e.g. a Stop that interrupts the faulty activity)")
 
 
 def find_codels(interface: dict[str, Any], given: str | None, origin: str | None) -> str | None:
@@ -51,7 +54,7 @@ def _line(event: dict[str, Any]) -> str | None:
         extra = event.get("outputs") if event["status"] == "ok" else event.get("message")
         text = json.dumps(extra) if isinstance(extra, (dict, list)) else (extra or "")
         return f"[{event['request']}] {event['component']}.{event['service']}: {event['status']} {text}".rstrip()
-    if kind in ("overrun", "codel_error"):
+    if kind in ("overrun", "codel_error", "observer"):
         return f"{kind}: {event.get('message')}"
     return None
 
@@ -82,6 +85,12 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
         return 1
     except KeyError as e:
         print(f"{prog}: error: --connect: {e.args[0]}", file=sys.stderr)
+        return 1
+    from runtime.controller.recovery import RecoveryError, on_violation
+    try:
+        on_violation(controller, args.on_violation)
+    except RecoveryError as e:
+        print(f"{prog}: error: --on-violation: {e}", file=sys.stderr)
         return 1
     try:
         server = ServiceServer(controller, args.port)

@@ -10,7 +10,7 @@ Routes (docs/runtime.md has the shapes; ``/openapi.json`` describes them):
     GET  /requests                             recent requests (?status=running&limit=100)
     GET  /requests/{id}?wait=SECONDS           a request and its reports; waits for the final one
     GET  /components/{c}/ports/{p}             a poster's last value
-    GET  /events?types=report,poster           server-sent events: reports, poster writes, overruns, codel errors
+    GET  /events?types=report,poster           server-sent events: reports, poster writes, overruns, codel errors, observers
     GET  /tasks                                periods, lateness and overruns of every task
     GET  /openapi.json                         OpenAPI 3.1 description
 
@@ -44,7 +44,7 @@ MAX_WAIT = 60.0
 MAX_BODY = 1 << 20
 #: Events kept for a slow event-stream client before it is cut off.
 QUEUE_SIZE = 10_000
-EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller")
+EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller", "observer")
 
 
 def _finite(value: Any) -> Any:

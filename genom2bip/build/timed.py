@@ -1,0 +1,390 @@
+"""Symbolic time (paper §IV-D): ticks, bounded clocks and observers, added to the model before any back end.
+
+``apply(level, options)`` rewrites a :class:`~genom2bip.build.functional.FunctionalLevel`
+before it becomes a package, so that the ``.bip`` text, the Python package,
+the explorer and the run-time monitors all see the same atoms:
+
+* every Timer, Scheduler and observer gets a ``tick`` port; one rendezvous
+  connector labelled ``tick`` joins them all (strong synchronisation: time
+  passes for everybody at once, or not at all);
+* a Timer counts the ticks of its period and opens the next period when it
+  has elapsed (time cannot pass beyond that point before it does);
+* a Scheduler is busy for the WCET of the codel it let run, in ticks: no
+  other codel of the task runs and the period cannot close meanwhile, and
+  time cannot pass while the task is idle in an open period (it has to run a
+  codel or close the period first);
+* an observer per periodic task (Fig. 8) counts the ticks of an open period
+  and goes to ``ERROR`` once they exceed the period: an overrun;
+* a latency observer per user observer (genom2bip/observers.py) counts the
+  ticks from its ``from`` event to its ``to`` event and goes to ``ERROR``
+  once they exceed its bound.
+
+Ticks are ordinary ports and data (docs/verification.md, *Time* says why).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import reduce
+
+from genom2bip.build import library
+from genom2bip.build.assembly import End, Path, Wire
+from genom2bip.build.names import ident
+from runtime.diagnostics import NOWHERE, Reporter, Span
+from runtime.model import (
+    Annotation,
+    Assign,
+    AtomType,
+    Binary,
+    Call,
+    Const,
+    ConnectorParam,
+    ConnectorType,
+    DataDecl,
+    DataParam,
+    DefineGroup,
+    DefinePort,
+    If,
+    InitialTransition,
+    InteractionSpec,
+    PortData,
+    PortDecl,
+    PortType,
+    Transition,
+    Var,
+)
+
+#: The label of the interaction in which time passes by one tick.
+TICK = "tick"
+#: The place an observer reaches when its property is violated.
+ERROR = "ERROR"
+#: A codel without a ``wcet`` annotation is taken to run this long (µs): no time, and a warning names it.
+DEFAULT_WCET_US = 0
+#: Port type of a scheduler's ``exec``: the connector tells it how many ticks the codel takes.
+COST = "Cost"
+
+
+@dataclass
+class LatencySpec:
+    """A user observer: every ``begin`` event is followed by an ``end`` event within ``within_us``."""
+
+    name: str
+    begin: str  # event pattern, e.g. LaserRF.Scan:write
+    end: str
+    within_us: int
+    doc: str | None = None
+    begin_span: Span = NOWHERE  # where the file says it, for errors
+    end_span: Span = NOWHERE
+
+
+@dataclass
+class TimeOptions:
+    tick_us: int | None = None  # None: the gcd of every period, WCET and observer bound
+    default_wcet_us: int = DEFAULT_WCET_US
+    latencies: list[LatencySpec] = field(default_factory=list)
+    ticks: bool = True  # False: observers only, for a controller that measures real time
+
+
+@dataclass
+class Observer:
+    """An observer atom of the timed model: ERROR reachable means its property is violated."""
+
+    name: str  # what reports call it
+    atom: str  # instance path, e.g. NDD.motion.overrun
+    kind: str  # "overrun" or "latency"
+    bound_ticks: int
+    text: str  # the property in words
+
+
+@dataclass
+class Timing:
+    """What the transformation chose and added: reports and the run-time monitor read it."""
+
+    tick_us: int
+    observers: list[Observer]
+    untimed_codels: list[str]  # codels that got the default WCET
+    default_wcet_us: int
+    costs: dict[str, int]  # exec label -> ticks
+    ticks: bool = True
+
+    def annotation(self) -> Annotation:
+        """``@timed(tick_us=...)`` (or ``@monitored`` without ticks) on the package: a ``.bip`` knows its resolution."""
+        args = {"tick_us": str(self.tick_us)}
+        if not self.ticks:
+            return Annotation("monitored", args)
+        if self.untimed_codels:
+            args.update(untimed=",".join(self.untimed_codels), default_wcet_us=str(self.default_wcet_us))
+        return Annotation("timed", args)
+
+
+def cost_port_type() -> PortType:
+    return PortType(COST, [DataParam("int", "cost")])
+
+
+def ticks_up(us: int, tick: int) -> int:
+    """A duration in ticks, rounded up: a WCET never shrinks."""
+    return -(-us // tick)
+
+
+def matching_wires(level, event: str) -> list[Wire]:
+    """The wires an event ``Module.Name:port`` names: its label, the family ``port_*``, or a poster's writes."""
+    head, port = event.rsplit(":", 1)
+    module, thing = head.split(".", 1)
+    poster = (ident(module), ident(thing))
+    out = []
+    for w in level.asm.wires:
+        if port == "write":
+            if any(isinstance(e, End) and e.atom == poster and e.port == "write" for e in w.ends):
+                out.append(w)
+        elif w.label is not None and (w.label == event or w.label.startswith(event + "_")):
+            out.append(w)
+    return out
+
+
+def _resolve(level, spec: LatencySpec) -> tuple[list[Wire], list[Wire]]:
+    """The wires of both events of an observer; located errors when one names nothing or both the same step."""
+    reporter = Reporter()
+    begin, end = matching_wires(level, spec.begin), matching_wires(level, spec.end)
+    for wires, event, span in ((begin, spec.begin, spec.begin_span), (end, spec.end, spec.end_span)):
+        if not wires:
+            reporter.error(span, f"observer {spec.name}: no interaction of the model is a {event} event",
+                           "the service or task has no codel for it")
+    both = [w.label for w in begin if w in end]
+    if both:
+        reporter.error(spec.end_span, f"observer {spec.name}: {both[0]} is both a 'from' and a 'to' event",
+                       "an observer needs two different events")
+    reporter.raise_if_errors()
+    return begin, end
+
+
+def timer_type() -> AtomType:
+    """Timer counting the ticks of its period; the next period opens only once ``ticks`` have passed.
+
+    Its guards compare ``t`` with ``ticks`` only (``<`` and ``>=``), so ``t``
+    stops at ``ticks``: larger values behave the same.
+    """
+    base = library.timer_type()
+    base.params.append(DataParam("int", "ticks"))
+    base.data.append(DataDecl("int", "t"))
+    base.ports.append(PortDecl(library.PORT, "tick", exported=True))
+    base.initial = InitialTransition(["WAIT"], [Assign(Var("t"), Var("ticks"))])
+    t_ready = Binary(">=", Var("t"), Var("ticks"))
+    base.transitions = [
+        Transition("trigger", ["WAIT"], ["PERIOD"], guard=t_ready, action=[Assign(Var("t"), Const(0))]),
+        Transition("sleep", ["PERIOD"], ["WAIT"]),
+        Transition("tick", ["WAIT"], ["WAIT"], guard=Binary("<", Var("t"), Var("ticks")),
+                   action=[Assign(Var("t"), Binary("+", Var("t"), Const(1)))]),
+        Transition("tick", ["PERIOD"], ["PERIOD"], action=[_capped("t", "ticks")]),
+    ]
+    return base
+
+
+def _capped(var: str, cap: str) -> If:
+    """``if (var < cap) then var = var + 1; fi``: a clock that stops at ``cap`` (bounded clocks)."""
+    return If(Binary("<", Var(var), Var(cap)), (Assign(Var(var), Binary("+", Var(var), Const(1))),))
+
+
+def scheduler_type() -> AtomType:
+    """Scheduler whose ``exec`` receives the ticks the codel takes; busy until they have passed."""
+    base = library.scheduler_type()
+    base.data = [DataDecl("int", "busy"), DataDecl("int", "cost")]
+    base.ports = [
+        PortDecl(library.PORT, "period", exported=True),
+        PortDecl(COST, "exec", ["cost"], exported=True),
+        PortDecl(library.PORT, "sleep", exported=True),
+        PortDecl(library.PORT, "tick", exported=True),
+    ]
+    idle = Binary("==", Var("busy"), Const(0))
+    base.initial = InitialTransition(["SLEEP"], [Assign(Var("busy"), Const(0)), Assign(Var("cost"), Const(0))])
+    base.transitions = [
+        Transition("period", ["SLEEP"], ["RUN"]),
+        Transition("exec", ["RUN"], ["RUN"], guard=idle,
+                   action=[Assign(Var("busy"), Var("cost")), Assign(Var("cost"), Const(0))]),
+        Transition("sleep", ["RUN"], ["SLEEP"], guard=idle),
+        Transition("tick", ["SLEEP"], ["SLEEP"]),
+        Transition("tick", ["RUN"], ["RUN"], guard=Binary(">", Var("busy"), Const(0)),
+                   action=[Assign(Var("busy"), Binary("-", Var("busy"), Const(1)))]),
+    ]
+    return base
+
+
+def overrun_type() -> AtomType:
+    """The paper's Fig. 8: clock ``c`` counts the ticks of an open period; ``c > p`` is an overrun (ERROR)."""
+    c, p = Var("c"), Var("p")
+    return AtomType(
+        name="PeriodObserver",
+        annotations=[Annotation("observer", {"kind": "overrun", "open": "period", "close": "sleep", "bound": "p"})],
+        params=[DataParam("int", "p")],
+        data=[DataDecl("int", "c")],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("period", "sleep", "tick")],
+        places=["IDLE", "RUN", ERROR],
+        initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
+        transitions=[
+            Transition("period", ["IDLE"], ["RUN"], action=[Assign(c, Const(0))]),
+            Transition("sleep", ["RUN"], ["IDLE"]),
+            Transition("tick", ["IDLE"], ["IDLE"]),
+            Transition("tick", ["RUN"], ["RUN"], action=[Assign(c, Binary("+", c, Const(1)))]),
+            Transition(None, ["RUN"], [ERROR], guard=Binary(">", c, p)),
+            # Once reported, observing goes on: the next period is watched afresh.
+            Transition("period", [ERROR], ["RUN"], action=[Assign(c, Const(0))]),
+            Transition("sleep", [ERROR], ["IDLE"]),
+            Transition("tick", [ERROR], [ERROR]),
+        ],
+    )
+
+
+def latency_type() -> AtomType:
+    """Latency observer: after ``cause``, ``effect`` must come within ``bound`` ticks, else ERROR.
+
+    A second ``cause`` while waiting keeps the first one's clock: the oldest
+    unanswered event is the one that can miss its deadline.
+    """
+    c, bound = Var("c"), Var("bound")
+    return AtomType(
+        name="LatencyObserver",
+        annotations=[Annotation("observer", {"kind": "latency", "open": "cause", "close": "effect", "bound": "bound"})],
+        params=[DataParam("int", "bound")],
+        data=[DataDecl("int", "c")],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("cause", "effect", "tick")],
+        places=["IDLE", "WAIT", ERROR],
+        initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
+        transitions=[
+            Transition("cause", ["IDLE"], ["WAIT"], action=[Assign(c, Const(0))]),
+            Transition("cause", ["WAIT"], ["WAIT"]),
+            Transition("effect", ["IDLE"], ["IDLE"]),
+            Transition("effect", ["WAIT"], ["IDLE"]),
+            Transition("tick", ["IDLE"], ["IDLE"]),
+            Transition("tick", ["WAIT"], ["WAIT"], action=[Assign(c, Binary("+", c, Const(1)))]),
+            Transition(None, ["WAIT"], [ERROR], guard=Binary(">", c, bound)),
+            # Once reported, observing goes on: the late answer ends the wait, a new event starts one.
+            Transition("cause", [ERROR], ["WAIT"], action=[Assign(c, Const(0))]),
+            Transition("effect", [ERROR], ["IDLE"]),
+            Transition("tick", [ERROR], [ERROR]),
+        ],
+    )
+
+
+def observed(ctype: ConnectorType, extra: int) -> ConnectorType:
+    """``ctype`` with ``extra`` more ports that take part in every interaction (observer ports, always ready)."""
+    names = [f"p{len(ctype.params) + i + 1}" for i in range(extra)]
+    items = list(ctype.define.items)
+    head = items[0] if items and isinstance(items[0], DefineGroup) and items[0].trigger else None
+    if head is not None:  # (trigger group)' receivers: observers fire with the trigger
+        items[0] = DefineGroup(list(head.items) + [DefinePort(n) for n in names], trigger=True)
+    else:
+        items += [DefinePort(n) for n in names]
+    return ConnectorType(
+        name=f"{ctype.name}_O{extra}",
+        params=list(ctype.params) + [ConnectorParam(library.PORT, n) for n in names],
+        define=DefineGroup(items, trigger=ctype.define.trigger),
+        data=list(ctype.data),
+        export=ctype.export,
+        interactions=[InteractionSpec(list(s.ports) + names, s.guard, list(s.up), list(s.down), list(s.annotations))
+                      for s in ctype.interactions],
+        annotations=list(ctype.annotations),
+    )
+
+
+def exec_type(ctype: ConnectorType, cost: int) -> ConnectorType:
+    """An exec rendezvous that tells the scheduler (its first port) the codel's cost in ticks."""
+    names = [p.name for p in ctype.params]
+    return ConnectorType(
+        name=f"Exec{cost}_{ctype.name.split('_', 1)[1]}",
+        params=[ConnectorParam(COST, names[0])] + list(ctype.params[1:]),
+        define=ctype.define,
+        interactions=[InteractionSpec(names, down=[Assign(PortData(names[0], "cost"), Const(cost))])],
+    )
+
+
+def _codel_of(level, end: End) -> tuple[str, int | None]:
+    """The codel an activity's exec port calls: (its name, its ``wcet_us`` annotation or None)."""
+    atom = level.atom_types[level.asm.atoms[end.atom].type]
+    for t in atom.transitions:
+        if t.port == end.port:
+            for stmt in t.action:
+                if isinstance(stmt, Assign) and isinstance(stmt.value, Call):
+                    extern = level.externs[stmt.value.function]
+                    ann = next(a for a in extern.annotations if a.name == "codel")
+                    wcet = ann.arguments.get("wcet_us")
+                    return ann.arguments["codel"], int(wcet) if wcet is not None else None
+    raise ValueError(f"no codel on {end}")
+
+
+def apply(level, options: TimeOptions) -> Timing:
+    """Add time to ``level`` (a FunctionalLevel whose wires are all built); returns what was chosen.
+
+    With ``options.ticks`` false only the observers are added (no tick, no
+    clock moves): the model a controller runs, whose monitor measures real
+    time instead (runtime/controller/monitor.py); bounds are then in µs.
+    """
+    execs: list[tuple[Wire, str, int | None]] = []
+    for task, wires in level.task_execs.items():
+        for w in wires:
+            execs.append((w, *_codel_of(level, w.ends[1])))
+    timers = {path: inst for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
+    untimed = sorted({f"{w.label.split('.')[0]}.{name}" for w, name, wcet in execs if wcet is None})
+    constants = [inst.args[0].value for inst in timers.values()]
+    constants += [wcet for _, _, wcet in execs if wcet is not None]
+    constants += [spec.within_us for spec in options.latencies]
+    if untimed:
+        constants.append(options.default_wcet_us)
+    tick = options.tick_us or reduce(math.gcd, [c for c in constants if c > 0], 0) or options.default_wcet_us or 1
+    if not options.ticks:
+        tick, untimed = 1, []
+    periods = {path: max(1, inst.args[0].value // tick) for path, inst in timers.items()}  # rounded down
+
+    ticking: list[End] = []
+    costs: dict[str, int] = {}
+    if options.ticks:
+        level.atom_types["Timer"] = timer_type()
+        level.atom_types["Scheduler"] = scheduler_type()
+        for path, inst in timers.items():
+            inst.args.append(Const(periods[path]))
+            ticking.append(End(path, "tick"))
+        ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
+        for w, name, wcet in execs:
+            cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
+            w.type = level._connector(exec_type(w.type, cost))
+            costs[w.label] = cost
+
+    observers: list[Observer] = []
+    extra: dict[int, tuple[Wire, list[End]]] = {}
+
+    def watch(wire: Wire, end: End) -> None:
+        extra.setdefault(id(wire), (wire, []))[1].append(end)
+
+    if timers:
+        level.atom_types["PeriodObserver"] = overrun_type()
+        level.docs.setdefault("PeriodObserver", "Period observer (paper Fig. 8): ERROR when a period overruns.")
+    for path in timers:
+        task = path[:-1]
+        ticks = periods[path]
+        atom = level.asm.atom(task + ("overrun",), "PeriodObserver", [Const(ticks)])
+        label = level.task_labels[task]
+        for w in level.asm.wires:
+            if w.label in (f"{label}:period", f"{label}:sleep"):
+                watch(w, End(atom, w.label.rsplit(":", 1)[1]))
+        ticking.append(End(atom, "tick"))
+        observers.append(Observer(f"{label}:overrun", ".".join(atom), "overrun", ticks,
+                                  f"a period of {label} never lasts longer than the period"))
+    if options.latencies:
+        level.atom_types["LatencyObserver"] = latency_type()
+        level.docs.setdefault("LatencyObserver", "Latency observer: ERROR when an answer comes too late.")
+    for spec in options.latencies:
+        bound = spec.within_us // tick
+        begin, end = _resolve(level, spec)
+        atom = level.asm.atom((ident(spec.name.replace("-", "_")),), "LatencyObserver", [Const(bound)])
+        for w in begin:
+            watch(w, End(atom, "cause"))
+        for w in end:
+            watch(w, End(atom, "effect"))
+        ticking.append(End(atom, "tick"))
+        observers.append(Observer(spec.name, ".".join(atom), "latency", bound,
+                                  f"after {spec.begin}, {spec.end} within {spec.within_us / 1000:g} ms"))
+    for wire, ends in extra.values():
+        wire.ends = list(wire.ends) + ends
+        wire.type = level._connector(observed(wire.type, len(ends)))
+    if options.ticks:
+        level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
+                            comment="time passes by one tick for every timed atom at once"))
+    return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks)
