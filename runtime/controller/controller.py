@@ -140,7 +140,7 @@ class Controller:
         """Service label -> the services whose start aborts it (the description's and the rules' interruptions)."""
         leaves = self._leaves
         found: dict[str, list[str]] = {}
-        for fc in flat.connectors:
+        for fc in self.engine.flat.connectors:
             if not fc.top:
                 continue
             roles = [self._roles.get(p) for p in leaves(fc)]
