@@ -30,7 +30,7 @@ import networkx as nx
 import yaml
 
 from genom2bip import ir
-from runtime.diagnostics import NOWHERE, Reporter, SourceCache, Span
+from runtime.diagnostics import NOWHERE, Reporter, Span
 
 Ref = tuple[str, str]  # (component, service)
 
@@ -267,22 +267,25 @@ def _suggest(word: str, choices: list[str]) -> str | None:
 
 def load_rules(path: Path, description: ir.Description, reporter: Reporter) -> list[Rule]:
     """Read and check a rule file against the description; problems go to ``reporter``."""
-    sources: SourceCache = reporter.sources
+    ok, root = compose_file(path, reporter, "rule file")
+    return _Reader(str(path), description, reporter).rules(root) if ok else []
+
+
+def compose_file(path: Path, reporter: Reporter, what: str) -> tuple[bool, yaml.Node | None]:
+    """A YAML file's node tree (positions kept for messages); (False, None) after reporting a problem."""
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
-        reporter.error(Span(str(path), 0, 0), f"cannot read rule file: {exc.strerror or exc}")
-        return []
-    sources.add(str(path), text)
-    reader = _Reader(str(path), description, reporter)
+        reporter.error(Span(str(path), 0, 0), f"cannot read {what}: {exc.strerror or exc}")
+        return False, None
+    reporter.sources.add(str(path), text)
     try:
-        root = yaml.compose(text)
+        return True, yaml.compose(text)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
         reporter.error(Span(str(path), line, col), f"not valid YAML: {exc.problem or exc.context}")
-        return []
-    return reader.rules(root)
+        return False, None
 
 
 # --------------------------------------------------------------------------- consistency
