@@ -24,7 +24,8 @@ import yaml
 
 from genom2bip import ir
 from genom2bip.build.timed import LatencySpec
-from genom2bip.rules import _suggest
+from genom2bip import rules
+from genom2bip.rules import _suggest, compose_file
 from runtime.diagnostics import Reporter, Span
 
 KEYS = ("name", "doc", "from", "to", "within")
@@ -40,18 +41,8 @@ def parse_duration(text: str) -> int | None:
     return round(float(m.group(1)) * UNITS[m.group(2)]) if m else None
 
 
-class _Reader:
-    def __init__(self, path: str, description: ir.Description, reporter: Reporter) -> None:
-        self.path = path
-        self.description = description
-        self.reporter = reporter
-
-    def span(self, node: yaml.Node) -> Span:
-        m = node.start_mark
-        return Span(self.path, m.line + 1, m.column + 1, node.end_mark.line + 1, node.end_mark.column + 1)
-
-    def error(self, node: yaml.Node, message: str, hint: str | None = None) -> None:
-        self.reporter.error(self.span(node), message, hint)
+class _Reader(rules._Reader):
+    """The rule file's reader (positions, messages), reading observers."""
 
     def scalar(self, node: yaml.Node, what: str, name: str) -> str | None:
         if not isinstance(node, yaml.ScalarNode) or node.value == "":
@@ -164,17 +155,5 @@ class _Reader:
 
 def load_observers(path: Path, description: ir.Description, reporter: Reporter) -> list[LatencySpec]:
     """Read and check an observer file against the description; problems go to ``reporter``."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        reporter.error(Span(str(path), 0, 0), f"cannot read observer file: {exc.strerror or exc}")
-        return []
-    reporter.sources.add(str(path), text)
-    try:
-        root = yaml.compose(text)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
-        reporter.error(Span(str(path), line, col), f"not valid YAML: {exc.problem or exc.context}")
-        return []
-    return _Reader(str(path), description, reporter).observers(root)
+    ok, root = compose_file(path, reporter, "observer file")
+    return _Reader(str(path), description, reporter).observers(root) if ok else []

@@ -30,7 +30,7 @@ import networkx as nx
 import yaml
 
 from genom2bip import ir
-from runtime.diagnostics import NOWHERE, DiagnosticError, Reporter, SourceCache, Span
+from runtime.diagnostics import NOWHERE, DiagnosticError, Reporter, Span
 from runtime.textfile import read_text
 
 Ref = tuple[str, str]  # (component, service)
@@ -268,22 +268,25 @@ def _suggest(word: str, choices: list[str]) -> str | None:
 
 def load_rules(path: Path, description: ir.Description, reporter: Reporter) -> list[Rule]:
     """Read and check a rule file against the description; problems go to ``reporter``."""
-    sources: SourceCache = reporter.sources
+    ok, root = compose_file(path, reporter, "rule file")
+    return _Reader(str(path), description, reporter).rules(root) if ok else []
+
+
+def compose_file(path: Path, reporter: Reporter, what: str) -> tuple[bool, yaml.Node | None]:
+    """A YAML file's node tree (positions kept for messages); (False, None) after reporting a problem."""
     try:
-        text = read_text(path, "rule file")
+        text = read_text(path, what)
     except DiagnosticError as exc:
         reporter.diagnostics.extend(exc.diagnostics)
-        return []
-    sources.add(str(path), text)
-    reader = _Reader(str(path), description, reporter)
+        return False, None
+    reporter.sources.add(str(path), text)
     try:
-        root = yaml.compose(text)
+        return True, yaml.compose(text)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
         reporter.error(Span(str(path), line, col), f"not valid YAML: {exc.problem or exc.context}")
-        return []
-    return reader.rules(root)
+        return False, None
 
 
 # --------------------------------------------------------------------------- consistency

@@ -69,6 +69,9 @@ def time_options(args: argparse.Namespace, description):
     if timed and monitor:
         error("--timed and --monitor exclude each other: a timed model is verified, a monitored one runs")
         raise Failure(2)
+    if timed and getattr(args, "engine", "explore") == "spin":
+        error("the observers of --timed are checked by our explorer: drop --engine spin")
+        raise Failure(2)
     if not (timed or monitor):
         if getattr(args, "schedulability", False) or getattr(args, "observers", None):
             error("--schedulability and --observers need --timed" + ("" if hasattr(args, "schedulability")

@@ -196,3 +196,18 @@ def test_the_generated_package_keeps_the_models_annotations(tmp_path):
                          env={**__import__("os").environ, "PYTHONPATH": f"{tmp_path}:{Path(__file__).parents[1]}"})
     assert "[('monitored', {'tick_us': '1'})]" in out.stdout
     assert "'PeriodObserver'" in out.stdout
+
+
+def test_a_timed_package_is_refused_by_run(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from genom2bip.cli import main
+
+    assert main([str(Path(__file__).parent / "fixtures/timed/Cruise.gen"), "-o", str(tmp_path), "--timed"]) == 0
+    out = subprocess.run([sys.executable, "-m", "cruise", "run", "--duration", "1"], cwd=tmp_path,
+                         capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": f"{tmp_path}:{Path(__file__).parents[1]}"})
+    assert out.returncode == 1
+    assert "this model is timed (generated with --timed) for verification" in out.stderr

@@ -153,6 +153,11 @@ def test_observers_need_timed(capsys):
     assert code == 2 and "--schedulability and --observers need --timed" in err
 
 
+def test_timed_observers_are_not_handed_to_spin(capsys):
+    code, _, err = verify(capsys, str(CRUISE), "--timed", "--engine", "spin")
+    assert code == 2 and "checked by our explorer: drop --engine spin" in err
+
+
 def test_a_bad_tick_is_a_usage_error(capsys):
     code, _, err = verify(capsys, str(CRUISE), "--timed", "--tick", "fast")
     assert code == 2 and "--tick: 'fast' is not a duration" in err

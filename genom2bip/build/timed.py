@@ -208,60 +208,50 @@ def scheduler_type() -> AtomType:
     return base
 
 
+def _observer_type(name: str, kind: str, opening: str, closing: str, bound: str, watching: str,
+                   either_order: bool) -> AtomType:
+    """An observer: ``opening`` starts clock ``c``, ``closing`` stops it, ``c > bound`` is ERROR.
+
+    Every place has a transition on every port (an observer never blocks
+    what it watches).  ``either_order``: the events may come in any order
+    (a second opening keeps the first one's clock, a closing with nothing
+    open is ignored); otherwise they alternate.  From ERROR, observing goes
+    on: the closing ends the late observation, the next opening starts one.
+    """
+    c, limit = Var("c"), Var(bound)
+    restart = [Assign(c, Const(0))]
+    transitions = [
+        Transition(opening, ["IDLE"], [watching], action=restart),
+        Transition(closing, [watching], ["IDLE"]),
+        Transition("tick", ["IDLE"], ["IDLE"]),
+        Transition("tick", [watching], [watching], action=[Assign(c, Binary("+", c, Const(1)))]),
+        Transition(None, [watching], [ERROR], guard=Binary(">", c, limit)),
+        Transition(opening, [ERROR], [watching], action=restart),
+        Transition(closing, [ERROR], ["IDLE"]),
+        Transition("tick", [ERROR], [ERROR]),
+    ]
+    if either_order:
+        transitions += [Transition(opening, [watching], [watching]), Transition(closing, ["IDLE"], ["IDLE"])]
+    return AtomType(
+        name=name,
+        annotations=[Annotation("observer", {"kind": kind, "open": opening, "close": closing, "bound": bound})],
+        params=[DataParam("int", bound)],
+        data=[DataDecl("int", "c")],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in (opening, closing, "tick")],
+        places=["IDLE", watching, ERROR],
+        initial=InitialTransition(["IDLE"], restart),
+        transitions=transitions,
+    )
+
+
 def overrun_type() -> AtomType:
     """The paper's Fig. 8: clock ``c`` counts the ticks of an open period; ``c > p`` is an overrun (ERROR)."""
-    c, p = Var("c"), Var("p")
-    return AtomType(
-        name="PeriodObserver",
-        annotations=[Annotation("observer", {"kind": "overrun", "open": "period", "close": "sleep", "bound": "p"})],
-        params=[DataParam("int", "p")],
-        data=[DataDecl("int", "c")],
-        ports=[PortDecl(library.PORT, n, exported=True) for n in ("period", "sleep", "tick")],
-        places=["IDLE", "RUN", ERROR],
-        initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
-        transitions=[
-            Transition("period", ["IDLE"], ["RUN"], action=[Assign(c, Const(0))]),
-            Transition("sleep", ["RUN"], ["IDLE"]),
-            Transition("tick", ["IDLE"], ["IDLE"]),
-            Transition("tick", ["RUN"], ["RUN"], action=[Assign(c, Binary("+", c, Const(1)))]),
-            Transition(None, ["RUN"], [ERROR], guard=Binary(">", c, p)),
-            # Once reported, observing goes on: the next period is watched afresh.
-            Transition("period", [ERROR], ["RUN"], action=[Assign(c, Const(0))]),
-            Transition("sleep", [ERROR], ["IDLE"]),
-            Transition("tick", [ERROR], [ERROR]),
-        ],
-    )
+    return _observer_type("PeriodObserver", "overrun", "period", "sleep", "p", "RUN", either_order=False)
 
 
 def latency_type() -> AtomType:
-    """Latency observer: after ``cause``, ``effect`` must come within ``bound`` ticks, else ERROR.
-
-    A second ``cause`` while waiting keeps the first one's clock: the oldest
-    unanswered event is the one that can miss its deadline.
-    """
-    c, bound = Var("c"), Var("bound")
-    return AtomType(
-        name="LatencyObserver",
-        annotations=[Annotation("observer", {"kind": "latency", "open": "cause", "close": "effect", "bound": "bound"})],
-        params=[DataParam("int", "bound")],
-        data=[DataDecl("int", "c")],
-        ports=[PortDecl(library.PORT, n, exported=True) for n in ("cause", "effect", "tick")],
-        places=["IDLE", "WAIT", ERROR],
-        initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
-        transitions=[
-            Transition("cause", ["IDLE"], ["WAIT"], action=[Assign(c, Const(0))]),
-            Transition("cause", ["WAIT"], ["WAIT"]),
-            Transition("effect", ["IDLE"], ["IDLE"]),
-            Transition("effect", ["WAIT"], ["IDLE"]),
-            Transition("tick", ["IDLE"], ["IDLE"]),
-            Transition("tick", ["WAIT"], ["WAIT"], action=[Assign(c, Binary("+", c, Const(1)))]),
-            Transition(None, ["WAIT"], [ERROR], guard=Binary(">", c, bound)),
-            # Once reported, observing goes on: the late answer ends the wait, a new event starts one.
-            Transition("cause", [ERROR], ["WAIT"], action=[Assign(c, Const(0))]),
-            Transition("effect", [ERROR], ["IDLE"]),
-            Transition("tick", [ERROR], [ERROR]),
-        ],
-    )
+    """After ``cause``, ``effect`` must come within ``bound`` ticks, else ERROR; the oldest cause counts."""
+    return _observer_type("LatencyObserver", "latency", "cause", "effect", "bound", "WAIT", either_order=True)
 
 
 def observed(ctype: ConnectorType, extra: int) -> ConnectorType:
