@@ -34,7 +34,7 @@ from runtime.model import (
     PortType,
     Var,
 )
-from runtime.model.expressions import Binary, Call, Expr, Unary
+from runtime.model.expressions import Binary, Call, Const, Expr, Unary
 
 from genom2bip.build.library import PORT, broadcast_type, param_names, rendezvous_type, triggered_type
 
@@ -77,12 +77,19 @@ def _broadcast_shape(ct: ConnectorType) -> bool:
 def _rendezvous_shape(ct: ConnectorType) -> bool:
     """All ports together, at most one interaction block (with the guard only), exporting no data."""
     d = ct.define
-    if (ct.export is not None and (ct.export.data or ct.interactions)) or d is None or d.trigger or not all(isinstance(i, DefinePort) and not i.trigger
-                                                                   for i in d.items):
+    exported_guard = ct.export is not None and any(s.guard is not None for s in ct.interactions)
+    if (ct.export is not None and ct.export.data) or exported_guard or d is None or d.trigger \
+            or not all(isinstance(i, DefinePort) and not i.trigger for i in d.items):
         return False
     if len(ct.interactions) > 1:
         return False
-    return all(not s.up and not s.down and len(s.ports) == len(ct.params) for s in ct.interactions)
+    return all(not s.up and all(_constant_down(a) for a in s.down) and len(s.ports) == len(ct.params)
+               for s in ct.interactions)
+
+
+def _constant_down(stmt) -> bool:
+    """``p.x = constant``: a down action that any level may run, since it reads nothing."""
+    return isinstance(stmt, Assign) and isinstance(stmt.target, PortData) and isinstance(stmt.value, Const)
 
 
 def split_connector(ct: ConnectorType, groups: list[list[int]], port_types: dict[str, PortType]) -> Split:
@@ -152,7 +159,9 @@ def _rename(e: Expr, table: dict[tuple[str, str], PortData]) -> Expr:
 
 
 def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: dict[str, PortType]) -> Split:
+    """Rendezvous of rendezvous; a guard's reads go up, a constant down action goes to the level binding its port."""
     guard = ct.interactions[0].guard if ct.interactions else None
+    downs = list(ct.interactions[0].down) if ct.interactions else []
     reads: list[tuple[str, str]] = []
     _reads(guard, reads)
     names = [p.name for p in ct.params]
@@ -161,6 +170,7 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
     subs: list[ConnectorType | None] = []
     outer_types: list[str] = []
     membership = [0] * len(ct.params)
+    outer_downs: list[Assign] = []
     for gi, g in enumerate(groups):
         for i in g:
             membership[i] = gi
@@ -170,12 +180,23 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
             for port, field in reads:
                 if port == names[g[0]]:
                     table[(port, field)] = PortData(outer_names[gi], field)
+            outer_downs += [Assign(PortData(outer_names[gi], a.target.name), a.value) for a in downs
+                            if a.target.port == names[g[0]]]
             continue
         local = param_names(len(g))
         types = tuple(ct.params[i].port_type for i in g)
         mine = [(port, field) for port, field in reads if names.index(port) in g]
-        if not mine:
+        sub_downs = [Assign(PortData(local[g.index(names.index(a.target.port))], a.target.name), a.value)
+                     for a in downs if names.index(a.target.port) in g]
+        if not mine and not sub_downs:
             subs.append(rendezvous_type(types, exported=True))
+            outer_types.append(PORT)
+            continue
+        if not mine:
+            subs.append(ConnectorType(name="", params=[ConnectorParam(t, n) for t, n in zip(types, local)],
+                                      export=ConnectorExport(PORT, "ep", []),
+                                      define=DefineGroup([DefinePort(n) for n in local]),
+                                      interactions=[InteractionSpec(list(local), down=sub_downs)]))
             outer_types.append(PORT)
             continue
         carried = _carried_type(len(mine), port_types)
@@ -191,17 +212,19 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
             data=[DataDecl("bool", f"v{j + 1}") for j in range(len(mine))],
             export=ConnectorExport(carried, "ep", [f"v{j + 1}" for j in range(len(mine))]),
             define=DefineGroup([DefinePort(n) for n in local]),
-            interactions=[InteractionSpec(list(local), up=up)],
+            interactions=[InteractionSpec(list(local), up=up, down=sub_downs)],
         )
     order = list(range(len(groups)))
-    if guard is None:
+    if guard is None and not downs:
         return Split(rendezvous_type(tuple(outer_types), exported=ct.export is not None), subs, order, [])
     code = "".join("0123456789abcdefghijklmnopqrstuvwxyz"[m] for m in membership)
     outer = ConnectorType(
         name=f"{ct.name}_{code}",
         params=[ConnectorParam(t, n) for t, n in zip(outer_types, outer_names)],
         define=DefineGroup([DefinePort(n) for n in outer_names]),
-        interactions=[InteractionSpec(list(outer_names), guard=_rename(guard, table))],
+        export=ConnectorExport(PORT, "ep", []) if ct.export is not None else None,
+        interactions=[InteractionSpec(list(outer_names), guard=_rename(guard, table) if guard is not None else None,
+                                      down=outer_downs)],
     )
     for gi, sub in enumerate(subs):
         if sub is not None and not sub.name:

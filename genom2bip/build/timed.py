@@ -254,15 +254,27 @@ def latency_type() -> AtomType:
     return _observer_type("LatencyObserver", "latency", "cause", "effect", "bound", "WAIT", either_order=True)
 
 
-def observed(ctype: ConnectorType, extra: int) -> ConnectorType:
-    """``ctype`` with ``extra`` more ports that take part in every interaction (observer ports, always ready)."""
-    names = [f"p{len(ctype.params) + i + 1}" for i in range(extra)]
+def observed(ctype: ConnectorType, extra: int) -> tuple[ConnectorType, int]:
+    """``ctype`` with ``extra`` more ports that take part in every interaction (observer ports, always ready).
+
+    Returns the type and the position of the new ports among the parameters: right after the trigger
+    group of ``(t1 .. tk)' r1 .. rn`` (they fire with the trigger; a trigger group stays the first
+    parameters, as connector splitting expects), else at the end.
+    """
     items = list(ctype.define.items)
     head = items[0] if items and isinstance(items[0], DefineGroup) and items[0].trigger else None
-    if head is not None:  # (trigger group)' receivers: observers fire with the trigger
-        items[0] = DefineGroup(list(head.items) + [DefinePort(n) for n in names], trigger=True)
-    else:
-        items += [DefinePort(n) for n in names]
+    if head is not None and not ctype.interactions:  # (trigger group)' receivers: observers fire with the trigger
+        k, n = len(head.items), len(ctype.params) + extra
+        names = library.param_names(n)
+        types = [p.port_type for p in ctype.params[:k]] + [library.PORT] * extra + \
+            [p.port_type for p in ctype.params[k:]]
+        define = DefineGroup([DefineGroup([DefinePort(x) for x in names[:k + extra]], trigger=True)]
+                             + [DefinePort(x) for x in names[k + extra:]], trigger=ctype.define.trigger)
+        return ConnectorType(name=f"{ctype.name}_O{extra}", params=[ConnectorParam(t, x) for t, x in zip(types, names)],
+                             define=define, data=list(ctype.data), export=ctype.export,
+                             annotations=list(ctype.annotations)), k
+    names = [f"p{len(ctype.params) + i + 1}" for i in range(extra)]
+    items += [DefinePort(n) for n in names]
     return ConnectorType(
         name=f"{ctype.name}_O{extra}",
         params=list(ctype.params) + [ConnectorParam(library.PORT, n) for n in names],
@@ -272,7 +284,7 @@ def observed(ctype: ConnectorType, extra: int) -> ConnectorType:
         interactions=[InteractionSpec(list(s.ports) + names, s.guard, list(s.up), list(s.down), list(s.annotations))
                       for s in ctype.interactions],
         annotations=list(ctype.annotations),
-    )
+    ), len(ctype.params)
 
 
 def exec_type(ctype: ConnectorType, cost: int) -> ConnectorType:
@@ -372,8 +384,9 @@ def apply(level, options: TimeOptions) -> Timing:
         observers.append(Observer(spec.name, ".".join(atom), "latency", bound,
                                   f"after {spec.begin}, {spec.end} within {spec.within_us / 1000:g} ms"))
     for wire, ends in extra.values():
-        wire.ends = list(wire.ends) + ends
-        wire.type = level._connector(observed(wire.type, len(ends)))
+        ctype, at = observed(wire.type, len(ends))
+        wire.ends = list(wire.ends)[:at] + ends + list(wire.ends)[at:]
+        wire.type = level._connector(ctype)
     if options.ticks:
         level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
                             comment="time passes by one tick for every timed atom at once"))
