@@ -207,3 +207,21 @@ def test_a_model_without_interactions_is_one_deadlocked_state():
     assert explore(text_space(IDLE)).deadlocks == [0]
     result = spin.verify_deadlocks(text_space(IDLE), opt=FAST)
     assert result.report.states == 1 and result.report.errors == 1
+
+
+@needs_spin
+def test_pan_progress_lines_are_streamed():
+    import io
+
+    from runtime.explore import Progress
+
+    run = spin.SpinRun(StateSpace(ndd_model()[0], ndd_model()[1]), opt=FAST)
+    stream = io.StringIO()
+    try:
+        run.build(extra=("-DFREQ=10000",))  # a progress line every 10,000 states instead of every million
+        report = run.pan(["-E", "-n"], progress=Progress(stream, force=True, delay=0))
+    finally:
+        run.cleanup()
+    assert report.states == 55_680
+    shown = stream.getvalue()
+    assert "states 10,000" in shown and "depth " in shown and "states/s" in shown
