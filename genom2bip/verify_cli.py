@@ -248,6 +248,9 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
                 worst = max(worst, EXIT_INCONCLUSIVE)
             else:
                 worst = max(worst, _export_lts(space, args))
+    if properties and args.engine in ("compiled", "explore"):
+        from genom2bip.verify_native import note
+        note("properties are checked with the Python step")
     for item in properties:
         verdict = check(space, item, _progress(args))
         print(f"property {describe(item)}")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 
 #: Share of the machine's memory the compiled search may use when --max-memory is not given.
 MEMORY_SHARE = 0.5
@@ -49,6 +50,10 @@ def _compiled(space, args, progress):
         note(why)
         return None
     max_bytes = args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()
+    if args.max_states is None and args.max_depth is None and (args.progress or sys.stderr.isatty()) \
+            and not args.quiet and max_bytes is not None:
+        print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
+              "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
     try:
         result = cs.explore(args.max_states, args.max_depth, args.dfs, progress, max_bytes=max_bytes)
     except Diverged as exc:

@@ -66,6 +66,14 @@ def test_lts_exports_say_they_use_the_python_step(capsys, tmp_path):
     assert (tmp_path / "d.aut").read_text().startswith("des (0, 8, 6)")
 
 
+@needs_cc
+def test_properties_say_they_are_checked_in_python(capsys, tmp_path):
+    props = tmp_path / "p.mcl"
+    props.write_text('ok: "S.req" precedes "S.work";\n')
+    code, out, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props))
+    assert "note: properties are checked with the Python step" in out and code == 0
+
+
 def test_max_memory_must_be_positive(capsys):
     code, _, err = run(capsys, "verify", DINING, "--max-memory", "-1")
     assert code == 2 and "--max-memory must be >= 0" in err
@@ -104,6 +112,8 @@ def test_ctrl_c_prints_a_summary_of_what_was_explored(tmp_path, engine):
     err = "".join(seen)
     assert proc.returncode == 5, err
     assert "states/s" in err and "depth" in err  # the progress line appeared after a second
+    if engine == "compiled":
+        assert "until complete or 0.3 GB (--max-memory); Ctrl-C stops and reports what was explored" in err
     summary = next(line for line in out.splitlines() if line.startswith("explored: "))
     assert "stopped at interrupted" in summary
     assert "deadlocks: none reachable in the explored part" in out or "deadlocks:" in out

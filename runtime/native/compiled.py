@@ -112,14 +112,20 @@ class CompiledSpace:
     # -- the search ------------------------------------------------------------------------------
     def explore(self, max_states: int | None = None, max_depth: int | None = None, dfs: bool = False,
                 progress: Progress | None = None, stop_at_deadlock: bool = False,
-                max_bytes: int | None = None) -> ExploreResult:
-        """Like :func:`runtime.explore.explore`; raises :class:`Diverged` if the Python step must take over."""
+                max_bytes: int | None = None, max_seconds: float | None = None) -> ExploreResult:
+        """Like :func:`runtime.explore.explore`; raises :class:`Diverged` if the Python step must take over.
+
+        ``max_bytes`` bounds the visited set and ``max_seconds`` the time (stopped by ``max-memory``,
+        ``max-seconds``); Ctrl-C stops the search as ``interrupted``, with everything found so far.
+        """
         progress = progress or null_progress()
-        interrupt = _Interrupt()
+        interrupt, timed = _Interrupt(), _Interrupt()
 
         def report(states, transitions, depth, frontier, memory):
             progress.tick(states, transitions, frontier, lambda: memory, depth=depth)
-            return 1 if interrupt.hit else 0
+            if max_seconds is not None and time.perf_counter() - start >= max_seconds:
+                timed.hit = True
+            return 1 if interrupt.hit or timed.hit else 0
 
         callback = PROGRESS(report)
         previous = _catch_interrupt(interrupt)
@@ -142,7 +148,7 @@ class CompiledSpace:
         error = None
         if status == S_ERROR:
             error = self._error(r)
-        stopped = STATUS[status]
+        stopped = "max-seconds" if timed.hit and status == 5 else STATUS[status]
         bits = sum(self.lib.c_width(i) for i in range(len(self.space.slots)))
         return ExploreResult(r.states, r.transitions, r.depth, not stopped, stopped, deadlocks, error, seconds,
                              r.memory, bits)
