@@ -226,3 +226,27 @@ def test_random_models_have_the_same_successors(text):
     except EngineError:
         return  # refused before any step (a priority cycle, ...): nothing to compare
     agree(space, compiled(space), limit=500)
+
+
+WIDE = """package Wide
+  port type Port()
+  atom type A()
+    data int x
+    port Port grow()
+    place s
+    initial to s do { x = 0; }
+    on grow from s to s do { x = (x + 7) % 300 - 100; }
+  end
+  compound type Main()
+    component A a()
+  end
+end
+"""
+
+
+def test_ints_outgrowing_their_field_are_widened():
+    ours = explore(verifykit.text_space(WIDE))
+    cs = compiled(verifykit.text_space(WIDE))
+    theirs = cs.explore()
+    assert (theirs.states, theirs.transitions, theirs.deadlocks) == (ours.states, ours.transitions, [])
+    assert ours.states == 102 and cs.widths == {1: 16}  # -100..199: 4 bits, then 8, then 16

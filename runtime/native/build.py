@@ -82,7 +82,7 @@ def load(path: Path) -> ctypes.CDLL:
     lib = ctypes.CDLL(str(path), mode=ctypes.RTLD_LOCAL)
     i64, i32, p = ctypes.c_int64, ctypes.c_int, ctypes.POINTER
     sig = {
-        "c_set_width": (None, [i32, i32]), "c_width": (i32, [i32]), "c_words": (i32, []),
+        "c_width": (i32, [i32]), "c_words": (i32, []),
         "c_state_width": (i32, []), "c_nstates": (i64, []), "c_parent": (i64, [i64]), "c_via": (i64, [i64]),
         "c_deadlock": (i64, [i64]), "c_state": (None, [i64, p(i64)]), "c_free": (None, []),
         "c_successors": (i32, [p(i64), p(i64), p(ctypes.c_uint32), i32, i64, p(i32), p(i64)]),

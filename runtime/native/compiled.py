@@ -53,15 +53,14 @@ def compile_space(space: StateSpace, externs: dict[str, Any] | None = None) -> t
     cc = compiler()
     if cc is None:
         return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
+    cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc)
     try:
-        model = generate(space, exploration_choices(space.engine.flat.package, externs))
+        cs.build()
     except Unsupported as exc:
         return None, f"compiled exploration does not take this model ({exc}): exploring with the Python step"
-    try:
-        lib = load(build(model.source, cc))
     except (BuildError, OSError) as exc:
         return None, f"compiling the step failed ({str(exc).splitlines()[0]}): exploring with the Python step"
-    return CompiledSpace(space, lib, model.width, model.source), ""
+    return cs, ""
 
 
 @dataclass
@@ -72,16 +71,27 @@ class _Interrupt:
 class CompiledSpace:
     """The C library of one model bound to its Python :class:`StateSpace` (which words errors and traces)."""
 
-    def __init__(self, space: StateSpace, lib: ctypes.CDLL, width: int, source: str) -> None:
+    def __init__(self, space: StateSpace, choices: dict[str, Choice], cc: str) -> None:
         self.space = space
-        self.lib = lib
-        self.width = width
-        self.source = source
+        self.choices = choices
+        self.cc = cc
+        self.widths: dict[int, int] = {}
         self.engine = space.engine
         budget = space.environment.budget
         self.budget = -1 if budget is None else budget
         self.bools = [s.index for s in space.slots if s.kind == "bool"]
         self.kinds = {s.index: s.kind for s in space.slots}
+
+    def build(self) -> None:
+        """Generate, compile (or find in the cache) and load the library for the current field widths."""
+        model = generate(self.space, self.choices, self.widths)
+        self.lib = load(build(model.source, self.cc))
+        self.width, self.source, self.bits = model.width, model.source, model.bits
+
+    def _widen(self, slot: int) -> None:
+        """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits."""
+        self.widths[slot] = min(64, 2 * self.lib.c_width(slot))
+        self.build()
 
     # -- one step -------------------------------------------------------------------------------
     def _typed(self, values) -> tuple:
@@ -102,7 +112,7 @@ class CompiledSpace:
             if n >= 0:
                 return [(via[i], self._typed(out[i * self.width:(i + 1) * self.width])) for i in range(n)]
             if code.value == 8:  # a field too narrow: widen and redo
-                self.lib.c_set_width(arg.value, min(64, 2 * self.lib.c_width(arg.value)))
+                self._widen(arg.value)
                 continue
             if code.value == 10 and cap < 65536:
                 cap *= 16
@@ -139,7 +149,7 @@ class CompiledSpace:
                                            self.budget, PERIOD, callback, ctypes.byref(r))
                 if status != S_WIDEN:
                     break
-                self.lib.c_set_width(r.earg, min(64, 2 * self.lib.c_width(r.earg)))
+                self._widen(r.earg)
         finally:
             _restore_interrupt(previous)
             progress.done()
@@ -149,9 +159,8 @@ class CompiledSpace:
         if status == S_ERROR:
             error = self._error(r)
         stopped = "max-seconds" if timed.hit and status == 5 else STATUS[status]
-        bits = sum(self.lib.c_width(i) for i in range(len(self.space.slots)))
         return ExploreResult(r.states, r.transitions, r.depth, not stopped, stopped, deadlocks, error, seconds,
-                             r.memory, bits)
+                             r.memory, self.bits)
 
     def _error(self, r: Result) -> Finding:
         """The Python step's own words for the error the C step stopped at, with a shortest trace."""

@@ -29,6 +29,8 @@ SEARCH_C = Path(__file__).with_name("search.c")
 MAX_GUARDED = 10
 #: Port parameters of a connector past which its interaction tables would be too large.
 MAX_PARAMS = 16
+#: Bits of an int field without a declared domain at first (zig-zag: -8..7); doubled when a value outgrows it.
+START_BITS = 4
 
 # error codes shared with search.c
 E_NONDET, E_UNSAFE, E_STUCK, E_NOTENABLED, E_ARITH, E_CYCLE, E_DOMAIN, E_WIDEN, E_CHOICES, E_FULL = range(1, 11)
@@ -40,13 +42,15 @@ class CModel:
 
     source: str
     width: int
+    bits: int = 0
     label_ids: dict[int, int] = field(default_factory=dict)  # interaction index -> label id (static ones)
     labels: list[str] = field(default_factory=list)
 
 
 class CGen:
-    def __init__(self, space, choices: dict[str, Choice]) -> None:
+    def __init__(self, space, choices: dict[str, Choice], widths: dict[int, int]) -> None:
         self.space = space
+        self.widths = widths
         self.engine = space.engine
         self.flat = space.engine.flat
         self.sources = space.engine.sources
@@ -128,7 +132,7 @@ class CGen:
             self.gen_fire(src)
         self.gen_fire_table()
         self.gen_slots()
-        model = CModel("", self.width)
+        model = CModel("", self.width, bits=self.bits)
         self.gen_labels(model)
         self.gen_priorities()
         self.gen_enabled()
@@ -311,26 +315,77 @@ class CGen:
         self.w(f"static void (*const FIRE[NSRC])(V *, uint32_t) = {{{', '.join(f'f{s.index}' for s in self.sources)}}};")
 
     # -- slots: reset of dead variables, domains, packing --------------------------------------------
+    def slot_width(self, k: int, s: Slot) -> int:
+        if s.live == 0:
+            return 0  # never live: always the default, no bits
+        if s.kind == "marking":
+            return max(s.places, 1)
+        if s.kind == "bool":
+            return 1
+        if s.domain is not None:
+            return max((s.domain[1] - s.domain[0]).bit_length(), 1)
+        return self.widths.get(k, START_BITS)
+
     def gen_slots(self) -> None:
-        """One row per slot: kind (0 marking, 1 bool, 2 domain int, 3 int), marking slot, live mask, default, lo, hi, width."""
-        rows = []
-        for s in self.slots:
-            if s.kind == "marking":
-                kind, width = 0, max(s.places, 1)
-            elif s.kind == "bool":
-                kind, width = 1, 1
-            elif s.domain is not None:
-                kind, width = 2, max((s.domain[1] - s.domain[0]).bit_length(), 1)
+        """Straight-line ``pack`` and ``unpack`` (runtime.explore.codec's fields), widths fixed in the text.
+
+        Ints without a declared domain are zig-zag coded in a field of ``widths[k]`` bits; a value that does
+        not fit stops the step with E_WIDEN and the slot's position, and the caller regenerates wider.
+        """
+        w = self.w
+        fields, bit = [], 0
+        for k, s in enumerate(self.slots):
+            width = self.slot_width(k, s)
+            fields.append((k, s, width, bit))
+            bit += width
+        self.bits = bit
+        words = max((bit + 63) // 64, 1)
+        w(f"#define NW {words}")
+        w(f"static const int WIDTHS[NSLOTS > 0 ? NSLOTS : 1] = {{{', '.join(str(f[2]) for f in fields) or '0'}}};")
+        w("static void pack(const V *L, uint64_t *o) {")
+        w("    uint64_t u; V x;")
+        for i in range(words):
+            w(f"    o[{i}] = 0;")
+        for k, s, width, off in fields:
+            if not width:
+                continue
+            w(f"    x = L[{s.index}];")
+            if s.domain is not None:
+                w(f"    if (x < {s.domain[0]} || x > {s.domain[1]}) fail({E_DOMAIN}, {k});")
+            if s.live is not None:
+                w(f"    if (!(L[{s.marking}] & {s.live})) x = {literal(s.default or 0, s.title)[0]};")
+            if s.domain is not None:
+                w(f"    u = (uint64_t)(x - ({s.domain[0]}));")
+            elif s.kind in ("marking", "bool"):
+                w("    u = (uint64_t)x;")
             else:
-                kind, width = 3, 4
-            if s.live == 0:
-                width = 0
-            lo, hi = s.domain or (0, 0)
-            default = int(s.default or 0)
-            marking = s.marking if s.marking is not None else -1
-            live = -1 if s.live is None else s.live
-            rows.append(f"{{{kind}, {s.index}, {marking}, {live}, {default}, {lo}, {hi}, {width}}}")
-        self.w(f"static SlotDesc SLOTS[NSLOTS > 0 ? NSLOTS : 1] = {{{', '.join(rows) or '{0}'}}};")
+                w("    u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
+                if width < 64:
+                    w(f"    if (u >> {width}) fail({E_WIDEN}, {k});")
+            word, sh = divmod(off, 64)
+            w(f"    o[{word}] |= u << {sh};" if sh else f"    o[{word}] |= u;")
+            if sh and sh + width > 64:
+                w(f"    o[{word + 1}] |= u >> {64 - sh};")
+        w("}")
+        w("static void unpack(const uint64_t *o, V *L) {")
+        w("    uint64_t u;")
+        for k, s, width, off in fields:
+            if not width:
+                w(f"    L[{s.index}] = {literal(s.default or 0, s.title)[0]};")
+                continue
+            word, sh = divmod(off, 64)
+            expr = f"(o[{word}] >> {sh})" if sh else f"o[{word}]"
+            if sh and sh + width > 64:
+                expr = f"({expr} | (o[{word + 1}] << {64 - sh}))"
+            mask = f" & UINT64_C({(1 << width) - 1})" if width < 64 else ""
+            w(f"    u = {expr}{mask};")
+            if s.domain is not None:
+                w(f"    L[{s.index}] = (V)u + ({s.domain[0]});")
+            elif s.kind in ("marking", "bool"):
+                w(f"    L[{s.index}] = (V)u;")
+            else:
+                w(f"    L[{s.index}] = (V)(u >> 1) ^ -(V)(u & 1);")
+        w("}")
 
     # -- labels -----------------------------------------------------------------------------------
     def gen_labels(self, model: CModel) -> None:
@@ -552,9 +607,12 @@ class CGen:
         return sc
 
 
-def generate(space, choices: dict[str, Choice]) -> CModel:
-    """The C text of a state space's step and search (raises :class:`Unsupported` with the reason)."""
-    gen = CGen(space, choices)
+def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = None) -> CModel:
+    """The C text of a state space's step and search (raises :class:`Unsupported` with the reason).
+
+    ``widths`` gives the field of some int slots (by position in the layout) wider than START_BITS.
+    """
+    gen = CGen(space, choices, dict(widths or {}))
     model = gen.generate()
     blocked = getattr(gen, "pre_blocked", [])
     if blocked:

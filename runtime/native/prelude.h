@@ -7,7 +7,6 @@
 #include <time.h>
 
 typedef int64_t V;
-typedef struct { int kind, index, marking; int64_t live, def, lo, hi; int width; } SlotDesc;
 typedef struct { int label, fixed; uint32_t full; } LabelDesc;
 
 enum { E_NONDET = 1, E_UNSAFE, E_STUCK, E_NOTENABLED, E_ARITH, E_CYCLE, E_DOMAIN, E_WIDEN, E_CHOICES, E_FULL };

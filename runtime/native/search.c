@@ -1,7 +1,7 @@
 /* The search over packed states, included after a model's generated step (runtime.native.cstep).
 
-   States are bit-packed into NW 64-bit words (runtime.explore.codec's fields: markings, bools, declared
-   domains, other ints zig-zag coded in a field that the caller widens when a value outgrows it), numbered in
+   States are bit-packed into NW 64-bit words by the generated pack/unpack (runtime.explore.codec's fields:
+   markings, bools, declared domains, other ints zig-zag coded in a field the caller widens), numbered in
    order of discovery, with a parent and the interaction that first reached them.  The visited set is an
    open-addressing table of state numbers.  Breadth-first numbering makes the parent links shortest paths. */
 
@@ -15,8 +15,6 @@ typedef struct {
 
 enum { S_COMPLETE, S_MAX_STATES, S_MAX_DEPTH, S_ERROR, S_DEADLOCK, S_INTERRUPTED, S_MAX_MEMORY, S_WIDEN };
 
-static int OFF[NSLOTS > 0 ? NSLOTS : 1];
-static int NW = 1;
 static uint64_t *STORE;
 static uint32_t *PARENT, *VIA;
 static int64_t NSTATES, CAP;
@@ -30,49 +28,9 @@ static uint64_t *PK;
 static int SCAP;
 static int64_t EXTRA; /* bytes of the depth-first stack and marks */
 
-static void layout_bits(void) {
-    int bit = 0;
-    for (int i = 0; i < NSLOTS; i++) { OFF[i] = bit; bit += SLOTS[i].width; }
-    NW = bit ? (bit + 63) / 64 : 1;
-}
-
-static void put(uint64_t *w, int off, int width, uint64_t u) {
-    w[off >> 6] |= u << (off & 63);
-    if ((off & 63) + width > 64) w[(off >> 6) + 1] |= u >> (64 - (off & 63));
-}
-
-static uint64_t get(const uint64_t *w, int off, int width) {
-    uint64_t u = w[off >> 6] >> (off & 63);
-    if ((off & 63) + width > 64) u |= w[(off >> 6) + 1] << (64 - (off & 63));
-    return width == 64 ? u : u & ((UINT64_C(1) << width) - 1);
-}
-
-static void pack(const V *L, uint64_t *out) {
-    memset(out, 0, NW * sizeof *out);
-    for (int i = 0; i < NSLOTS; i++) {
-        const SlotDesc *d = &SLOTS[i];
-        if (!d->width) continue;
-        V x = L[d->index];
-        if (d->kind == 2 && (x < d->lo || x > d->hi)) fail(E_DOMAIN, i);
-        if (d->live >= 0 && !(L[d->marking] & d->live)) x = d->def;
-        uint64_t u;
-        if (d->kind == 2) u = (uint64_t)(x - d->lo);
-        else if (d->kind == 3) u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);
-        else u = (uint64_t)x;
-        if (d->width < 64 && (u >> d->width)) fail(E_WIDEN, i);
-        put(out, OFF[i], d->width, u);
-    }
-}
-
-static void unpack(const uint64_t *w, V *L) {
-    for (int i = 0; i < NSLOTS; i++) {
-        const SlotDesc *d = &SLOTS[i];
-        if (!d->width) { L[d->index] = d->def; continue; }
-        uint64_t u = get(w, OFF[i], d->width);
-        if (d->kind == 2) L[d->index] = (V)u + d->lo;
-        else if (d->kind == 3) L[d->index] = (V)(u >> 1) ^ -(V)(u & 1);
-        else L[d->index] = (V)u;
-    }
+static inline int same(const uint64_t *a, const uint64_t *b) {
+    for (int i = 0; i < NW; i++) if (a[i] != b[i]) return 0;
+    return 1;
 }
 
 static uint64_t hash(const uint64_t *w) {
@@ -111,7 +69,7 @@ static int64_t add(const uint64_t *w, uint32_t parent, uint32_t via, int64_t max
     uint64_t h = hash(w) & (TSIZE - 1);
     while (TABLE[h]) {
         int64_t id = TABLE[h] - 1;
-        if (!memcmp(STORE + id * NW, w, NW * 8)) { *added = 0; return id; }
+        if (same(STORE + id * NW, w)) { *added = 0; return id; }
         h = (h + 1) & (TSIZE - 1);
     }
     if (max_states >= 0 && NSTATES >= max_states) return -1;
@@ -202,8 +160,7 @@ static int label_of(uint32_t via) {
 
 /* ---- entry points called from Python ---- */
 
-void c_set_width(int slot, int width) { SLOTS[slot].width = width; }
-int c_width(int slot) { return SLOTS[slot].width; }
+int c_width(int slot) { return WIDTHS[slot]; }
 int c_words(void) { return NW; }
 int c_state_width(void) { return W; }
 int64_t c_nstates(void) { return NSTATES; }
@@ -216,7 +173,6 @@ void c_free(void) { c_release(); }
 /* successors of one explorer state, packed then unpacked (dead variables reset): the agreement tests' view */
 int c_successors(const V *s, V *out, uint32_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
     BUDGET = budget;
-    layout_bits();
     ensure_succ(1);
     int n = step_packed(s);
     if (n < 0) { *ecode = ECODE; *earg = EARG; return -1; }
@@ -260,7 +216,6 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
              int64_t budget, double period, progress_fn cb, Result *r) {
     c_release();
     BUDGET = budget;
-    layout_bits();
     memset(r, 0, sizeof *r);
     r->error_state = -1;
     rehash(1 << 12);
