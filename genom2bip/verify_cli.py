@@ -225,7 +225,7 @@ def _progress(args):
 
 
 def _run_explorer(space, args, deadlock: bool, properties) -> int:
-    from runtime.props import check, describe
+    from runtime.props import describe
 
     worst = EXIT_OK
     need_full = deadlock or args.aut or args.dot
@@ -248,11 +248,9 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
                 worst = max(worst, EXIT_INCONCLUSIVE)
             else:
                 worst = max(worst, _export_lts(space, args))
-    if properties and args.engine in ("compiled", "explore"):
-        from genom2bip.verify_native import note
-        note("properties are checked with the Python step")
     for item in properties:
-        verdict = check(space, item, _progress(args))
+        from genom2bip.verify_native import check_property
+        verdict = check_property(space, item, args, _progress(args))
         print(f"property {describe(item)}")
         head = f"  {verdict.word}"
         stats = f"{verdict.method}, {verdict.states:,} states, {verdict.seconds:.2f} s" if verdict.method else ""

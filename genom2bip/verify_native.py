@@ -1,8 +1,9 @@
 """Which explorer ``genom2bip verify`` runs: the compiled one (default) or the Python one, and a note when it falls back.
 
-The compiled search answers deadlocks and model errors; LTS exports and
-properties need the successor lists the Python explorer keeps, so they run
-there (a note says so).  A model the C back end does not take, or a machine
+The compiled search answers deadlocks, model errors, deadlock freedom and
+safety properties (through observers); LTS exports and the other properties
+need the successor lists the Python explorer keeps, so they run there (a
+note says so).  A model the C back end does not take, or a machine
 without a C compiler, gets the Python explorer and a one-line note.
 """
 from __future__ import annotations
@@ -41,6 +42,26 @@ def explore_model(space, args: argparse.Namespace, progress):
     return explore(space, args.max_depth, args.dfs, progress), space
 
 
+def check_property(space, item, args: argparse.Namespace, progress):
+    """The verdict of one property: by the compiled search when it takes it, else by the Python checker (noted)."""
+    from runtime.props import check
+
+    if args.engine in ("compiled", "explore"):
+        from genom2bip.verify_cli import load_externs
+        from runtime.native.properties import compiled_check
+
+        verdict = compiled_check(space, item, load_externs(args.externs), progress, args.max_states, _max_bytes(args))
+        if verdict is not None:
+            return verdict
+        note(f"property {item.name} is checked with the Python step (the compiled search takes deadlock freedom "
+             "and [R] false / [R] {P} shapes, on models it compiles)")
+    return check(space, item, progress)
+
+
+def _max_bytes(args) -> int | None:
+    return args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()
+
+
 def _compiled(space, args, progress):
     from genom2bip.verify_cli import load_externs
     from runtime.native.compiled import Diverged, compile_space
@@ -49,7 +70,7 @@ def _compiled(space, args, progress):
     if cs is None:
         note(why)
         return None
-    max_bytes = args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()
+    max_bytes = _max_bytes(args)
     if args.max_states is None and args.max_depth is None and (args.progress or sys.stderr.isatty()) \
             and not args.quiet and max_bytes is not None:
         print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "

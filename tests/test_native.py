@@ -250,3 +250,38 @@ def test_ints_outgrowing_their_field_are_widened():
     theirs = cs.explore()
     assert (theirs.states, theirs.transitions, theirs.deadlocks) == (ours.states, ours.transitions, [])
     assert ours.states == 102 and cs.widths == {1: 16}  # -100..199: 4 bits, then 8, then 16
+
+
+def verdicts(pkg, root, items):
+    from runtime.props import check
+    from runtime.native.properties import compiled_check
+
+    observed = set().union(*(i.observed for i in items))
+    out = []
+    for item in items:
+        ours = check(StateSpace(pkg, root, observed=observed), item)
+        theirs = compiled_check(StateSpace(pkg, root, observed=observed), item)
+        out.append((item.name, ours, theirs))
+    return out
+
+
+def test_safety_observers_give_the_python_checkers_verdicts_and_trace_lengths():
+    from runtime.engine import flatten
+    from runtime.props import read_properties, read_property_file
+
+    cases = []
+    for path in (str(verifykit.NDD), str(verifykit.NDD_NO_AFTER)):
+        pkg, root = verifykit.ndd_model(path)
+        items, _ = read_property_file(verifykit.FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
+        cases += verdicts(pkg, root, items)
+    pkg = verifykit.package("Server")
+    items, _ = read_properties("a: invariant S.served <= 1; b: invariant not S @ DONE; c: deadlock free", "p.mcl",
+                               flatten(pkg, "Main()"))
+    cases += verdicts(pkg, "Main()", items)
+    checked = [(name, ours, theirs) for name, ours, theirs in cases if theirs is not None]
+    assert len(checked) == 7  # the paper's property is not an observer shape: the Python checker takes it
+    for name, ours, theirs in checked:
+        assert theirs.holds == ours.holds, name
+        assert [str(s) for s in theirs.trace] == [str(s) for s in ours.trace], name
+    assert sorted(name for name, _, theirs in checked if theirs.holds is False) == \
+        ["b", "goto_after_setspeed", "goto_after_setspeed_mcl"]

@@ -67,11 +67,19 @@ def test_lts_exports_say_they_use_the_python_step(capsys, tmp_path):
 
 
 @needs_cc
-def test_properties_say_they_are_checked_in_python(capsys, tmp_path):
+def test_safety_properties_run_compiled_and_the_others_say_they_run_in_python(capsys, tmp_path):
     props = tmp_path / "p.mcl"
-    props.write_text('ok: "S.req" precedes "S.work";\n')
-    code, out, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props))
-    assert "note: properties are checked with the Python step" in out and code == 0
+    props.write_text('ok: "S.req" precedes "S.work";\nbad: never "S.reply";\nreach: <true* . "S.reply"> true\n')
+    code_c, out_c, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props))
+    code_p, out_p, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props),
+                           "--engine", "python")
+    assert code_c == code_p == 4
+    assert out_c[1] == "property ok: \"S.req\" precedes \"S.work\""
+    assert out_c[3].startswith("  holds (compiled observer search, ")
+    assert any(line.startswith("  violated (compiled observer search") for line in out_c)
+    assert "note: property reach is checked with the Python step" in " ".join(out_c)
+    traces = [line for line in out_c if line.startswith("       ")]
+    assert traces == [line for line in out_p if line.startswith("       ")]
 
 
 def test_max_memory_must_be_positive(capsys):

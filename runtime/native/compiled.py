@@ -25,8 +25,9 @@ from runtime.native.build import PROGRESS, BuildError, Result, build, compiler, 
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
 
-STATUS = {0: "", 1: "max-states", 2: "max-depth", 3: "error", 4: "deadlock", 5: "interrupted", 6: "max-memory"}
-S_ERROR, S_WIDEN = 3, 7
+STATUS = {0: "", 1: "max-states", 2: "max-depth", 3: "error", 4: "deadlock", 5: "interrupted", 6: "max-memory",
+          8: "violated"}
+S_ERROR, S_WIDEN, S_VIOLATED = 3, 7, 8
 #: Seconds between progress reports from the C search (and checks for Ctrl-C).
 PERIOD = 0.25
 
@@ -48,12 +49,16 @@ def exploration_choices(package, externs: dict[str, Any] | None) -> dict[str, Ch
     return out
 
 
-def compile_space(space: StateSpace, externs: dict[str, Any] | None = None) -> tuple["CompiledSpace | None", str]:
-    """The compiled step and search of ``space``, or None and why not (one line)."""
+def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
+                  monitors=()) -> tuple["CompiledSpace | None", str]:
+    """The compiled step and search of ``space``, or None and why not (one line).
+
+    ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction.
+    """
     cc = compiler()
     if cc is None:
         return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
-    cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc)
+    cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc, monitors)
     try:
         cs.build()
     except Unsupported as exc:
@@ -71,8 +76,9 @@ class _Interrupt:
 class CompiledSpace:
     """The C library of one model bound to its Python :class:`StateSpace` (which words errors and traces)."""
 
-    def __init__(self, space: StateSpace, choices: dict[str, Choice], cc: str) -> None:
+    def __init__(self, space: StateSpace, choices: dict[str, Choice], cc: str, monitors=()) -> None:
         self.space = space
+        self.monitors = list(monitors)
         self.choices = choices
         self.cc = cc
         self.widths: dict[int, int] = {}
@@ -84,7 +90,7 @@ class CompiledSpace:
 
     def build(self) -> None:
         """Generate, compile (or find in the cache) and load the library for the current field widths."""
-        model = generate(self.space, self.choices, self.widths)
+        model = generate(self.space, self.choices, self.widths, self.monitors)
         self.lib = load(build(model.source, self.cc))
         self.width, self.source, self.bits = model.width, model.source, model.bits
 
@@ -156,6 +162,7 @@ class CompiledSpace:
         seconds = time.perf_counter() - start
         deadlocks = [self.lib.c_deadlock(i) for i in range(r.deadlocks)]
         error = None
+        self.violation = r.error_state if status == S_VIOLATED else -1  # the state an observer rejects
         if status == S_ERROR:
             error = self._error(r)
         stopped = "max-seconds" if timed.hit and status == 5 else STATUS[status]
@@ -166,8 +173,8 @@ class CompiledSpace:
         """The Python step's own words for the error the C step stopped at, with a shortest trace."""
         if r.error_state < 0:
             raise Diverged("the initial state")
-        state = self.state(r.error_state)
         space = self.space
+        state = self.state(r.error_state)[:space.width + len(space.services)]
         saved, space.max_states = space.max_states, None
         try:
             sid = space._add(space._pack(state), -1, -1)
@@ -194,9 +201,10 @@ class CompiledSpace:
         """The steps along the parent links to ``sid`` (shortest after a breadth-first search), with outcomes."""
         path = self.path_to(sid)
         space = self.space
+        explorer = space.width + len(space.services)  # the observers' slots follow
         saved, space.max_states = space.max_states, None
         try:
-            ids = [space._add(space._pack(self.state(k)), -1, -1) for k in path]
+            ids = [space._add(space._pack(self.state(k)[:explorer]), -1, -1) for k in path]
         finally:
             space.max_states = saved
         labels = [space.interaction(self.lib.c_via(k)).label for k in path[1:]]

@@ -13,7 +13,7 @@ typedef struct {
     int64_t earg;
 } Result;
 
-enum { S_COMPLETE, S_MAX_STATES, S_MAX_DEPTH, S_ERROR, S_DEADLOCK, S_INTERRUPTED, S_MAX_MEMORY, S_WIDEN };
+enum { S_COMPLETE, S_MAX_STATES, S_MAX_DEPTH, S_ERROR, S_DEADLOCK, S_INTERRUPTED, S_MAX_MEMORY, S_WIDEN, S_VIOLATED };
 
 static uint64_t *STORE;
 static uint32_t *PARENT, *VIA;
@@ -24,6 +24,8 @@ static int64_t *DEAD;
 static int64_t NDEAD, DCAP;
 static V *SUCC;
 static uint32_t *SVIA;
+static uint8_t *SBAD; /* successor i violates an observer */
+static int64_t VIOL = -1;
 static uint64_t *PK;
 static int SCAP;
 static int64_t EXTRA; /* bytes of the depth-first stack and marks */
@@ -48,8 +50,8 @@ static int64_t memory(void) {
 }
 
 static void c_release(void) {
-    free(STORE); free(PARENT); free(VIA); free(TABLE); free(DEAD); free(SUCC); free(SVIA); free(PK);
-    STORE = 0; PARENT = VIA = TABLE = 0; DEAD = 0; SUCC = 0; SVIA = 0; PK = 0;
+    free(STORE); free(PARENT); free(VIA); free(TABLE); free(DEAD); free(SUCC); free(SVIA); free(PK); free(SBAD);
+    STORE = 0; PARENT = VIA = TABLE = 0; DEAD = 0; SUCC = 0; SVIA = 0; PK = 0; SBAD = 0; VIOL = -1;
     NSTATES = CAP = NDEAD = DCAP = 0; TSIZE = 0; SCAP = 0; EXTRA = 0;
 }
 
@@ -98,6 +100,7 @@ static void ensure_succ(int n) {
     SUCC = realloc(SUCC, (size_t)cap * W * sizeof *SUCC);
     SVIA = realloc(SVIA, (size_t)cap * sizeof *SVIA);
     PK = realloc(PK, (size_t)cap * NW * sizeof *PK);
+    SBAD = realloc(SBAD, (size_t)cap);
     SCAP = cap;
 }
 
@@ -121,6 +124,7 @@ static int expand(const V *s) {
             FIRE[isrc[i]](L, imask[i]);
             for (int k = 0; k < NSERV; k++) L[E + k] = s[E + k] + TAKEN[k];
             SVIA[cnt] = imask[i] * NSRC + isrc[i];
+            SBAD[cnt] = (uint8_t)observe(s, L, SVIA[cnt]);
             cnt++;
         } while (odometer_next());
     }
@@ -139,6 +143,7 @@ static int initials(void) {
         initial(L);
         for (int k = 0; k < NSERV; k++) L[E + k] = TAKEN[k];
         SVIA[cnt] = UINT32_MAX;
+        SBAD[cnt] = (uint8_t)observe_initial(L);
         cnt++;
     } while (odometer_next());
     return cnt;
@@ -197,6 +202,7 @@ static int record(int64_t sid, int n, int64_t max_states, int64_t *targets, Resu
         int64_t t = add(PK + (size_t)i * NW, (uint32_t)sid, SVIA[i], max_states, &added);
         if (t == -1) { r->status = S_MAX_STATES; return -1; }
         if (t == -2) { r->status = S_MAX_MEMORY; return -1; }
+        if (SBAD[i] && VIOL < 0) VIOL = t;
         int lab = label_of(SVIA[i]), dup = 0;
         for (int j = 0; j < distinct; j++)
             if (targets[2 * j] == lab && targets[2 * j + 1] == t) { dup = 1; break; }
@@ -233,6 +239,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
         int64_t id = add(PK + (size_t)i * NW, UINT32_MAX, UINT32_MAX, max_states, &added);
         if (id < 0) { r->status = id == -1 ? S_MAX_STATES : S_MAX_MEMORY; break; }
         if (added && ninit < 64) init_ids[ninit++] = id;
+        if (SBAD[i] && VIOL < 0) { VIOL = id; r->status = S_VIOLATED; r->error_state = id; }
     }
     double next = now() + period;
     int64_t ticks = 0;
@@ -250,6 +257,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
                 r->ecode = ECODE; r->earg = EARG; r->error_state = sid; break;
             }
             if (record(sid, m, max_states, targets, r) < 0) break;
+            if (VIOL >= 0) { r->status = S_VIOLATED; r->error_state = VIOL; break; }
             if (m == 0) { push_dead(sid); if (stop_at_deadlock) { r->status = S_DEADLOCK; break; } }
             sid++;
             if (max_bytes >= 0 && memory() > max_bytes) { r->status = S_MAX_MEMORY; break; }
@@ -285,6 +293,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
             }
             int d = record(sid, m, max_states, targets, r);
             if (d < 0) break;
+            if (VIOL >= 0) { r->status = S_VIOLATED; r->error_state = VIOL; break; }
             if (m == 0) { push_dead(sid); if (stop_at_deadlock) { r->status = S_DEADLOCK; break; } }
             if (NSTATES > mcap) {
                 int64_t cap = mcap;
