@@ -212,6 +212,14 @@ static int record(int64_t sid, int n, int64_t max_states, int64_t *targets, Resu
     return distinct;
 }
 
+/* the step stopped at state sid (-1: the initial states): a model error, or a field to widen */
+static void stopped_by_error(int64_t sid, Result *r) {
+    r->status = ECODE == E_WIDEN ? S_WIDEN : S_ERROR;
+    r->ecode = ECODE;
+    r->earg = EARG;
+    r->error_state = sid;
+}
+
 static double now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -229,7 +237,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
     int64_t *targets = malloc(2 * MAXSUCC * sizeof *targets);
     int n = step_packed(NULL);
     if (n < 0) {
-        r->status = ECODE == E_WIDEN ? S_WIDEN : S_ERROR; r->ecode = ECODE; r->earg = EARG;
+        stopped_by_error(-1, r);
         free(S); free(targets); return r->status;
     }
     int64_t ninit = 0;
@@ -252,10 +260,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
             if (max_depth >= 0 && depth >= max_depth) { r->status = S_MAX_DEPTH; break; }
             unpack(STORE + sid * NW, S);
             int m = step_packed(S);
-            if (m < 0) {
-                r->status = ECODE == E_WIDEN ? S_WIDEN : S_ERROR;
-                r->ecode = ECODE; r->earg = EARG; r->error_state = sid; break;
-            }
+            if (m < 0) { stopped_by_error(sid, r); break; }
             if (record(sid, m, max_states, targets, r) < 0) break;
             if (VIOL >= 0) { r->status = S_VIOLATED; r->error_state = VIOL; break; }
             if (m == 0) { push_dead(sid); if (stop_at_deadlock) { r->status = S_DEADLOCK; break; } }
@@ -287,10 +292,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
             if (max_depth >= 0 && depth >= max_depth) { r->status = S_MAX_DEPTH; continue; }
             unpack(STORE + sid * NW, S);
             int m = step_packed(S);
-            if (m < 0) {
-                r->status = ECODE == E_WIDEN ? S_WIDEN : S_ERROR;
-                r->ecode = ECODE; r->earg = EARG; r->error_state = sid; break;
-            }
+            if (m < 0) { stopped_by_error(sid, r); break; }
             int d = record(sid, m, max_states, targets, r);
             if (d < 0) break;
             if (VIOL >= 0) { r->status = S_VIOLATED; r->error_state = VIOL; break; }
