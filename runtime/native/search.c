@@ -42,6 +42,10 @@ static uint64_t hash(const uint64_t *w) {
         h *= UINT64_C(0xff51afd7ed558ccd);
         h ^= h >> 32;
     }
+    /* murmur3's finaliser: every input bit reaches the low bits the table uses */
+    h ^= h >> 33;
+    h *= UINT64_C(0xc4ceb9fe1a85ec53);
+    h ^= h >> 33;
     return h;
 }
 
