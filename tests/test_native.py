@@ -173,7 +173,7 @@ def models(draw) -> str:
         lines = ["    export data int x", "    export port IntPort p0(x), p1(x)", "    port Port q()",
                  f"    place {', '.join(places)}", f"    initial to P0 do {{ x = {draw(st.integers(0, 2))}; }}"]
         for port in ("p0", "p1", "q", None):
-            for _ in range(draw(st.integers(0 if port else 0, 2 if port else 1))):
+            for _ in range(draw(st.integers(0, 2 if port else 1))):
                 src, dst = draw(st.sampled_from(places)), draw(st.sampled_from(places))
                 guard = draw(st.sampled_from(["", " provided (x < 2)", " provided (x % 2 == 0)", " provided (x != 1)"]))
                 if port is None:
@@ -253,8 +253,8 @@ def test_ints_outgrowing_their_field_are_widened():
 
 
 def verdicts(pkg, root, items):
-    from runtime.props import check
     from runtime.native.properties import compiled_check
+    from runtime.props import check
 
     observed = set().union(*(i.observed for i in items))
     out = []

@@ -61,7 +61,7 @@ def test_a_model_the_c_step_does_not_take_is_explored_in_python(capsys):
 
 @needs_cc
 def test_lts_exports_say_they_use_the_python_step(capsys, tmp_path):
-    code, out, _ = run(capsys, "verify", DINING, "--root", "Table2()", "--aut", str(tmp_path / "d.aut"))
+    _, out, _ = run(capsys, "verify", DINING, "--root", "Table2()", "--aut", str(tmp_path / "d.aut"))
     assert "note: LTS exports need every successor list: exploring with the Python step" in out
     assert (tmp_path / "d.aut").read_text().startswith("des (0, 8, 6)")
 

@@ -56,7 +56,8 @@ def build(source: str, cc: str) -> Path:
         c_file = Path(tmp) / "model.c"
         c_file.write_text(source, encoding="utf-8")
         so = Path(tmp) / "model.so"
-        proc = subprocess.run([cc, *FLAGS, f"-I{HERE}", "-o", str(so), str(c_file)], capture_output=True, text=True)
+        proc = subprocess.run([cc, *FLAGS, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
+                              capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{cc} failed on the generated step:\n{proc.stderr[-4000:]}")
         partial = out_dir / f".{lib.name}.{os.getpid()}"

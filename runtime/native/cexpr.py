@@ -13,7 +13,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from runtime.model.expressions import Assign, Binary, Call, Const, Do, Expr, If, PortData, Stmt, Unary, Var
+from runtime.model.expressions import (
+    Assign,
+    Binary,
+    Call,
+    Const,
+    Do,
+    Expr,
+    If,
+    PortData,
+    Stmt,
+    Unary,
+    Var,
+)
 
 COMPARISONS = ("==", "!=", "<", "<=", ">", ">=")
 CHECKED = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "IDIV", "%": "IMOD", "<<": "SHL", ">>": "SHR"}

@@ -50,7 +50,7 @@ def exploration_choices(package, externs: dict[str, Any] | None) -> dict[str, Ch
 
 
 def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
-                  monitors=()) -> tuple["CompiledSpace | None", str]:
+                  monitors=()) -> tuple[CompiledSpace | None, str]:
     """The compiled step and search of ``space``, or None and why not (one line).
 
     ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction.

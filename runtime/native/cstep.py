@@ -22,8 +22,17 @@ from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom
 from runtime.explore.choices import Choice
 from runtime.explore.layout import Slot
+from runtime.native.cexpr import (
+    CName,
+    CScope,
+    Externs,
+    Unsupported,
+    c_type,
+    condition,
+    literal,
+    statements,
+)
 from runtime.native.observers import gen_observers
-from runtime.native.cexpr import CName, CScope, Externs, Unsupported, c_type, condition, literal, statements
 
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
@@ -141,6 +150,7 @@ class CGen:
         model = CModel("", self.width, bits=self.bits)
         self.gen_labels(model)
         self.gen_priorities()
+        self.gen_blocked()
         self.gen_enabled()
         gen_observers(w, self.monitors, self.sources, fl, self.base)
         w('#include "search.c"')
@@ -488,6 +498,19 @@ class CGen:
         self.w("#define LO(s, m) LOT[s](m)")
         self.w("#define HI(s, m) HIT[s](m)")
 
+    def gen_blocked(self) -> None:
+        """``blocked<k>(m, pv)``: the guard of interaction ``m`` of a flat connector source is false."""
+        for src in self.sources:
+            if src.kind != "flat":
+                continue
+            info = self.infos[src.connector.type.name]
+            k = self.type_index[src.connector.type.name]
+            cases = " ".join(f"case {m}: return !k{k}_{m}_g(pv);" for m, spec in info.clauses.items()
+                             if spec.guard is not None)
+            if cases:
+                self.w(f"static int blocked{src.index}(uint32_t m, V pv[][MAXF]) "
+                       f"{{ switch (m) {{ {cases} default: return 0; }} }}")
+
     # -- enabled ----------------------------------------------------------------------------------
     def gen_enabled(self) -> None:
         w = self.w
@@ -567,7 +590,6 @@ class CGen:
             w(f"    if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
             return
         info = self.infos[src.connector.type.name]
-        k = self.type_index[src.connector.type.name]
         enabled = [f"e{p}" for p in src.leaves]
         if src.kind == "rendezvous":
             cond = " && ".join(enabled)
@@ -590,12 +612,8 @@ class CGen:
                 fa = fl.atoms[fp.atom]
                 for j, v in enumerate(fp.decl.data):
                     w(f"            pv[{i}][{j}] = a{fa.index}_{v};")
-            cases = " ".join(f"case {m}: return !k{k}_{m}_g(pv);" for m in guarded)
             w(f"            n = maximal_enabled(MAXA, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
             w("        }")
-            self.pre_blocked = getattr(self, "pre_blocked", [])
-            self.pre_blocked.append(
-                f"static int blocked{src.index}(uint32_t m, V pv[][MAXF]) {{ switch (m) {{ {cases} default: return 0; }} }}")
         elif defines.is_flat(info.tree):
             w(f"        if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")
         else:
@@ -621,11 +639,4 @@ def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = 
     ``monitors`` are ``(Monitor, statics)`` safety observers stepped with every interaction.
     """
     gen = CGen(space, choices, dict(widths or {}), monitors)
-    model = gen.generate()
-    blocked = getattr(gen, "pre_blocked", [])
-    if blocked:
-        # the guard predicates of guarded flat connectors go before ``enabled``
-        text = model.source
-        anchor = "static int enabled("
-        model.source = text.replace(anchor, "\n".join(blocked) + "\n" + anchor, 1)
-    return model
+    return gen.generate()
