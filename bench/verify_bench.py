@@ -1,22 +1,25 @@
-"""Exploration throughput and memory, our explorer and SPIN side by side on the same models.
+"""Exploration throughput and memory: our explorer in Python, compiled to C, and SPIN side by side on the same models.
 
 Run ``python bench/verify_bench.py [--seconds S] [--max-states N] [--only NAME]``.
-Models: dining philosophers N = 8..12 (left fork, then right: one deadlock),
+Models: dining philosophers N = 10..12 (left fork, then right: one deadlock),
 the NDD module, and the whole DALA functional level (rules included), whose
-state space no exhaustive search finishes: both tools then run for the same
-budget (our explorer stops at ``--max-states``, SPIN is interrupted after
-``--seconds``) and the rates are compared.  Both tools see the same model:
+state space no exhaustive search finishes: the tools then run for a budget
+(the Python explorer stops at ``--max-states``; the compiled explorer and
+SPIN are stopped after ``--seconds``, SPIN's memory is capped at 4 GB with
+``-DMEMLIM=4000``) and the rates are compared.  Both tools see the same model:
 the Promela translation has our layout and dead-variable reduction, and the
 exhaustive runs find the same number of states (checked here).
 
 Rates are end to end over the search (ours: numbering, successors, packing;
 SPIN: pan's process including its hash-table set-up), repeated until a run
 has lasted a second so that small models are timed fairly; building the
-engine or compiling pan is not counted.  Bytes per state: ours is the
-visited set (dict of packed ints, numbering, parents) divided by the
-states; SPIN's is pan's "equivalent memory usage for states"
-(stored x (state vector + overhead)) divided by the states it stored.  The
-hash table and the search stack are extra for both.
+engine, compiling the C step or compiling pan is not counted.  Bytes per
+state: the Python explorer's is the visited set (dict of packed ints,
+numbering, parents) divided by the states; the compiled explorer's is all it
+allocates (packed states, parents, the interactions that reached them, the
+hash table) divided by the states; SPIN's is pan's "equivalent memory usage
+for states" (stored x (state vector + overhead)) divided by the states it
+stored, without its hash table and search stack.
 """
 from __future__ import annotations
 
@@ -101,6 +104,10 @@ class Row:
     ours_rate: float
     ours_bytes: float
     ours_complete: bool
+    c_states: int
+    c_rate: float
+    c_bytes: float
+    c_complete: bool
     spin_states: int
     spin_rate: float
     spin_bytes: float
@@ -121,11 +128,27 @@ def run_ours(package, root: str, max_states: int | None) -> tuple[int, float, fl
     return result.states, result.states * runs / total, result.bytes_per_state, result.complete
 
 
+def run_compiled(package, root: str, seconds: float) -> tuple[int, float, float, bool]:
+    """The compiled explorer (library built and cached before timing), capped at ``seconds`` and 4 GB."""
+    from runtime.native.compiled import compile_space
+
+    cs, note = compile_space(StateSpace(package, root))
+    if cs is None:
+        print(f"compiled explorer: {note}", file=sys.stderr)
+        return 0, 0.0, 0.0, False
+    runs, total = 0, 0.0
+    while total < MIN_SECONDS:
+        result = cs.explore(max_seconds=seconds, max_bytes=4 << 30)
+        runs += 1
+        total += result.seconds
+    return result.states, result.states * runs / total, result.bytes_per_state, result.complete
+
+
 def run_spin(package, root: str, seconds: float, states_hint: int) -> tuple[int, float, float, bool]:
     run = SpinRun(StateSpace(package, root))
     bits = max(16, min(27, (2 * states_hint).bit_length()))
     try:
-        run.build()
+        run.build(extra=("-DMEMLIM=4000",))
         runs, total = 0, 0.0
         while total < MIN_SECONDS:
             start = time.perf_counter()
@@ -155,15 +178,16 @@ def _equivalent_mb(output: str) -> float:
 
 
 def table(rows: list[Row]) -> str:
-    head = ("| model | states (ours / SPIN) | ours states/s | SPIN states/s | SPIN/ours | ours B/state | "
-            "SPIN B/state | ours/SPIN |")
-    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    head = ("| model | states (Python / compiled / SPIN) | Python states/s | compiled states/s | SPIN states/s | "
+            "compiled/SPIN speed | B/state Python / compiled / SPIN | compiled/SPIN B/state |")
+    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | --- | ---: |"]
     for r in rows:
-        mark = "" if r.ours_complete and r.spin_complete else " (budget)"
-        speed = r.spin_rate / r.ours_rate if r.ours_rate else float("nan")
-        mem = r.ours_bytes / r.spin_bytes if r.spin_bytes else float("nan")
-        lines.append(f"| {r.model}{mark} | {r.ours_states:,} / {r.spin_states:,} | {r.ours_rate:,.0f} | "
-                     f"{r.spin_rate:,.0f} | {speed:,.1f}x | {r.ours_bytes:,.0f} | {r.spin_bytes:,.0f} | {mem:.1f}x |")
+        mark = "" if r.ours_complete and r.c_complete and r.spin_complete else " (budget)"
+        speed = r.c_rate / r.spin_rate if r.spin_rate else float("nan")
+        mem = r.c_bytes / r.spin_bytes if r.spin_bytes else float("nan")
+        lines.append(f"| {r.model}{mark} | {r.ours_states:,} / {r.c_states:,} / {r.spin_states:,} | "
+                     f"{r.ours_rate:,.0f} | {r.c_rate:,.0f} | {r.spin_rate:,.0f} | {speed:,.2f}x | "
+                     f"{r.ours_bytes:,.0f} / {r.c_bytes:,.0f} / {r.spin_bytes:,.0f} | {mem:.2f}x |")
     return "\n".join(lines)
 
 
@@ -174,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", help="run only the models whose name contains this")
     args = ap.parse_args(argv)
     models = [(f"dining N={n}", lambda n=n: (parse_text(dining(n), f"Dining{n}.bip"), "Table()"), None)
-              for n in range(8, 13)]
+              for n in range(10, 13)]
     models.append(("NDD module", lambda: dala_model(["NDD"]), None))
     models.append(("DALA (5 modules, rules)", dala_model, args.max_states))
     rows = []
@@ -183,12 +207,17 @@ def main(argv: list[str] | None = None) -> int:
             continue
         package, root = build()
         ours = run_ours(package, root, budget)
-        theirs = run_spin(package, root, args.seconds, ours[0])
-        if ours[3] and theirs[3] and ours[0] != theirs[0]:
-            print(f"warning: {name}: ours {ours[0]} states, SPIN {theirs[0]}", file=sys.stderr)
-        rows.append(Row(name, *ours, *theirs))
+        compiled = run_compiled(package, root, args.seconds)
+        theirs = run_spin(package, root, args.seconds, max(ours[0], compiled[0]))
+        for who, got in (("compiled", compiled), ("SPIN", theirs)):
+            if ours[3] and got[3] and ours[0] != got[0]:
+                print(f"warning: {name}: Python {ours[0]} states, {who} {got[0]}", file=sys.stderr)
+        rows.append(Row(name, *ours, *compiled, *theirs))
         print(f"{name}: done", file=sys.stderr)
-    print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}; SPIN single core, gcc -O2")
+    from runtime.native.build import FLAGS, compiler
+
+    print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}; compiled explorer single core, "
+          f"{compiler()} {' '.join(FLAGS)}; SPIN single core, gcc -O2 -DMEMLIM=4000")
     print(table(rows))
     return 0
 

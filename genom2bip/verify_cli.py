@@ -34,8 +34,11 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     what.add_argument("--property", metavar="FILE", action="append", default=[],
                       help="check the properties of FILE (MCL-style; docs/verification.md); may be repeated")
     search = parser.add_argument_group("exploration")
-    search.add_argument("--engine", choices=("explore", "spin"), default="explore",
-                        help="our explorer (default) or SPIN on the Promela translation")
+    search.add_argument("--engine", choices=("compiled", "python", "spin", "explore"), default="compiled",
+                        help="our explorer compiled to C (default; Python where it cannot be compiled), our explorer "
+                             "in Python, or SPIN on the Promela translation ('explore' is 'compiled')")
+    search.add_argument("--max-memory", type=int, metavar="MB",
+                        help="stop the compiled search past MB megabytes (default: half the machine's memory)")
     search.add_argument("--max-states", type=int, metavar="N", help="stop after N states")
     search.add_argument("--max-depth", type=int, metavar="N", help="do not expand states deeper than N steps")
     search.add_argument("--dfs", action="store_true", help="depth-first (traces are then not shortest)")
@@ -144,7 +147,7 @@ def print_state(engine, state, indent: str = "    ") -> None:
 
 
 def _check_options(args) -> None:
-    for name in ("max_states", "max_depth", "requests"):
+    for name in ("max_states", "max_depth", "requests", "max_memory"):
         value = getattr(args, name)
         if value is not None and value < 0:
             error(f"--{name.replace('_', '-')} must be >= 0")
@@ -258,13 +261,13 @@ def _progress(args):
 
 
 def _run_explorer(space, args, deadlock: bool, properties) -> int:
-    from runtime.explore import explore
-    from runtime.props import check, describe
+    from runtime.props import describe
 
     worst = EXIT_OK
     need_full = deadlock or args.aut or args.dot
     if need_full:
-        result = explore(space, args.max_depth, args.dfs, _progress(args))
+        from genom2bip.verify_native import explore_model
+        result, view = explore_model(space, args, _progress(args))
         print(f"explored: {result.summary()}")
         if result.error is not None:
             worst = EXIT_VIOLATED
@@ -273,7 +276,7 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             print_trace(result.error.trace)
             _trace_picture(args, space.engine, result.error.trace, [f"model error: {result.error.message}"])
         if deadlock:
-            worst = max(worst, _report_deadlocks(space, result, args))
+            worst = max(worst, _report_deadlocks(view, result, args))
         if not result.complete and worst == EXIT_OK:
             worst = EXIT_INCONCLUSIVE
         if args.aut or args.dot:
@@ -283,7 +286,8 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             else:
                 worst = max(worst, _export_lts(space, args))
     for item in properties:
-        verdict = check(space, item, _progress(args))
+        from genom2bip.verify_native import check_property
+        verdict = check_property(space, item, args, _progress(args))
         print(f"property {describe(item)}")
         head = f"  {verdict.word}"
         stats = f"{verdict.method}, {verdict.states:,} states, {verdict.seconds:.2f} s" if verdict.method else ""

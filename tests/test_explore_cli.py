@@ -56,7 +56,7 @@ def test_limits_give_exit_five(capsys):
 def test_property_verdicts_and_exit_status(capsys, tmp_path):
     props = tmp_path / "p.mcl"
     props.write_text('ok: "S.req" precedes "S.work";\nbad: never "S.reply"\n')
-    code, out, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props))
+    code, out, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props), "--engine", "python")
     assert code == 4
     assert 'property ok: "S.req" precedes "S.work"' in out
     assert "  holds (safety search" in out

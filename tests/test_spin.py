@@ -1,6 +1,7 @@
 """SPIN and our explorer on the same models: the same number of states, the same deadlock verdicts.
 
-CI installs SPIN (.ci/run); without it these tests are skipped with that reason.
+CI installs SPIN (.ci/run); without it the tests that run SPIN are skipped with that reason, and those
+about the Promela text and what is refused before SPIN runs still run.
 """
 import shutil
 
@@ -15,7 +16,7 @@ from runtime.export.promela import PromelaError, write_promela
 from runtime.props import read_properties, read_property_file
 from tests.verifykit import FIXTURES, NDD_NO_AFTER, ndd_model, package, text_space
 
-pytestmark = pytest.mark.skipif(shutil.which("spin") is None or shutil.which("gcc") is None,
+needs_spin = pytest.mark.skipif(shutil.which("spin") is None or shutil.which("gcc") is None,
                                 reason="SPIN or gcc is not installed (Debian: apt-get install spin; .ci/run does it)")
 
 FAST = "-O0"  # pan compiles four times faster; these models are small
@@ -36,6 +37,7 @@ def both(pkg, root, **kw):
     ("Mix", "Main()", True),
     ("Server", "Main()", True),
 ])
+@needs_spin
 def test_same_states_and_deadlock_verdict(name, root, reduce):
     ours, theirs = both(package(name), root, reduce=reduce)
     assert theirs.report.states == ours.states
@@ -43,6 +45,7 @@ def test_same_states_and_deadlock_verdict(name, root, reduce):
     assert theirs.report.complete
 
 
+@needs_spin
 def test_same_on_the_ndd_module():
     pkg, root = ndd_model()
     ours, theirs = both(pkg, root)
@@ -50,12 +53,14 @@ def test_same_on_the_ndd_module():
     assert theirs.report.errors == 0 and ours.deadlocks == []
 
 
+@needs_spin
 def test_same_with_a_request_budget():
     pkg, root = ndd_model()
     ours, theirs = both(pkg, root, requests=1)
     assert ours.states == theirs.report.states and theirs.report.errors == 0
 
 
+@needs_spin
 def test_spin_trails_are_replayed_on_the_engine():
     sp = StateSpace(package("Dining"), "Table2()")
     result = spin.verify_deadlocks(sp, opt=FAST)
@@ -65,12 +70,14 @@ def test_spin_trails_are_replayed_on_the_engine():
     assert sp.successors(trail.end_state) == ()  # the end of SPIN's trail is a deadlock for our engine too
 
 
+@needs_spin
 def test_codel_outcomes_come_back_from_the_trail():
     result = spin.verify_deadlocks(StateSpace(package("Codel"), "Main()", reduce=False), opt=FAST)
     (trail,) = result.trails
     assert trail.steps[-1].outcome_names == ("plan -> throw e_fail",)
 
 
+@needs_spin
 def test_safety_observers_agree_with_the_explorer():
     pkg, root = ndd_model()
     items, _ = read_property_file(FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
@@ -91,6 +98,7 @@ def test_safety_observers_agree_with_the_explorer():
     assert labels[-1] == "NDD.GoTo:trigger" and "NDD.SetSpeed:finish" not in labels
 
 
+@needs_spin
 def test_invariant_observer_reads_places_and_variables():
     pkg = package("Server")
     flat = flatten(pkg, "Main()")
@@ -114,6 +122,7 @@ def test_promela_text_has_one_atomic_step_per_interaction():
     assert "do\n" in text and "od\n" in text
 
 
+@needs_spin
 def test_multi_core_and_bitstate_modes_run():
     pkg = package("Dining")
     cores = spin.verify_deadlocks(StateSpace(pkg, "Table3()"), cores=2, opt=FAST)
@@ -132,6 +141,7 @@ def test_python_externs_cannot_be_translated():
         write_promela(text_space(EXTERN, externs={"measure": lambda: 1}))
 
 
+@needs_spin
 def test_verify_engine_spin_from_the_command_line(capsys):
     from genom2bip.cli import main
     code = main(["verify", str(FIXTURES / "Dining.bip"), "--root", "Table2()", "--engine", "spin"])
@@ -166,6 +176,7 @@ BOUNDED = {
     ("AtomPriorities", "System()", 5),  # guarded atom priorities, closure through a disabled port, '*'
     ("Broadcast", "System()", 24),
 ])
+@needs_spin
 def test_same_on_the_engines_priority_and_broadcast_fixtures(name, root, states):
     from pathlib import Path
     from runtime.bip2 import parse_text
@@ -191,7 +202,26 @@ end
 """
 
 
+@needs_spin
 def test_a_model_without_interactions_is_one_deadlocked_state():
     assert explore(text_space(IDLE)).deadlocks == [0]
     result = spin.verify_deadlocks(text_space(IDLE), opt=FAST)
     assert result.report.states == 1 and result.report.errors == 1
+
+
+@needs_spin
+def test_pan_progress_lines_are_streamed():
+    import io
+
+    from runtime.explore import Progress
+
+    run = spin.SpinRun(StateSpace(ndd_model()[0], ndd_model()[1]), opt=FAST)
+    stream = io.StringIO()
+    try:
+        run.build(extra=("-DFREQ=10000",))  # a progress line every 10,000 states instead of every million
+        report = run.pan(["-E", "-n"], progress=Progress(stream, force=True, delay=0))
+    finally:
+        run.cleanup()
+    assert report.states == 55_680
+    shown = stream.getvalue()
+    assert "states 10,000" in shown and "depth " in shown and "states/s" in shown

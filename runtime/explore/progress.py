@@ -36,7 +36,8 @@ class Progress:
         self.shown = False
         self.width = 0
 
-    def tick(self, states: int, transitions: int, frontier: int, memory: Callable[[], int]) -> None:
+    def tick(self, states: int, transitions: int, frontier: int, memory: Callable[[], int],
+             depth: int | None = None) -> None:
         if not self.on:
             return
         now = time.monotonic()
@@ -45,7 +46,8 @@ class Progress:
         self.next = now + PERIOD
         rate = states / max(now - self.start, 1e-9)
         line = (f"states {states:,}  transitions {transitions:,}  {rate:,.0f} states/s  "
-                f"frontier {frontier:,}  memory {human_bytes(memory())}")
+                + (f"depth {depth:,}  " if depth is not None else "")
+                + f"frontier {frontier:,}  memory {human_bytes(memory())}")
         pad = " " * max(0, self.width - len(line))
         self.stream.write("\r" + line + pad)
         self.stream.flush()

@@ -35,7 +35,7 @@ class ExploreResult:
     transitions: int
     depth: int
     complete: bool
-    stopped_by: str = ""  # "max-states", "max-depth" or "error" when not complete
+    stopped_by: str = ""  # "max-states", "max-depth", "max-memory", "interrupted" or "error" when not complete
     deadlocks: list[int] = field(default_factory=list)
     error: Finding | None = None
     seconds: float = 0.0
@@ -75,6 +75,8 @@ def explore(space: StateSpace, max_depth: int | None = None, dfs: bool = False,
             _breadth_first(space, max_depth, progress, found, stop_at_deadlock)
     except LimitReached:
         found.stopped = "max-states"
+    except KeyboardInterrupt:
+        found.stopped = "interrupted"  # Ctrl-C: what was explored so far is still reported
     finally:
         progress.done()
     seconds = time.perf_counter() - start
@@ -123,7 +125,7 @@ def _breadth_first(space: StateSpace, max_depth, progress: Progress, found: _Fou
         if _expand(space, sid, found, stop_at_deadlock) is None:
             return
         sid += 1
-        progress.tick(len(space), space.transitions, len(space) - sid, space.memory)
+        progress.tick(len(space), space.transitions, len(space) - sid, space.memory, depth)
 
 
 def _depth_first(space: StateSpace, max_depth, progress: Progress, found: _Found, stop_at_deadlock: bool) -> None:
@@ -147,4 +149,4 @@ def _depth_first(space: StateSpace, max_depth, progress: Progress, found: _Found
             t = succ[k]
             if t >= len(expanded) or not expanded[t]:
                 stack.append((t, depth + 1))
-        progress.tick(len(space), space.transitions, len(stack), space.memory)
+        progress.tick(len(space), space.transitions, len(stack), space.memory, found.depth)

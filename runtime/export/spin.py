@@ -146,14 +146,41 @@ class SpinRun:
             raise SpinError(f"compiling pan failed:\n{comp.stderr[-2000:]}")
         return self.dir / "pan"
 
-    def pan(self, args: list[str], timeout: float | None = None) -> PanReport:
+    def pan(self, args: list[str], timeout: float | None = None, progress=None) -> PanReport:
         start = time.perf_counter()
-        done = self._run(["./pan", f"-m{DEPTH}", *args], timeout)
-        report = parse_pan(done.stdout + done.stderr)
+        if progress is None:
+            done = self._run(["./pan", f"-m{DEPTH}", *args], timeout)
+            output = done.stdout + done.stderr
+        else:
+            output = self._streamed(["./pan", f"-m{DEPTH}", *args], timeout, progress)
+        report = parse_pan(output)
         if report.seconds == 0:
             report.seconds = time.perf_counter() - start
         report.trails = sorted(self.dir.glob("model.pml*.trail"), key=_trail_order)
         return report
+
+    def _streamed(self, argv: list[str], timeout: float | None, progress) -> str:
+        """Run pan reading its output as it comes; each of its progress lines goes to ``progress.tick``."""
+        proc = subprocess.Popen(argv, cwd=self.dir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        deadline = None if timeout is None else time.monotonic() + timeout
+        lines = []
+        try:
+            for line in proc.stdout:
+                lines.append(line)
+                m = _PAN_PROGRESS.match(line)
+                if m:
+                    depth, states, transitions, memory = (float(m.group(k)) for k in range(1, 5))
+                    progress.tick(int(states), int(transitions), 0, lambda: memory * 1024 * 1024, depth=int(depth))
+                if deadline is not None and time.monotonic() > deadline:
+                    proc.kill()
+                    raise subprocess.TimeoutExpired(argv, timeout)
+            proc.wait()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            progress.done()
+        return "".join(lines)
 
     def trail(self, path: Path, message: str) -> SpinTrail:
         """Replay a trail with pan, read our markers, and replay the steps on the engine."""
@@ -164,6 +191,11 @@ class SpinRun:
     def cleanup(self) -> None:
         if not self.keep:
             shutil.rmtree(self.dir, ignore_errors=True)
+
+
+#: pan's periodic line: ``Depth= 31 States= 1e+06 Transitions= 7.2e+06 Memory= 128.000 t= 3.1 R= 3e+05``.
+_PAN_PROGRESS = re.compile(r"Depth=\s*(\d+)\s+States=\s*([0-9.e+]+)\s+Transitions=\s*([0-9.e+]+)\s+"
+                           r"Memory=\s*([0-9.]+)")
 
 
 def _trail_order(p: Path) -> int:
@@ -181,7 +213,8 @@ def _markers(output: str) -> list[tuple[str, int]]:
 
 
 def verify_deadlocks(space: StateSpace, cores: int = 1, bitstate: bool = False, hash_bits: int = 27,
-                     max_trails: int = 20, workdir=None, timeout: float | None = None, opt: str = "-O2") -> SpinResult:
+                     max_trails: int = 20, workdir=None, timeout: float | None = None, opt: str = "-O2",
+                     progress=None) -> SpinResult:
     """Every invalid end state (deadlock) SPIN finds, with their trails read back (up to ``max_trails``).
 
     Trails are pan's depth-first paths, usually much longer than the
@@ -194,7 +227,7 @@ def verify_deadlocks(space: StateSpace, cores: int = 1, bitstate: bool = False, 
         args = ["-c0", "-e", "-n"]
         if bitstate:
             args.append(f"-w{hash_bits}")
-        report = run.pan(args, timeout)
+        report = run.pan(args, timeout, progress)
         trails = []
         for path, msg in zip(report.trails[:max_trails], report.messages):
             trails.append(run.trail(path, msg))
@@ -215,7 +248,8 @@ def count_states(space: StateSpace, cores: int = 1, workdir=None, timeout: float
 
 
 def verify_safety(space: StateSpace, monitors: list[Monitor], cores: int = 1, bitstate: bool = False,
-                  hash_bits: int = 27, workdir=None, timeout: float | None = None, opt: str = "-O2") -> SpinResult:
+                  hash_bits: int = 27, workdir=None, timeout: float | None = None, opt: str = "-O2",
+                  progress=None) -> SpinResult:
     """Assertion violations of the observers (deadlocks ignored); the first trail is read back."""
     run = SpinRun(space, workdir, cores, bitstate, hash_bits, opt=opt)
     try:
@@ -223,7 +257,7 @@ def verify_safety(space: StateSpace, monitors: list[Monitor], cores: int = 1, bi
         args = ["-E", "-c1", "-n"]
         if bitstate:
             args.append(f"-w{hash_bits}")
-        report = run.pan(args, timeout)
+        report = run.pan(args, timeout, progress)
         trails = [run.trail(p, m) for p, m in zip(report.trails[:1], report.messages)]
         return SpinResult(report, trails, "safety", run.dir if run.keep else None)
     finally:

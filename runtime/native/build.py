@@ -1,0 +1,96 @@
+"""Compile a model's generated C with the system compiler, cache the library by content hash, load it with ctypes.
+
+The cache is ``$XDG_CACHE_HOME/genom2bip/native`` (``~/.cache/...`` by
+default; ``GENOM2BIP_CACHE`` overrides it): the file name is the hash of
+the C text and the compiler flags, so a model compiles once per change.
+:func:`compiler` finds ``$CC`` or ``gcc``/``cc`` on PATH; without one the
+caller explores in Python.
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).parent
+FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w")
+
+
+class BuildError(Exception):
+    """The C compiler failed on generated text (a bug of the generator: the message carries its output)."""
+
+
+def compiler() -> str | None:
+    """The C compiler to use: ``$CC`` if set and found, else gcc or cc on PATH, else None."""
+    for name in (os.environ.get("CC"), "gcc", "cc"):
+        if name and shutil.which(name):
+            return shutil.which(name)
+    return None
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("GENOM2BIP_CACHE")
+    if base:
+        return Path(base)
+    xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(xdg) / "genom2bip" / "native"
+
+
+def _headers() -> str:
+    return "".join((HERE / n).read_text() for n in ("prelude.h", "odometer.h", "search.c"))
+
+
+def build(source: str, cc: str) -> Path:
+    """The shared library for ``source``, compiled now or found in the cache."""
+    key = hashlib.sha256("\0".join((source, _headers(), " ".join(FLAGS), cc)).encode()).hexdigest()[:24]
+    out_dir = cache_dir()
+    lib = out_dir / f"step-{key}.so"
+    if lib.exists():
+        return lib
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="genom2bip-c-") as tmp:
+        c_file = Path(tmp) / "model.c"
+        c_file.write_text(source, encoding="utf-8")
+        so = Path(tmp) / "model.so"
+        proc = subprocess.run([cc, *FLAGS, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
+                              capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise BuildError(f"{cc} failed on the generated step:\n{proc.stderr[-4000:]}")
+        partial = out_dir / f".{lib.name}.{os.getpid()}"
+        shutil.copyfile(so, partial)
+        os.replace(partial, lib)  # atomic: concurrent builds of the same model do not see half a file
+    return lib
+
+
+class Result(ctypes.Structure):
+    """Mirror of ``Result`` in search.c."""
+
+    _fields_ = [("states", ctypes.c_int64), ("transitions", ctypes.c_int64), ("depth", ctypes.c_int64),
+                ("error_state", ctypes.c_int64), ("deadlocks", ctypes.c_int64), ("memory", ctypes.c_int64),
+                ("status", ctypes.c_int32), ("ecode", ctypes.c_int32), ("earg", ctypes.c_int64)]
+
+
+PROGRESS = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64, ctypes.c_int64, ctypes.c_int64, ctypes.c_int64,
+                            ctypes.c_int64)
+
+
+def load(path: Path) -> ctypes.CDLL:
+    """Open the library with the argument types of its entry points declared."""
+    lib = ctypes.CDLL(str(path), mode=ctypes.RTLD_LOCAL)
+    i64, i32, p = ctypes.c_int64, ctypes.c_int, ctypes.POINTER
+    sig = {
+        "c_width": (i32, [i32]), "c_words": (i32, []),
+        "c_state_width": (i32, []), "c_nstates": (i64, []), "c_parent": (i64, [i64]), "c_via": (i64, [i64]),
+        "c_deadlock": (i64, [i64]), "c_state": (None, [i64, p(i64)]), "c_free": (None, []),
+        "c_successors": (i32, [p(i64), p(i64), p(ctypes.c_uint32), i32, i64, p(i32), p(i64)]),
+        "c_search": (i32, [i32, i64, i64, i64, i32, i64, ctypes.c_double, PROGRESS, p(Result)]),
+    }
+    for name, (res, args) in sig.items():
+        fn = getattr(lib, name)
+        fn.restype = res
+        fn.argtypes = args
+    return lib

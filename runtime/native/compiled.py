@@ -1,0 +1,236 @@
+"""A state space's step and search run in C: same states, numbers, deadlocks and traces as the Python explorer.
+
+``compile_space(space)`` returns a :class:`CompiledSpace` or, when the
+model cannot be compiled (no C compiler, a feature the C back end does not
+take), None and a one-line note saying why.  The compiled search numbers
+states exactly as :func:`runtime.explore.explore` does (same order of
+interactions and outcomes), so state numbers, deadlocks and shortest traces
+agree; traces are rebuilt by the Python step along the C parent links, with
+their codel outcomes.
+"""
+from __future__ import annotations
+
+import ctypes
+import signal
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from runtime.engine.errors import EngineError
+from runtime.explore.choices import Choice, codel_choices
+from runtime.explore.progress import Progress, null_progress
+from runtime.explore.search import ExploreResult, Finding
+from runtime.explore.space import StateSpace, Step
+from runtime.native.build import PROGRESS, BuildError, Result, build, compiler, load
+from runtime.native.cexpr import Unsupported
+from runtime.native.cstep import generate
+
+STATUS = {0: "", 1: "max-states", 2: "max-depth", 3: "error", 4: "deadlock", 5: "interrupted", 6: "max-memory",
+          8: "violated"}
+S_ERROR, S_WIDEN, S_VIOLATED = 3, 7, 8
+#: Seconds between progress reports from the C search (and checks for Ctrl-C).
+PERIOD = 0.25
+
+
+class Diverged(Exception):
+    """The C step stopped where the Python step computes a value (an int past 64 bits): explore in Python."""
+
+
+def exploration_choices(package, externs: dict[str, Any] | None) -> dict[str, Choice]:
+    """The externs that are choice points during exploration, as :func:`bind_for_exploration` binds them."""
+    user = dict(externs or {})
+    out = {}
+    for name, choice in codel_choices(package).items():
+        if name not in user:
+            out[name] = choice
+    for name, given in user.items():
+        if isinstance(given, Choice):
+            out[name] = given
+    return out
+
+
+def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
+                  monitors=()) -> tuple[CompiledSpace | None, str]:
+    """The compiled step and search of ``space``, or None and why not (one line).
+
+    ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction.
+    """
+    cc = compiler()
+    if cc is None:
+        return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
+    cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc, monitors)
+    try:
+        cs.build()
+    except Unsupported as exc:
+        return None, f"compiled exploration does not take this model ({exc}): exploring with the Python step"
+    except (BuildError, OSError) as exc:
+        return None, f"compiling the step failed ({str(exc).splitlines()[0]}): exploring with the Python step"
+    return cs, ""
+
+
+@dataclass
+class _Interrupt:
+    hit: bool = False
+
+
+class CompiledSpace:
+    """The C library of one model bound to its Python :class:`StateSpace` (which words errors and traces)."""
+
+    def __init__(self, space: StateSpace, choices: dict[str, Choice], cc: str, monitors=()) -> None:
+        self.space = space
+        self.monitors = list(monitors)
+        self.choices = choices
+        self.cc = cc
+        self.widths: dict[int, int] = {}
+        self.engine = space.engine
+        budget = space.environment.budget
+        self.budget = -1 if budget is None else budget
+        self.bools = [s.index for s in space.slots if s.kind == "bool"]
+        self.kinds = {s.index: s.kind for s in space.slots}
+
+    def build(self) -> None:
+        """Generate, compile (or find in the cache) and load the library for the current field widths."""
+        model = generate(self.space, self.choices, self.widths, self.monitors)
+        self.lib = load(build(model.source, self.cc))
+        self.width, self.source, self.bits = model.width, model.source, model.bits
+
+    def _widen(self, slot: int) -> None:
+        """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits."""
+        self.widths[slot] = min(64, 2 * self.lib.c_width(slot))
+        self.build()
+
+    # -- one step -------------------------------------------------------------------------------
+    def _typed(self, values) -> tuple:
+        out = list(values)
+        for i in self.bools:
+            out[i] = bool(out[i])
+        return tuple(out)
+
+    def successors(self, state: tuple) -> list[tuple[int, tuple]]:
+        """``(interaction index, next state)`` for every successor of an explorer state, dead variables reset."""
+        cap = 1024
+        while True:
+            s = (ctypes.c_int64 * self.width)(*[int(v) for v in state])
+            out = (ctypes.c_int64 * (self.width * cap))()
+            via = (ctypes.c_uint32 * cap)()
+            code, arg = ctypes.c_int(0), ctypes.c_int64(0)
+            n = self.lib.c_successors(s, out, via, cap, self.budget, ctypes.byref(code), ctypes.byref(arg))
+            if n >= 0:
+                return [(via[i], self._typed(out[i * self.width:(i + 1) * self.width])) for i in range(n)]
+            if code.value == 8:  # a field too narrow: widen and redo
+                self._widen(arg.value)
+                continue
+            if code.value == 10 and cap < 65536:
+                cap *= 16
+                continue
+            raise _CError(code.value, arg.value)
+
+    # -- the search ------------------------------------------------------------------------------
+    def explore(self, max_states: int | None = None, max_depth: int | None = None, dfs: bool = False,
+                progress: Progress | None = None, stop_at_deadlock: bool = False,
+                max_bytes: int | None = None, max_seconds: float | None = None) -> ExploreResult:
+        """Like :func:`runtime.explore.explore`; raises :class:`Diverged` if the Python step must take over.
+
+        ``max_bytes`` bounds the visited set and ``max_seconds`` the time (stopped by ``max-memory``,
+        ``max-seconds``); Ctrl-C stops the search as ``interrupted``, with everything found so far.
+        """
+        progress = progress or null_progress()
+        interrupt, timed = _Interrupt(), _Interrupt()
+
+        def report(states, transitions, depth, frontier, memory):
+            progress.tick(states, transitions, frontier, lambda: memory, depth=depth)
+            if max_seconds is not None and time.perf_counter() - start >= max_seconds:
+                timed.hit = True
+            return 1 if interrupt.hit or timed.hit else 0
+
+        callback = PROGRESS(report)
+        previous = _catch_interrupt(interrupt)
+        start = time.perf_counter()
+        try:
+            while True:
+                r = Result()
+                status = self.lib.c_search(int(dfs), -1 if max_states is None else max_states,
+                                           -1 if max_depth is None else max_depth,
+                                           -1 if max_bytes is None else max_bytes, int(stop_at_deadlock),
+                                           self.budget, PERIOD, callback, ctypes.byref(r))
+                if status != S_WIDEN:
+                    break
+                self._widen(r.earg)
+        finally:
+            _restore_interrupt(previous)
+            progress.done()
+        seconds = time.perf_counter() - start
+        deadlocks = [self.lib.c_deadlock(i) for i in range(r.deadlocks)]
+        error = None
+        self.violation = r.error_state if status == S_VIOLATED else -1  # the state an observer rejects
+        if status == S_ERROR:
+            error = self._error(r)
+        stopped = "max-seconds" if timed.hit and status == 5 else STATUS[status]
+        return ExploreResult(r.states, r.transitions, r.depth, not stopped, stopped, deadlocks, error, seconds,
+                             r.memory, self.bits)
+
+    def _error(self, r: Result) -> Finding:
+        """The Python step's own words for the error the C step stopped at, with a shortest trace."""
+        if r.error_state < 0:
+            raise Diverged("the initial state")
+        space = self.space
+        state = self.state(r.error_state)[:space.width + len(space.services)]
+        saved, space.max_states = space.max_states, None
+        try:
+            sid = space._add(space._pack(state), -1, -1)
+            space.successors(sid)
+        except EngineError as err:
+            return Finding("error", r.error_state, self.trace_to(r.error_state), str(err))
+        finally:
+            space.max_states = saved
+        raise Diverged(f"state {r.error_state}")
+
+    # -- states and traces ---------------------------------------------------------------------------
+    def state(self, sid: int) -> tuple:
+        out = (ctypes.c_int64 * self.width)()
+        self.lib.c_state(sid, out)
+        return self._typed(out[:])
+
+    def path_to(self, sid: int) -> list[int]:
+        path = [sid]
+        while self.lib.c_parent(path[-1]) >= 0:
+            path.append(self.lib.c_parent(path[-1]))
+        return path[::-1]
+
+    def trace_to(self, sid: int) -> list[Step]:
+        """The steps along the parent links to ``sid`` (shortest after a breadth-first search), with outcomes."""
+        path = self.path_to(sid)
+        space = self.space
+        explorer = space.width + len(space.services)  # the observers' slots follow
+        saved, space.max_states = space.max_states, None
+        try:
+            ids = [space._add(space._pack(self.state(k)[:explorer]), -1, -1) for k in path]
+        finally:
+            space.max_states = saved
+        labels = [space.interaction(self.lib.c_via(k)).label for k in path[1:]]
+        return space.steps_along(ids, labels)
+
+    def concrete(self, steps: list[Step]) -> tuple:
+        return self.space.concrete(steps)
+
+    def release(self) -> None:
+        self.lib.c_free()
+
+
+class _CError(EngineError):
+    def __init__(self, code: int, arg: int) -> None:
+        super().__init__(f"compiled step stopped with error code {code} ({arg})")
+        self.code, self.arg = code, arg
+
+
+def _catch_interrupt(flag: _Interrupt):
+    """Ctrl-C during the C search sets a flag the progress callback returns: the search stops and reports."""
+    try:
+        return signal.signal(signal.SIGINT, lambda *_: setattr(flag, "hit", True))
+    except ValueError:  # not the main thread
+        return None
+
+
+def _restore_interrupt(previous) -> None:
+    if previous is not None:
+        signal.signal(signal.SIGINT, previous)

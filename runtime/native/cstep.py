@@ -1,0 +1,642 @@
+"""C source for one model's step and search, generated from the same flat system as the Python step.
+
+The generated functions mirror :mod:`runtime.engine.codegen` one to one:
+``in<i>`` eager internal transitions of atom ``i``, ``ap<p>`` firing of
+atom port ``p``, ``f<k>`` firing of source ``k``, ``enabled`` (atom ports,
+atom priorities, connectors, lone ports, then compound priorities) and the
+codel odometer of :mod:`runtime.explore.choices`.  Atom and compound
+priority tables are computed by the Python step's own
+:class:`~runtime.engine.support.AtomPriorities` and
+:class:`~runtime.engine.support.Priorities`, one entry per combination of
+their guards.  The search itself is fixed C text (``search.c``) included
+after the model.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from runtime.engine import defines
+from runtime.engine.codegen import MAX_INTERNAL, describe
+from runtime.engine.errors import ModelError
+from runtime.engine.flatten import FlatAtom
+from runtime.explore.choices import Choice
+from runtime.explore.layout import Slot
+from runtime.native.cexpr import (
+    CName,
+    CScope,
+    Externs,
+    Unsupported,
+    c_type,
+    condition,
+    literal,
+    statements,
+)
+from runtime.native.observers import gen_observers
+
+SEARCH_C = Path(__file__).with_name("search.c")
+#: Guards of atom or compound priorities past which the tables would be too large.
+MAX_GUARDED = 10
+#: Port parameters of a connector past which its interaction tables would be too large.
+MAX_PARAMS = 16
+#: Bits of an int field without a declared domain at first (zig-zag: -8..7); doubled when a value outgrows it.
+START_BITS = 4
+
+# error codes shared with search.c
+E_NONDET, E_UNSAFE, E_STUCK, E_NOTENABLED, E_ARITH, E_CYCLE, E_DOMAIN, E_WIDEN, E_CHOICES, E_FULL = range(1, 11)
+
+
+@dataclass
+class CModel:
+    """The generated C text and what Python needs to read the compiled search's answers."""
+
+    source: str
+    width: int
+    bits: int = 0
+    label_ids: dict[int, int] = field(default_factory=dict)  # interaction index -> label id (static ones)
+    labels: list[str] = field(default_factory=list)
+
+
+class CGen:
+    def __init__(self, space, choices: dict[str, Choice], widths: dict[int, int], monitors=()) -> None:
+        self.space = space
+        self.widths = widths
+        self.monitors = list(monitors)
+        self.engine = space.engine
+        self.flat = space.engine.flat
+        self.sources = space.engine.sources
+        self.infos = space.engine.infos
+        self.slots: list[Slot] = space.slots
+        self.lines: list[str] = []
+        self.choices = list(choices.values())
+        budget = space.environment.budget
+        self.externs = Externs({name: k for k, name in enumerate(choices)},
+                               list(space.services) if budget is not None else None)
+        self.type_index = {name: k for k, name in enumerate(self.infos)}
+        self.maxf = max([len(fp.fields) for fp in self.flat.ports] + [1])
+
+    def w(self, line: str = "") -> None:
+        self.lines.append(line)
+
+    # -- scopes ---------------------------------------------------------------------------------
+    def atom_scope(self, fa: FlatAtom, in_enabled: bool) -> CScope:
+        sc = CScope(f"atom {fa.name} ({fa.type.name})", self.externs, constants=fa.constants, in_guard=in_enabled)
+        for d in fa.variables:
+            t = c_type(d.type, f"{sc.where}, {d.name}")
+            src = f"a{fa.index}_{d.name}" if in_enabled else f"v_{d.name}"
+            sc.variables[d.name] = CName(src, t, assignable=not in_enabled)
+        return sc
+
+    def connector_scope(self, info, mask: int, ports_rw: bool, with_locals: bool) -> CScope:
+        ct = info.type
+        sc = CScope(f"connector type {ct.name}", self.externs, constants=dict(self.flat.constants),
+                    in_guard=not with_locals)
+        for k, d in enumerate(ct.data):
+            t = c_type(d.type, f"{sc.where}, {d.name}")
+            if with_locals:
+                sc.variables[d.name] = CName(f"lv[{k}]", t, assignable=True)
+            else:
+                sc.constants[d.name] = (info.local_defaults[k], d.type)
+        for i, p in enumerate(ct.params):
+            if not mask >> i & 1:
+                continue
+            pt = self.flat.package.port_type(p.port_type)
+            for j, f in enumerate(pt.params if pt else []):
+                sc.ports[(p.name, f.name)] = CName(f"pv[{i}][{j}]", c_type(f.type, sc.where), assignable=ports_rw)
+        return sc
+
+    # -- the whole file -------------------------------------------------------------------------
+    def generate(self) -> CModel:
+        fl = self.flat
+        for s in self.slots:
+            if s.kind == "value":
+                raise Unsupported(f"{s.title}: data of this type are explored in Python only")
+        for src in self.sources:
+            if src.kind == "generic":
+                raise Unsupported(f"connector {src.connector.path}: nested connectors are explored in Python only")
+            if len(src.leaves) > MAX_PARAMS:
+                raise Unsupported(f"connector {src.connector.path}: more than {MAX_PARAMS} ports")
+        nsrc = len(self.sources)
+        if max((s.full for s in self.sources), default=0) * nsrc + nsrc >= (1 << 32) - 1:
+            raise Unsupported("too many interactions to number them in 32 bits")
+        self.base = fl.state_size + (len(self.space.services) if self.externs.services is not None else 0)
+        self.width = self.base + len(self.monitors)
+        for m, (mon, _) in enumerate(self.monitors):
+            self.slots = self.slots + [Slot(self.base + m, "marking", None, f"observer {mon.name}",
+                                            places=max(1, (mon.states - 1).bit_length()))]
+        w = self.w
+        w(f"/* Step and search of package {fl.package.name}, root {fl.root}: generated by runtime.native.cstep. */")
+        w("#include <stdint.h>")
+        w(f"#define E {fl.state_size}")
+        w(f"#define W {self.width}")
+        w(f"#define NSRC {nsrc}")
+        w(f"#define MAXF {self.maxf}")
+        w(f"#define NSLOTS {len(self.slots)}")
+        w(f"#define MAXINT {MAX_INTERNAL}")
+        w(f"#define NSERV {len(self.space.services) if self.externs.services is not None else 0}")
+        w('#include "prelude.h"')
+        self.gen_choices()
+        for fa in fl.atoms:
+            self.gen_internal(fa)
+        for fp in fl.ports:
+            self.gen_port(fp)
+        self.gen_initial()
+        for name, info in self.infos.items():
+            self.gen_clauses(name, info)
+        for src in self.sources:
+            self.gen_fire(src)
+        self.gen_fire_table()
+        self.gen_slots()
+        model = CModel("", self.width, bits=self.bits)
+        self.gen_labels(model)
+        self.gen_priorities()
+        self.gen_blocked()
+        self.gen_enabled()
+        gen_observers(w, self.monitors, self.sources, fl, self.base)
+        w('#include "search.c"')
+        model.source = "\n".join(self.lines) + "\n"
+        return model
+
+    def gen_choices(self) -> None:
+        n = max(len(self.choices), 1)
+        doms = []
+        for k, c in enumerate(self.choices):
+            vals = []
+            for v in c.values:
+                if not isinstance(v, int):
+                    raise Unsupported(f"choice extern {c.name}: non-integer outcomes are explored in Python only")
+                vals.append(literal(v, c.name)[0])
+            self.w(f"static const V DOM{k}[] = {{{', '.join(vals)}}};")
+            doms.append((f"DOM{k}", len(vals)))
+        self.w(f"static const V *const DOMV[{n}] = {{{', '.join(d for d, _ in doms) or '0'}}};")
+        self.w(f"static const int DOMN[{n}] = {{{', '.join(str(m) for _, m in doms) or '0'}}};")
+        self.w('#include "odometer.h"')
+
+    # -- atoms ----------------------------------------------------------------------------------
+    def load(self, fa: FlatAtom, indent: str) -> None:
+        self.w(f"{indent}V m = L[{fa.offset}];")
+        for d in fa.variables:
+            self.w(f"{indent}V v_{d.name} = L[{fa.slot(d.name)}];")
+
+    def store(self, fa: FlatAtom, indent: str) -> None:
+        self.w(f"{indent}L[{fa.offset}] = m;")
+        for d in fa.variables:
+            self.w(f"{indent}L[{fa.slot(d.name)}] = v_{d.name};")
+
+    def marked(self, fa: FlatAtom, t, var: str) -> str:
+        for p in t.sources + t.targets:
+            if p not in fa.places:
+                raise ModelError(f"transition {describe(t)} names unknown place '{p}'", atom=fa.name)
+        src = fa.place_mask(t.sources)
+        return f"(({var} & {src}) == {src})" if src else "1"
+
+    def enabled_expr(self, fa: FlatAtom, t, var: str, sc: CScope) -> str:
+        guard = condition(t.guard, sc)
+        mk = self.marked(fa, t, var)
+        return mk if guard == "1" else f"({mk} && {guard})"
+
+    def move(self, fa: FlatAtom, t, indent: str, sc: CScope) -> None:
+        src, tgt = fa.place_mask(t.sources), fa.place_mask(t.targets)
+        if src:
+            self.w(f"{indent}m &= ~(V){src};")
+        if tgt:
+            self.w(f"{indent}if (m & {tgt}) fail({E_UNSAFE}, {fa.index});")
+            self.w(f"{indent}m |= {tgt};")
+        self.lines.extend(statements(t.action, sc, indent))
+
+    def gen_internal(self, fa: FlatAtom) -> None:
+        ts = [t for t in fa.type.transitions if t.internal]
+        if not ts:
+            return
+        w = self.w
+        sc = self.atom_scope(fa, in_enabled=False)
+        w(f"static void in{fa.index}(V *L) {{  /* eager internal transitions of {fa.name} */")
+        self.load(fa, "    ")
+        w("    int n;")
+        w("    for (n = 0; n < MAXINT; n++) {")
+        for k, t in enumerate(ts):
+            w(f"        int c{k} = {self.enabled_expr(fa, t, 'm', sc)};")
+        if len(ts) > 1:
+            w(f"        if ({' + '.join(f'c{k}' for k in range(len(ts)))} > 1) fail({E_NONDET}, {fa.index});")
+        for k, t in enumerate(ts):
+            w(f"        {'if' if k == 0 else 'else if'} (c{k}) {{")
+            self.move(fa, t, "            ", sc)
+            w("        }")
+        w("        else break;")
+        w("    }")
+        w(f"    if (n == MAXINT) fail({E_STUCK}, {fa.index});")
+        self.store(fa, "    ")
+        w("}")
+
+    def gen_port(self, fp) -> None:
+        w = self.w
+        fa = self.flat.atoms[fp.atom]
+        ts = [t for t in fa.type.transitions if t.port == fp.name]
+        sc = self.atom_scope(fa, in_enabled=False)
+        w(f"static void ap{fp.id}(V *L, const V *vals) {{  /* port {fp.path} */")
+        self.load(fa, "    ")
+        for k, t in enumerate(ts):
+            w(f"    {'if' if k == 0 else 'else if'} ({self.enabled_expr(fa, t, 'm', sc)}) {{")
+            if fp.decl.data:
+                w("        if (vals) {")
+                for j, v in enumerate(fp.decl.data):
+                    w(f"            v_{v} = vals[{j}];")
+                w("        }")
+            self.move(fa, t, "        ", sc)
+            w("    }")
+        w(f"    {'else ' if ts else ''}fail({E_NOTENABLED}, {fp.id});")
+        self.store(fa, "    ")
+        if any(t.internal for t in fa.type.transitions):
+            w(f"    in{fa.index}(L);")
+        w("}")
+
+    def gen_initial(self) -> None:
+        from runtime.engine.cexpr import default_value
+        from runtime.model.expressions import Assign, Var
+
+        w = self.w
+        w("static void initial(V *L) {")
+        for fa in self.flat.atoms:
+            t = fa.type
+            sc = self.atom_scope(fa, in_enabled=False)
+            w("    {")
+            for d in fa.variables:
+                w(f"        V v_{d.name} = {literal(default_value(d.type), sc.where)[0]};")
+            for d in fa.variables:
+                if d.init is not None:
+                    self.lines.extend(statements([Assign(Var(d.name), d.init)], sc, "        "))
+            targets = t.initial.targets
+            if any(p not in fa.places for p in targets) or len(set(targets)) != len(targets):
+                raise Unsupported(f"atom {fa.name}: its initial transition is refused by the engine")
+            w(f"        V m = {fa.place_mask(targets)};")
+            self.lines.extend(statements(t.initial.action, sc, "        "))
+            self.store(fa, "        ")
+            if any(tr.internal for tr in t.transitions):
+                w(f"        in{fa.index}(L);")
+            w("    }")
+        w("}")
+
+    # -- connectors -----------------------------------------------------------------------------
+    def gen_clauses(self, name: str, info) -> None:
+        w = self.w
+        k = self.type_index[name]
+        for mask, spec in info.clauses.items():
+            if spec.guard is not None:
+                sc = self.connector_scope(info, mask, False, False)
+                w(f"static int k{k}_{mask}_g(V pv[][MAXF]) {{ return {condition(spec.guard, sc)}; }}")
+            for part, body, rw in (("u", spec.up, False), ("d", spec.down, True)):
+                if body:
+                    sc = self.connector_scope(info, mask, rw, True)
+                    w(f"static void k{k}_{mask}_{part}(V pv[][MAXF], V *lv) {{")
+                    self.lines.extend(statements(body, sc, "    "))
+                    w("}")
+
+    def locals_init(self, info) -> str:
+        vals = [literal(v, f"connector type {info.type.name}")[0] for v in info.local_defaults]
+        return f"V lv[{max(len(vals), 1)}] = {{{', '.join(vals) or '0'}}};"
+
+    def gen_fire(self, src) -> None:
+        w = self.w
+        fl = self.flat
+        w(f"static void f{src.index}(V *L, uint32_t mask) {{")
+        if src.kind == "port":
+            w(f"    (void)mask; ap{src.port.id}(L, 0);")
+            w("}")
+            return
+        info = self.infos[src.connector.type.name]
+        k = self.type_index[src.connector.type.name]
+        w(f"    V pv[{len(src.leaves)}][MAXF];")
+        for i, p in enumerate(src.leaves):
+            for j, slot in enumerate(fl.ports[p].slots):
+                w(f"    pv[{i}][{j}] = L[{slot}];")
+        if info.clauses:
+            w(f"    {self.locals_init(info)}")
+            w("    (void)lv;")
+            key = str(info.all_params) if src.kind == "rendezvous" else "mask"
+            w(f"    switch ({key}) {{")
+            for mask, spec in info.clauses.items():
+                calls = [f"k{k}_{mask}_{part}(pv, lv);" for part, body in (("u", spec.up), ("d", spec.down)) if body]
+                if calls:
+                    w(f"    case {mask}: {' '.join(calls)} break;")
+            w("    default: break;")
+            w("    }")
+        for i, p in enumerate(src.leaves):
+            if src.kind == "rendezvous":
+                w(f"    ap{p}(L, pv[{i}]);")
+            else:
+                w(f"    if (mask & {1 << i}) ap{p}(L, pv[{i}]);")
+        w("    (void)mask;")
+        w("}")
+
+    def gen_fire_table(self) -> None:
+        self.w(f"static void (*const FIRE[NSRC])(V *, uint32_t) = {{{', '.join(f'f{s.index}' for s in self.sources)}}};")
+
+    # -- slots: reset of dead variables, domains, packing --------------------------------------------
+    def slot_width(self, k: int, s: Slot) -> int:
+        if s.live == 0:
+            return 0  # never live: always the default, no bits
+        if s.kind == "marking":
+            return max(s.places, 1)
+        if s.kind == "bool":
+            return 1
+        if s.domain is not None:
+            return max((s.domain[1] - s.domain[0]).bit_length(), 1)
+        return self.widths.get(k, START_BITS)
+
+    def gen_slots(self) -> None:
+        """Straight-line ``pack`` and ``unpack`` (runtime.explore.codec's fields), widths fixed in the text.
+
+        Ints without a declared domain are zig-zag coded in a field of ``widths[k]`` bits; a value that does
+        not fit stops the step with E_WIDEN and the slot's position, and the caller regenerates wider.
+        """
+        w = self.w
+        fields, bit = [], 0
+        for k, s in enumerate(self.slots):
+            width = self.slot_width(k, s)
+            fields.append((k, s, width, bit))
+            bit += width
+        self.bits = bit
+        words = max((bit + 63) // 64, 1)
+        w(f"#define NW {words}")
+        w(f"static const int WIDTHS[NSLOTS > 0 ? NSLOTS : 1] = {{{', '.join(str(f[2]) for f in fields) or '0'}}};")
+        w("static void pack(const V *L, uint64_t *o) {")
+        w("    uint64_t u; V x;")
+        for i in range(words):
+            w(f"    o[{i}] = 0;")
+        for k, s, width, off in fields:
+            if not width:
+                continue
+            w(f"    x = L[{s.index}];")
+            if s.domain is not None:
+                w(f"    if (x < {s.domain[0]} || x > {s.domain[1]}) fail({E_DOMAIN}, {k});")
+            if s.live is not None:
+                w(f"    if (!(L[{s.marking}] & {s.live})) x = {literal(s.default or 0, s.title)[0]};")
+            if s.domain is not None:
+                w(f"    u = (uint64_t)(x - ({s.domain[0]}));")
+            elif s.kind in ("marking", "bool"):
+                w("    u = (uint64_t)x;")
+            else:
+                w("    u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
+                if width < 64:
+                    w(f"    if (u >> {width}) fail({E_WIDEN}, {k});")
+            word, sh = divmod(off, 64)
+            w(f"    o[{word}] |= u << {sh};" if sh else f"    o[{word}] |= u;")
+            if sh and sh + width > 64:
+                w(f"    o[{word + 1}] |= u >> {64 - sh};")
+        w("}")
+        w("static void unpack(const uint64_t *o, V *L) {")
+        w("    uint64_t u;")
+        for k, s, width, off in fields:
+            if not width:
+                w(f"    L[{s.index}] = {literal(s.default or 0, s.title)[0]};")
+                continue
+            word, sh = divmod(off, 64)
+            expr = f"(o[{word}] >> {sh})" if sh else f"o[{word}]"
+            if sh and sh + width > 64:
+                expr = f"({expr} | (o[{word + 1}] << {64 - sh}))"
+            mask = f" & UINT64_C({(1 << width) - 1})" if width < 64 else ""
+            w(f"    u = {expr}{mask};")
+            if s.domain is not None:
+                w(f"    L[{s.index}] = (V)u + ({s.domain[0]});")
+            elif s.kind in ("marking", "bool"):
+                w(f"    L[{s.index}] = (V)u;")
+            else:
+                w(f"    L[{s.index}] = (V)(u >> 1) ^ -(V)(u & 1);")
+        w("}")
+
+    # -- labels -----------------------------------------------------------------------------------
+    def gen_labels(self, model: CModel) -> None:
+        """Label ids: one per distinct label of the interactions whose label does not depend on the mask."""
+        ids: dict[str, int] = {}
+        static = []
+        for src in self.sources:
+            named = src.kind == "port" or src.kind == "rendezvous" or (src.connector.named and not src.alternatives)
+            inter = self.engine._make(src.index, src.full)
+            label = inter.label
+            if label not in ids:
+                ids[label] = len(ids)
+                model.labels.append(label)
+            static.append(f"{{{ids[label]}, {1 if named else 0}, {src.full}}}")
+        self.w(f"#define NLABELS {len(ids)}")
+        self.w(f"static const LabelDesc LABELS[NSRC] = {{{', '.join(static)}}};")
+
+    # -- priorities -----------------------------------------------------------------------------
+    def gen_priorities(self) -> None:
+        """Atom priority closures and compound priority reach sets, per combination of their guards."""
+        from runtime.engine import support
+
+        ns = self.engine.namespace
+        for fa in self.flat.atoms:
+            ap = ns.get(f"_aprio{fa.index}")
+            if ap is None:
+                continue
+            n = len(ap.ports)
+            g = len(ap.guard_bit)
+            if g > MAX_GUARDED or n > 32:
+                raise Unsupported(f"atom {fa.name}: too many priorities for the compiled tables")
+            rows, cyc = [], []
+            for active in range(1 << g):
+                try:
+                    ap._compute(0, active)
+                    row = []
+                    for p in range(n):
+                        higher = 0
+                        for q in range(n):
+                            if q != p and not ap._compute((1 << p) | (1 << q), active) >> p & 1:
+                                higher |= 1 << q
+                        row.append(str(higher))
+                    cyc.append("0")
+                except ModelError:
+                    row = ["0"] * n
+                    cyc.append("1")
+                rows.append("{" + ", ".join(row) + "}")
+            self.w(f"static const uint32_t APH{fa.index}[{1 << g}][{n}] = {{{', '.join(rows)}}};")
+            self.w(f"static const uint8_t APX{fa.index}[{1 << g}] = {{{', '.join(cyc)}}};")
+        prio = ns.get("_prio")
+        self.prio = prio.__self__ if prio is not None else None
+        if self.prio is None:
+            return
+        pr: support.Priorities = self.prio
+        nr = len(pr.rules)
+        if nr > 64 or len(pr.guards) > MAX_GUARDED:
+            raise Unsupported("too many compound priorities for the compiled tables")
+        rows, cyc = [], []
+        for key in range(1 << len(pr.guards)):
+            bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
+            try:
+                reach = pr._reach(bits)
+                cyc.append("0")
+            except ModelError:
+                reach = [0] * nr
+                cyc.append("1")
+            rows.append("{" + ", ".join(f"UINT64_C({r})" for r in reach) + "}")
+        self.w(f"#define NRULES {nr}")
+        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}] = {{{', '.join(rows)}}};")
+        self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
+        # guard functions of compound priorities, reading exported data from the state
+        for k, (r, _) in enumerate(pr.guards):
+            fp = self.flat.priorities[r]
+            sc = CScope(f"priority {fp.name}", self.externs, constants=fp.constants, in_guard=True)
+            for (comp, name), (slot, ty) in fp.data.items():
+                sc.ports[(comp, name)] = CName(f"s[{slot}]", c_type(ty, sc.where))
+            self.w(f"static int pg{k}(const V *s) {{ return {condition(fp.guard, sc)}; }}")
+        # low/high rule masks of each source's interactions: parts are [(connector id, mask)]
+        for src in self.sources:
+            for side, name in ((1, "lo"), (2, "hi")):
+                terms = []
+                if src.tree is not None:
+                    cid = src.connector.id
+                    for i, rule in enumerate(pr.rules):
+                        conds = [f"(mask & {pm}) == {pm}" for c, pm in rule[side] if c == cid]
+                        if conds:
+                            terms.append(f"((({' || '.join(conds)})) ? UINT64_C({1 << i}) : 0)")
+                self.w(f"static uint64_t {name}{src.index}(uint32_t mask) {{ (void)mask; return "
+                       f"{' | '.join(terms) or '0'}; }}")
+        for name in ("lo", "hi"):
+            self.w(f"static uint64_t (*const {name.upper()}T[NSRC])(uint32_t) = "
+                   f"{{{', '.join(f'{name}{s.index}' for s in self.sources)}}};")
+        self.w("#define LO(s, m) LOT[s](m)")
+        self.w("#define HI(s, m) HIT[s](m)")
+
+    def gen_blocked(self) -> None:
+        """``blocked<k>(m, pv)``: the guard of interaction ``m`` of a flat connector source is false."""
+        for src in self.sources:
+            if src.kind != "flat":
+                continue
+            info = self.infos[src.connector.type.name]
+            k = self.type_index[src.connector.type.name]
+            cases = " ".join(f"case {m}: return !k{k}_{m}_g(pv);" for m, spec in info.clauses.items()
+                             if spec.guard is not None)
+            if cases:
+                self.w(f"static int blocked{src.index}(uint32_t m, V pv[][MAXF]) "
+                       f"{{ switch (m) {{ {cases} default: return 0; }} }}")
+
+    # -- enabled ----------------------------------------------------------------------------------
+    def gen_enabled(self) -> None:
+        w = self.w
+        fl = self.flat
+        w("static int enabled(const V *s, uint32_t *isrc, uint32_t *imask) {")
+        w("    int n = 0;")
+        for fa in fl.atoms:
+            w(f"    const V m{fa.index} = s[{fa.offset}]; (void)m{fa.index};")
+            for d in fa.variables:
+                w(f"    const V a{fa.index}_{d.name} = s[{fa.slot(d.name)}]; (void)a{fa.index}_{d.name};")
+        for fa in fl.atoms:
+            self.gen_atom_enabled(fa)
+        for src in self.sources:
+            self.gen_source_enabled(src)
+        if self.prio is not None:
+            pr = self.prio
+            key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(pr.guards))) or "0"
+            w("    if (n) {")
+            w(f"        int key = {key};")
+            w(f"        if (PCYC[key]) fail({E_CYCLE}, -1);")
+            w("        uint64_t high = 0, blocked = 0;")
+            w("        for (int i = 0; i < n; i++) high |= HI(isrc[i], imask[i]);")
+            w("        if (high) {")
+            w("            for (int r = 0; r < NRULES; r++) if (PREACH[key][r] & high) blocked |= UINT64_C(1) << r;")
+            w("            if (blocked) {")
+            w("                int k = 0;")
+            w("                for (int i = 0; i < n; i++) if (!(LO(isrc[i], imask[i]) & blocked)) "
+              "{ isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
+            w("                n = k;")
+            w("            }")
+            w("        }")
+            w("    }")
+        w("    return n;")
+        w("}")
+
+    def gen_atom_enabled(self, fa: FlatAtom) -> None:
+        w = self.w
+        t = fa.type
+        sc = self.atom_scope(fa, in_enabled=True)
+        for name, pid in fa.ports.items():
+            ts = [tr for tr in t.transitions if tr.port == name]
+            if not ts:
+                w(f"    int e{pid} = 0;")
+            elif len(ts) == 1:
+                w(f"    int e{pid} = {self.enabled_expr(fa, ts[0], f'm{fa.index}', sc)};")
+            else:
+                w(f"    int e{pid};")
+                w("    {")
+                for k, tr in enumerate(ts):
+                    w(f"        int t{k} = {self.enabled_expr(fa, tr, f'm{fa.index}', sc)};")
+                w(f"        if ({' + '.join(f't{k}' for k in range(len(ts)))} > 1) fail({E_NONDET}, {pid});")
+                w(f"        e{pid} = {' || '.join(f't{k}' for k in range(len(ts)))};")
+                w("    }")
+        if t.priorities:
+            ap = self.engine.namespace[f"_aprio{fa.index}"]
+            order = ap.ports
+            guarded = sorted(ap.guard_bit, key=lambda r: ap.guard_bit[r])
+            guards = [condition(t.priorities[r].guard, sc) for r in guarded]
+            raw = " | ".join(f"((uint32_t)e{fa.ports[p]} << {i})" for i, p in enumerate(order))
+            act = " | ".join(f"(({g}) ? {1 << k} : 0)" for k, g in enumerate(guards)) or "0"
+            w("    {")
+            w(f"        uint32_t r = {raw};")
+            w("        if (r) {")
+            w(f"            int act = {act};")
+            w(f"            if (APX{fa.index}[act]) fail({E_CYCLE}, {fa.index});")
+            w("            uint32_t out = r;")
+            w(f"            for (int p = 0; p < {len(order)}; p++) if (r & APH{fa.index}[act][p]) out &= ~(1u << p);")
+            for i, p in enumerate(order):
+                w(f"            e{fa.ports[p]} = (out >> {i}) & 1;")
+            w("        }")
+            w("    }")
+
+    def gen_source_enabled(self, src) -> None:
+        w = self.w
+        fl = self.flat
+        if src.kind == "port":
+            w(f"    if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
+            return
+        info = self.infos[src.connector.type.name]
+        enabled = [f"e{p}" for p in src.leaves]
+        if src.kind == "rendezvous":
+            cond = " && ".join(enabled)
+            spec = info.clauses.get(info.all_params)
+            if spec is not None and spec.guard is not None:
+                cond += f" && {condition(spec.guard, self.inline_scope(src, info))}"
+            w(f"    if ({cond}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
+            return
+        nparams = len(src.leaves)
+        table = [defines.max_allowed(info.tree, em) for em in range(1 << nparams)]
+        w("    {")
+        w(f"        static const uint32_t MAXA[{1 << nparams}] = {{{', '.join(map(str, table))}}};")
+        w(f"        uint32_t em = {' | '.join(f'((uint32_t){e} << {i})' for i, e in enumerate(enabled))};")
+        guarded = {mask: spec for mask, spec in info.clauses.items() if spec.guard is not None}
+        if guarded:
+            w("        if (em) {")
+            w(f"            V pv[{nparams}][MAXF];")
+            for i, p in enumerate(src.leaves):
+                fp = fl.ports[p]
+                fa = fl.atoms[fp.atom]
+                for j, v in enumerate(fp.decl.data):
+                    w(f"            pv[{i}][{j}] = a{fa.index}_{v};")
+            w(f"            n = maximal_enabled(MAXA, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
+            w("        }")
+        elif defines.is_flat(info.tree):
+            w(f"        if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")
+        else:
+            w("        uint32_t k = MAXA[em];")
+            w(f"        if (k) {{ isrc[n] = {src.index}; imask[n] = k; n++; }}")
+        w("        (void)MAXA;")
+        w("    }")
+
+    def inline_scope(self, src, info) -> CScope:
+        sc = self.connector_scope(info, info.all_params, False, False)
+        for i, p in enumerate(info.type.params):
+            fp = self.flat.ports[src.leaves[i]]
+            fa = self.flat.atoms[fp.atom]
+            for f, v, ty in zip(fp.fields, fp.decl.data, fp.field_types):
+                sc.ports[(p.name, f)] = CName(f"a{fa.index}_{v}", c_type(ty, sc.where))
+        return sc
+
+
+def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = None, monitors=()) -> CModel:
+    """The C text of a state space's step and search (raises :class:`Unsupported` with the reason).
+
+    ``widths`` gives the field of some int slots (by position in the layout) wider than START_BITS;
+    ``monitors`` are ``(Monitor, statics)`` safety observers stepped with every interaction.
+    """
+    gen = CGen(space, choices, dict(widths or {}), monitors)
+    return gen.generate()

@@ -1,0 +1,287 @@
+"""The compiled step and search agree with the Python step: same successors, states, deadlocks, traces, errors."""
+from __future__ import annotations
+
+import os
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from runtime.bip2 import parse_text
+from runtime.engine.errors import EngineError
+from runtime.explore import StateSpace, explore
+from runtime.native import compiled as native
+from tests import enginekit, verifykit
+from tests.nativekit import agree, compiled, needs_cc
+
+pytestmark = needs_cc
+
+ENGINE_CASES = [
+    ("AtomPriorities", "System()"), ("AtomPriorities", "GuardedCycle()"), ("Broadcast", "System()"),
+    ("Chain", "System()"), ("Dining", "Table3()"), ("Errors", "Nondet()"), ("Errors", "Internal()"),
+    ("Errors", "OneSafe()"), ("Errors", "Loop()"), ("Hierarchy", "TwoSources()"), ("NestedAny", "Dangling()"),
+    ("Priorities", "Low()"), ("Priorities", "High()"), ("Priorities", "Star()"), ("Priorities", "Nested()"),
+    ("Priorities", "GuardedCycle()"),
+]
+VERIFY_CASES = [("Codel", "Main()"), ("Counters", "Pair()"), ("Dining", "Table2()"), ("Dining", "Table3()"),
+                ("Server", "Main()")]
+
+
+@pytest.mark.parametrize("name, root", ENGINE_CASES)
+def test_same_successors_on_engine_fixtures(name, root):
+    space = StateSpace(enginekit.package(name), root)
+    assert agree(space, compiled(space)) >= 1
+
+
+@pytest.mark.parametrize("name, root", VERIFY_CASES)
+@pytest.mark.parametrize("reduce", [True, False])
+def test_same_successors_on_verify_fixtures(name, root, reduce):
+    space = StateSpace(verifykit.package(name), root, reduce=reduce)
+    assert agree(space, compiled(space)) == len(space)
+
+
+def same_search(space_args: tuple, **kw):
+    python = StateSpace(*space_args, **kw)
+    ours = explore(python)
+    cs = compiled(StateSpace(*space_args, **kw))
+    theirs = cs.explore()
+    assert (theirs.states, theirs.transitions, theirs.depth, theirs.complete) == \
+        (ours.states, ours.transitions, ours.depth, ours.complete)
+    assert theirs.deadlocks == ours.deadlocks
+    for sid in ours.deadlocks:
+        assert [str(s) for s in cs.trace_to(sid)] == [str(s) for s in python.trace_to(sid)]
+    return ours, theirs
+
+
+@pytest.mark.parametrize("name, root", VERIFY_CASES)
+def test_same_search_on_verify_fixtures(name, root):
+    same_search((verifykit.package(name), root))
+
+
+def test_ndd_has_55680_states_and_no_deadlock():
+    pkg, root = verifykit.ndd_model()
+    cs = compiled(StateSpace(pkg, root))
+    result = cs.explore()
+    assert (result.states, result.complete, result.deadlocks) == (55_680, True, [])
+    assert result.transitions == 401_104
+
+
+def test_ndd_agrees_state_by_state_with_a_request_budget():
+    pkg, root = verifykit.ndd_model()
+    space = StateSpace(pkg, root, requests=1)
+    assert agree(space, compiled(space), limit=400) == 400
+
+
+def test_depth_first_and_limits_agree():
+    args = (verifykit.package("Dining"), "Table3()")
+    for kw in ({"dfs": True}, {"max_depth": 2}, {"dfs": True, "max_depth": 2}):
+        ours = explore(StateSpace(*args), **kw)
+        theirs = compiled(StateSpace(*args)).explore(**kw)
+        assert (theirs.states, theirs.transitions, theirs.stopped_by, theirs.deadlocks) == \
+            (ours.states, ours.transitions, ours.stopped_by, ours.deadlocks)
+    ours = explore(StateSpace(*args, max_states=5))
+    theirs = compiled(StateSpace(*args)).explore(max_states=5)
+    assert (theirs.states, theirs.transitions, theirs.stopped_by) == (ours.states, ours.transitions, "max-states")
+
+
+@pytest.mark.parametrize("root", ["Nondet()", "OneSafe()", "Loop()"])
+def test_model_errors_are_worded_by_the_engine_with_a_trace(root):
+    pkg = enginekit.package("Errors")
+    ours = explore(StateSpace(pkg, root))
+    theirs = compiled(StateSpace(pkg, root)).explore()
+    assert theirs.error is not None and ours.error is not None
+    assert theirs.error.message == ours.error.message
+    assert theirs.error.state == ours.error.state
+    assert [str(s) for s in theirs.error.trace] == [str(s) for s in ours.error.trace]
+
+
+DIVISION = """package Div
+  port type Port()
+  atom type A()
+    data int x
+    port Port dec()
+    place s
+    initial to s do { x = 2; }
+    on dec from s to s do { x = 6 / (x - 1); }
+  end
+  compound type Main()
+    component A a()
+  end
+end
+"""
+
+
+def test_division_by_zero_is_reported_at_its_state():
+    ours = explore(verifykit.text_space(DIVISION))
+    theirs = compiled(verifykit.text_space(DIVISION)).explore()
+    assert "division by zero" in ours.error.message
+    assert theirs.error.message == ours.error.message and theirs.error.state == ours.error.state == 2
+    assert [s.label for s in theirs.error.trace] == ["a.dec", "a.dec"]
+
+
+BIG = """package Big
+  port type Port()
+  atom type A()
+    data int x
+    port Port grow()
+    place s
+    initial to s do { x = 1; }
+    on grow from s to s provided (x > 0) do { x = x * 1000; }
+  end
+  compound type Main()
+    component A a()
+  end
+end
+"""
+
+
+def test_an_int_past_64_bits_gives_way_to_the_python_step():
+    with pytest.raises(native.Diverged):
+        compiled(verifykit.text_space(BIG)).explore()
+
+
+def test_without_a_compiler_the_note_says_so(monkeypatch):
+    monkeypatch.setenv("PATH", "")
+    monkeypatch.delenv("CC", raising=False)
+    cs, note = native.compile_space(verifykit.space("Dining", "Table2()"))
+    assert cs is None and note.startswith("no C compiler on PATH")
+
+
+def test_unsupported_models_say_why():
+    cs, note = native.compile_space(verifykit.space("Mix", "Main()"))
+    assert cs is None and "nested connectors are explored in Python only" in note
+
+
+def test_the_library_is_cached_by_model(tmp_path, monkeypatch):
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path))
+    compiled(verifykit.space("Dining", "Table2()"))
+    compiled(verifykit.space("Dining", "Table2()"))
+    compiled(verifykit.space("Dining", "Table3()"))
+    assert len(os.listdir(tmp_path)) == 2
+
+
+# -- random models ---------------------------------------------------------------------------------
+
+@st.composite
+def models(draw) -> str:
+    """Small random models: atoms with guarded, counting transitions and priorities; rendezvous, broadcasts."""
+    natoms = draw(st.integers(2, 3))
+    atoms, comps = [], []
+    for a in range(natoms):
+        nplaces = draw(st.integers(1, 3))
+        places = [f"P{k}" for k in range(nplaces)]
+        lines = ["    export data int x", "    export port IntPort p0(x), p1(x)", "    port Port q()",
+                 f"    place {', '.join(places)}", f"    initial to P0 do {{ x = {draw(st.integers(0, 2))}; }}"]
+        for port in ("p0", "p1", "q", None):
+            for _ in range(draw(st.integers(0, 2 if port else 1))):
+                src, dst = draw(st.sampled_from(places)), draw(st.sampled_from(places))
+                guard = draw(st.sampled_from(["", " provided (x < 2)", " provided (x % 2 == 0)", " provided (x != 1)"]))
+                if port is None:
+                    if src == dst or guard == "":
+                        continue  # an unguarded internal self-loop is a livelock in every state
+                    guard = " provided (x == 0)"
+                act = draw(st.sampled_from(["", " do { x = (x + 1) % 3; }", " do { x = 2 - x; }",
+                                            " do { if (x > 0) then x = x - 1; fi }"]))
+                head = f"on {port}" if port else "internal"
+                lines.append(f"    {head} from {src} to {dst}{guard}{act}")
+        if draw(st.booleans()):
+            lines.append("    priority r p0 < p1 provided (x > 0)")
+        atoms.append(f"  atom type A{a}()\n" + "\n".join(lines) + "\n  end")
+        comps.append(f"    component A{a} a{a}()")
+    conns = []
+    for c in range(draw(st.integers(1, 3))):
+        i, j = draw(st.lists(st.integers(0, natoms - 1), min_size=2, max_size=2, unique=True))
+        pi, pj = draw(st.sampled_from(["p0", "p1"])), draw(st.sampled_from(["p0", "p1"]))
+        kind = draw(st.sampled_from(["Sync", "Bcast"]))
+        conns.append(f"    connector {kind} c{c}(a{i}.{pi}, a{j}.{pj})")
+    prios = []
+    if len(conns) > 1 and draw(st.booleans()):
+        prios.append("    priority pr c0:* < c1:* provided (a0.x == 1)")
+    return f"""package Random
+  port type Port()
+  port type IntPort(int v)
+{chr(10).join(atoms)}
+  connector type Sync(IntPort a, IntPort b)
+    define a b
+    on a b provided (a.v + b.v < 4) down {{ a.v = b.v; }}
+  end
+  connector type Bcast(IntPort s, IntPort r)
+    define s' r
+    on s r down {{ r.v = s.v; }}
+  end
+  compound type Main()
+{chr(10).join(comps)}
+{chr(10).join(conns)}
+{chr(10).join(prios)}
+  end
+end
+"""
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(models())
+def test_random_models_have_the_same_successors(text):
+    try:
+        space = StateSpace(parse_text(text, "Random.bip"), "Main()")
+    except EngineError:
+        return  # refused before any step (a priority cycle, ...): nothing to compare
+    agree(space, compiled(space), limit=500)
+
+
+WIDE = """package Wide
+  port type Port()
+  atom type A()
+    data int x
+    port Port grow()
+    place s
+    initial to s do { x = 0; }
+    on grow from s to s do { x = (x + 7) % 300 - 100; }
+  end
+  compound type Main()
+    component A a()
+  end
+end
+"""
+
+
+def test_ints_outgrowing_their_field_are_widened():
+    ours = explore(verifykit.text_space(WIDE))
+    cs = compiled(verifykit.text_space(WIDE))
+    theirs = cs.explore()
+    assert (theirs.states, theirs.transitions, theirs.deadlocks) == (ours.states, ours.transitions, [])
+    assert ours.states == 102 and cs.widths == {1: 16}  # -100..199: 4 bits, then 8, then 16
+
+
+def verdicts(pkg, root, items):
+    from runtime.native.properties import compiled_check
+    from runtime.props import check
+
+    observed = set().union(*(i.observed for i in items))
+    out = []
+    for item in items:
+        ours = check(StateSpace(pkg, root, observed=observed), item)
+        theirs = compiled_check(StateSpace(pkg, root, observed=observed), item)
+        out.append((item.name, ours, theirs))
+    return out
+
+
+def test_safety_observers_give_the_python_checkers_verdicts_and_trace_lengths():
+    from runtime.engine import flatten
+    from runtime.props import read_properties, read_property_file
+
+    cases = []
+    for path in (str(verifykit.NDD), str(verifykit.NDD_NO_AFTER)):
+        pkg, root = verifykit.ndd_model(path)
+        items, _ = read_property_file(verifykit.FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
+        cases += verdicts(pkg, root, items)
+    pkg = verifykit.package("Server")
+    items, _ = read_properties("a: invariant S.served <= 1; b: invariant not S @ DONE; c: deadlock free", "p.mcl",
+                               flatten(pkg, "Main()"))
+    cases += verdicts(pkg, "Main()", items)
+    checked = [(name, ours, theirs) for name, ours, theirs in cases if theirs is not None]
+    assert len(checked) == 7  # the paper's property is not an observer shape: the Python checker takes it
+    for name, ours, theirs in checked:
+        assert theirs.holds == ours.holds, name
+        assert [str(s) for s in theirs.trace] == [str(s) for s in ours.trace], name
+    assert sorted(name for name, _, theirs in checked if theirs.holds is False) == \
+        ["b", "goto_after_setspeed", "goto_after_setspeed_mcl"]

@@ -1,0 +1,127 @@
+"""``genom2bip verify --engine compiled|python``: the same report, notes when falling back, progress and Ctrl-C."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from genom2bip.cli import main
+from tests.nativekit import needs_cc
+from tests.verifykit import FIXTURES, ROOT
+
+DINING = str(FIXTURES / "Dining.bip")
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out.splitlines(), err
+
+
+def without_summary(lines: list[str]) -> list[str]:
+    """The report without the line of figures (time, rate, bytes), which differ between engines."""
+    return [line for line in lines if not line.startswith("explored: ")]
+
+
+@needs_cc
+@pytest.mark.parametrize("path, root", [(DINING, "Table3()"), (str(FIXTURES / "Codel.bip"), "Main()"),
+                                        (str(FIXTURES / "Counters.bip"), "Pair()")])
+def test_compiled_and_python_print_the_same_report(capsys, path, root):
+    code_c, out_c, _ = run(capsys, "verify", path, "--root", root, "--engine", "compiled")
+    code_p, out_p, _ = run(capsys, "verify", path, "--root", root, "--engine", "python")
+    assert code_c == code_p
+    assert without_summary(out_c) == without_summary(out_p)
+    summary = next(line for line in out_c if line.startswith("explored: "))
+    assert summary.split(";")[0] == next(line for line in out_p if line.startswith("explored: ")).split(";")[0]
+    assert not any(line.startswith("note:") for line in out_c)
+
+
+def test_without_a_compiler_one_note_and_the_same_answers(capsys, monkeypatch):
+    _, expected, _ = run(capsys, "verify", DINING, "--root", "Table2()", "--engine", "python")
+    monkeypatch.setenv("PATH", "")
+    monkeypatch.delenv("CC", raising=False)
+    code, out, _ = run(capsys, "verify", DINING, "--root", "Table2()")
+    assert code == 4
+    assert out[1] == "note: no C compiler on PATH (gcc or $CC): exploring with the Python step"
+    assert without_summary(out[:1] + out[2:]) == without_summary(expected)
+
+
+@needs_cc
+def test_a_model_the_c_step_does_not_take_is_explored_in_python(capsys):
+    code, out, _ = run(capsys, "verify", str(FIXTURES / "Mix.bip"))
+    assert out[1].startswith("note: compiled exploration does not take this model (connector kick: nested")
+    assert out[2].startswith("explored: ") and code in (0, 4)
+
+
+@needs_cc
+def test_lts_exports_say_they_use_the_python_step(capsys, tmp_path):
+    _, out, _ = run(capsys, "verify", DINING, "--root", "Table2()", "--aut", str(tmp_path / "d.aut"))
+    assert "note: LTS exports need every successor list: exploring with the Python step" in out
+    assert (tmp_path / "d.aut").read_text().startswith("des (0, 8, 6)")
+
+
+@needs_cc
+def test_safety_properties_run_compiled_and_the_others_say_they_run_in_python(capsys, tmp_path):
+    props = tmp_path / "p.mcl"
+    props.write_text('ok: "S.req" precedes "S.work";\nbad: never "S.reply";\nreach: <true* . "S.reply"> true\n')
+    code_c, out_c, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props))
+    code_p, out_p, _ = run(capsys, "verify", str(FIXTURES / "Server.bip"), "--property", str(props),
+                           "--engine", "python")
+    assert code_c == code_p == 4
+    assert out_c[1] == "property ok: \"S.req\" precedes \"S.work\""
+    assert out_c[3].startswith("  holds (compiled observer search, ")
+    assert any(line.startswith("  violated (compiled observer search") for line in out_c)
+    assert "note: property reach is checked with the Python step" in " ".join(out_c)
+    traces = [line for line in out_c if line.startswith("       ")]
+    assert traces == [line for line in out_p if line.startswith("       ")]
+
+
+def test_max_memory_must_be_positive(capsys):
+    code, _, err = run(capsys, "verify", DINING, "--max-memory", "-1")
+    assert code == 2 and "--max-memory must be >= 0" in err
+
+
+def big_dining(tmp_path: Path, n: int = 22) -> str:
+    sys.path.insert(0, str(ROOT / "bench"))
+    from verify_bench import dining
+
+    path = tmp_path / f"Dining{n}.bip"
+    path.write_text(dining(n), encoding="utf-8")
+    return str(path)
+
+
+@pytest.mark.parametrize("engine", [pytest.param("compiled", marks=needs_cc), "python"])
+def test_ctrl_c_prints_a_summary_of_what_was_explored(tmp_path, engine):
+    model = big_dining(tmp_path)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "verify", model, "--engine", engine, "--progress",
+                             "--max-memory", "300"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env, cwd=tmp_path)
+    seen: list[str] = []
+    reader = threading.Thread(target=lambda: seen.extend(iter(lambda: proc.stderr.read(1), "")), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 120
+        while "states/s" not in "".join(seen) and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.2)
+        proc.send_signal(signal.SIGINT)
+        out = proc.stdout.read()
+        proc.wait(timeout=60)
+        reader.join(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    err = "".join(seen)
+    assert proc.returncode == 5, err
+    assert "states/s" in err and "depth" in err  # the progress line appeared after a second
+    if engine == "compiled":
+        assert "until complete or 0.3 GB (--max-memory); Ctrl-C stops and reports what was explored" in err
+    summary = next(line for line in out.splitlines() if line.startswith("explored: "))
+    assert "stopped at interrupted" in summary
+    assert "deadlocks: none reachable in the explored part" in out or "deadlocks:" in out
