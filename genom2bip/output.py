@@ -12,6 +12,7 @@ generator did not write.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import re
@@ -19,6 +20,9 @@ import stat
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, TextIO, TypeVar
+
+T = TypeVar("T")
 
 MARKER = ".genom2bip"
 _HEADER = ("genom2bip output: `genom2bip ... -o DIR` replaces the files listed below when it runs again\n"
@@ -77,6 +81,44 @@ def _unchanged(path: Path, digest: str) -> bool:
 
 def _is_within(inner: Path, outer: Path) -> bool:
     return inner == outer or outer in inner.parents
+
+
+def check_files_are_not_inputs(outputs: list[Path], inputs: list[Path]) -> None:
+    """Refuse an output file that is one of the inputs, or a file of an input directory (``--aut NDD.gen``)."""
+    files = [f for item in inputs if item.is_dir() for f in sorted(item.iterdir()) if f.is_file()]
+    read = {item.resolve(): item for item in [*inputs, *files]}
+    for out in outputs:
+        if out.resolve() in read:
+            raise OutputError(f"refusing to write {out}: it is the input {read[out.resolve()]}")
+
+
+def write_file(path: Path, write: Callable[[TextIO], T]) -> T:
+    """Write ``path`` atomically: ``write`` fills a temporary file beside it, renamed over it once complete.
+
+    An error or Ctrl-C in the middle leaves the previous file as it was, never a truncated one.
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", errors="backslashreplace", newline="\n") as f:
+            result = write(f)
+        os.chmod(tmp, _mode_for(path))
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return result
+
+
+def _mode_for(path: Path) -> int:
+    """The permissions of the file being replaced, else what the umask gives a new file."""
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def check_inputs(target: Path, inputs: list[Path]) -> None:
