@@ -170,10 +170,10 @@ def _own_files(directory: Path) -> dict[str, str] | None:
 
 def _remove_own(directory: Path, recorded: dict[str, str]) -> bool:
     """Delete the unchanged files of ``directory`` that ``recorded`` lists, then the directory if it is empty."""
-    for name, digest in recorded.items():
-        if _unchanged(directory / name, digest):
-            (directory / name).unlink()
     try:
+        for name, digest in recorded.items():
+            if _unchanged(directory / name, digest):
+                (directory / name).unlink()
         directory.rmdir()
     except OSError:
         return False

@@ -405,3 +405,25 @@ def test_a_pipe_given_as_a_description_is_refused_without_reading_it(tmp_path):
         result = subprocess.run([sys.executable, "-m", "genom2bip", *map(str, argv)], capture_output=True, text=True,
                                 timeout=60, cwd=ROOT)
         assert (result.returncode, result.stdout) == (1, "") and message in result.stderr
+
+
+def test_when_the_previous_output_cannot_be_cleared_its_files_stay_and_it_is_said(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    (out / "counter" / "notes.txt").write_text("my notes")
+    real = Path.rename
+
+    def read_only(self, target):  # as in a directory the user may not write: its entries cannot move
+        if ".old." in self.parent.name:
+            raise PermissionError(13, "Permission denied")
+        return real(self, target)
+
+    monkeypatch.setattr(Path, "rename", read_only)
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    [old] = [p for p in out.iterdir() if p.name.startswith(".counter.old.")]
+    assert f"wrote {out}/counter/, but could not carry everything over from the previous output: {old}/ keeps" in err
+    assert (old / "notes.txt").read_text() == "my notes"
+    assert (out / "counter" / "model.py").is_file()
