@@ -278,6 +278,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (0 ok, 1 errors in the input, 2 usage, 3 internal error)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    for stream in (sys.stdout, sys.stderr):  # a file name the terminal cannot show is escaped, not a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     parser = build_parser()
     if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
         if not Path(argv[0]).exists():
