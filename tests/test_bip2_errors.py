@@ -245,3 +245,12 @@ def test_validate_names_the_declaration_of_a_model_built_in_code():
                                             transitions=[Transition(None, ["S"], ["X"], Var("nope"))])])
     messages = [d.message for d in validate(pkg)]
     assert messages == ["unknown place 'X' in atom type A", "unknown variable 'nope' in atom type A"]
+
+
+def test_an_expression_nested_without_bound_is_located_not_an_internal_error():
+    chain = "+".join(["1"] * 3000)
+    text = ("package P\n  port type Port()\n  atom type A()\n    data int x\n    port Port p()\n    place S\n"
+            f"    initial to S do {{ x = {chain}; }}\n    on p from S to S\n  end\nend\n")
+    [d] = errors(text)
+    assert (d.span.line, d.message) == (7, "nested more than 200 operators deep here")
+    assert parse_text(text.replace(chain, "+".join(["1"] * 150)), "ok.bip").atom_types[0].name == "A"

@@ -16,6 +16,8 @@ from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache, Span
+from runtime.nesting import message as nesting_message
+from runtime.nesting import too_deep
 
 GRAMMAR = Path(__file__).with_name("mcl.lark")
 
@@ -231,31 +233,15 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
         else:
             diag = syntax_error(file, err)
         raise DiagnosticError([diag], sources) from None
-    deep = _too_deep(tree)
+    deep = too_deep(tree)
     if deep is not None:
-        raise DiagnosticError([Diagnostic(_span(file, deep.meta), f"the formula is nested more than {MAX_DEPTH} "
-                                          f"operators deep here",
+        raise DiagnosticError([Diagnostic(_span(file, deep.meta), f"the formula is {nesting_message()}",
                                           hint="split it into several properties")], sources)
     props = _Build(file).transform(tree)
     out = []
     for k, p in enumerate(props, 1):
         out.append(RawProperty(p.name or f"property {k}", p.body, p.span, _slice(text, p.body.span)))
     return out
-
-
-#: How deep a formula's operators may nest: the reading, typing and solving of formulas recurse on it.
-MAX_DEPTH = 200
-
-
-def _too_deep(tree: Tree) -> Tree | None:
-    """The first node nested deeper than MAX_DEPTH, found without recursion, or None."""
-    stack = [(tree, 0)]
-    while stack:
-        node, depth = stack.pop()
-        if depth > MAX_DEPTH:
-            return node
-        stack.extend((child, depth + 1) for child in node.children if isinstance(child, Tree))
-    return None
 
 
 def _unclosed_comment(text: str) -> tuple[int, int] | None:
