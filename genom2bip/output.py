@@ -143,7 +143,7 @@ def kept_entries(target: Path, files: dict[str, str]) -> list[str]:
         raise OutputError(f"refusing to write {target}: it exists and is not a directory")
     recorded = read_marker(target)
     if recorded is None:
-        raise OutputError(f"refusing to replace {target}/: genom2bip did not write it (no {MARKER} marker); "
+        raise OutputError(f"refusing to replace {target}/: genom2bip did not write it (no valid {MARKER} marker); "
                           f"move it away or choose another -o DIR")
     changed = sorted(name for name, digest in recorded.items()
                      if os.path.lexists(target / name) and not _unchanged(target / name, digest))
@@ -206,7 +206,7 @@ def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) 
     target = out / name
     data = {file_name: encode(text) for file_name, text in files.items()}
     if os.path.lexists(out) and not out.is_dir():
-        raise OutputError(f"cannot write {out}: it is a file, not a directory")
+        raise OutputError(f"cannot write {out}: it exists and is not a directory")
     check_inputs(target, inputs)
     kept = kept_entries(target, files)
     out.mkdir(parents=True, exist_ok=True)

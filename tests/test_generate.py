@@ -225,7 +225,7 @@ def test_a_directory_genom2bip_did_not_write_is_not_replaced(tmp_path, capsys):
     before = _snapshot(tmp_path)
     assert main([str(COUNTER), "-o", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err
-    assert f"refusing to replace {mine}/: genom2bip did not write it (no .genom2bip marker)" in err
+    assert f"refusing to replace {mine}/: genom2bip did not write it (no valid .genom2bip marker)" in err
     assert _snapshot(tmp_path) == before
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["counter"]
 
@@ -427,3 +427,27 @@ def test_when_the_previous_output_cannot_be_cleared_its_files_stay_and_it_is_sai
     assert f"wrote {out}/counter/, but could not carry everything over from the previous output: {old}/ keeps" in err
     assert (old / "notes.txt").read_text() == "my notes"
     assert (out / "counter" / "model.py").is_file()
+
+
+def test_a_marker_naming_files_outside_its_directory_is_not_trusted(tmp_path, capsys):
+    import hashlib
+
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    victim = out / "victim.txt"
+    victim.write_text("keep me")
+    marker = out / "counter" / ".genom2bip"
+    digest = hashlib.sha256(victim.read_bytes()).hexdigest()
+    marker.write_text(marker.read_text() + f"{digest}  ../victim.txt\n")
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert "genom2bip did not write it (no valid .genom2bip marker)" in capsys.readouterr().err
+    assert victim.read_text() == "keep me"
+
+
+def test_a_dangling_link_as_the_output_directory_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.symlink_to(tmp_path / "nowhere")
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert f"genom2bip: error: cannot write {out}: it exists and is not a directory" in capsys.readouterr().err
+    assert not (tmp_path / "nowhere").exists()
