@@ -196,6 +196,15 @@ def test_golden_controllers_run_without_model_error(name):
 COUNTER = ROOT / "tests/fixtures/genom3/counter.gen"
 
 
+@pytest.fixture
+def counter_out(tmp_path, capsys) -> Path:
+    """``tmp_path/out``, holding ``counter/`` as generated from counter.gen (console output cleared)."""
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    capsys.readouterr()
+    return out
+
+
 def test_output_that_is_an_input_directory_is_refused(tmp_path, capsys):
     import shutil
 
@@ -230,9 +239,8 @@ def test_a_directory_genom2bip_did_not_write_is_not_replaced(tmp_path, capsys):
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["counter"]
 
 
-def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_path, capsys, counter_out):
+    out = counter_out
     target = out / "counter"
     marker = (target / ".genom2bip").read_text()
     assert "counter.bip" in marker and "model.py" in marker
@@ -250,9 +258,8 @@ def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_p
     assert sorted(p.name for p in out.iterdir()) == ["counter"], "staging or old directories left behind"
 
 
-def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys, counter_out):
+    out = counter_out
     with open(out / "counter" / "model.py", "a") as f:
         f.write("# my fix\n")
     before = _snapshot(tmp_path)
@@ -263,9 +270,8 @@ def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys):
     assert _snapshot(tmp_path) == before
 
 
-def test_a_users_file_named_like_a_new_generated_file_is_not_overwritten(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_a_users_file_named_like_a_new_generated_file_is_not_overwritten(tmp_path, capsys, counter_out):
+    out = counter_out
     marker = out / "counter" / ".genom2bip"
     marker.write_text("".join(line + "\n" for line in marker.read_text().splitlines() if "interface.py" not in line))
     (out / "counter" / "interface.py").write_text("mine")
@@ -288,9 +294,8 @@ def test_a_symbolic_link_in_place_of_the_output_is_refused(tmp_path, capsys):
     assert sorted(p.name for p in elsewhere.iterdir()) == ["data"]
 
 
-def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched(tmp_path, capsys, counter_out):
+    out = counter_out
     victim = tmp_path / "victim.txt"
     victim.write_text("not yours")
     (out / "counter" / "model.py").unlink()
@@ -301,9 +306,8 @@ def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched
     assert victim.read_text() == "not yours"
 
 
-def test_what_a_killed_run_left_is_cleared_only_when_it_is_all_generated(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_what_a_killed_run_left_is_cleared_only_when_it_is_all_generated(tmp_path, capsys, counter_out):
+    out = counter_out
     # A run killed after writing its staging directory, and one killed while moving a user's file back.
     import shutil
 
@@ -407,9 +411,8 @@ def test_a_pipe_given_as_a_description_is_refused_without_reading_it(tmp_path):
         assert (result.returncode, result.stdout) == (1, "") and message in result.stderr
 
 
-def test_when_the_previous_output_cannot_be_cleared_its_files_stay_and_it_is_said(tmp_path, capsys, monkeypatch):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_when_the_previous_output_cannot_be_cleared_its_files_stay_and_it_is_said(capsys, monkeypatch, counter_out):
+    out = counter_out
     (out / "counter" / "notes.txt").write_text("my notes")
     real = Path.rename
 
@@ -429,11 +432,10 @@ def test_when_the_previous_output_cannot_be_cleared_its_files_stay_and_it_is_sai
     assert (out / "counter" / "model.py").is_file()
 
 
-def test_a_marker_naming_files_outside_its_directory_is_not_trusted(tmp_path, capsys):
+def test_a_marker_naming_files_outside_its_directory_is_not_trusted(capsys, counter_out):
     import hashlib
 
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+    out = counter_out
     victim = out / "victim.txt"
     victim.write_text("keep me")
     marker = out / "counter" / ".genom2bip"
