@@ -23,7 +23,7 @@ def test_an_export_onto_an_input_is_refused(tmp_path, capsys, option):
 
 
 def test_a_failing_export_keeps_the_previous_file_and_leaves_no_temporary(tmp_path, capsys, monkeypatch):
-    import runtime.export.lts as lts
+    from runtime.export import lts
 
     aut = tmp_path / "model.aut"
     aut.write_text("previous LTS\n")
