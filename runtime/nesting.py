@@ -23,6 +23,3 @@ def too_deep(tree: Tree, limit: int = MAX_DEPTH) -> Tree | None:
         stack.extend((child, depth + 1) for child in node.children if isinstance(child, Tree))
     return None
 
-
-def message(limit: int = MAX_DEPTH) -> str:
-    return f"nested more than {limit} operators deep here"

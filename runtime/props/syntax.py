@@ -13,16 +13,10 @@ from pathlib import Path
 from typing import Any
 
 from lark import Lark, Token, Transformer, Tree, v_args
-from lark.exceptions import (
-    UnexpectedCharacters,
-    UnexpectedEOF,
-    UnexpectedInput,
-    UnexpectedToken,
-)
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache, Span
-from runtime.nesting import message as nesting_message
-from runtime.nesting import too_deep
+from runtime.nesting import MAX_DEPTH, too_deep
 
 GRAMMAR = Path(__file__).with_name("mcl.lark")
 
@@ -240,7 +234,7 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
         raise DiagnosticError([diag], sources) from None
     deep = too_deep(tree)
     if deep is not None:
-        raise DiagnosticError([Diagnostic(_span(file, deep.meta), f"the formula is {nesting_message()}",
+        raise DiagnosticError([Diagnostic(_span(file, deep.meta), f"the formula is nested more than {MAX_DEPTH} operators deep here",
                                           hint="split it into several properties")], sources)
     props = _Build(file).transform(tree)
     out = []
