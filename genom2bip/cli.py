@@ -249,8 +249,9 @@ def verb_generate(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "
           f"{len(result.package.atom_types)} atom types, {len(result.package.connector_types)} connector types")
-    if result.kept:
-        print(f"kept in {result.directory}/, not written by genom2bip: {', '.join(result.kept)}")
+    kept = [name for name in result.kept if name != "__pycache__"]  # Python's cache of the package: not news
+    if kept:
+        print(f"kept in {result.directory}/, not written by genom2bip: {', '.join(kept)}")
     for path in result.leftovers:
         print(f"genom2bip: warning: {path}/ was left by an interrupted run and holds files genom2bip did not "
               f"write; it is kept", file=sys.stderr)

@@ -250,7 +250,7 @@ def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_p
     (target / "model.py").unlink()  # a generated file deleted by hand comes back
     capsys.readouterr()
     assert main([str(COUNTER), "-o", str(out)]) == 0
-    assert "kept in" in capsys.readouterr().out
+    assert f"kept in {target}/, not written by genom2bip: notes.txt\n" in capsys.readouterr().out
     assert (target / "notes.txt").read_text() == "my notes"
     assert (target / "__pycache__" / "model.cpython.pyc").read_bytes() == b"cache"
     assert (target / "model.py").is_file()
