@@ -260,8 +260,9 @@ def verb_generate(args: argparse.Namespace) -> int:
     warn_untimed(result.package)
     print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "
           f"{len(result.package.atom_types)} atom types, {len(result.package.connector_types)} connector types")
-    if result.kept:
-        print(f"kept in {result.directory}/, not written by genom2bip: {', '.join(result.kept)}")
+    kept = [name for name in result.kept if name != "__pycache__"]  # Python's cache of the package: not news
+    if kept:
+        print(f"kept in {result.directory}/, not written by genom2bip: {', '.join(kept)}")
     for path in result.leftovers:
         print(f"genom2bip: warning: {path}/ was left by an interrupted run and holds files genom2bip did not "
               f"write; it is kept", file=sys.stderr)
@@ -293,6 +294,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     show_traceback = "--traceback" in argv or os.environ.get("GENOM2BIP_TRACEBACK", "") not in ("", "0")
     argv = [a for a in argv if a != "--traceback"]
+    for stream in (sys.stdout, sys.stderr):  # a file name the terminal cannot show is escaped, not a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     parser = build_parser()
     if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
         if not Path(argv[0]).exists():

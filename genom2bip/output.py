@@ -12,13 +12,18 @@ generator did not write.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import re
 import stat
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO, TypeVar
+
+T = TypeVar("T")
 
 MARKER = ".genom2bip"
 _HEADER = ("genom2bip output: `genom2bip ... -o DIR` replaces the files listed below when it runs again\n"
@@ -79,6 +84,44 @@ def _is_within(inner: Path, outer: Path) -> bool:
     return inner == outer or outer in inner.parents
 
 
+def check_files_are_not_inputs(outputs: list[Path], inputs: list[Path]) -> None:
+    """Refuse an output file that is one of the inputs, or a file of an input directory (``--aut NDD.gen``)."""
+    files = [f for item in inputs if item.is_dir() for f in sorted(item.iterdir()) if f.is_file()]
+    read = {item.resolve(): item for item in [*inputs, *files]}
+    for out in outputs:
+        if out.resolve() in read:
+            raise OutputError(f"refusing to write {out}: it is the input {read[out.resolve()]}")
+
+
+def write_file(path: Path, write: Callable[[TextIO], T]) -> T:
+    """Write ``path`` atomically: ``write`` fills a temporary file beside it, renamed over it once complete.
+
+    An error or Ctrl-C in the middle leaves the previous file as it was, never a truncated one.
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", errors="backslashreplace", newline="\n") as f:
+            result = write(f)
+        os.chmod(tmp, _mode_for(path))
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return result
+
+
+def _mode_for(path: Path) -> int:
+    """The permissions of the file being replaced, else what the umask gives a new file."""
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 def check_inputs(target: Path, inputs: list[Path]) -> None:
     """Refuse an output directory that is, or contains, one of the inputs."""
     where = target.resolve()
@@ -101,7 +144,7 @@ def kept_entries(target: Path, files: dict[str, str]) -> list[str]:
         raise OutputError(f"refusing to write {target}: it exists and is not a directory")
     recorded = read_marker(target)
     if recorded is None:
-        raise OutputError(f"refusing to replace {target}/: genom2bip did not write it (no {MARKER} marker); "
+        raise OutputError(f"refusing to replace {target}/: genom2bip did not write it (no valid {MARKER} marker); "
                           f"move it away or choose another -o DIR")
     changed = sorted(name for name, digest in recorded.items()
                      if os.path.lexists(target / name) and not _unchanged(target / name, digest))
@@ -128,10 +171,10 @@ def _own_files(directory: Path) -> dict[str, str] | None:
 
 def _remove_own(directory: Path, recorded: dict[str, str]) -> bool:
     """Delete the unchanged files of ``directory`` that ``recorded`` lists, then the directory if it is empty."""
-    for name, digest in recorded.items():
-        if _unchanged(directory / name, digest):
-            (directory / name).unlink()
     try:
+        for name, digest in recorded.items():
+            if _unchanged(directory / name, digest):
+                (directory / name).unlink()
         directory.rmdir()
     except OSError:
         return False
@@ -164,7 +207,7 @@ def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) 
     target = out / name
     data = {file_name: encode(text) for file_name, text in files.items()}
     if os.path.lexists(out) and not out.is_dir():
-        raise OutputError(f"cannot write {out}: it is a file, not a directory")
+        raise OutputError(f"cannot write {out}: it exists and is not a directory")
     check_inputs(target, inputs)
     kept = kept_entries(target, files)
     out.mkdir(parents=True, exist_ok=True)

@@ -266,6 +266,23 @@ def _suggest(word: str, choices: list[str]) -> str | None:
     return f"did you mean '{close[0]}'?" if close else (f"known: {', '.join(choices)}" if choices else None)
 
 
+#: A rule file nests three levels (rules, a rule, a list of services); reading deeper would recurse without bound.
+MAX_NESTING = 50
+
+
+def _too_deep(text: str):
+    """The YAML mark where collections nest deeper than MAX_NESTING (read as events, without recursion), or None."""
+    depth = 0
+    for event in yaml.parse(text):
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_NESTING:
+                return event.start_mark
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
+    return None
+
+
 def load_rules(path: Path, description: ir.Description, reporter: Reporter) -> list[Rule]:
     """Read and check a rule file against the description; problems go to ``reporter``."""
     ok, root = compose_file(path, reporter, "rule file")
@@ -281,6 +298,11 @@ def compose_file(path: Path, reporter: Reporter, what: str) -> tuple[bool, yaml.
         return False, None
     reporter.sources.add(str(path), text)
     try:
+        deep = _too_deep(text)
+        if deep is not None:
+            reporter.error(Span(str(path), deep.line + 1, deep.column + 1),
+                           f"nested more than {MAX_NESTING} levels deep: not a {what}")
+            return False, None
         return True, yaml.compose(text)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark

@@ -158,6 +158,14 @@ def _check_options(args) -> None:
     if args.engine == "spin" and (args.dfs or args.max_depth is not None or args.aut or args.dot):
         error("--dfs, --max-depth, --aut and --dot belong to --engine explore")
         raise Failure(EXIT_USAGE)
+    from genom2bip.output import OutputError, check_files_are_not_inputs
+
+    try:  # an export never overwrites what verify reads
+        check_files_are_not_inputs([Path(p) for p in (args.aut, args.dot, args.promela) if p],
+                                   [Path(p) for p in (*args.paths, *args.property, args.rules) if p])
+    except OutputError as exc:
+        error(str(exc))
+        raise Failure(EXIT_ERRORS) from None
 
 
 # --------------------------------------------------------------------------- the verb
@@ -233,6 +241,7 @@ def _observer_kinds(args) -> set[str]:
 
 
 def _write_promela(space, properties, path: str) -> int:
+    from genom2bip.output import write_file
     from runtime.export.interactions import all_interactions
     from runtime.export.monitors import build_monitor, spin_shape
     from runtime.export.promela import PromelaError, write_promela
@@ -244,7 +253,7 @@ def _write_promela(space, properties, path: str) -> int:
             if spin_shape(p) == "observer":
                 monitors.append(build_monitor(p, statics, f"p{k}")[0])
         text = write_promela(space, monitors)
-        Path(path).write_text(text, encoding="utf-8")
+        write_file(Path(path), lambda f: f.write(text))
     except PromelaError as exc:
         error(f"cannot write Promela: {exc}")
         return EXIT_ERRORS
@@ -354,14 +363,14 @@ def _trace_picture(args, engine, steps, ending: list[str]) -> None:
 
 
 def _export_lts(space, args) -> int:
+    from genom2bip.output import write_file
     from runtime.export.lts import write_aut, write_dot
 
     for path, writer, what in ((args.aut, write_aut, "Aldebaran LTS"), (args.dot, write_dot, "DOT graph")):
         if not path:
             continue
         try:
-            with open(path, "w", encoding="utf-8") as f:
-                states, transitions = writer(space, f)
+            states, transitions = write_file(Path(path), lambda f, writer=writer: writer(space, f))
         except OSError as exc:
             error(f"cannot write {path}: {exc.strerror or exc}")
             return EXIT_ERRORS

@@ -307,3 +307,10 @@ def test_an_interaction_block_may_have_no_guard_and_no_action():
     from genom2bip.back.bip2 import write_package
     written = write_package(pkg)
     assert "    on a b\n" in written and parse_text(written) == pkg
+def test_an_expression_nested_without_bound_is_located_not_an_internal_error():
+    chain = "+".join(["1"] * 3000)
+    text = ("package P\n  port type Port()\n  atom type A()\n    data int x\n    port Port p()\n    place S\n"
+            f"    initial to S do {{ x = {chain}; }}\n    on p from S to S\n  end\nend\n")
+    [d] = errors(text)
+    assert (d.span.line, d.message) == (7, "nested more than 200 operators deep here")
+    assert parse_text(text.replace(chain, "+".join(["1"] * 150)), "ok.bip").atom_types[0].name == "A"

@@ -227,3 +227,14 @@ def test_renamed_model_is_accepted():
              initial=InitialTransition([bip_identifier("at")]), transitions=[])
     text = write_package(package(a))
     assert "data int error_" in text and "place at_" in text
+
+
+def test_a_new_file_gets_the_permissions_the_umask_gives(tmp_path):
+    import os
+
+    umask = os.umask(0o022)
+    try:
+        path = write_package_file(package(atom()), tmp_path)
+    finally:
+        os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o644

@@ -200,7 +200,7 @@ def test_binary_input_files_are_input_errors_not_internal_ones(tmp_path, capsys,
         path = tmp_path / ("p.mcl" if option == "--property" else "rules.yaml")
         argv = ["verify", DALA / "NDD.gen", option, path, "--max-states", "10"]
     path.write_bytes(binary)
-    code, out, err = run(capsys, *argv)
+    code, _, err = run(capsys, *argv)
     assert code == 1, err
     assert err.startswith(f"{path}:1:9: error: not a UTF-8 text file: byte 0xff cannot be read\n"), err
     assert "internal error" not in err and "Traceback" not in err
@@ -226,3 +226,18 @@ def test_a_file_without_component_is_accepted_by_check_and_refused_by_generate(t
                        f"(or module)\n")
         assert "generator bug" not in err
     assert not out_dir.exists()
+
+
+def test_a_file_name_the_terminal_cannot_show_is_escaped_not_an_internal_error(tmp_path):
+    import os
+
+    source = tmp_path / "robot é" / os.fsdecode(b"arm\xff.gen")
+    source.parent.mkdir()
+    source.write_bytes((ROOT / "tests/fixtures/genom3/counter.gen").read_bytes())
+    env = {**os.environ, "PYTHONIOENCODING": "ascii"}
+    for argv, shown in ((["check", source], b"robot \\xe9/arm\\udcff.gen:2:11"),
+                        ([source, "-o", tmp_path / "out \u00e9"], b"out \\xe9/arm_/ (5 files)")):
+        result = subprocess.run([sys.executable, "-m", "genom2bip", *map(str, argv)], capture_output=True,
+                                env=env, cwd=ROOT, timeout=60, check=False)
+        assert result.returncode == 0, result.stderr
+        assert shown in result.stdout

@@ -196,6 +196,15 @@ def test_golden_controllers_run_without_model_error(name):
 COUNTER = ROOT / "tests/fixtures/genom3/counter.gen"
 
 
+@pytest.fixture
+def counter_out(tmp_path, capsys) -> Path:
+    """``tmp_path/out``, holding ``counter/`` as generated from counter.gen (console output cleared)."""
+    out = tmp_path / "out"
+    assert main([str(COUNTER), "-o", str(out)]) == 0
+    capsys.readouterr()
+    return out
+
+
 def test_output_that_is_an_input_directory_is_refused(tmp_path, capsys):
     import shutil
 
@@ -225,14 +234,13 @@ def test_a_directory_genom2bip_did_not_write_is_not_replaced(tmp_path, capsys):
     before = _snapshot(tmp_path)
     assert main([str(COUNTER), "-o", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err
-    assert f"refusing to replace {mine}/: genom2bip did not write it (no .genom2bip marker)" in err
+    assert f"refusing to replace {mine}/: genom2bip did not write it (no valid .genom2bip marker)" in err
     assert _snapshot(tmp_path) == before
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["counter"]
 
 
-def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_path, capsys, counter_out):
+    out = counter_out
     target = out / "counter"
     marker = (target / ".genom2bip").read_text()
     assert "counter.bip" in marker and "model.py" in marker
@@ -242,7 +250,7 @@ def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_p
     (target / "model.py").unlink()  # a generated file deleted by hand comes back
     capsys.readouterr()
     assert main([str(COUNTER), "-o", str(out)]) == 0
-    assert "kept in" in capsys.readouterr().out
+    assert f"kept in {target}/, not written by genom2bip: notes.txt\n" in capsys.readouterr().out
     assert (target / "notes.txt").read_text() == "my notes"
     assert (target / "__pycache__" / "model.cpython.pyc").read_bytes() == b"cache"
     assert (target / "model.py").is_file()
@@ -250,9 +258,8 @@ def test_regenerating_keeps_a_users_file_and_replaces_only_generated_files(tmp_p
     assert sorted(p.name for p in out.iterdir()) == ["counter"], "staging or old directories left behind"
 
 
-def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys, counter_out):
+    out = counter_out
     with open(out / "counter" / "model.py", "a") as f:
         f.write("# my fix\n")
     before = _snapshot(tmp_path)
@@ -263,9 +270,8 @@ def test_a_generated_file_edited_by_hand_is_not_overwritten(tmp_path, capsys):
     assert _snapshot(tmp_path) == before
 
 
-def test_a_users_file_named_like_a_new_generated_file_is_not_overwritten(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_a_users_file_named_like_a_new_generated_file_is_not_overwritten(tmp_path, capsys, counter_out):
+    out = counter_out
     marker = out / "counter" / ".genom2bip"
     marker.write_text("".join(line + "\n" for line in marker.read_text().splitlines() if "interface.py" not in line))
     (out / "counter" / "interface.py").write_text("mine")
@@ -288,9 +294,8 @@ def test_a_symbolic_link_in_place_of_the_output_is_refused(tmp_path, capsys):
     assert sorted(p.name for p in elsewhere.iterdir()) == ["data"]
 
 
-def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched(tmp_path, capsys, counter_out):
+    out = counter_out
     victim = tmp_path / "victim.txt"
     victim.write_text("not yours")
     (out / "counter" / "model.py").unlink()
@@ -301,9 +306,8 @@ def test_a_generated_file_replaced_by_a_link_is_refused_and_its_target_untouched
     assert victim.read_text() == "not yours"
 
 
-def test_what_a_killed_run_left_is_cleared_only_when_it_is_all_generated(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main([str(COUNTER), "-o", str(out)]) == 0
+def test_what_a_killed_run_left_is_cleared_only_when_it_is_all_generated(tmp_path, capsys, counter_out):
+    out = counter_out
     # A run killed after writing its staging directory, and one killed while moving a user's file back.
     import shutil
 
@@ -391,7 +395,7 @@ def test_paths_that_are_not_utf8_or_have_spaces_are_written_and_run(tmp_path, ca
     package = out / "my_robot_"
     assert "my robot\\udcff.gen" in (package / "__init__.py").read_text()
     result = subprocess.run([sys.executable, "-m", "my_robot_", "describe"], cwd=out, capture_output=True,
-                            text=True, timeout=60)
+                            text=True, timeout=60, check=False)
     assert result.returncode == 0 and "counter: GetTicks, SetRunning" in result.stdout, result.stderr
 
 
@@ -403,5 +407,49 @@ def test_a_pipe_given_as_a_description_is_refused_without_reading_it(tmp_path):
                           (["verify", COUNTER, "--property", fifo],
                            f"{fifo}:0:0: error: cannot read the property file: not a regular file")):
         result = subprocess.run([sys.executable, "-m", "genom2bip", *map(str, argv)], capture_output=True, text=True,
-                                timeout=60, cwd=ROOT)
+                                timeout=60, cwd=ROOT, check=False)
         assert (result.returncode, result.stdout) == (1, "") and message in result.stderr
+
+
+def test_when_the_previous_output_cannot_be_cleared_its_files_stay_and_it_is_said(capsys, monkeypatch, counter_out):
+    out = counter_out
+    (out / "counter" / "notes.txt").write_text("my notes")
+    real = Path.rename
+
+    def read_only(self, target):  # as in a directory the user may not write: its entries cannot move
+        if ".old." in self.parent.name:
+            raise PermissionError(13, "Permission denied")
+        return real(self, target)
+
+    monkeypatch.setattr(Path, "rename", read_only)
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    [old] = [p for p in out.iterdir() if p.name.startswith(".counter.old.")]
+    assert f"wrote {out}/counter/, but could not carry everything over from the previous output: {old}/ keeps" in err
+    assert (old / "notes.txt").read_text() == "my notes"
+    assert (out / "counter" / "model.py").is_file()
+
+
+def test_a_marker_naming_files_outside_its_directory_is_not_trusted(capsys, counter_out):
+    import hashlib
+
+    out = counter_out
+    victim = out / "victim.txt"
+    victim.write_text("keep me")
+    marker = out / "counter" / ".genom2bip"
+    digest = hashlib.sha256(victim.read_bytes()).hexdigest()
+    marker.write_text(marker.read_text() + f"{digest}  ../victim.txt\n")
+    capsys.readouterr()
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert "genom2bip did not write it (no valid .genom2bip marker)" in capsys.readouterr().err
+    assert victim.read_text() == "keep me"
+
+
+def test_a_dangling_link_as_the_output_directory_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.symlink_to(tmp_path / "nowhere")
+    assert main([str(COUNTER), "-o", str(out)]) == 1
+    assert f"genom2bip: error: cannot write {out}: it exists and is not a directory" in capsys.readouterr().err
+    assert not (tmp_path / "nowhere").exists()

@@ -194,3 +194,14 @@ def test_an_unclosed_comment_is_named_where_it_opens(text, where):
 def test_comment_markers_inside_labels_are_not_comments():
     where, message = one('<"S.req"> true; <"(*"> true')
     assert (where, message) == ("bad.mcl:1:18", '"(*" matches no interaction label of the model')
+
+
+def test_a_formula_nested_too_deeply_is_an_error_not_an_internal_one():
+    chain = " and ".join(['<"S.req"> true'] * 600)
+    ((where, message),) = errors(chain)
+    assert where.startswith("bad.mcl:1:") and message == "the formula is nested more than 200 operators deep here"
+    nested = '<"S.req">' * 400 + "true"
+    assert errors(nested) == [("bad.mcl:1:1783", "the formula is nested more than 200 operators deep here")]
+    flat = flatten(package("Server"), "Main()")
+    items, _ = read_properties(" and ".join(['<"S.req"> true'] * 100), "ok.mcl", flat)
+    assert len(items) == 1

@@ -307,3 +307,14 @@ def test_a_binary_rule_file_is_located_and_writes_nothing(tmp_path, capsys):
     assert "      - id: r\ufffd\ufffd?\n             ^\n" in err and "save it as UTF-8 text" in err
     assert "internal error" not in err
     assert not out.exists()
+
+
+def test_a_rule_file_nested_without_bound_is_located_not_an_internal_error(tmp_path, capsys):
+    rules = tmp_path / "rules.yaml"
+    rules.write_text("rules:\n  - id: r\n    service: Arm.Move\n    requires: " + "[" * 5000 + "]" * 5000 + "\n")
+    out = tmp_path / "out"
+    assert main([str(ARM), "--rules", str(rules), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"{rules}:4:62: error: nested more than 50 levels deep: not a rule file\n")
+    assert "internal error" not in err
+    assert not out.exists()

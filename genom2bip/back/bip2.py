@@ -9,12 +9,11 @@ text back into an equal model.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import jinja2
 
+from genom2bip.output import write_file
 from runtime.bip2.printer import action as print_action
 from runtime.bip2.printer import expr as print_expr
 from runtime.bip2.reserved import IDENTIFIER, RESERVED, is_identifier
@@ -450,17 +449,8 @@ def write_package(package: Package) -> str:
 
 
 def write_package_file(package: Package, directory) -> Path:
-    """Write ``<directory>/<package name>.bip`` atomically (temp file, then rename); nothing is written on error."""
+    """Write ``<directory>/<package name>.bip`` atomically (genom2bip.output.write_file); nothing is written on error."""
     text = write_package(package)
-    directory = Path(directory)
-    target = directory / f"{package.name}.bip"
-    fd, tmp = tempfile.mkstemp(prefix=f".{package.name}.", suffix=".bip.tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as out:
-            out.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    target = Path(directory) / f"{package.name}.bip"
+    write_file(target, lambda out: out.write(text))
     return target

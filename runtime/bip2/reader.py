@@ -12,6 +12,7 @@ from runtime.bip2.syntax import parse_tree
 from runtime.bip2.validate import validate
 from runtime.diagnostics import DiagnosticError, Reporter, SourceCache, Span
 from runtime.model import Package
+from runtime.nesting import MAX_DEPTH, too_deep
 from runtime.textfile import decode_error
 
 
@@ -53,6 +54,12 @@ def _read(text: str, filename: str, reporter: Reporter) -> Package | None:
     tree = parse_tree(text, filename)
     if not isinstance(tree, Tree):
         reporter.diagnostics.append(tree)
+        return None
+    deep = too_deep(tree)
+    if deep is not None:
+        meta = deep.meta
+        reporter.error(Span(filename, getattr(meta, "line", 1), getattr(meta, "column", 1)),
+                       f"nested more than {MAX_DEPTH} operators deep here")
         return None
     locator = Locator()
     package = Builder(filename, text, reporter, locator).transform(tree)

@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache, Span
+from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache
 from runtime.engine.errors import EngineError
 from runtime.engine.flatten import FlatSystem
 from runtime.explore.space import LimitReached, StateSpace, Step

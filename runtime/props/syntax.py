@@ -16,6 +16,7 @@ from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache, Span
+from runtime.nesting import MAX_DEPTH, too_deep
 
 GRAMMAR = Path(__file__).with_name("mcl.lark")
 
@@ -231,6 +232,10 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
         else:
             diag = syntax_error(file, err)
         raise DiagnosticError([diag], sources) from None
+    deep = too_deep(tree)
+    if deep is not None:
+        raise DiagnosticError([Diagnostic(_span(file, deep.meta), f"the formula is nested more than {MAX_DEPTH} operators deep here",
+                                          hint="split it into several properties")], sources)
     props = _Build(file).transform(tree)
     out = []
     for k, p in enumerate(props, 1):
