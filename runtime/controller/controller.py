@@ -662,7 +662,9 @@ class Controller:
                 svc.queue.clear()
             for req in pending:
                 if req.final is None:
-                    self._report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}")
+                    cut = f"; {req.failure['message']}" if req.failure else ""  # e.g. its codel, interrupted
+                    self._report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}{cut}",
+                                 **self._failure_fields(req.failure or {}))
 
     def _emit(self, event: dict[str, Any]) -> None:
         for listener in self.listeners:

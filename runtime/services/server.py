@@ -22,6 +22,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import signal
 import socket
 import threading
 import time
@@ -45,6 +46,11 @@ MAX_BODY = 1 << 20
 #: Events kept for a slow event-stream client before it is cut off.
 QUEUE_SIZE = 10_000
 EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller")
+#: On a stop: how long the codel under way may take to return (s), then how long after it is interrupted.
+STOP_GRACE = 2.0
+INTERRUPT_GRACE = 1.0
+#: How long event streams and long polls get to send their last events (s) before their connections are cut.
+FLUSH_GRACE = 0.5
 
 
 def _finite(value: Any) -> Any:
@@ -90,6 +96,7 @@ class Hub:
     def __init__(self) -> None:
         self.waiters: dict[int, list[asyncio.Future]] = {}
         self.subscribers: set[Subscriber] = set()
+        self.streams = 0  # event streams still sending
         self.loop: asyncio.AbstractEventLoop | None = None
         self.closed = False
 
@@ -254,6 +261,7 @@ def create_app(controller: Controller) -> Starlette:
                                     f"(types: {', '.join(EVENT_KINDS)})")
         sub = Subscriber(kinds)
         hub.subscribers.add(sub)
+        hub.streams += 1
 
         async def stream():
             try:
@@ -269,6 +277,7 @@ def create_app(controller: Controller) -> Starlette:
                     yield f"event: {event['event']}\ndata: {dumps(event)}\n\n"
             finally:
                 hub.subscribers.discard(sub)
+                hub.streams -= 1
 
         return StreamingResponse(stream(), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
@@ -309,7 +318,10 @@ class _Uvicorn(uvicorn.Server):
 
     This is done in the server's own startup and shutdown rather than in an
     ASGI lifespan task: on Ctrl-C uvicorn cancels a pending lifespan task and
-    logs a traceback for it, which a clean stop must not print.
+    logs a traceback for it, which a clean stop must not print.  The shutdown
+    ends the controller first (its final reports go out over every stream and
+    long poll), then the streams, then the connections.  A second Ctrl-C
+    calls ``on_force`` (the ``run`` command exits at once).
     """
 
     def __init__(self, config: uvicorn.Config, controller: Controller, hub: "Hub", on_exit) -> None:
@@ -317,6 +329,7 @@ class _Uvicorn(uvicorn.Server):
         self.controller = controller
         self.hub = hub
         self.on_exit = on_exit
+        self.on_force = None
         self._unsubscribe = None
 
     async def startup(self, sockets=None) -> None:
@@ -326,6 +339,9 @@ class _Uvicorn(uvicorn.Server):
 
     async def shutdown(self, sockets=None) -> None:
         try:
+            await self._stop_controller()
+            self.hub.close()
+            await self._flush()
             await super().shutdown(sockets=sockets)
         finally:
             if self._unsubscribe is not None:
@@ -333,7 +349,35 @@ class _Uvicorn(uvicorn.Server):
                 self._unsubscribe = None
             self.hub.close()
 
+    async def _stop_controller(self) -> None:
+        """End the run, interrupting a codel that does not return; its final reports reach the hub before it closes."""
+        c = self.controller
+        loop = asyncio.get_running_loop()
+        c.stop(timeout=0)
+        if c.alive():
+            await loop.run_in_executor(None, c.stop, STOP_GRACE)
+        if c.alive() and c.interrupt_codel() is not None:
+            await loop.run_in_executor(None, c.stop, INTERRUPT_GRACE)
+        if c.alive():
+            c.abandon(f"{c.busy() or 'the engine thread'} did not return within "
+                      f"{STOP_GRACE + INTERRUPT_GRACE:g} s of the stop: abandoned")
+        await asyncio.sleep(0)  # the reports the engine thread handed over are published before the hub closes
+
+    async def _flush(self) -> None:
+        """Give streams and long polls a moment to send their last events, then cut the connections still busy."""
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + FLUSH_GRACE
+        while self.hub.streams and loop.time() < deadline:
+            await asyncio.sleep(0.02)
+        for connection in list(self.server_state.connections):
+            cycle = getattr(connection, "cycle", None)
+            transport = getattr(connection, "transport", None)
+            if cycle is not None and not cycle.response_complete and transport is not None:
+                transport.abort()  # a client that does not read: it must not hold the stop
+
     def handle_exit(self, sig, frame) -> None:
+        if self.should_exit and sig == signal.SIGINT and self.on_force is not None:
+            self.on_force()
         self.on_exit()
         super().handle_exit(sig, frame)
 
@@ -358,14 +402,8 @@ class ServiceServer:
         self._thread: threading.Thread | None = None
 
     def _exiting(self) -> None:
-        """A stop was asked for: the controller ends after its current step, streams and long polls end."""
+        """A stop was asked for: the controller ends after its current step (the shutdown waits for it)."""
         self.controller.stop(timeout=0)
-        hub: Hub = self.app.state.hub
-        if hub.loop is not None:
-            try:
-                hub.loop.call_soon_threadsafe(hub.close)
-            except RuntimeError:
-                pass
 
     def serve(self) -> None:
         """Serve in this thread until Ctrl-C / SIGTERM (the main thread) or :meth:`stop`."""
