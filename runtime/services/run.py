@@ -20,6 +20,10 @@ from runtime.model import Package
 
 def add_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--port", type=int, default=0, help="TCP port on 127.0.0.1 (default: a free one, printed)")
+    run.add_argument("--host", default="127.0.0.1", metavar="ADDRESS",
+                     help="address to listen on (default 127.0.0.1); another one only with a token")
+    run.add_argument("--token", metavar="TOKEN", default=os.environ.get("GENOM2BIP_TOKEN"),
+                     help="every client must send 'Authorization: Bearer TOKEN' (default: $GENOM2BIP_TOKEN)")
     run.add_argument("--codels", metavar="DIR|MODULE",
                      help="the codels package (default: codels/ next to the descriptions, see docs/runtime.md)")
     run.add_argument("--connect", metavar="C.IN=D.OUT", action="append", default=[],
@@ -98,9 +102,12 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
         print(f"{prog}: error: --connect: {e.args[0]}", file=sys.stderr)
         return 1
     try:
-        server = ServiceServer(controller, args.port)
+        server = ServiceServer(controller, args.port, args.host, args.token)
+    except ValueError as e:
+        print(f"{prog}: error: --host {args.host}: {e}", file=sys.stderr)
+        return 1
     except OSError as e:
-        print(f"{prog}: error: cannot listen on 127.0.0.1:{args.port}: {e.strerror or e}", file=sys.stderr)
+        print(f"{prog}: error: cannot listen on {args.host}:{args.port}: {e.strerror or e}", file=sys.stderr)
         return 1
     comps = interface["components"]
     nservices = sum(len(c["services"]) for c in comps.values())
