@@ -420,3 +420,17 @@ def test_a_poster_value_of_the_wrong_type_fails_its_writer_with_the_path(tick):
                                    "Count: expected an integer, got 'many'"
     assert c.data.poster("tick", "Count").seq == 0  # nothing published
     assert not [e for e in events if e["event"] == "poster"]
+
+
+def test_requests_beyond_the_bound_of_waiting_ones_are_refused_with_429(tick):
+    package, root, interface = tick
+    c = Controller(package, root, interface, tick_codels(), clock=VirtualClock(), max_queued=2)
+    first, second = c.submit("tick", "Work"), c.submit("tick", "Work")
+    with pytest.raises(RequestError) as err:
+        c.submit("tick", "Work")
+    assert err.value.status == 429
+    assert err.value.message == "2 requests are waiting to be taken: request to tick.Work not accepted, send it again " \
+                                "later"
+    assert sorted(c.requests) == [first.id, second.id]
+    c.run(duration=0.1)
+    assert first.status == second.status == "ok"

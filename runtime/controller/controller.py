@@ -31,6 +31,10 @@ from runtime.model import Package
 
 Listener = Callable[[dict[str, Any]], None]
 
+#: The interpreter's switch interval while the engine thread runs (s): a thread woken for a period gets the
+#: interpreter back within about this long, even while the services interface is busy (docs/runtime.md).
+SWITCH_INTERVAL = 0.001
+
 
 @dataclass
 class StepInfo:
@@ -81,11 +85,12 @@ class Controller:
     clock (a :class:`~runtime.controller.timing.VirtualClock` runs as fast as
     possible); ``seed`` makes the choice among ready interactions random
     (default: the engine's order); ``keep`` bounds how many ended requests
-    are remembered.
+    are remembered; ``max_queued`` how many requests may wait to be taken
+    (beyond, :meth:`submit` answers 429: memory and latency stay bounded).
     """
 
     def __init__(self, package: Package, root: str, interface: dict[str, Any], codels: Any = None, *,
-                 clock: Any = None, seed: int | None = None, keep: int = 10_000) -> None:
+                 clock: Any = None, seed: int | None = None, keep: int = 10_000, max_queued: int = 1000) -> None:
         self.interface = interface
         self.types: dict[str, dict[str, Any]] = interface.get("types", {})
         comps = interface["components"]
@@ -115,6 +120,7 @@ class Controller:
         self._last: dict[int, int] = {}  # interaction index -> step when it last fired (fair choice)
         self._work: dict[tuple, bool] = {}  # (untimed period, state) -> a codel would run in it
         self.keep = keep
+        self.max_queued = max_queued
         self.requests: dict[int, Request] = {}
         self._ended: deque[int] = deque()
         self._next_id = 1
@@ -240,6 +246,10 @@ class Controller:
                     hint = f" or interrupt it ({', '.join(others)})" if others else ""
                     raise RequestError(409, f"{svc.label} is busy with request {busy.id} ({busy.status}): an activity "
                                             f"takes one request at a time; wait for its report{hint}")
+            waiting = sum(len(s.queue) for s in self.services.values())
+            if waiting >= self.max_queued:
+                raise RequestError(429, f"{waiting} requests are waiting to be taken: request to {svc.label} "
+                                        "not accepted, send it again later")
             req = Request(self._next_id, component, service, values, local)
             self._next_id += 1
             self.requests[req.id] = req
@@ -342,6 +352,8 @@ class Controller:
             finally:
                 if then is not None:
                     then()
+        if not self.clock.virtual:
+            sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_INTERVAL))
         self._thread = threading.Thread(target=body, name="bip-controller", daemon=True)
         self._thread.start()
 

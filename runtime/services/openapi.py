@@ -121,6 +121,9 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
                         "400": _error("malformed JSON"),
                         "409": _error("an activity already handling a request"),
                         "422": _error("unknown, missing or ill-typed parameters"),
+                        "413": _error("a body longer than 1 MiB"),
+                        "415": _error("a body not sent as application/json"),
+                        "429": _error("too many requests waiting to be taken"),
                         "503": _error("the controller has stopped")}}}
     return {
         "openapi": "3.1.0",
