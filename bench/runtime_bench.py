@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import sys
 import threading
 import time
@@ -81,7 +82,39 @@ def _pct(values: list[float], q: float) -> float:
     return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
 
 
-def http_rate(requests: int, clients: int) -> dict:
+def _flood(url: str, requests: int, clients: int, targets: list, out=None) -> tuple[list[int], list[float]]:
+    """``clients`` threads each send their share of ``requests``, then wait for every final report."""
+    from runtime.services.client import Client
+
+    ids: list[int] = []
+    posts: list[float] = []
+    lock = threading.Lock()
+
+    def send(k: int) -> None:
+        client = Client(url)
+        mine, took = [], []
+        for i in range(requests // clients):
+            t0 = time.perf_counter()
+            mine.append(client.send(*targets[(k + i) % len(targets)]))
+            took.append(time.perf_counter() - t0)
+        for rid in mine:
+            client.wait(rid, timeout=60)
+        with lock:
+            ids.extend(mine)
+            posts.extend(took)
+
+    threads = [threading.Thread(target=send, args=(k,)) for k in range(clients)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    if out is not None:
+        out.put((ids, posts))
+    return ids, posts
+
+
+def http_rate(requests: int, clients: int, apart: bool = False) -> dict:
+    """The flood; ``apart``: the clients in a process of their own, as a decisional layer would be."""
     import dala
     from runtime.services.client import Client
     from runtime.services.server import ServiceServer
@@ -98,31 +131,18 @@ def http_rate(requests: int, clients: int) -> dict:
         for i in range(200):
             one.call(*targets[i % len(targets)])
         sequential = 200 / (time.perf_counter() - t)
-        ids: list[int] = []
-        posts: list[float] = []
-        lock = threading.Lock()
         servo = next(t for t in controller.timers.timers if t.task == "RFLEX.servo")
         before = (servo.periods, servo.missed, servo.overruns)
-
-        def send(k: int) -> None:
-            client = Client(server.url)
-            mine, took = [], []
-            for i in range(requests // clients):
-                t0 = time.perf_counter()
-                mine.append(client.send(*targets[(k + i) % len(targets)]))
-                took.append(time.perf_counter() - t0)
-            for rid in mine:
-                client.wait(rid, timeout=60)
-            with lock:
-                ids.extend(mine)
-                posts.extend(took)
-
         t = time.perf_counter()
-        threads = [threading.Thread(target=send, args=(k,)) for k in range(clients)]
-        for th in threads:
-            th.start()
-        for th in threads:
-            th.join()
+        if apart:
+            ctx = multiprocessing.get_context("fork")
+            out = ctx.Queue()
+            child = ctx.Process(target=_flood, args=(server.url, requests, clients, targets, out))
+            child.start()
+            ids, posts = out.get(timeout=600)
+            child.join()
+        else:
+            ids, posts = _flood(server.url, requests, clients, targets)
         concurrent = len(ids) / (time.perf_counter() - t)
         assert all(controller.requests[i].final is not None for i in ids)
         late = list(servo.lateness)[before[0]:servo.periods]
@@ -159,7 +179,13 @@ def main() -> None:
 
 
 def report_flood(args) -> None:
-    flood = http_rate(args.requests, args.clients)
+    for apart in (False, True):
+        flood = http_rate(args.requests, args.clients, apart)
+        print(f"clients {'in another process' if apart else 'in the same process (threads)'}:")
+        _print_flood(args, flood)
+
+
+def _print_flood(args, flood: dict) -> None:
     print(f"requests/s through HTTP (send + final report): {flood['sequential']:,.0f} (one client, one at a time), "
           f"{flood['concurrent']:,.0f} ({args.clients} clients, {args.requests} requests)")
     print(f"during the flood: latency queued->final p50 {flood['p50_ms']:.1f} ms, p99 {flood['p99_ms']:.1f} ms, "
