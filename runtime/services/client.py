@@ -27,7 +27,7 @@ from runtime.services.guard import TOKEN_ENV
 
 
 class ServiceError(Exception):
-    """The server refused a call: ``status`` (400, 404, 409, 422, 503...) and its message."""
+    """The server refused a call: ``status`` (400, 401, 403, 404, 409, 413, 415, 422, 429, 503...) and its message."""
 
     def __init__(self, status: int, message: str) -> None:
         super().__init__(f"{status}: {message}")

@@ -80,7 +80,7 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
             "responses": {"200": {"description": "component"}, "404": _error("no such component")}}},
         "/requests": {"get": {"summary": "recent requests", "parameters": [
             {"name": "status", "in": "query", "schema": {"type": "string"}},
-            {"name": "limit", "in": "query", "schema": {"type": "integer"}}],
+            {"name": "limit", "in": "query", "schema": {"type": "integer", "minimum": 1}}],
             "responses": {"200": {"description": "list"}}}},
         "/requests/{id}": {"get": {
             "summary": "a request and its reports", "parameters": [

@@ -318,9 +318,9 @@ def create_app(controller: Controller, token: str | None = None, loopback: bool 
                                     f"(types: {', '.join(EVENT_KINDS)})")
         sub = Subscriber(kinds)
         hub.subscribers.add(sub)
-        hub.streams += 1
 
         async def stream():
+            hub.streams += 1
             try:
                 yield f"event: hello\ndata: {dumps(controller.summary())}\n\n"
                 while True:
