@@ -224,6 +224,23 @@ def start(cwd, package, *args):
     pytest.fail(f"no URL printed: {proc.communicate()}")
 
 
+@pytest.fixture
+def launch():
+    """:func:`start`, and every process it started killed after the test if still running (a failed test)."""
+    procs = []
+
+    def run(cwd, package, *args):
+        proc, url = start(cwd, package, *args)
+        procs.append(proc)
+        return proc, url
+
+    yield run
+    for proc in procs:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate(timeout=10)
+
+
 def stopped(proc, signals=1, between=0.5, timeout=20):
     """Send Ctrl-C ``signals`` times: (seconds the process took to end after the first, stdout, stderr)."""
     t0 = time.monotonic()
@@ -250,9 +267,9 @@ def running_work(url, add):
     return client, rid
 
 
-def test_a_codel_raising_system_exit_fails_its_request_and_the_controller_runs_on(tick_package):
+def test_a_codel_raising_system_exit_fails_its_request_and_the_controller_runs_on(launch, tick_package):
     gen, codels = tick_package
-    proc, url = start(gen, "tick", "--codels", codels)
+    proc, url = launch(gen, "tick", "--codels", codels)
     from runtime.services.client import Client
 
     client = Client(url, timeout=10)
@@ -270,9 +287,10 @@ def test_a_codel_raising_system_exit_fails_its_request_and_the_controller_runs_o
     (3, "[{rid}] tick.Work: interrupted tick.Work: the controller stopped (codel tickWork of tick.Work (request "
         "{rid}) did not return within 3 s of the stop: abandoned)", 2),  # blocked in time.sleep: given up on
 ], ids=["loop", "blocked"])
-def test_ctrl_c_stops_within_a_bounded_time_whatever_the_codel_under_way_does(tick_package, add, line, status):
+def test_ctrl_c_stops_within_a_bounded_time_whatever_the_codel_under_way_does(launch, tick_package, add, line,
+                                                                         status):
     gen, codels = tick_package
-    proc, url = start(gen, "tick", "--codels", codels)
+    proc, url = launch(gen, "tick", "--codels", codels)
     client, rid = running_work(url, add)
     took, out, err = stopped(proc)
     assert took < 6, took
@@ -281,9 +299,9 @@ def test_ctrl_c_stops_within_a_bounded_time_whatever_the_codel_under_way_does(ti
     assert proc.returncode == status and "Traceback" not in err, err
 
 
-def test_a_second_ctrl_c_exits_at_once_saying_what_it_interrupted(tick_package):
+def test_a_second_ctrl_c_exits_at_once_saying_what_it_interrupted(launch, tick_package):
     gen, codels = tick_package
-    proc, url = start(gen, "tick", "--codels", codels)
+    proc, url = launch(gen, "tick", "--codels", codels)
     client, rid = running_work(url, 3)
     queued = client.send("tick", "Work", add=1)
     took, out, err = stopped(proc, signals=2, between=0.3)
@@ -294,14 +312,14 @@ def test_a_second_ctrl_c_exits_at_once_saying_what_it_interrupted(tick_package):
     assert "Traceback" not in err
 
 
-def test_every_accepted_request_gets_one_final_report_on_every_channel_when_stopped():
+def test_every_accepted_request_gets_one_final_report_on_every_channel_when_stopped(launch):
     import threading
     from collections import Counter
 
     from runkit import navigation_ready, ndd_settings, until
     from runtime.services.client import Client
 
-    proc, url = start(ROOT / "gen", "dala", "--codels", DALA_CODELS)
+    proc, url = launch(ROOT / "gen", "dala", "--codels", DALA_CODELS)
     client = Client(url, timeout=10)
     finals: Counter = Counter()
     streaming = threading.Event()
@@ -339,13 +357,13 @@ def test_every_accepted_request_gets_one_final_report_on_every_channel_when_stop
     assert f"[{goto}] NDD.GoTo: interrupted NDD.GoTo: the controller stopped" in out
 
 
-def test_an_event_stream_client_that_stopped_reading_does_not_hold_the_stop():
+def test_an_event_stream_client_that_stopped_reading_does_not_hold_the_stop(launch):
     import socket
 
     from runkit import until
     from runtime.services.client import Client
 
-    proc, url = start(ROOT / "gen", "dala", "--codels", DALA_CODELS)
+    proc, url = launch(ROOT / "gen", "dala", "--codels", DALA_CODELS)
     port = int(url.rsplit(":", 1)[1])
     client = Client(url, timeout=10)
     client.call("LaserRF", "Init", timeout=10)
