@@ -11,11 +11,14 @@
    deadline, p50 / p99 / max.
 3. Requests per second through the HTTP interface: ``--requests`` requests to
    DALA attributes from ``--clients`` threads, each with its own connection,
-   until every one has its final report.
+   until every one has its final report; the p99 latency of a request (POST
+   sent to final report, from the reports' times) and what the flood cost
+   RFLEX.servo, the 25 ms task: periods missed, overruns, worst lateness.
 """
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import sys
 import threading
 import time
@@ -74,7 +77,44 @@ def jitter(seconds: float) -> dict:
     return controller.timers.stats()[0]
 
 
-def http_rate(requests: int, clients: int) -> tuple[float, float]:
+def _pct(values: list[float], q: float) -> float:
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
+
+
+def _flood(url: str, requests: int, clients: int, targets: list, out=None) -> tuple[list[int], list[float]]:
+    """``clients`` threads each send their share of ``requests``, then wait for every final report."""
+    from runtime.services.client import Client
+
+    ids: list[int] = []
+    posts: list[float] = []
+    lock = threading.Lock()
+
+    def send(k: int) -> None:
+        client = Client(url)
+        mine, took = [], []
+        for i in range(requests // clients):
+            t0 = time.perf_counter()
+            mine.append(client.send(*targets[(k + i) % len(targets)]))
+            took.append(time.perf_counter() - t0)
+        for rid in mine:
+            client.wait(rid, timeout=60)
+        with lock:
+            ids.extend(mine)
+            posts.extend(took)
+
+    threads = [threading.Thread(target=send, args=(k,)) for k in range(clients)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    if out is not None:
+        out.put((ids, posts))
+    return ids, posts
+
+
+def http_rate(requests: int, clients: int, apart: bool = False) -> dict:
+    """The flood; ``apart``: the clients in a process of their own, as a decisional layer would be."""
     import dala
     from runtime.services.client import Client
     from runtime.services.server import ServiceServer
@@ -91,29 +131,30 @@ def http_rate(requests: int, clients: int) -> tuple[float, float]:
         for i in range(200):
             one.call(*targets[i % len(targets)])
         sequential = 200 / (time.perf_counter() - t)
-        ids: list[int] = []
-        lock = threading.Lock()
-
-        def send(k: int) -> None:
-            client = Client(server.url)
-            mine = [client.send(*targets[(k + i) % len(targets)]) for i in range(requests // clients)]
-            for rid in mine:
-                client.wait(rid, timeout=60)
-            with lock:
-                ids.extend(mine)
-
+        servo = next(t for t in controller.timers.timers if t.task == "RFLEX.servo")
+        before = (servo.periods, servo.missed, servo.overruns)
         t = time.perf_counter()
-        threads = [threading.Thread(target=send, args=(k,)) for k in range(clients)]
-        for th in threads:
-            th.start()
-        for th in threads:
-            th.join()
+        if apart:
+            ctx = multiprocessing.get_context("fork")
+            out = ctx.Queue()
+            child = ctx.Process(target=_flood, args=(server.url, requests, clients, targets, out))
+            child.start()
+            ids, posts = out.get(timeout=600)
+            child.join()
+        else:
+            ids, posts = _flood(server.url, requests, clients, targets)
         concurrent = len(ids) / (time.perf_counter() - t)
         assert all(controller.requests[i].final is not None for i in ids)
+        late = list(servo.lateness)[before[0]:servo.periods]
+        latency = [controller.requests[i].final["time"] - controller.requests[i].reports[0]["time"] for i in ids]
+        return {"sequential": sequential, "concurrent": concurrent, "p50_ms": _pct(latency, 0.5) * 1e3,
+                "p99_ms": _pct(latency, 0.99) * 1e3,
+                "post_p99_ms": _pct(posts, 0.99) * 1e3, "periods": servo.periods - before[0],
+                "missed": servo.missed - before[1], "overruns": servo.overruns - before[2],
+                "late_max_ms": max(late, default=0.0) * 1e3}
     finally:
         server.stop()
         controller.stop()
-    return sequential, concurrent
 
 
 def main() -> None:
@@ -122,7 +163,10 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=20_000, help="engine steps (default 20000)")
     ap.add_argument("--requests", type=int, default=2000, help="requests through HTTP (default 2000)")
     ap.add_argument("--clients", type=int, default=8, help="concurrent HTTP clients (default 8)")
+    ap.add_argument("--only-http", action="store_true", help="only the HTTP flood (part 3)")
     args = ap.parse_args()
+    if args.only_http:
+        return report_flood(args)
     bare, loop = engine_steps(args.steps)
     print(f"engine steps/s, DALA, no-op codels: {bare:,.0f} (enabled+fire), {loop:,.0f} (run-time loop, "
           f"virtual clock)")
@@ -131,9 +175,23 @@ def main() -> None:
     print(f"period jitter, 10 ms task over {args.seconds:g} s ({stats['periods']} periods): "
           f"p50 {lat['p50']:.3f} ms, p99 {lat['p99']:.3f} ms, max {lat['max']:.3f} ms late; "
           f"{stats['overruns']} overruns, {stats['missed']} missed")
-    sequential, concurrent = http_rate(args.requests, args.clients)
-    print(f"requests/s through HTTP (send + final report): {sequential:,.0f} (one client, one at a time), "
-          f"{concurrent:,.0f} ({args.clients} clients, {args.requests} requests)")
+    report_flood(args)
+
+
+def report_flood(args) -> None:
+    for apart in (False, True):
+        flood = http_rate(args.requests, args.clients, apart)
+        print(f"clients {'in another process' if apart else 'in the same process (threads)'}:")
+        _print_flood(args, flood)
+
+
+def _print_flood(args, flood: dict) -> None:
+    print(f"requests/s through HTTP (send + final report): {flood['sequential']:,.0f} (one client, one at a time), "
+          f"{flood['concurrent']:,.0f} ({args.clients} clients, {args.requests} requests)")
+    print(f"during the flood: latency queued->final p50 {flood['p50_ms']:.1f} ms, p99 {flood['p99_ms']:.1f} ms, "
+          f"POST answered p99 {flood['post_p99_ms']:.1f} ms; "
+          f"RFLEX.servo (25 ms): {flood['periods']} periods, {flood['missed']} missed, {flood['overruns']} overruns, "
+          f"max lateness {flood['late_max_ms']:.1f} ms")
 
 
 if __name__ == "__main__":

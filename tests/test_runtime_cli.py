@@ -156,3 +156,225 @@ def test_generated_interface_describes_dala():
     assert problems("drive_fast", {"$ref": "dala::drive_mode"}, types, "mode") == [
         "mode: 'drive_fast' is not one of drive_idle, drive_tracking, drive_braking"]
     assert problems(True, {"type": "number"}, types, "v") == ["v: expected a number, got True"]
+
+
+# --------------------------------------------------------------------------- stopping: reports, stuck codels, Ctrl-C
+
+#: Codels of runkit.TICK for ``run``: tickWork's ``add`` says how it misbehaves (2: loops, 3: sleeps, 4: SystemExit).
+TICK_CODELS = '''
+import time
+
+
+def tickStart(n):
+    n.value = 0
+    return "count"
+
+
+def tickCount(n, Count):
+    n.value += 1
+    Count.value = n.value
+    return "pause::count"
+
+
+def tickSlow(seconds):
+    return "ether"
+
+
+def tickWork(add, n, total):
+    if add == 2:
+        while True:
+            pass
+    if add == 3:
+        time.sleep(1000)
+    if add == 4:
+        raise SystemExit(4)
+    n.value += add
+    total.value = n.value
+    return "ether"
+'''
+
+
+@pytest.fixture(scope="module")
+def tick_package(tmp_path_factory):
+    """runkit.TICK generated as a package, and a codels directory for it: (directory of the package, codels)."""
+    from runkit import TICK
+
+    where = tmp_path_factory.mktemp("tick")
+    (where / "tick.gen").write_text(TICK)
+    assert genom2bip_main([str(where / "tick.gen"), "-o", str(where / "gen")]) == 0
+    (where / "codels").mkdir()
+    (where / "codels" / "tick.py").write_text(TICK_CODELS)
+    return where / "gen", where / "codels"
+
+
+def start(cwd, package, *args):
+    """``python -m package run ARGS`` in its own process: (process, url), once the URL is printed."""
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", package, "run", *map(str, args)], cwd=cwd,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        found = re.search(r"services interface on (http://127\.0\.0\.1:\d+)/", line)
+        if found:
+            return proc, found.group(1)
+        if not line:
+            break
+    proc.kill()
+    pytest.fail(f"no URL printed: {proc.communicate()}")
+
+
+@pytest.fixture
+def launch():
+    """:func:`start`, and every process it started killed after the test if still running (a failed test)."""
+    procs = []
+
+    def run(cwd, package, *args):
+        proc, url = start(cwd, package, *args)
+        procs.append(proc)
+        return proc, url
+
+    yield run
+    for proc in procs:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate(timeout=10)
+
+
+def stopped(proc, signals=1, between=0.5, timeout=20):
+    """Send Ctrl-C ``signals`` times: (seconds the process took to end after the first, stdout, stderr)."""
+    t0 = time.monotonic()
+    for k in range(signals):
+        if k:
+            time.sleep(between)
+        proc.send_signal(signal.SIGINT)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, err = proc.communicate()
+        pytest.fail(f"still running {timeout} s after Ctrl-C: {out}{err}")
+    return time.monotonic() - t0, out, err
+
+
+def running_work(url, add):
+    from runtime.services.client import Client
+    from runkit import until
+
+    client = Client(url, timeout=10)
+    rid = client.send("tick", "Work", add=add)
+    until(lambda: client.request(rid)["status"] == "running")
+    return client, rid
+
+
+def test_a_codel_raising_system_exit_fails_its_request_and_the_controller_runs_on(launch, tick_package):
+    gen, codels = tick_package
+    proc, url = launch(gen, "tick", "--codels", codels)
+    from runtime.services.client import Client
+
+    client = Client(url, timeout=10)
+    report = client.call("tick", "Work", add=4, timeout=10)
+    assert report["status"] == "failed" and report["message"] == "codel tickWork raised SystemExit: 4"
+    assert client.info()["status"] == "running"
+    assert client.call("tick", "Work", add=1, timeout=10)["status"] == "ok"
+    took, out, err = stopped(proc)
+    assert proc.returncode == 0 and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("add, line, status", [
+    (2, "[{rid}] tick.Work: interrupted tick.Work: the controller stopped; codel tickWork did not return after the "
+        "controller was told to stop: interrupted", 0),  # a Python loop: interrupted
+    (3, "[{rid}] tick.Work: interrupted tick.Work: the controller stopped (codel tickWork of tick.Work (request "
+        "{rid}) did not return within 3 s of the stop: abandoned)", 2),  # blocked in time.sleep: given up on
+], ids=["loop", "blocked"])
+def test_ctrl_c_stops_within_a_bounded_time_whatever_the_codel_under_way_does(launch, tick_package, add, line,
+                                                                         status):
+    gen, codels = tick_package
+    proc, url = launch(gen, "tick", "--codels", codels)
+    client, rid = running_work(url, add)
+    took, out, err = stopped(proc)
+    assert took < 6, took
+    assert line.format(rid=rid) in out, out
+    assert re.search(r"stopped after \d+ steps; requests: 1 interrupted", out), out
+    assert proc.returncode == status and "Traceback" not in err, err
+
+
+def test_a_second_ctrl_c_exits_at_once_saying_what_it_interrupted(launch, tick_package):
+    gen, codels = tick_package
+    proc, url = launch(gen, "tick", "--codels", codels)
+    client, rid = running_work(url, 3)
+    queued = client.send("tick", "Work", add=1)
+    took, out, err = stopped(proc, signals=2, between=0.3)
+    assert took < 1.5, took
+    assert proc.returncode == 130
+    assert f"second Ctrl-C: exiting at once; interrupted: codel tickWork of tick.Work (request {rid}); " \
+           f"2 request(s) left without a final report: {rid}, {queued}" in err, err
+    assert "Traceback" not in err
+
+
+def test_every_accepted_request_gets_one_final_report_on_every_channel_when_stopped(launch):
+    import threading
+    from collections import Counter
+
+    from runkit import navigation_ready, ndd_settings, until
+    from runtime.services.client import Client
+
+    proc, url = launch(ROOT / "gen", "dala", "--codels", DALA_CODELS)
+    client = Client(url, timeout=10)
+    finals: Counter = Counter()
+    streaming = threading.Event()
+
+    def listen():
+        for event in client.events(types="report,controller", timeout=30):
+            streaming.set()
+            if event["event"] == "report" and event["final"]:
+                finals[event["request"]] += 1
+
+    reader = threading.Thread(target=listen, daemon=True)
+    reader.start()
+    navigation_ready(client)
+    ndd_settings(client)
+    goto = client.send("NDD", "GoTo", goal={"x": 1000.0, "y": 0.0, "theta": 0.0})
+    until(lambda: client.request(goto)["status"] == "running")
+    polled = {}
+
+    def long_poll():
+        polled.update(Client(url, timeout=10).request(goto, wait=60))
+
+    poller = threading.Thread(target=long_poll, daemon=True)
+    poller.start()
+    time.sleep(0.3)
+    accepted = [r["id"] for r in client.requests(limit=1000)]
+    took, out, err = stopped(proc)
+    poller.join(10)
+    reader.join(10)
+    assert proc.returncode == 0 and "Traceback" not in err, err
+    assert polled["final"]["status"] == "interrupted", polled
+    assert polled["final"]["message"] == "NDD.GoTo: the controller stopped"
+    assert set(finals) == set(accepted) and set(finals.values()) == {1}, (finals, accepted)
+    console = Counter(int(m) for m in re.findall(r"^\[(\d+)\] ", out, re.M))
+    assert set(console) == set(accepted) and set(console.values()) == {1}
+    assert f"[{goto}] NDD.GoTo: interrupted NDD.GoTo: the controller stopped" in out
+
+
+def test_an_event_stream_client_that_stopped_reading_does_not_hold_the_stop(launch):
+    import socket
+
+    from runkit import until
+    from runtime.services.client import Client
+
+    proc, url = launch(ROOT / "gen", "dala", "--codels", DALA_CODELS)
+    port = int(url.rsplit(":", 1)[1])
+    client = Client(url, timeout=10)
+    client.call("LaserRF", "Init", timeout=10)
+    client.send("LaserRF", "Start")  # a 361-range scan on the stream every period
+    stalled = socket.socket()
+    stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    stalled.connect(("127.0.0.1", port))
+    stalled.sendall(b"GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")  # and never reads
+    until(lambda: client.poster("LaserRF", "Scan")["seq"] > 20, timeout=20)
+    took, out, err = stopped(proc)
+    stalled.close()
+    assert proc.returncode == 0, err
+    assert took < 2.5, took
+    assert "Traceback" not in err and "CancelledError" not in err, err

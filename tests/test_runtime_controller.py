@@ -299,3 +299,138 @@ def test_a_failing_task_codel_is_an_event_and_ends_the_permanent_activity(tick):
     assert len(errors) == 1 and errors[0]["task"] == "tick.t" and errors[0]["codel"] == "tickCount"
     assert "returned 'sideways', not a declared yield (declared: pause::count)" in errors[0]["message"]
     assert c.timers.stats()[0]["periods"] == 9  # the task's periods go on, empty
+
+
+# --------------------------------------------------------------------------- faults: nothing silent, nothing lost
+
+#: A component whose attributes store into an ids struct member (p.a) and the whole struct.
+STORE = """
+component store {
+  struct pair { double a; double b; };
+  ids { pair p; };
+  attribute SetA(in p.a = 1.0);
+  attribute SetP(in p);
+};
+"""
+
+
+@pytest.mark.parametrize("raised", [SystemExit(3), KeyboardInterrupt(), GeneratorExit()])
+def test_a_codel_raising_a_base_exception_fails_its_service_and_the_controller_keeps_running(tick, raised):
+    package, root, interface = tick
+    codels = tick_codels()
+
+    def tickWork(add, n, total):
+        raise raised
+
+    codels["tick"]["tickWork"] = tickWork
+    c = Controller(package, root, interface, codels, clock=VirtualClock())
+    first = c.submit("tick", "Work", {"add": 2})
+    second = c.submit("tick", "Slow", {"seconds": 0.0})
+    assert c.run(duration=0.2) == "stopped" and c.error is None
+    assert first.status == "failed" and first.final["error"] == "python exception"
+    assert first.final["message"] == f"codel tickWork raised {type(raised).__name__}" + (": 3" if raised.args else "")
+    assert first.final["codel"] == "tickWork" and first.final["where"].endswith("test_runtime_controller.py:" +
+                                                                                 first.final["where"].split(":")[-1])
+    assert second.status == "ok"
+
+
+def test_an_engine_thread_that_dies_says_so_on_the_interface_and_ends_every_request(tick):
+    package, root, interface = tick
+    c = Controller(package, root, interface, tick_codels())
+    events = []
+    c.subscribe(events.append)
+    original = c._choose
+
+    def dying(now):
+        if c.requests and c.requests[1].status == "running":
+            raise SystemExit("the engine's own code gave up")
+        return original(now)
+
+    c._choose = dying
+    c.start()
+    req = c.submit("tick", "Slow", {"seconds": 0.0})
+    c.wait(req.id, timeout=5)
+    c.stop(timeout=5)
+    assert not c.alive()
+    assert req.final is not None and req.final["status"] == "interrupted"
+    assert "the engine stopped on SystemExit: the engine's own code gave up" in req.final["message"]
+    summary = c.summary()
+    assert summary["status"] == "error" and summary["error"] == "the engine stopped on SystemExit: " \
+                                                                "the engine's own code gave up"
+    assert events[-1] == {"event": "controller", "status": "error", "steps": c.steps, "error": summary["error"]}
+    with pytest.raises(RequestError) as err:
+        c.submit("tick", "Work")
+    assert err.value.status == 503 and err.value.message == "the controller has stopped on an error (the engine " \
+        "stopped on SystemExit: the engine's own code gave up); request to tick.Work not accepted"
+
+
+def test_a_dead_engine_thread_is_seen_even_when_its_run_could_not_say_so(tick):
+    package, root, interface = tick
+    c = Controller(package, root, interface, tick_codels())
+    c.status = "running"
+    c._thread = threading.Thread(target=lambda: None)
+    c._thread.start()
+    c._thread.join()
+    assert c.summary()["status"] == "error" and c.summary()["error"] == "the engine thread has died"
+
+
+def test_an_input_that_cannot_be_stored_in_the_ids_is_refused_naming_it(tmp_path):
+    package, root, interface = build(tmp_path, STORE, "store")
+    c = Controller(package, root, interface, {}, clock=VirtualClock())
+    c.data.ids["store"]["p"] = [0.0, 0.0]  # a codel left something else than the struct there
+    with pytest.raises(RequestError) as err:
+        c.submit("store", "SetA", {"a": 2.0})
+    assert err.value.status == 422
+    assert err.value.message == "bad request to store.SetA: parameter 'a' cannot be stored in ids member p.a: " \
+                                "p is not a struct"
+    assert c.requests == {} and c.data.ids["store"]["p"] == [0.0, 0.0]
+
+
+def test_an_input_whose_ids_member_changed_shape_before_it_started_is_reported(tmp_path):
+    package, root, interface = build(tmp_path, STORE, "store")
+    c = Controller(package, root, interface, {}, clock=VirtualClock())
+    events = []
+    c.subscribe(events.append)
+    req = c.submit("store", "SetA", {"a": 2.0})
+    c.data.ids["store"]["p"] = 7  # changed between the request's acceptance and its start
+    c.run(duration=1.0)
+    errors = [e for e in events if e["event"] == "codel_error"]
+    assert len(errors) == 1 and errors[0]["request"] == req.id and errors[0]["input"] == "a"
+    assert errors[0]["message"] == f"store.SetA request {req.id}: parameter 'a' not stored in ids member p.a: " \
+                                   "p is not a struct"
+    assert req.failure["error"] == "bad input" and c.data.ids["store"]["p"] == 7
+
+
+def test_a_poster_value_of_the_wrong_type_fails_its_writer_with_the_path(tick):
+    package, root, interface = tick
+    codels = tick_codels()
+
+    def tickCount(n, Count):
+        Count.value = "many"
+        return "pause::count"
+
+    codels["tick"]["tickCount"] = tickCount
+    c = Controller(package, root, interface, codels, clock=VirtualClock())
+    events = []
+    c.subscribe(events.append)
+    c.run(duration=0.05)
+    errors = [e for e in events if e["event"] == "codel_error"]
+    assert errors and errors[0]["codel"] == "tickCount" and errors[0]["error"] == "bad poster value"
+    assert errors[0]["message"] == "codel tickCount wrote poster tick.Count (argument Count): " \
+                                   "Count: expected an integer, got 'many'"
+    assert c.data.poster("tick", "Count").seq == 0  # nothing published
+    assert not [e for e in events if e["event"] == "poster"]
+
+
+def test_requests_beyond_the_bound_of_waiting_ones_are_refused_with_429(tick):
+    package, root, interface = tick
+    c = Controller(package, root, interface, tick_codels(), clock=VirtualClock(), max_queued=2)
+    first, second = c.submit("tick", "Work"), c.submit("tick", "Work")
+    with pytest.raises(RequestError) as err:
+        c.submit("tick", "Work")
+    assert err.value.status == 429
+    assert err.value.message == "2 requests are waiting to be taken: request to tick.Work not accepted, send it again " \
+                                "later"
+    assert sorted(c.requests) == [first.id, second.id]
+    c.run(duration=0.1)
+    assert first.status == second.status == "ok"

@@ -19,10 +19,10 @@ def ctl():
         yield running
 
 
-def raw(server, method, path, body=None):
-    """(status, decoded JSON) of one HTTP call, for bodies the client would never send."""
+def raw(server, method, path, body=None, headers=None):
+    """(status, decoded JSON) of one HTTP call, for bodies and headers the client would never send."""
     conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
-    conn.request(method, path, body=body, headers={"Content-Type": "application/json"})
+    conn.request(method, path, body=body, headers={"Content-Type": "application/json"} if headers is None else headers)
     response = conn.getresponse()
     data = json.loads(response.read())
     conn.close()
@@ -143,7 +143,26 @@ def test_outputs_come_back_in_the_ok_report(ctl):
     ("GET", "/nowhere", None, 404, "no route /nowhere"),
     ("DELETE", "/components/NDD/services/GoTo", None, 405, "DELETE is not allowed"),
     ("GET", "/events?types=report,gossip", None, 400, "unknown event type(s) gossip"),
-])
+    ("POST", "/components/NDD/services/SetSpeed", b'{"max_speed": {"v": ' + b"1" * 5000 + b"}}", 400,
+     "unreadable JSON in the body of the request to NDD.SetSpeed: Exceeds the limit (4300 digits)"),
+    ("POST", "/components/NDD/services/SetSpeed", b"[" * 100_000 + b"]" * 100_000, 400,
+     "the body of the request to NDD.SetSpeed nests arrays or objects too deeply (at most 64 levels)"),
+    ("POST", "/components/NDD/services/SetSpeed", b'{"max_speed": ' * 70 + b"1" + b"}" * 70, 400,
+     "nests arrays or objects too deeply"),
+    ("POST", "/components/NDD/services/SetSpeed", b'{"max_speed": {"v": NaN}}', 422,
+     "max_speed.v: nan is not a finite number"),
+    ("POST", "/components/NDD/services/SetSpeed", b'{"max_speed": {"v": Infinity}}', 422,
+     "max_speed.v: inf is not a finite number"),
+    ("POST", "/components/NDD/services/SetSpeed", b'{"max_speed": {"w": -Infinity}}', 422,
+     "max_speed.w: -inf is not a finite number"),
+    ("POST", "/components/NDD/services/SetSpeed", b'{"max_speed": {"v": 1e999}}', 422,
+     "max_speed.v: inf is not a finite number"),
+    ("POST", "/components/NDD/services/SetSpeed", b"null", 422, "must be a JSON object, not null"),
+    ("POST", "/components/NDD/services/SetSpeed", b"\xff\xfe{}", 400, "is not UTF-8"),
+    ("GET", "/requests?limit=-5", None, 400, "limit='-5': a number of requests from 1 to 999999999 expected"),
+    ("GET", "/requests?limit=0", None, 400, "limit='0'"),
+    ("GET", "/requests?limit=" + "9" * 5000, None, 400, "a number of requests from 1"),
+], ids=lambda v: None if v is None else (v.decode(errors="replace") if isinstance(v, bytes) else str(v))[:40])
 def test_bad_requests_get_a_4xx_that_names_the_problem(ctl, method, path, body, status, message):
     controller, server, client = ctl
     before = client.send("NDD", "SetSpeed")

@@ -19,7 +19,12 @@ from typing import Any, Callable
 from runtime.codels import UNDECLARED, CodelSpec
 from runtime.controller.codels import CodelSource
 from runtime.controller.data import Data, clone, get_path, path_steps, set_path
+from runtime.controller.schema import problems
 from runtime.genom import Ref, Throw
+
+
+class CodelInterrupted(BaseException):
+    """Raised inside a codel that would not return after the controller was told to stop."""
 
 
 @dataclass
@@ -87,6 +92,7 @@ class Binder:
         self.locals: dict[str, Any] | None = None
         self.failure: dict[str, Any] | None = None
         self.calls = 0
+        self.running: str | None = None  # the codel being called (to say what a stop interrupted)
         self.missing: list[str] = []
         self._externs: dict[str, Callable[[], int]] | None = None
         # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
@@ -128,18 +134,26 @@ class Binder:
             if args is None:
                 args = self._anywhere.get(extern, (component, []))[1]
             kwargs, holders = self._arguments(comp, args)
+            self.running = spec.codel
             try:
                 result = fn(**kwargs)
             except Throw as thrown:
                 if not self._write_back(comp, holders, spec):
                     return UNDECLARED
                 return self._thrown(spec, thrown)
-            except Exception as err:  # noqa: BLE001 - the codel's bug, reported with its name
+            except CodelInterrupted:
+                self.failure = {"codel": spec.codel, "error": "interrupted",
+                                "message": f"codel {spec.codel} did not return after the controller was told to "
+                                           "stop: interrupted"}
+                return UNDECLARED
+            except BaseException as err:  # noqa: BLE001 - the codel's bug (even SystemExit), reported with its name
                 frame = traceback.extract_tb(err.__traceback__)[-1]
                 self.failure = {"codel": spec.codel, "error": "python exception",
-                                "message": f"codel {spec.codel} raised {type(err).__name__}: {err}",
+                                "message": f"codel {spec.codel} raised {type(err).__name__}" + (f": {err}" if str(err) else ""),
                                 "where": f"{frame.filename}:{frame.lineno}"}
                 return UNDECLARED
+            finally:
+                self.running = None
             if not self._write_back(comp, holders, spec):
                 return UNDECLARED
             if validate and result in (None, "ok"):
@@ -197,12 +211,25 @@ class Binder:
                 holders.append((a, ref))
         return kwargs, holders
 
+    def _poster_problems(self, component: str, port: str, value: Any) -> list[str]:
+        """What in ``value`` does not fit the IDL type of ``component``'s ``port out``, each with its path."""
+        spec = self.interface["components"][component]["ports"].get(port)
+        if spec is None or spec.get("multiple"):  # a multiple port's value is the codel's own dict of values
+            return []
+        return problems(value, spec["schema"], self.interface.get("types", {}), port)
+
     def _write_back(self, component: str, holders: list[tuple[Arg, Ref]], spec: CodelSpec) -> bool:
         """Store what the codel left in its holders; False (and a failure) when a value has nowhere to go."""
         for a, ref in holders:
             try:
                 if a.source == "port":
                     if ref.value is not None:
+                        wrong = self._poster_problems(component, a.port, ref.value)
+                        if wrong:
+                            self.failure = {"codel": spec.codel, "error": "bad poster value", "port": a.port,
+                                            "message": f"codel {spec.codel} wrote poster {component}.{a.port} "
+                                                       f"(argument {a.name}): " + "; ".join(wrong[:5])}
+                            return False
                         written = self.data.write_poster(component, a.port, ref.value)
                         if self.on_poster is not None:
                             self.on_poster(component, a.port, written)

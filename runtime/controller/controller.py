@@ -10,6 +10,7 @@ of the interactions that fired (docs/runtime.md).
 """
 from __future__ import annotations
 
+import ctypes
 import random
 import sys
 import threading
@@ -18,7 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from runtime.codels import codel_specs
-from runtime.controller.binding import Binder, Scope
+from runtime.controller.binding import Binder, CodelInterrupted, Scope
 from runtime.controller.codels import load_codels
 from runtime.controller.data import Data, PosterValue, clone, get_path, path_steps, set_path
 from runtime.controller.monitor import Monitor
@@ -30,6 +31,10 @@ from runtime.engine.flatten import Leaf
 from runtime.model import Package
 
 Listener = Callable[[dict[str, Any]], None]
+
+#: The interpreter's switch interval while the engine thread runs (s): a thread woken for a period gets the
+#: interpreter back within about this long, even while the services interface is busy (docs/runtime.md).
+SWITCH_INTERVAL = 0.001
 
 
 @dataclass
@@ -49,6 +54,29 @@ class StepInfo:
     lazy_exec: str | None = None  # an untimed period: the exec port of its scheduler
 
 
+def _unstorable(root: dict[str, Any], member: str) -> str | None:
+    """Why a value cannot be stored at the ids path ``member`` (None when it can)."""
+    steps = path_steps(member)
+    if not steps:
+        return f"{member!r} is not a member path"
+    target: Any = root
+    where = ""
+    for i, step in enumerate(steps):
+        if isinstance(step, int):
+            if not isinstance(target, list):
+                return f"{where or 'the ids'} is not an array"
+            if step >= len(target):
+                return f"{where}[{step}] is out of range (length {len(target)})"
+        elif not isinstance(target, dict):
+            return f"{where or 'the ids'} is not a struct"
+        elif step not in target and i < len(steps) - 1:
+            return f"no member {step!r} in {where or 'the ids'}"
+        where += f"[{step}]" if isinstance(step, int) else (f".{step}" if where else step)
+        if i < len(steps) - 1:
+            target = target[step]
+    return None
+
+
 class Controller:
     """``Controller(package, root, interface, codels)``: ``start()``/``run()``, ``submit()``, ``wait()``, ``stop()``.
 
@@ -58,11 +86,12 @@ class Controller:
     clock (a :class:`~runtime.controller.timing.VirtualClock` runs as fast as
     possible); ``seed`` makes the choice among ready interactions random
     (default: the engine's order); ``keep`` bounds how many ended requests
-    are remembered.
+    are remembered; ``max_queued`` how many requests may wait to be taken
+    (beyond, :meth:`submit` answers 429: memory and latency stay bounded).
     """
 
     def __init__(self, package: Package, root: str, interface: dict[str, Any], codels: Any = None, *,
-                 clock: Any = None, seed: int | None = None, keep: int = 10_000) -> None:
+                 clock: Any = None, seed: int | None = None, keep: int = 10_000, max_queued: int = 1000) -> None:
         self.interface = interface
         self.types: dict[str, dict[str, Any]] = interface.get("types", {})
         comps = interface["components"]
@@ -93,6 +122,7 @@ class Controller:
         self._last: dict[int, int] = {}  # interaction index -> step when it last fired (fair choice)
         self._work: dict[tuple, bool] = {}  # (untimed period, state) -> a codel would run in it
         self.keep = keep
+        self.max_queued = max_queued
         self.requests: dict[int, Request] = {}
         self._ended: deque[int] = deque()
         self._next_id = 1
@@ -103,6 +133,8 @@ class Controller:
         self.error: str | None = None
         self.started_at: float | None = None
         self._thread: threading.Thread | None = None
+        self._firing: Request | None = None  # the request whose step is under way (to say what a stop cut short)
+        self._finished = False
 
     # -- the model's structure ---------------------------------------------------------------------------
     def _port_roles(self) -> dict[str, tuple[Any, str, str]]:
@@ -207,8 +239,9 @@ class Controller:
             local[p["name"]] = clone(values[p["name"]]) if p["name"] in values else zero(p["schema"], self.types)
         with self._lock:
             if self.status in ("stopped", "error") or self._stopping:
-                raise RequestError(503, f"the controller is {'stopping' if self._stopping else self.status}; "
-                                        f"request to {svc.label} not accepted")
+                state = f"has stopped on an error ({self.error})" if self.error else \
+                    "is stopping" if self.status in ("ready", "running") else "has stopped"
+                raise RequestError(503, f"the controller {state}; request to {svc.label} not accepted")
             if not svc.reentrant:
                 busy = svc.busy_with()
                 if busy is not None:
@@ -216,6 +249,10 @@ class Controller:
                     hint = f" or interrupt it ({', '.join(others)})" if others else ""
                     raise RequestError(409, f"{svc.label} is busy with request {busy.id} ({busy.status}): an activity "
                                             f"takes one request at a time; wait for its report{hint}")
+            waiting = sum(len(s.queue) for s in self.services.values())
+            if waiting >= self.max_queued:
+                raise RequestError(429, f"{waiting} requests are waiting to be taken: request to {svc.label} "
+                                        "not accepted, send it again later")
             req = Request(self._next_id, component, service, values, local)
             self._next_id += 1
             self.requests[req.id] = req
@@ -243,6 +280,13 @@ class Controller:
                 values[name] = clone(p["default"])
             else:
                 errors.append(f"missing parameter {name!r}" + (f" ({p['doc']})" if p.get("doc") else ""))
+        ids = self.data.ids[svc.scope.component]
+        for p in params:
+            if p["source"] == "ids" and p["name"] in values:
+                problem = _unstorable(ids, p.get("member") or p["name"])
+                if problem:
+                    errors.append(f"parameter {p['name']!r} cannot be stored in ids member "
+                                  f"{p.get('member') or p['name']}: {problem}")
         if errors:
             raise RequestError(422, f"bad request to {svc.label}: " + "; ".join(errors))
         return values
@@ -306,9 +350,13 @@ class Controller:
               then: Callable[[], None] | None = None) -> None:
         """Run in a thread of its own (``stop()`` ends it); ``then()`` is called when the run has ended."""
         def body() -> None:
-            self.run(limit, duration)
-            if then is not None:
-                then()
+            try:
+                self.run(limit, duration)
+            finally:
+                if then is not None:
+                    then()
+        if not self.clock.virtual:
+            sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_INTERVAL))
         self._thread = threading.Thread(target=body, name="bip-controller", daemon=True)
         self._thread.start()
 
@@ -355,12 +403,65 @@ class Controller:
                         self._wake.wait(None if wake_at is None else max(0.0, wake_at - clock.now()))
         except ModelError as err:
             self.error = f"model error: {err}"
+        except CodelInterrupted:
+            pass  # a stuck codel was interrupted just after it returned: the stop it was interrupted for goes on
         except Exception as err:  # noqa: BLE001 - a bug here must not leave requests without a report
             self.error = f"internal error: {type(err).__name__}: {err}"
+        except BaseException as err:  # SystemExit, KeyboardInterrupt...: the run ends, reported, never silently
+            self.error = f"the engine stopped on {type(err).__name__}{f': {err}' if str(err) else ''}"
+            self._finish()
+            if threading.current_thread() is threading.main_thread():
+                raise
+            return self.status
+        self._finish()
+        return self.status
+
+    def _finish(self) -> None:
+        """The run has ended: its status, a final report for every pending request, the ``controller`` event."""
+        with self._lock:
+            if self._finished:
+                return
+            self._finished = True
         self.status = "error" if self.error else "stopped"
         self._end_pending()
         self._emit({"event": "controller", "status": self.status, "steps": self.steps, "error": self.error})
-        return self.status
+
+    # -- a stop that the step under way does not let happen ----------------------------------------------
+    def busy(self) -> str | None:
+        """What the engine thread is doing that a stop waits for: ``codel X of M.S (request N)``, or None."""
+        codel = self.binder.running
+        if codel is None:
+            return None
+        scope = self.binder.scope
+        req = self._firing
+        return f"codel {codel}" + (f" of {scope.label}" if scope is not None else "") + \
+            (f" (request {req.id})" if req is not None else "")
+
+    def alive(self) -> bool:
+        """The engine thread is still running (False when run without a thread)."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def interrupt_codel(self) -> str | None:
+        """Raise :class:`CodelInterrupted` in a codel that does not return after a stop; returns what it interrupted.
+
+        It interrupts Python code only: a codel blocked in a system call
+        (``time.sleep``, a read) sees it when the call returns.
+        """
+        what = self.busy()
+        thread = self._thread
+        if what is None or thread is None or not thread.is_alive() or not self._stopping:
+            return None
+        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident), ctypes.py_object(CodelInterrupted))
+        return what
+
+    def abandon(self, why: str) -> None:
+        """Give up on an engine thread that does not stop: every pending request gets its final report now."""
+        with self._lock:
+            if self.status != "running" or self._finished:
+                return
+            self._stopping = True
+            self.error = why
+        self._finish()
 
     def _choose(self, now: float) -> tuple[Interaction | None, StepInfo | None, float | None]:
         """A due period first (earliest deadline), else an untimed interaction, else a period with work to do."""
@@ -451,7 +552,9 @@ class Controller:
         else:
             b.scope, b.locals = info.scope, None
         now = self.clock.now()
+        self._firing = req
         self.state = self.engine.fire(self.state, inter)
+        self._firing = None
         self.steps += 1
         self._observe(info, req, now)
         if self.monitor is not None:
@@ -518,16 +621,24 @@ class Controller:
         return out
 
     def _apply_inputs(self, svc: Service, req: Request) -> None:
-        """Parameters bound to ids members are written to the ids once the request is accepted (GenoM attributes)."""
+        """Parameters bound to ids members are written to the ids once the request is accepted (GenoM attributes).
+
+        :meth:`submit` refuses an input that has nowhere to go; should the ids
+        have changed shape since, the input is not lost without a word: the
+        request's failure and a ``codel_error`` event name it.
+        """
         ids = self.data.ids[svc.scope.component]
         for p in svc.spec["parameters"]:
             if p["source"] == "ids" and p["direction"] in ("in", "inout") and p["name"] in req.locals:
-                steps = path_steps(p.get("member") or p["name"])
-                if steps:
-                    try:
-                        set_path(ids, steps, clone(req.locals[p["name"]]))
-                    except (KeyError, IndexError, TypeError):
-                        pass
+                member = p.get("member") or p["name"]
+                problem = _unstorable(ids, member)
+                if problem is None:
+                    set_path(ids, path_steps(member), clone(req.locals[p["name"]]))
+                    continue
+                message = f"{req.label} request {req.id}: parameter {p['name']!r} not stored in ids member {member}: " \
+                          f"{problem}"
+                req.failure = {"error": "bad input", "input": p["name"], "message": message}
+                self._emit({"event": "codel_error", "request": req.id, "task": None, **req.failure})
 
     def _outputs(self, svc: Service, req: Request) -> dict[str, Any]:
         ids = self.data.ids[svc.scope.component]
@@ -570,7 +681,9 @@ class Controller:
                 svc.queue.clear()
             for req in pending:
                 if req.final is None:
-                    self._report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}")
+                    cut = f"; {req.failure['message']}" if req.failure else ""  # e.g. its codel, interrupted
+                    self._report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}{cut}",
+                                 **self._failure_fields(req.failure or {}))
 
     def _emit(self, event: dict[str, Any]) -> None:
         for listener in self.listeners:
@@ -586,6 +699,9 @@ class Controller:
             for req in self.requests.values():
                 counts[req.status] = counts.get(req.status, 0) + 1
         now = self.clock.now()
-        return {"system": self.interface.get("system"), "status": self.status, "error": self.error,
+        status, error = self.status, self.error
+        if status == "running" and self._thread is not None and not self._thread.is_alive():
+            status, error = "error", error or "the engine thread has died"
+        return {"system": self.interface.get("system"), "status": status, "error": error,
                 "steps": self.steps, "uptime": round(now - self.started_at, 3) if self.started_at else 0.0,
                 "requests": counts, "codels": {"source": self.codels.where or None, "missing": self.binder.missing}}

@@ -7,6 +7,7 @@ min/maxItems, maxLength, enum, minimum/maximum, anyOf, min/maxProperties and
 """
 from __future__ import annotations
 
+import math
 from typing import Any
 
 _JSON_TYPES = {"object": "an object", "array": "an array", "string": "a string", "integer": "an integer",
@@ -47,6 +48,8 @@ def problems(value: Any, schema: dict[str, Any], types: dict[str, dict[str, Any]
     kind = schema.get("type")
     if kind is not None and not _is(value, kind):
         return [f"{path}: expected {_JSON_TYPES.get(kind, kind)}, got {_show(value)}"]
+    if kind in ("number", "integer") and isinstance(value, float) and not math.isfinite(value):
+        return [f"{path}: {value} is not a finite number"]
     out: list[str] = []
     if "enum" in schema and value not in schema["enum"]:
         out.append(f"{path}: {_show(value)} is not one of {', '.join(map(str, schema['enum']))}")

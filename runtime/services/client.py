@@ -17,14 +17,17 @@ from __future__ import annotations
 
 import http.client
 import json
+import os
 import threading
 import time
 from typing import Any, Iterator
 from urllib.parse import quote, urlencode, urlsplit
 
+from runtime.services.guard import TOKEN_ENV
+
 
 class ServiceError(Exception):
-    """The server refused a call: ``status`` (400, 404, 409, 422, 503...) and its message."""
+    """The server refused a call: ``status`` (400, 401, 403, 404, 409, 413, 415, 422, 429, 503...) and its message."""
 
     def __init__(self, status: int, message: str) -> None:
         super().__init__(f"{status}: {message}")
@@ -33,9 +36,13 @@ class ServiceError(Exception):
 
 
 class Client:
-    """Talks to one controller's services interface at ``url`` (``http://127.0.0.1:PORT``)."""
+    """Talks to one controller's services interface at ``url`` (``http://127.0.0.1:PORT``).
 
-    def __init__(self, url: str, timeout: float = 30.0) -> None:
+    ``token``: the controller's token, if it has one (default: the
+    ``GENOM2BIP_TOKEN`` environment variable).
+    """
+
+    def __init__(self, url: str, timeout: float = 30.0, token: str | None = None) -> None:
         parts = urlsplit(url if "://" in url else f"http://{url}")
         if parts.scheme != "http" or not parts.hostname:
             raise ValueError(f"{url!r}: an http://HOST:PORT address expected")
@@ -43,6 +50,8 @@ class Client:
         self.port = parts.port or 80
         self.url = f"http://{self.host}:{self.port}"
         self.timeout = timeout
+        token = os.environ.get(TOKEN_ENV) if token is None else token
+        self._auth = {"Authorization": f"Bearer {token}"} if token else {}
         self._local = threading.local()
 
     # -- plumbing ------------------------------------------------------------------------------------
@@ -58,6 +67,7 @@ class Client:
     def _call(self, method: str, path: str, body: Any = None, timeout: float | None = None) -> Any:
         data = None if body is None else json.dumps(body).encode()
         headers = {"Content-Type": "application/json"} if data is not None else {}
+        headers.update(self._auth)
         timeout = self.timeout if timeout is None else timeout
         for attempt in (1, 2):
             conn = self._connection(timeout)
@@ -151,7 +161,7 @@ class Client:
         conn = http.client.HTTPConnection(self.host, self.port, timeout=timeout)
         path = "/events" + (f"?{urlencode({'types': types})}" if types else "")
         try:
-            conn.request("GET", path, headers={"Accept": "text/event-stream"})
+            conn.request("GET", path, headers={"Accept": "text/event-stream", **self._auth})
             response = conn.getresponse()
             if response.status >= 400:
                 raw = response.read()

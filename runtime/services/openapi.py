@@ -80,7 +80,7 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
             "responses": {"200": {"description": "component"}, "404": _error("no such component")}}},
         "/requests": {"get": {"summary": "recent requests", "parameters": [
             {"name": "status", "in": "query", "schema": {"type": "string"}},
-            {"name": "limit", "in": "query", "schema": {"type": "integer"}}],
+            {"name": "limit", "in": "query", "schema": {"type": "integer", "minimum": 1}}],
             "responses": {"200": {"description": "list"}}}},
         "/requests/{id}": {"get": {
             "summary": "a request and its reports", "parameters": [
@@ -121,6 +121,9 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
                         "400": _error("malformed JSON"),
                         "409": _error("an activity already handling a request"),
                         "422": _error("unknown, missing or ill-typed parameters"),
+                        "413": _error("a body longer than 1 MiB"),
+                        "415": _error("a body not sent as application/json"),
+                        "429": _error("too many requests waiting to be taken"),
                         "503": _error("the controller has stopped")}}}
     return {
         "openapi": "3.1.0",

@@ -22,6 +22,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import signal
 import socket
 import threading
 import time
@@ -30,21 +31,30 @@ from typing import Any
 import uvicorn
 from starlette.applications import Starlette
 from starlette.exceptions import HTTPException
-from starlette.requests import Request as HttpRequest
+from starlette.middleware import Middleware
+from starlette.requests import ClientDisconnect, Request as HttpRequest
 from starlette.responses import Response, StreamingResponse
 from starlette.routing import Route
 
 from runtime.controller import Controller, RequestError
+from runtime.services.guard import TOKEN_ENV, Guard, is_loopback
 from runtime.services.openapi import openapi
 from runtime.services.views import component_view, components_view, service_view
 
 #: Longest a client may wait for a report in one HTTP call (s); it asks again for longer waits.
 MAX_WAIT = 60.0
-#: Largest request body accepted (bytes).
+#: Largest request body accepted (bytes): refused as it streams in, so memory stays bounded.
 MAX_BODY = 1 << 20
+#: Deepest nesting of arrays and objects accepted in a request body.
+MAX_DEPTH = 64
 #: Events kept for a slow event-stream client before it is cut off.
 QUEUE_SIZE = 10_000
 EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller", "observer")
+#: On a stop: how long the codel under way may take to return (s), then how long after it is interrupted.
+STOP_GRACE = 2.0
+INTERRUPT_GRACE = 1.0
+#: How long event streams and long polls get to send their last events (s) before their connections are cut.
+FLUSH_GRACE = 0.5
 
 
 def _finite(value: Any) -> Any:
@@ -76,6 +86,65 @@ def error(status: int, message: str) -> JSONResponse:
     return JSONResponse({"error": message, "status": status}, status_code=status)
 
 
+async def read_body(request: HttpRequest, what: str) -> bytes:
+    """The body, read as it streams in and refused (413) past :data:`MAX_BODY` bytes, whatever the client says."""
+    declared = request.headers.get("content-length")
+    if declared is not None:
+        if not declared.isdigit():
+            raise RequestError(400, f"Content-Length {declared!r} is not a number of bytes")
+        if int(declared) > MAX_BODY:
+            raise RequestError(413, f"request body of {declared} bytes to {what}: at most {MAX_BODY} accepted")
+    chunks: list[bytes] = []
+    size = 0
+    try:
+        async for chunk in request.stream():
+            size += len(chunk)
+            if size > MAX_BODY:
+                raise RequestError(413, f"request body to {what} longer than {MAX_BODY} bytes: refused")
+            chunks.append(chunk)
+    except ClientDisconnect:
+        raise RequestError(400, f"the client disconnected before sending the whole body to {what}") from None
+    return b"".join(chunks)
+
+
+def _depth(value: Any) -> int:
+    """How deeply arrays and objects nest in ``value`` (without recursion: the value may come from anyone)."""
+    deepest, todo = 0, [(value, 1)]
+    while todo:
+        v, d = todo.pop()
+        if isinstance(v, (dict, list)):
+            deepest = max(deepest, d)
+            if d <= MAX_DEPTH:
+                todo.extend((x, d + 1) for x in (v.values() if isinstance(v, dict) else v))
+    return deepest
+
+
+def parse_inputs(body: bytes, what: str) -> Any:
+    """A request body as JSON data: 400 naming what is wrong, for anything the JSON parser or its limits refuse."""
+    try:
+        text = body.decode()
+    except UnicodeDecodeError as err:
+        raise RequestError(400, f"the body of the request to {what} is not UTF-8: {err}") from None
+    if not text.strip():
+        return {}
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise RequestError(400, f"malformed JSON in the body of the request to {what}: {err}") from None
+    except RecursionError:
+        raise RequestError(400, f"the body of the request to {what} nests arrays or objects too deeply "
+                                f"(at most {MAX_DEPTH} levels)") from None
+    except ValueError as err:  # e.g. an integer of more than 4300 digits
+        raise RequestError(400, f"unreadable JSON in the body of the request to {what}: {err}") from None
+    if _depth(value) > MAX_DEPTH:
+        raise RequestError(400, f"the body of the request to {what} nests arrays or objects too deeply "
+                                f"(at most {MAX_DEPTH} levels)")
+    if value is None:
+        raise RequestError(422, f"the parameters of {what} must be a JSON object, not null (send {{}} or "
+                                "nothing for the defaults)")
+    return value
+
+
 class Subscriber:
     """One event-stream client: a bounded queue of events of the kinds it asked for."""
 
@@ -90,6 +159,7 @@ class Hub:
     def __init__(self) -> None:
         self.waiters: dict[int, list[asyncio.Future]] = {}
         self.subscribers: set[Subscriber] = set()
+        self.streams = 0  # event streams still sending
         self.loop: asyncio.AbstractEventLoop | None = None
         self.closed = False
 
@@ -136,8 +206,8 @@ class Hub:
         self.waiters.clear()
 
 
-def create_app(controller: Controller) -> Starlette:
-    """The ASGI application serving ``controller``."""
+def create_app(controller: Controller, token: str | None = None, loopback: bool = True) -> Starlette:
+    """The ASGI application serving ``controller``, behind its :class:`~runtime.services.guard.Guard`."""
     hub = Hub()
     interface = controller.interface
 
@@ -195,13 +265,7 @@ def create_app(controller: Controller) -> Starlette:
         controller.service(c, s)
         if request.method == "GET":
             return JSONResponse(service_view(interface, c, s))
-        body = await request.body()
-        if len(body) > MAX_BODY:
-            return error(413, f"request body of {len(body)} bytes: at most {MAX_BODY} accepted")
-        try:
-            inputs = json.loads(body) if body.strip() else {}
-        except (json.JSONDecodeError, UnicodeDecodeError) as err:
-            return error(400, f"malformed JSON in the body of the request to {c}.{s}: {err}")
+        inputs = parse_inputs(await read_body(request, f"{c}.{s}"), f"{c}.{s}")
         timeout = wait_time(request)
         req = controller.submit(c, s, inputs)
         if timeout is None:
@@ -212,10 +276,10 @@ def create_app(controller: Controller) -> Starlette:
 
     async def requests_list(request: HttpRequest) -> Response:
         status = request.query_params.get("status")
-        try:
-            limit = int(request.query_params.get("limit", "100"))
-        except ValueError:
-            raise RequestError(400, "limit: a number expected") from None
+        text = request.query_params.get("limit", "100")
+        limit = int(text) if text.isdigit() and len(text) < 10 else 0
+        if limit < 1:
+            raise RequestError(400, f"limit={text!r}: a number of requests from 1 to 999999999 expected")
         ids = sorted(controller.requests, reverse=True)
         rows = []
         for rid in ids:
@@ -256,6 +320,7 @@ def create_app(controller: Controller) -> Starlette:
         hub.subscribers.add(sub)
 
         async def stream():
+            hub.streams += 1
             try:
                 yield f"event: hello\ndata: {dumps(controller.summary())}\n\n"
                 while True:
@@ -269,6 +334,7 @@ def create_app(controller: Controller) -> Starlette:
                     yield f"event: {event['event']}\ndata: {dumps(event)}\n\n"
             finally:
                 hub.subscribers.discard(sub)
+                hub.streams -= 1
 
         return StreamingResponse(stream(), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
@@ -298,8 +364,9 @@ def create_app(controller: Controller) -> Starlette:
         Route("/events", events),
         Route("/tasks", tasks),
     ]
-    app = Starlette(routes=routes, exception_handlers={
-        RequestError: on_request_error, HTTPException: on_http_error, Exception: on_crash})
+    app = Starlette(routes=routes, middleware=[Middleware(Guard, token=token, loopback=loopback)],
+                    exception_handlers={RequestError: on_request_error, HTTPException: on_http_error,
+                                        Exception: on_crash})
     app.state.hub = hub
     return app
 
@@ -309,7 +376,10 @@ class _Uvicorn(uvicorn.Server):
 
     This is done in the server's own startup and shutdown rather than in an
     ASGI lifespan task: on Ctrl-C uvicorn cancels a pending lifespan task and
-    logs a traceback for it, which a clean stop must not print.
+    logs a traceback for it, which a clean stop must not print.  The shutdown
+    ends the controller first (its final reports go out over every stream and
+    long poll), then the streams, then the connections.  A second Ctrl-C
+    calls ``on_force`` (the ``run`` command exits at once).
     """
 
     def __init__(self, config: uvicorn.Config, controller: Controller, hub: "Hub", on_exit) -> None:
@@ -317,6 +387,7 @@ class _Uvicorn(uvicorn.Server):
         self.controller = controller
         self.hub = hub
         self.on_exit = on_exit
+        self.on_force = None
         self._unsubscribe = None
 
     async def startup(self, sockets=None) -> None:
@@ -326,6 +397,9 @@ class _Uvicorn(uvicorn.Server):
 
     async def shutdown(self, sockets=None) -> None:
         try:
+            await self._stop_controller()
+            self.hub.close()
+            await self._flush()
             await super().shutdown(sockets=sockets)
         finally:
             if self._unsubscribe is not None:
@@ -333,39 +407,73 @@ class _Uvicorn(uvicorn.Server):
                 self._unsubscribe = None
             self.hub.close()
 
+    async def _stop_controller(self) -> None:
+        """End the run, interrupting a codel that does not return; its final reports reach the hub before it closes."""
+        c = self.controller
+        loop = asyncio.get_running_loop()
+        c.stop(timeout=0)
+        if c.alive():
+            await loop.run_in_executor(None, c.stop, STOP_GRACE)
+        if c.alive() and c.interrupt_codel() is not None:
+            await loop.run_in_executor(None, c.stop, INTERRUPT_GRACE)
+        if c.alive():
+            c.abandon(f"{c.busy() or 'the engine thread'} did not return within "
+                      f"{STOP_GRACE + INTERRUPT_GRACE:g} s of the stop: abandoned")
+        await asyncio.sleep(0)  # the reports the engine thread handed over are published before the hub closes
+
+    async def _flush(self) -> None:
+        """Give streams and long polls a moment to send their last events, then cut the connections still busy."""
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + FLUSH_GRACE
+        while self.hub.streams and loop.time() < deadline:
+            await asyncio.sleep(0.02)
+        for connection in list(self.server_state.connections):
+            cycle = getattr(connection, "cycle", None)
+            transport = getattr(connection, "transport", None)
+            if cycle is not None and not cycle.response_complete and transport is not None:
+                transport.abort()  # a client that does not read: it must not hold the stop
+
     def handle_exit(self, sig, frame) -> None:
+        if self.should_exit and sig == signal.SIGINT and self.on_force is not None:
+            self.on_force()
         self.on_exit()
         super().handle_exit(sig, frame)
 
 
 class ServiceServer:
-    """The HTTP server of a controller on 127.0.0.1: ``port=0`` picks a free port (see :attr:`url`)."""
+    """The HTTP server of a controller on 127.0.0.1: ``port=0`` picks a free port (see :attr:`url`).
 
-    def __init__(self, controller: Controller, port: int = 0) -> None:
+    ``host`` another address than the loopback only with a ``token``
+    (:class:`ValueError` otherwise): anyone who reaches the port could
+    command the robot.
+    """
+
+    def __init__(self, controller: Controller, port: int = 0, host: str = "127.0.0.1",
+                 token: str | None = None) -> None:
+        loopback = is_loopback(host)
+        if not loopback and not token:
+            raise ValueError(f"listening on {host} lets other machines command the robot: give a token "
+                             f"(--token or {TOKEN_ENV}) that every client must send")
         self.controller = controller
-        self.app = create_app(controller)
-        self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.app = create_app(controller, token, loopback)
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        self.socket = socket.socket(family, socket.SOCK_STREAM)
         self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         # accepted connections inherit it; without it a response written in two parts waits for a delayed ACK
         self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.socket.bind(("127.0.0.1", port))
+        self.socket.bind((host, port))
         self.socket.listen(2048)  # clients may connect as soon as the URL is printed; they wait in the backlog
         self.port = self.socket.getsockname()[1]
-        self.url = f"http://127.0.0.1:{self.port}"
+        shown = "127.0.0.1" if host in ("0.0.0.0", "localhost") else f"[{host}]" if ":" in host else host
+        self.url = f"http://{shown}:{self.port}"
         config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off",
                                 timeout_graceful_shutdown=3, timeout_keep_alive=30)
         self.server = _Uvicorn(config, controller, self.app.state.hub, self._exiting)
         self._thread: threading.Thread | None = None
 
     def _exiting(self) -> None:
-        """A stop was asked for: the controller ends after its current step, streams and long polls end."""
+        """A stop was asked for: the controller ends after its current step (the shutdown waits for it)."""
         self.controller.stop(timeout=0)
-        hub: Hub = self.app.state.hub
-        if hub.loop is not None:
-            try:
-                hub.loop.call_soon_threadsafe(hub.close)
-            except RuntimeError:
-                pass
 
     def serve(self) -> None:
         """Serve in this thread until Ctrl-C / SIGTERM (the main thread) or :meth:`stop`."""

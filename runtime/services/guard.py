@@ -1,0 +1,98 @@
+"""Who may talk to the services interface: a same-host check, no cross-site requests, an optional token.
+
+An ASGI middleware in front of the application (docs/runtime.md, "Security"):
+
+* the ``Host`` header must name this machine's loopback (``127.0.0.1``,
+  ``localhost``, ``[::1]``), so a page served from another name that DNS
+  rebinding points at 127.0.0.1 is refused; a server bound to another
+  address takes any ``Host`` but then requires the token;
+* an ``Origin`` header, which browsers add to cross-site requests, must be
+  the server's own (``http://`` + its ``Host``);
+* a request that acts (POST) must say ``Content-Type: application/json``,
+  which a plain HTML form or a "simple" cross-site fetch cannot send;
+* with a token (``--token`` or ``GENOM2BIP_TOKEN``), every request carries
+  ``Authorization: Bearer TOKEN``.
+"""
+from __future__ import annotations
+
+import hmac
+import ipaddress
+import json
+from typing import Any, Awaitable, Callable
+
+#: The environment variable the server and the client take the token from.
+TOKEN_ENV = "GENOM2BIP_TOKEN"
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
+
+Scope = dict[str, Any]
+ASGIApp = Callable[[Scope, Callable, Callable], Awaitable[None]]
+
+
+def is_loopback(host: str) -> bool:
+    """``127.0.0.1``, ``::1``, ``localhost``: only this machine can connect."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def host_name(header: str) -> str:
+    """``"127.0.0.1:8080"`` → ``"127.0.0.1"``, ``"[::1]:8080"`` → ``"::1"``."""
+    if header.startswith("["):
+        return header[1:].split("]", 1)[0]
+    return header.rsplit(":", 1)[0] if header.count(":") == 1 else header
+
+
+class Guard:
+    """The checks above, before the application sees the request; refusals are JSON ``{"error", "status"}``."""
+
+    def __init__(self, app: ASGIApp, token: str | None = None, loopback: bool = True) -> None:
+        self.app = app
+        self.token = token or None
+        self.loopback = loopback
+
+    async def __call__(self, scope: Scope, receive: Callable, send: Callable) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        problem = self.problem(scope)
+        if problem is None:
+            await self.app(scope, receive, send)
+            return
+        status, message = problem
+        body = json.dumps({"error": message, "status": status}).encode()
+        headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
+        if status == 401:
+            headers.append((b"www-authenticate", b'Bearer realm="genom2bip"'))
+        await send({"type": "http.response.start", "status": status, "headers": headers})
+        await send({"type": "http.response.body", "body": body})
+
+    def problem(self, scope: Scope) -> tuple[int, str] | None:
+        """(status, message) when the request is refused, else None."""
+        headers: dict[str, str] = {}
+        for k, v in scope.get("headers", []):
+            headers[k.decode("latin-1").lower()] = v.decode("latin-1")
+        host = headers.get("host", "")
+        if self.loopback and not is_loopback(host_name(host)):
+            return 403, (f"Host {host!r} is not this server: a controller on the loopback answers only to "
+                         f"{', '.join(LOOPBACK_NAMES)} (a guard against DNS rebinding)")
+        origin = headers.get("origin")
+        if origin is not None and origin != f"http://{host}":
+            return 403, (f"cross-site request from Origin {origin!r} refused: only pages of http://{host} "
+                         "may call this interface")
+        if self.token is not None:
+            given = headers.get("authorization", "")
+            scheme, _, value = given.partition(" ")
+            if scheme.lower() != "bearer" or not hmac.compare_digest(value.strip().encode(), self.token.encode()):
+                what = "a wrong token" if given else "no token"
+                return 401, (f"{what}: this controller requires 'Authorization: Bearer TOKEN' "
+                             f"(the client takes it from {TOKEN_ENV})")
+        if scope["method"] == "POST":
+            kind = headers.get("content-type", "").split(";", 1)[0].strip().lower()
+            if kind != "application/json":
+                shown = repr(headers["content-type"]) if "content-type" in headers else "none"
+                return 415, (f"Content-Type {shown}: a request that acts must be sent as application/json "
+                             "(a guard against cross-site form posts)")
+        return None
