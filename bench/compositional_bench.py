@@ -132,13 +132,15 @@ def measure(method: str, name: str, seconds: float) -> dict:
     """Run ``one`` in a child; add its peak memory (the child and its own children, e.g. pan)."""
     argv = [sys.executable, __file__, "--one", method, name, "--seconds", str(seconds)]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env={**os.environ, "PYTHONPATH": str(ROOT)})
+                            env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
     try:
         out, err = proc.communicate(timeout=seconds + 240)
     except subprocess.TimeoutExpired:
-        proc.kill()
+        os.killpg(proc.pid, signal.SIGKILL)  # the child and what it started (gcc, pan)
         out, err = proc.communicate()
-        return {"verdict": "did not finish", "seconds": seconds + 240, "note": "killed", "mb": 0.0}
+        stage = "translating or compiling (SPIN)" if method == "spin" else "running"
+        return {"verdict": "did not finish", "seconds": seconds + 240,
+                "note": f"still {stage} at {seconds + 240:.0f} s, stopped", "mb": 0.0}
     line = next((x for x in out.splitlines() if x.startswith("{")), None)
     if line is None:
         return {"verdict": "error", "seconds": 0.0, "note": err.strip().splitlines()[-1:] or [""], "mb": 0.0}
