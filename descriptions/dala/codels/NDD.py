@@ -88,8 +88,9 @@ def nddPlan(goal, params, max_speed, Obs, Pos, Speed):
     if distance <= params["goal_tolerance"]:
         return "arrived"
     points = grid.points(Obs["cells"], Obs["resolution"], SIDE) if Obs else []
-    setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"],
-                        dmax=SIDE / 2 * (Obs["resolution"] if Obs else 0.1), vmax=max_speed["v"], wmax=max_speed["w"])
+    cell = Obs["resolution"] if Obs else 0.1
+    setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"], dmax=SIDE / 2 * cell,
+                        vmax=max_speed["v"], wmax=max_speed["w"], cell=cell)
     decision = nd.decide(points, (target["x"], target["y"]), setting)
     why = blocked(_progress, distance, decision is not None, Pos["stamp"])
     if decision is None or why:

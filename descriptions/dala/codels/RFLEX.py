@@ -47,9 +47,14 @@ def rflexStartTracking(mode):
 
 
 def limited(current: dict, wanted: dict, acceleration_max: float, dt: float) -> dict:
-    """The speed one period closer to ``wanted``: linear speed changes by at most acceleration_max * dt."""
-    step = acceleration_max * dt
-    return {"v": current["v"] + max(-step, min(step, wanted["v"] - current["v"])), "w": wanted["w"]}
+    """The speed one period closer to ``wanted``: speeding up by at most acceleration_max * dt; braking at once."""
+    v, target = current["v"], wanted["v"]
+    if abs(target) > abs(v) and target * v >= 0:
+        step = acceleration_max * dt
+        v += max(-step, min(step, target - v))
+    else:
+        v = target
+    return {"v": v, "w": wanted["w"]}
 
 
 def _apply(speed: dict) -> None:

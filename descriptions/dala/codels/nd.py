@@ -228,7 +228,8 @@ def decide(points: list[tuple[float, float]], goal: tuple[float, float], p: Para
         situation, direction = "HSNR", wrap(rd + side * len(inside) / 2 * sector)
     near = [(k, r) for k, r in enumerate(d) if r - p.radius < p.security]
     if near:
-        ref = g_angle if v.rising == v.other else rd  # the sides are those of the gap the robot heads for
+        # The sides are those of the gap the robot heads for: the edge between its outer and valley sectors.
+        ref = g_angle if v.rising == v.other else rd - side * sector / 2
         left = [(k, r) for k, r in near if wrap(angle_of(k, n) - ref) > 0]
         right = [(k, r) for k, r in near if wrap(angle_of(k, n) - ref) <= 0]
         if left and right:
