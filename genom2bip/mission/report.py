@@ -21,7 +21,7 @@ def goals(run: Run) -> list[dict[str, Any]]:
         if o.step.kind != "send" or o.step.target != GOAL_SERVICE:
             continue
         goal = o.step.inputs.get("goal", {})
-        r = o.report
+        r = final_report(run, o.request) or o.report
         status = r.get("status")
         end = _pose_at(run, r.get("time"))
         gap = math.hypot(goal.get("x", 0) - end[0], goal.get("y", 0) - end[1]) if end else None
@@ -39,6 +39,12 @@ def goals(run: Run) -> list[dict[str, Any]]:
             why = f"not reached: {status}"
         out.append({"goal": goal, "status": status, "why": why, "distance_left": gap, "request": o.request})
     return out
+
+
+def final_report(run: Run, request: int | None) -> dict[str, Any] | None:
+    """The final report of ``request`` among the controller's events (it may come after the step that sent it)."""
+    finals = [e for e in run.events if e.get("event") == "report" and e.get("request") == request and e.get("final")]
+    return finals[-1] if finals else None
 
 
 def _pose_at(run: Run, t: float | None) -> tuple[float, float] | None:

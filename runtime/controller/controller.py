@@ -580,5 +580,5 @@ class Controller:
                 counts[req.status] = counts.get(req.status, 0) + 1
         now = self.clock.now()
         return {"system": self.interface.get("system"), "status": self.status, "error": self.error,
-                "steps": self.steps, "uptime": round(now - self.started_at, 3) if self.started_at else 0.0,
+                "steps": self.steps, "uptime": round(now - self.started_at, 3) if self.started_at is not None else 0.0,
                 "requests": counts, "codels": {"source": self.codels.where or None, "missing": self.binder.missing}}
