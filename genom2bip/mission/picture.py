@@ -7,8 +7,8 @@ from genom2bip.mission.report import goals
 from genom2bip.mission.session import Run
 
 
-def draw(run: Run, path: Path) -> None:
-    """Write a PNG of ``run`` (which must have a world) to ``path``."""
+def draw(run: Run, path: Path):
+    """Write a PNG of ``run`` (which must have a world) to ``path``; returns (x, y) -> (column, row) in it."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -51,3 +51,9 @@ def draw(run: Run, path: Path) -> None:
     tmp = path.with_name(path.name + ".tmp.png")
     fig.savefig(tmp)
     tmp.replace(path)
+    height = fig.bbox.height
+
+    def to_pixel(x: float, y: float) -> tuple[int, int]:
+        col, row = ax.transData.transform((x, y))
+        return int(round(col)), int(round(height - row))
+    return to_pixel
