@@ -248,6 +248,7 @@ def decide(points: list[tuple[float, float]], goal: tuple[float, float], p: Para
     direction = wrap(direction)
     safety = speed_factor(d, direction, p)
     heading = max(0.0, 1 - abs(direction) / (math.pi / 2))
-    v_ = p.vmax * safety * heading
+    # near the goal the robot slows down so that its turning radius v/w stays within half the distance left
+    v_ = min(p.vmax, p.wmax * math.hypot(*goal) / 2) * safety * heading
     w_ = p.wmax * max(-1.0, min(1.0, direction / (math.pi / 2)))
     return Decision(situation, direction, v_, w_, v)
