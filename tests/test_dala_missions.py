@@ -116,3 +116,22 @@ def test_dead_end_goto_fails_with_e_blocked_then_a_new_goto_is_served():
     end = run.world.trajectory[-1]
     assert math.hypot(end.x - 2.0, end.y - 6.5) < 0.3
     assert run.world.collisions == 0
+
+
+def test_the_trace_has_every_report_and_the_path_in_time_order(corridor, tmp_path):
+    import json
+
+    from genom2bip.mission.session import write_trace
+
+    path = tmp_path / "trace.jsonl"
+    write_trace(corridor, path)
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    times = [e["time"] for e in lines]
+    assert times == sorted(times)
+    reports = [e for e in lines if e["event"] == "report" and e["final"]]
+    assert [f"{e['component']}.{e['service']}" for e in reports][-1] == "NDD.GoTo"
+    assert {e["request"] for e in reports} == {o.request for o in corridor.outcomes if o.request is not None
+                                                and o.step.until == "final"}
+    poses = [e for e in lines if e["event"] == "pose"]
+    assert len(poses) == len(corridor.world.trajectory)
+    assert (poses[0]["x"], poses[0]["y"]) == (1.0, 2.0)
