@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
@@ -10,8 +11,8 @@ from tests.runkit import ROOT, dala
 
 pytest.importorskip("irsim")
 
-from genom2bip.mission.session import run_mission  # noqa: E402
-from genom2bip.mission.spec import read_mission  # noqa: E402
+from genom2bip.mission.session import run_mission
+from genom2bip.mission.spec import read_mission
 
 MISSIONS = ROOT / "descriptions" / "dala" / "missions"
 CODELS = str(ROOT / "descriptions" / "dala" / "codels")
@@ -97,7 +98,7 @@ def test_stop_interrupts_goto_and_the_robot_stops_within_a_bounded_distance():
     before = [s for s in samples if s.t <= stopped_at]
     assert before[-1].x > 2.5  # it was driving when Stop came
     after = [s for s in samples if stopped_at <= s.t <= stopped_at + 2.0]
-    moved = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(after, after[1:]))
+    moved = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in pairwise(after))
     assert moved < 0.1
     assert abs(after[-1].v) < 1e-6
     assert _report(run, "NDD.GoTo", 1)["status"] == "ok"  # and the next GoTo is served

@@ -55,5 +55,5 @@ def draw(run: Run, path: Path):
 
     def to_pixel(x: float, y: float) -> tuple[int, int]:
         col, row = ax.transData.transform((x, y))
-        return int(round(col)), int(round(height - row))
+        return round(col), round(height - row)
     return to_pixel

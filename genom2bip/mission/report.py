@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from typing import Any
 
 from genom2bip.mission.session import Run
@@ -11,7 +12,7 @@ GOAL_SERVICE = "NDD.GoTo"
 
 def distance_driven(run: Run) -> float:
     t = run.world.trajectory if run.world is not None else []
-    return sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(t, t[1:]))
+    return sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in pairwise(t))
 
 
 def goals(run: Run) -> list[dict[str, Any]]:

@@ -202,7 +202,10 @@ def speed_factor(d: list[float], direction: float, p: Params) -> float:
     n = len(d)
     ahead = [r for k, r in enumerate(d) if abs(wrap(angle_of(k, n) - direction)) < math.pi / 4]
     side = [r for k, r in enumerate(d) if abs(wrap(angle_of(k, n) - direction)) < math.pi / 2]
-    depth = lambda r: max(0.0, min(1.0, (r - p.radius) / p.security))  # noqa: E731
+
+    def depth(r: float) -> float:
+        return max(0.0, min(1.0, (r - p.radius) / p.security))
+
     front = depth(min(ahead, default=math.inf))
     return min(front, max(0.25, depth(min(side, default=math.inf))))
 
