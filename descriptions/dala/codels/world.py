@@ -107,7 +107,7 @@ class Session:
 
     def close(self) -> None:
         if self.display:
-            self.env.end(0)
+            self.env.end(1.0)  # a last look at the window (0 would wait for ever)
 
 
 _current: dict[str, Session] = {}
