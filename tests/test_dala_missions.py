@@ -7,12 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.runkit import ROOT, dala
-
-pytest.importorskip("irsim")
-
 from genom2bip.mission.session import run_mission
 from genom2bip.mission.spec import read_mission
+from tests.runkit import ROOT, dala
 
 MISSIONS = ROOT / "descriptions" / "dala" / "missions"
 CODELS = str(ROOT / "descriptions" / "dala" / "codels")
