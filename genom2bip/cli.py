@@ -339,3 +339,4 @@ if __name__ == "__main__":
 from genom2bip import call_cli  # noqa: E402,F401 - registers the call verb
 from genom2bip import verify_cli  # noqa: F401,E402
 from genom2bip import graph_cli  # noqa: F401,E402
+from genom2bip import mission_cli  # noqa: F401,E402 - registers the mission verb

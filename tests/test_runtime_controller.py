@@ -259,6 +259,9 @@ def test_the_simulated_dala_codels_drive_the_robot_to_its_goal():
     c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(ROOT / "descriptions" / "dala" / "codels"),
                    clock=VirtualClock())
     assert c.binder.missing == []
+    from genom2bip.mission.session import world_module
+
+    world_module(c).load()  # the open field, the robot at its start
     c.start()
 
     def call(component, service, **inputs):

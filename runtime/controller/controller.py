@@ -702,6 +702,7 @@ class Controller:
         status, error = self.status, self.error
         if status == "running" and self._thread is not None and not self._thread.is_alive():
             status, error = "error", error or "the engine thread has died"
-        return {"system": self.interface.get("system"), "status": status, "error": error,
-                "steps": self.steps, "uptime": round(now - self.started_at, 3) if self.started_at else 0.0,
+        uptime = round(now - self.started_at, 3) if self.started_at is not None else 0.0
+        return {"system": self.interface.get("system"), "status": status, "error": error, "steps": self.steps,
+                "uptime": uptime,
                 "requests": counts, "codels": {"source": self.codels.where or None, "missing": self.binder.missing}}

@@ -1,9 +1,11 @@
-"""Aspect, simulated: a robot-centred occupancy grid of the last scan, 64 x 64 cells."""
-import math
-
+"""Aspect: every new laser sweep is fused into the robot-centred obstacle map Obs (see grid.py)."""
 from runtime.genom import Throw
 
-SIDE = 64
+from . import grid
+
+SIDE = 64  # dala::map_cells
+RESOLUTION = 0.1  # m per cell
+DECAY = 0.6  # a return missed by one sweep stays one more sweep
 _seen = {"seq": None}
 
 
@@ -12,29 +14,24 @@ def aspCheckParams(resolution, decay):
         raise Throw("e_bad_params", resolution=resolution)
 
 
-def _empty(resolution):
-    return {"resolution": resolution, "origin": {"x": 0.0, "y": 0.0, "theta": 0.0}, "cells": [0] * (SIDE * SIDE),
+def _empty():
+    return {"resolution": RESOLUTION, "origin": {"x": 0.0, "y": 0.0, "theta": 0.0}, "cells": [0] * (SIDE * SIDE),
             "seq": 0}
 
 
 def aspReset(Obs):
-    Obs.value = _empty(0.1)
+    _seen["seq"] = None
+    Obs.value = _empty()
     return "fuse"
 
 
 def aspFuse(Scan, last_seq, Obs):
     if Scan is None or Scan["seq"] == _seen["seq"]:
         return "wait"
-    grid = _empty(Obs.value["resolution"] if Obs.value else 0.1)
-    res = grid["resolution"]
-    for i, r in enumerate(Scan["ranges"]):
-        if r < Scan["range_max"]:
-            a = Scan["angle_min"] + i * Scan["angle_step"]
-            cx, cy = int(r * math.cos(a) / res) + SIDE // 2, int(r * math.sin(a) / res) + SIDE // 2
-            if 0 <= cx < SIDE and 0 <= cy < SIDE:
-                grid["cells"][cy * SIDE + cx] = 255
-    grid["seq"] = last_seq.value = _seen["seq"] = Scan["seq"]
-    Obs.value = grid
+    previous = Obs.value or _empty()
+    cells = grid.fuse(Scan, previous["cells"], previous["resolution"], SIDE, DECAY)
+    last_seq.value = _seen["seq"] = Scan["seq"]
+    Obs.value = {**previous, "cells": cells, "seq": Scan["seq"]}
     return "pause::fuse"
 
 

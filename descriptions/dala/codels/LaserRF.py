@@ -1,11 +1,9 @@
-"""LaserRF, simulated: a 180 degree sweep cast into the simulated room."""
-import math
-
+"""LaserRF: reads the simulated 2D lidar into poster Scan, with the configured range and number of beams."""
 from runtime.genom import Throw
 
 from . import world
 
-_config = {"max_range": 8.0, "beams": 37}
+_config = {"max_range": 8.0, "beams": 361}
 
 
 def lrfInitTask(acquiring):
@@ -26,7 +24,7 @@ def lrfOpen(local_device, ids_device):
 
 
 def lrfConfigure(max_range, beams):
-    _config.update(max_range=max_range or 8.0, beams=min(beams or 37, 361))
+    _config.update(max_range=max_range or 8.0, beams=min(beams or 361, 361))
     return "ether"
 
 
@@ -35,12 +33,18 @@ def lrfStartAcquisition(acquiring):
     return "acquire"
 
 
+def sweep(raw: dict, beams: int, max_range: float) -> dict:
+    """At most ``beams`` evenly spread beams of the lidar's sweep, clipped to ``max_range``."""
+    ranges = raw["ranges"]
+    every = max(1, -(-len(ranges) // beams))
+    top = min(max_range, raw["range_max"])
+    return {"angle_min": raw["angle_min"], "angle_step": raw["angle_step"] * every, "range_max": top,
+            "ranges": [round(min(r, top), 3) for r in ranges[::every]]}
+
+
 def lrfAcquire(Scan):
-    n, top = _config["beams"], _config["max_range"]
-    step = math.pi / (n - 1)
     seq = Scan.value["seq"] + 1 if Scan.value else 0
-    Scan.value = {"angle_min": -math.pi / 2, "angle_step": step, "range_max": top,
-                  "ranges": [round(world.ray(-math.pi / 2 + i * step, top), 3) for i in range(n)], "seq": seq}
+    Scan.value = {**sweep(world.sim().scan(), _config["beams"], _config["max_range"]), "seq": seq}
     return "pause::acquire"
 
 

@@ -1,10 +1,22 @@
-"""NDD, simulated: heads for the goal, slows down near obstacles of the map, throws e_blocked when stuck."""
+"""NDD: nearness-diagram navigation (nd.py) towards the goal over Aspect's map Obs, from POM's position Pos.
+
+GoTo fails with e_blocked when no gap leads towards the goal for
+NO_WAY_TIMEOUT seconds, or when the robot has not got PROGRESS metres
+closer to the goal for PROGRESS_TIMEOUT seconds (simulated time, from the
+Pos stamps): a dead end, a goal inside an obstacle or behind a wall.
+"""
 import math
 
 from runtime.genom import Throw
 
+from . import grid, nd, odometry
+
 STILL = {"v": 0.0, "w": 0.0}
-SIDE = 64
+SIDE = 64  # dala::map_cells
+NO_WAY_TIMEOUT = 3.0  # s
+PROGRESS = 0.2  # m
+PROGRESS_TIMEOUT = 12.0  # s
+_progress = {"best": math.inf, "since": None, "no_way_since": None, "situation": None}
 
 
 def nddInit(navigating, Speed):
@@ -47,38 +59,47 @@ def nddCheckGoal(goal):
 def nddStartGoTo(local_goal, ids_goal, navigating):
     ids_goal.value = dict(local_goal)
     navigating.value = True
+    _progress.update(best=math.inf, since=None, no_way_since=None)
     return "plan"
 
 
-def _clearance(obs, heading):
-    """Distance to the nearest occupied cell within 15 degrees of ``heading`` (robot frame), in m."""
-    if obs is None:
-        return math.inf
-    res, best = obs["resolution"], math.inf
-    for k, cell in enumerate(obs["cells"]):
-        if cell:
-            x, y = (k % SIDE - SIDE // 2) * res, (k // SIDE - SIDE // 2) * res
-            if abs(math.atan2(y, x) - heading) < math.pi / 12:
-                best = min(best, math.hypot(x, y))
-    return best
+def blocked(progress: dict, distance: float, way: bool, now: float) -> str | None:
+    """Why the robot is blocked at ``now`` (sim seconds), or None: no navigable valley, or no progress, too long."""
+    if progress["since"] is None or distance < progress["best"] - PROGRESS:
+        progress.update(best=min(distance, progress["best"]), since=now)
+    if way:
+        progress["no_way_since"] = None
+    elif progress["no_way_since"] is None:
+        progress["no_way_since"] = now
+    if progress["no_way_since"] is not None and now - progress["no_way_since"] > NO_WAY_TIMEOUT:
+        return f"no navigable gap towards the goal for {NO_WAY_TIMEOUT:g} s"
+    if now - progress["since"] > PROGRESS_TIMEOUT:
+        return f"no progress of {PROGRESS:g} m towards the goal in {PROGRESS_TIMEOUT:g} s"
+    return None
 
 
 def nddPlan(goal, params, max_speed, Obs, Pos, Speed):
+    """One ND step towards the goal (nd.py); throws e_blocked when it cannot get closer."""
     if Pos is None:
         raise Throw("e_no_goal")
-    p = Pos["estimate"]
-    dx, dy = goal["x"] - p["x"], goal["y"] - p["y"]
-    distance = math.hypot(dx, dy)
+    here = Pos["estimate"]
+    target = odometry.between(here, goal)
+    distance = math.hypot(target["x"], target["y"])
     if distance <= params["goal_tolerance"]:
         return "arrived"
-    heading = math.atan2(math.sin(math.atan2(dy, dx) - p["theta"]), math.cos(math.atan2(dy, dx) - p["theta"]))
-    room = _clearance(Obs, heading) - params["robot_radius"]
-    if room < params["security_distance"] / 2:
+    points = grid.points(Obs["cells"], Obs["resolution"], SIDE) if Obs else []
+    cell = Obs["resolution"] if Obs else 0.1
+    setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"], dmax=SIDE / 2 * cell,
+                        vmax=max_speed["v"], wmax=max_speed["w"], cell=cell)
+    decision = nd.decide(points, (target["x"], target["y"]), setting)
+    why = blocked(_progress, distance, decision is not None, Pos["stamp"])
+    if decision is None or why:
         Speed.value = dict(STILL)
-        raise Throw("e_blocked", where=dict(p))
-    v = min(max_speed["v"], max(distance, 0.2), max(0.0, room - params["security_distance"]))
-    v *= max(0.0, math.cos(heading))
-    Speed.value = {"v": v, "w": max(-max_speed["w"], min(max_speed["w"], 1.5 * heading))}
+    else:
+        Speed.value = {"v": decision.v, "w": decision.w}
+        _progress["situation"] = decision.situation
+    if why:
+        raise Throw("e_blocked", where=dict(here))
     return "pause::plan"
 
 

@@ -1,0 +1,107 @@
+"""A mission run end to end: the generated controller with its codels in a loaded world, its server, the mission.
+
+The controller runs on a virtual clock by default (as fast as the machine
+allows; every period still advances the simulation by its own length), or
+in real time with ``realtime``.  The world module of the codels package
+(``world.py``, ir-sim) is loaded with the world file before the controller
+starts, and read back afterwards for the trajectory and the laser's hits.
+"""
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from genom2bip.mission.runner import Outcome, Runner
+from genom2bip.mission.spec import Mission
+
+
+@dataclass
+class Run:
+    """What a mission run leaves: the outcomes, the controller's reports, the world's record, times."""
+
+    mission: Mission
+    world_path: Path | None
+    outcomes: list[Outcome]
+    events: list[dict[str, Any]] = field(default_factory=list)
+    world: Any = None  # the codels' world session (trajectory, hits, obstacles), None without one
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None and all(o.ok for o in self.outcomes)
+
+
+def load_package(directory: str | Path):
+    """The generated package in ``directory`` (e.g. gen/dala), imported by its name from its parent folder."""
+    directory = Path(directory).resolve()
+    if not (directory / "__init__.py").is_file():
+        raise FileNotFoundError(f"{directory}: no generated package here (run genom2bip DESCRIPTIONS -o gen first)")
+    parent = str(directory.parent)
+    if parent not in sys.path:
+        sys.path.insert(0, parent)
+    return importlib.import_module(directory.name)
+
+
+def world_module(controller) -> Any:
+    """The ``world`` module beside the codels, None when the codels have none (stand-in codels)."""
+    for module in controller.codels.modules.values():
+        package = getattr(module, "__package__", None)
+        if package:
+            try:
+                return importlib.import_module(f"{package}.world")
+            except ImportError:
+                return None
+    return None
+
+
+def run_mission(mission: Mission, package, codels: str | None, world: Path | None, *, realtime: bool = False,
+                live: bool = False, log=None) -> Run:
+    """Start the controller and its server, load the world, run the mission's steps, stop everything."""
+    from runtime.controller import Controller
+    from runtime.controller.timing import VirtualClock
+    from runtime.services.client import Client
+    from runtime.services.run import find_codels
+    from runtime.services.server import ServiceServer
+
+    codels = find_codels(package.INTERFACE, codels, str(Path(package.__file__).parent))
+    controller = Controller(package.package(), package.ROOT, package.INTERFACE, codels,
+                            clock=None if realtime or live else VirtualClock())
+    sim_world = world_module(controller)
+    session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
+    events: list[dict[str, Any]] = []
+    controller.subscribe(lambda e: events.append(e) if e["event"] in ("report", "overrun", "codel_error") else None)
+    started = time.perf_counter()
+    controller.start()
+    server = ServiceServer(controller).start()
+    try:
+        outcomes = Runner(Client(server.url, timeout=30), log).run(mission)
+    finally:
+        server.stop()
+        controller.stop()
+    run = Run(mission, world, outcomes, events, session, sim_time=controller.clock.now() - controller.started_at,
+              wall_time=time.perf_counter() - started, error=controller.error)
+    if session is not None:
+        session.close()
+    return run
+
+
+def write_trace(run: Run, path: Path) -> None:
+    """The run as JSON lines, in time order: every report of the controller and the robot's true pose."""
+    lines: list[tuple[float, int, dict[str, Any]]] = [(e.get("time", 0.0), 0, e) for e in run.events]
+    if run.world is not None:
+        for s in run.world.trajectory:
+            lines.append((s.t, 1, {"event": "pose", "time": s.t, "x": round(s.x, 4), "y": round(s.y, 4),
+                                   "theta": round(s.theta, 4), "v": round(s.v, 4), "w": round(s.w, 4)}))
+    lines.sort(key=lambda item: (item[0], item[1]))
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    with tmp.open("w", encoding="utf-8") as f:
+        for _, _, event in lines:
+            f.write(json.dumps(event, default=str) + "\n")
+    tmp.replace(path)

@@ -1,0 +1,193 @@
+"""Reading a mission file (YAML): its steps, each with the line it came from; errors name file:line:column.
+
+```yaml
+mission: corridor
+world: ../worlds/corridor.yaml        # relative to this file; --world overrides it
+steps:
+  - send: NDD.SetSpeed                # Module.Service
+    with: {max_speed: {v: 0.4}}       # its inputs (defaults for the others)
+    expect: ok                        # a status, or {status, rule, exception, by}
+  - send: NDD.GoTo
+    as: goto                          # a name to await it later
+    until: started                    # queued | started | final (default)
+    timeout: 60                       # controller seconds (default 120)
+  - wait: 2.0                         # controller seconds
+  - await: goto
+    expect: {status: interrupted, by: NDD.Stop}
+```
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from runtime.diagnostics import Reporter, Span
+
+STATUSES = ("ok", "rejected", "failed", "interrupted", "refused")
+EXPECT_KEYS = ("status", "rule", "exception", "by", "reason")
+UNTIL = ("queued", "started", "final")
+DEFAULT_TIMEOUT = 120.0
+
+
+@dataclass
+class Step:
+    """One line of a mission: ``send``, ``wait`` or ``await``."""
+
+    kind: str
+    span: Span
+    target: str = ""  # send: Module.Service; await: the name given with ``as``
+    inputs: dict[str, Any] = field(default_factory=dict)
+    name: str | None = None
+    until: str = "final"
+    expect: dict[str, str] | None = None
+    timeout: float = DEFAULT_TIMEOUT
+    seconds: float = 0.0
+
+    @property
+    def where(self) -> str:
+        return f"{self.span.file}:{self.span.line}"
+
+
+@dataclass
+class Mission:
+    name: str
+    path: Path
+    world: Path | None
+    steps: list[Step]
+
+
+def _plain(node: yaml.Node) -> Any:
+    return yaml.safe_load(yaml.serialize(node))
+
+
+class _Reader:
+    def __init__(self, path: Path, reporter: Reporter) -> None:
+        self.path, self.reporter = path, reporter
+
+    def span(self, node: yaml.Node) -> Span:
+        m = node.start_mark
+        return Span(str(self.path), m.line + 1, m.column + 1, node.end_mark.line + 1, node.end_mark.column + 1)
+
+    def error(self, node: yaml.Node, message: str) -> None:
+        self.reporter.error(self.span(node), message)
+
+    def number(self, node: yaml.Node, what: str) -> float | None:
+        value = _plain(node)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:
+            self.error(node, f"{what}: a number of seconds (0 or more) expected, got {node.value!r}")
+            return None
+        return float(value)
+
+    def expect(self, node: yaml.Node) -> dict[str, str] | None:
+        value = _plain(node)
+        if isinstance(value, str):
+            value = {"status": value}
+        if not isinstance(value, dict) or not value:
+            self.error(node, "expect: a status (ok, rejected, failed, interrupted) or a mapping of "
+                             f"{', '.join(EXPECT_KEYS)} expected")
+            return None
+        for key, item in zip(node.value if isinstance(node, yaml.MappingNode) else [], value):
+            if item not in EXPECT_KEYS:
+                self.error(key[0], f"expect: unknown key {item!r} (keys: {', '.join(EXPECT_KEYS)})")
+        status = value.get("status")
+        if status is not None and status not in STATUSES:
+            self.error(node, f"expect: unknown status {status!r} (statuses: {', '.join(STATUSES[:4])})")
+        return {k: str(v) for k, v in value.items()}
+
+    def step(self, node: yaml.Node, names: set[str]) -> Step | None:
+        if not isinstance(node, yaml.MappingNode):
+            self.error(node, "a step is a mapping: send, wait or await")
+            return None
+        fields = {k.value: (k, v) for k, v in node.value}
+        kinds = [k for k in ("send", "wait", "await") if k in fields]
+        if len(kinds) != 1:
+            self.error(node, "a step has exactly one of send, wait, await" + (f" (has {', '.join(kinds)})" if kinds else ""))
+            return None
+        kind = kinds[0]
+        allowed = {"send": {"send", "with", "as", "until", "expect", "timeout"}, "wait": {"wait"},
+                   "await": {"await", "expect", "timeout"}}[kind]
+        ok = True
+        for key, (knode, _) in fields.items():
+            if key not in allowed:
+                self.error(knode, f"{kind} step: unknown key {key!r} (keys: {', '.join(sorted(allowed))})")
+                ok = False
+        step = Step(kind, self.span(node))
+        value = fields[kind][1]
+        if kind == "wait":
+            seconds = self.number(value, "wait")
+            step.seconds = seconds or 0.0
+            return step if ok and seconds is not None else None
+        text = value.value if isinstance(value, yaml.ScalarNode) else None
+        if kind == "send" and (not text or text.count(".") != 1 or not all(text.split("."))):
+            self.error(value, f"send: Module.Service expected, got {text or _plain(value)!r}")
+            ok = False
+        if kind == "await" and text not in names:
+            self.error(value, f"await: no earlier step named {text!r} (names: {', '.join(sorted(names)) or 'none'})")
+            ok = False
+        step.target = text or ""
+        if "with" in fields:
+            inputs = _plain(fields["with"][1])
+            if not isinstance(inputs, dict):
+                self.error(fields["with"][1], "with: a mapping of the service's inputs expected")
+                ok = False
+            step.inputs = inputs if isinstance(inputs, dict) else {}
+        if "as" in fields:
+            step.name = str(fields["as"][1].value)
+            names.add(step.name)
+        if "until" in fields:
+            step.until = str(fields["until"][1].value)
+            if step.until not in UNTIL:
+                self.error(fields["until"][1], f"until: one of {', '.join(UNTIL)} expected, got {step.until!r}")
+                ok = False
+        if "expect" in fields:
+            step.expect = self.expect(fields["expect"][1])
+            ok = ok and step.expect is not None
+        if "timeout" in fields:
+            t = self.number(fields["timeout"][1], "timeout")
+            ok = ok and t is not None
+            step.timeout = t if t is not None else DEFAULT_TIMEOUT
+        return step if ok else None
+
+    def mission(self, root: yaml.Node | None) -> Mission | None:
+        if not isinstance(root, yaml.MappingNode):
+            self.reporter.error(Span(str(self.path), 1, 1), "a mission file is a mapping with 'steps' (and 'mission', 'world')")
+            return None
+        fields = {k.value: (k, v) for k, v in root.value}
+        for key, (knode, _) in fields.items():
+            if key not in ("mission", "world", "steps", "doc"):
+                self.error(knode, f"unknown key {key!r} (keys: doc, mission, steps, world)")
+        if "steps" not in fields or not isinstance(fields["steps"][1], yaml.SequenceNode):
+            self.error(root, "'steps': a list of send, wait and await steps expected")
+            return None
+        world = None
+        if "world" in fields:
+            world = (self.path.parent / str(fields["world"][1].value)).resolve()
+        names: set[str] = set()
+        steps = [self.step(n, names) for n in fields["steps"][1].value]
+        name = str(fields["mission"][1].value) if "mission" in fields else self.path.stem
+        return Mission(name, self.path, world, [s for s in steps if s is not None])
+
+
+def read_mission(path: str | Path, reporter: Reporter | None = None) -> Mission:
+    """The mission in ``path``; raises DiagnosticError listing every problem (file:line:column)."""
+    path = Path(path)
+    reporter = reporter or Reporter()
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        reporter.error(Span(str(path), 0, 0), f"cannot read mission file: {exc.strerror or exc}")
+        reporter.raise_if_errors()
+    reporter.sources.add(str(path), text)
+    try:
+        root = yaml.compose(text)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        reporter.error(Span(str(path), mark.line + 1 if mark else 1, mark.column + 1 if mark else 1),
+                       f"not valid YAML: {exc.problem or exc.context}")
+        reporter.raise_if_errors()
+    mission = _Reader(path, reporter).mission(root)
+    reporter.raise_if_errors()
+    return mission

@@ -1,0 +1,137 @@
+"""Missions on the generated DALA controller with its real codels, in ir-sim worlds, through the services client."""
+from __future__ import annotations
+
+import math
+from itertools import pairwise
+from pathlib import Path
+
+import pytest
+
+from genom2bip.mission.session import run_mission
+from genom2bip.mission.spec import read_mission
+from tests.runkit import ROOT, dala
+
+MISSIONS = ROOT / "descriptions" / "dala" / "missions"
+CODELS = str(ROOT / "descriptions" / "dala" / "codels")
+BRINGUP = (MISSIONS / "corridor.yaml").read_text().split("steps:\n")[1].split("  - send: NDD.GoTo")[0]
+
+
+def _run(path: Path):
+    mission = read_mission(path)
+    return run_mission(mission, dala(), CODELS, mission.world)
+
+
+def _report(run, service: str, index: int = 0) -> dict:
+    """The final report of the index-th request to ``service`` (from the controller's events)."""
+    outs = [o for o in run.outcomes if o.step.kind == "send" and o.step.target == service]
+    rid = outs[index].request
+    finals = [e for e in run.events if e["event"] == "report" and e["request"] == rid and e["final"]]
+    return finals[-1] if finals else outs[index].report
+
+
+@pytest.fixture(scope="module")
+def corridor(tmp_path_factory):
+    """One drive down the corridor, past the two boxes, to (10, 1.5)."""
+    path = tmp_path_factory.mktemp("mission") / "corridor_short.yaml"
+    path.write_text(f"mission: corridor_short\nworld: {ROOT / 'descriptions/dala/worlds/corridor.yaml'}\nsteps:\n"
+                    + BRINGUP + "  - send: NDD.GoTo\n    with: {goal: {x: 10.0, y: 1.5, theta: 0.0}}\n"
+                                "    expect: ok\n    timeout: 60\n")
+    return _run(path)
+
+
+def test_corridor_goal_reached_without_collision(corridor):
+    assert corridor.ok, [o.problem for o in corridor.outcomes if not o.ok]
+    assert _report(corridor, "NDD.GoTo")["status"] == "ok"
+    world = corridor.world
+    end = world.trajectory[-1]
+    assert math.hypot(end.x - 10.0, end.y - 1.5) < 0.3
+    assert world.collisions == 0
+    # the robot (radius 0.3 m) never touched an obstacle: every sample of its path keeps clear of them
+    from shapely.geometry import Point
+
+    clearance = min(g.distance(Point(s.x, s.y)) for s in world.trajectory for g in world.obstacles())
+    assert clearance > 0.3
+    # and it went round the boxes: below box_high (x 8.1..8.9, y 2..4) on its way
+    assert any(8.1 <= s.x <= 8.9 and s.y < 1.7 for s in world.trajectory)
+
+
+def test_trajectory_png_shows_the_path_from_start_to_goal(corridor, tmp_path):
+    from matplotlib.image import imread
+
+    from genom2bip.mission.picture import draw
+
+    png = tmp_path / "corridor.png"
+    to_pixel = draw(corridor, png)
+    image = imread(png)[:, :, :3]
+    blue = (abs(image[:, :, 0] - 0.12) < 0.05) & (abs(image[:, :, 1] - 0.47) < 0.05) & (abs(image[:, :, 2] - 0.71) < 0.05)
+    assert blue.sum() > 300  # the trajectory's pixels
+
+    def near(xy, colour, radius=6):
+        col, row = to_pixel(*xy)
+        patch = image[max(0, row - radius):row + radius, max(0, col - radius):col + radius]
+        return (abs(patch - colour).max(axis=2) < 0.08).any()
+
+    assert near((1.0, 2.0), (0.17, 0.63, 0.17))  # start marker (green) where the world puts the robot
+    assert near((10.0, 1.5), (0.0, 0.0, 0.0))  # end marker (black) at the goal
+    assert not near((14.0, 3.5), (0.12, 0.47, 0.71))  # no path where the robot never went
+
+
+def test_goto_before_pom_run_is_rejected_with_the_rule_then_served():
+    run = _run(MISSIONS / "goto_before_pom.yaml")
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    refused = _report(run, "NDD.GoTo", 0)
+    assert (refused["status"], refused["reason"], refused["rule"]) == ("rejected", "rule", "goto-after-pom-run")
+    assert refused["status_of"]["POM.Run"]["ok"] is False
+    assert _report(run, "NDD.GoTo", 1)["status"] == "ok"
+
+
+def test_stop_interrupts_goto_and_the_robot_stops_within_a_bounded_distance():
+    run = _run(MISSIONS / "stop_during_goto.yaml")
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    drive = _report(run, "NDD.GoTo", 0)
+    assert (drive["status"], drive["by"]) == ("interrupted", "NDD.Stop")
+    stopped_at = _report(run, "NDD.Stop")["time"]
+    samples = run.world.trajectory
+    before = [s for s in samples if s.t <= stopped_at]
+    assert before[-1].x > 2.5  # it was driving when Stop came
+    after = [s for s in samples if stopped_at <= s.t <= stopped_at + 2.0]
+    moved = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in pairwise(after))
+    assert moved < 0.1
+    assert abs(after[-1].v) < 1e-6
+    assert _report(run, "NDD.GoTo", 1)["status"] == "ok"  # and the next GoTo is served
+
+
+def test_dead_end_goto_fails_with_e_blocked_then_a_new_goto_is_served():
+    run = _run(MISSIONS / "dead_end.yaml")
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    blocked = _report(run, "NDD.GoTo", 0)
+    assert blocked["status"] == "failed" and blocked["exception"] == "NDD::e_blocked"
+    assert blocked["codel"] == "nddPlan"
+    where = blocked["detail"]["where"]
+    assert where["x"] < 8.0 - 0.3  # in front of the wall, not through it
+    back = _report(run, "NDD.GoTo", 1)
+    assert back["status"] == "ok"
+    end = run.world.trajectory[-1]
+    assert math.hypot(end.x - 2.0, end.y - 6.5) < 0.3
+    assert run.world.collisions == 0
+
+
+def test_the_trace_has_every_report_and_the_path_in_time_order(corridor, tmp_path):
+    import json
+
+    from genom2bip.mission.session import write_trace
+
+    path = tmp_path / "trace.jsonl"
+    write_trace(corridor, path)
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    times = [e["time"] for e in lines]
+    assert times == sorted(times)
+    reports = [e for e in lines if e["event"] == "report" and e["final"]]
+    assert [e["status"] for e in reports if e["service"] == "GoTo"] == ["ok"]
+    # every request ends with a final report: the activities still running, when the controller stops
+    assert {e["request"] for e in reports} == {o.request for o in corridor.outcomes if o.request is not None}
+    track = [e for e in reports if e["service"] == "TrackSpeed"]
+    assert [(e["status"], e["by"]) for e in track] == [("interrupted", None)]
+    poses = [e for e in lines if e["event"] == "pose"]
+    assert len(poses) == len(corridor.world.trajectory)
+    assert (poses[0]["x"], poses[0]["y"]) == (1.0, 2.0)
