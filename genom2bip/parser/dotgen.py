@@ -1121,7 +1121,7 @@ class _Builder:
                 else target.properties.get(key)
             theirs = iface.properties.get(key)
             if ours is not None and theirs is not None and ours != theirs:
-                self.error(where, f"conflicting {key} in {what}: {ours} here, {theirs} in interface '{iface.name}'")
+                self.error(where, f"conflicting {key} for {what}: {ours}, and {theirs} from interface '{iface.name}'")
             elif theirs is not None and ours is None:
                 if key == "clock-rate" and isinstance(target, Component):
                     target.clock_rate = theirs
