@@ -1253,6 +1253,30 @@ def Triggered_2_3() -> ConnectorType:
     )
 
 
+def Triggered_2_4() -> ConnectorType:
+    """Connector type Triggered_2_4: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_4',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+            ConnectorParam('Port', 'p6'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+                DefinePort('p6'),
+            ],
+        ),
+    )
+
+
 # --------------------------------------------------------------------------------------------------
 # Compound types: the functional level, module by module
 
@@ -1329,15 +1353,11 @@ def rflex_Init_Service() -> CompoundType:
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.Init:interrupted'})],
             ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'start',
-                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:start'})],
-            ),
         ],
         ports=[
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
+            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
+            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -1528,10 +1548,10 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_end', targets=[PortRef('activity', 'exec_end')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_exec_fail', targets=[PortRef('activity', 'exec_fail')]),
-            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
-            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
             ExportPort('Port', 'activity_abort', targets=[PortRef('activity', 'abort')]),
             ExportPort('Port', 'control_cancel', targets=[PortRef('control', 'cancel')]),
+            ExportPort('Port', 'control_start', targets=[PortRef('control', 'start')]),
+            ExportPort('Port', 'activity_start', targets=[PortRef('activity', 'start')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -1687,6 +1707,20 @@ def rflex_Module() -> CompoundType:
                 comment='codel rflexStopInter of state stop',
             ),
             ConnectorInstance(
+                'Triggered_2_4',
+                'Init_start',
+                ports=[
+                    PortRef('Init', 'control_start'),
+                    PortRef('Init', 'activity_start'),
+                    PortRef('TrackSpeed', 'activity_abort'),
+                    PortRef('Stop', 'activity_abort'),
+                    PortRef('TrackSpeed', 'control_cancel'),
+                    PortRef('Stop', 'control_cancel'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'rflex.Init:start'})],
+                comment='Init interrupts TrackSpeed, Stop (rflex.Init.interrupts)',
+            ),
+            ConnectorInstance(
                 'Triggered_2_2',
                 'TrackSpeed_start',
                 ports=[
@@ -1761,6 +1795,54 @@ def rflex_Module() -> CompoundType:
             ),
         ],
         priorities=[
+            Priority(
+                'TrackSpeed_exec_start_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_start'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_exec_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_exec'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_end_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_end'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_stop_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_stop'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_fail_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_fail'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'Stop_exec_start_before_Init_start',
+                InteractionPattern('Stop_exec_start'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.Stop runs another codel',
+            ),
+            Priority(
+                'Stop_exec_exec_before_Init_start',
+                InteractionPattern('Stop_exec_exec'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.Stop runs another codel',
+            ),
+            Priority(
+                'Stop_exec_stop_before_Init_start',
+                InteractionPattern('Stop_exec_stop'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.Stop runs another codel',
+            ),
             Priority(
                 'Stop_exec_start_before_TrackSpeed_start',
                 InteractionPattern('Stop_exec_start'),
@@ -1891,7 +1973,7 @@ def RFLEX() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 16 atom types, 4 connector types, 10 compound types."""
+    """The whole model: 16 atom types, 5 connector types, 10 compound types."""
     return Package(
         'rflex',
         extern_functions=[
@@ -2062,6 +2144,7 @@ def package() -> Package:
             Rendezvous_PP(),
             Triggered_2_2(),
             Triggered_2_3(),
+            Triggered_2_4(),
         ],
         compound_types=[
             rflex_GetOdo_Service(),
