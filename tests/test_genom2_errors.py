@@ -88,9 +88,16 @@ def test_unterminated_block_is_reported_at_its_end():
 
 
 def test_stray_character():
-    line, col, message = only_error(SDI + "request A { type: control; doc: @; };")
-    assert (line, col) == (5, 33)
+    line, col, message = only_error(SDI + "request A { type: control; rqst_num: @; };")
+    assert (line, col) == (5, 38)
     assert message.startswith("syntax error: unexpected character '@'")
+
+
+def test_an_unquoted_string_field_is_one_error_without_cascade():
+    # the module's syntax error must not make every request "outside a module"
+    found, _ = errors("typedef struct S { double v; } S;\nmodule m {\n  email: a@b.org;\n  internal_data: S; };\n"
+                      "request SetSpeed { type: control; };\n")
+    assert found == [(3, 11, "'email' needs a quoted string: write email: \"...\";")]
 
 
 def test_unknown_declaration_kind():

@@ -257,6 +257,7 @@ class Genom2Frontend:
         self.c = CDeclarations(description, reporter, self.span_of, self.symbols)
         self.blocks: list[_Block] = []
         self.component: Component | None = None
+        self.broken_module = False  # a module declaration with a syntax error (already reported)
         self.init_requests: list[Service] = []  # type: init requests, incompatible with all others
         self.tick = 1.0 / DEFAULT_CLOCK_RATE
         self.poster_tasks: dict[str, Token] = {}
@@ -291,6 +292,8 @@ class Genom2Frontend:
             return _parser().parse(padded, start="start")
         except UnexpectedInput as err:
             self._syntax_error(err, text, end)
+            if _MODULE_HEAD.match(chunk):  # its requests are not "outside a module"
+                self.broken_module = True
             return None
 
     def _syntax_error(self, err: UnexpectedInput, text: str, end: int) -> None:
@@ -303,6 +306,11 @@ class Genom2Frontend:
             return
         if isinstance(err, UnexpectedCharacters):
             ch = text and err.char
+            field = _field_before(text, err.line, err.column)
+            if field in _STRING_FIELDS:
+                self.reporter.error(self._span_at(err.line, err.column),
+                                    f"'{field}' needs a quoted string: write {field}: \"...\";")
+                return
             message = f"syntax error: unexpected character {ch!r}"
             if err.allowed:
                 message += f"; expected {_expected_text(set(err.allowed))}"
@@ -455,7 +463,7 @@ class Genom2Frontend:
         modules = [b for b in self.blocks if b.kind == "module"]
         others = [b for b in self.blocks if b.kind != "module"]
         if not modules:
-            if others:
+            if others and not self.broken_module:
                 first = others[0]
                 self.reporter.error(self.span_of(first.kind_token),
                                     f"{first.kind} '{first.name}' outside a module: this file has no "
@@ -1090,6 +1098,22 @@ class Genom2Frontend:
                 service.interrupts = expanded
                 for m in activities:
                     service.ref_spans.setdefault(f"interrupts:{m}", span)
+
+
+_MODULE_HEAD = re.compile(r"\s*module\s+[A-Za-z_]\w*\s*\{")
+_STRING_FIELDS = {"email", "version", "doc", "lang"}
+
+
+def _field_before(text: str, line: int, column: int) -> str | None:
+    """The name of the ``field:`` whose value holds output position ``line:column``, if any."""
+    starts = [0] + [i + 1 for i, c in enumerate(text) if c == "\n"]
+    if not 1 <= line <= len(starts):
+        return None
+    offset = starts[line - 1] + column - 1
+    head = text[:offset]
+    cut = max(head.rfind(";"), head.rfind("{"))
+    m = re.match(r"\s*([A-Za-z_]\w*)\s*:", head[cut + 1:])
+    return m.group(1) if m else None
 
 
 def parse_genom2(source: Any, reporter: Reporter, description: Description) -> None:
