@@ -188,7 +188,11 @@ def split_declarations(text: str) -> Iterator[tuple[int, int, int, int]]:
         at_line_start = False
         if text.startswith("/*", i):
             end = text.find("*/", i + 2)
-            advance(n if end < 0 else end + 2)
+            if end < 0:  # unclosed: hand the rest to the parser, which reports it
+                begin = start if start is not None else (i, line, col)
+                yield begin[0], n, begin[1], begin[2]
+                return
+            advance(end + 2)
             continue
         if text.startswith("//", i):
             end = text.find("\n", i)
@@ -299,6 +303,10 @@ class Genom2Frontend:
     def _syntax_error(self, err: UnexpectedInput, text: str, end: int) -> None:
         if isinstance(err, UnexpectedToken) and err.token.type != "$END":
             tok = err.token
+            if str(tok) == "/" and text.startswith("/*", _offset(text, tok.line, tok.column)):
+                self.reporter.error(self.span_of(tok), "unterminated comment",
+                                    "a comment opened with '/*' must be closed with '*/'")
+                return
             shown = f"'{tok}'" if tok.type not in ("NAME", "STRING") else (
                 f"name '{tok}'" if tok.type == "NAME" else f"string {tok}")
             message = f"syntax error: unexpected {shown}; expected {_expected_text(set(err.expected))}"
@@ -306,6 +314,10 @@ class Genom2Frontend:
             return
         if isinstance(err, UnexpectedCharacters):
             ch = text and err.char
+            if err.char == "/" and text.startswith("/*", _offset(text, err.line, err.column)):
+                self.reporter.error(self._span_at(err.line, err.column), "unterminated comment",
+                                    "a comment opened with '/*' must be closed with '*/'")
+                return
             field = _field_before(text, err.line, err.column)
             if field in _STRING_FIELDS:
                 self.reporter.error(self._span_at(err.line, err.column),
@@ -1104,13 +1116,19 @@ _MODULE_HEAD = re.compile(r"\s*module\s+[A-Za-z_]\w*\s*\{")
 _STRING_FIELDS = {"email", "version", "doc", "lang"}
 
 
+def _offset(text: str, line: int, column: int) -> int:
+    """The character offset of 1-based ``line:column`` in ``text`` (its end when out of range)."""
+    start = 0
+    for _ in range(line - 1):
+        start = text.find("\n", start) + 1
+        if start == 0:
+            return len(text)
+    return start + column - 1
+
+
 def _field_before(text: str, line: int, column: int) -> str | None:
     """The name of the ``field:`` whose value holds output position ``line:column``, if any."""
-    starts = [0] + [i + 1 for i, c in enumerate(text) if c == "\n"]
-    if not 1 <= line <= len(starts):
-        return None
-    offset = starts[line - 1] + column - 1
-    head = text[:offset]
+    head = text[:_offset(text, line, column)]
     cut = max(head.rfind(";"), head.rfind("{"))
     m = re.match(r"\s*([A-Za-z_]\w*)\s*:", head[cut + 1:])
     return m.group(1) if m else None
