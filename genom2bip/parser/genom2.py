@@ -356,6 +356,12 @@ class Genom2Frontend:
                 self.reporter.error(self.span_of(kw), f"unknown declaration '{kw}'; expected "
                                     "'import from \"file.h\" { ... }'")
                 return
+            source = decl.children[2] if len(decl.children) > 2 else None
+            if isinstance(source, Token) and source.type == "STRING":  # parser.y: IMPORT_TYPE FROM identificateur
+                self.reporter.error(self.span_of(source), "import from takes the name of the module the types "
+                                    f"come from, not a file: {source}",
+                                    f"write import from MODULE {{ #include {source} }};")
+                return
             for child in decl.children:
                 if isinstance(child, Tree) and child.data in ("typedef", "tag_decl", "var_decl", "named_var_decl", "storage_decl"):
                     self.c.declare(child)
