@@ -304,10 +304,6 @@ class _Checker:
             return True
         if "::" not in bare and bare in self._type_tails:
             return True
-        if comp is not None and "::" in bare:
-            scope = bare.split("::", 1)[0]
-            if scope == comp.name and bare.split("::", 1)[1] in self._type_tails:
-                return True
         return any(k.endswith("::" + bare) for k in self._type_keys)
 
     def _poster_ref(self, name: str) -> str | None:

@@ -139,13 +139,16 @@ def load(args: argparse.Namespace, check: bool = True) -> Description:
     from genom2bip.checks import check_description
     from genom2bip.parser import parse_paths
 
+    reporter = Reporter()  # the parsers' warnings, then the checks' diagnostics
     try:
-        description = parse_paths([str(f) for f in files], include_dirs=tuple(args.include_dirs), defines=defines)
+        description = parse_paths([str(f) for f in files], include_dirs=tuple(args.include_dirs), defines=defines,
+                                  reporter=reporter)
     except DiagnosticError as exc:
         print_diagnostics(exc.diagnostics, exc.sources)
         raise Failure(EXIT_ERRORS) from None
+    if not check and reporter.diagnostics:
+        print_diagnostics(reporter.diagnostics, reporter.sources)
     if check:
-        reporter = Reporter()
         check_description(description, reporter)
         if reporter.diagnostics:
             print_diagnostics(reporter.diagnostics, reporter.sources)

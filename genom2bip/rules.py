@@ -242,7 +242,7 @@ class _Reader:
         if service is None or others is None or completed is None or violation is None:
             return []
         if service in others:
-            self.error(fields[kind], f"rule {name}: {service[0]}.{service[1]} cannot {kind.replace('_', ' ')} itself")
+            self.error(fields[kind], f"rule {name}: {service[0]}.{service[1]} names itself in '{kind}'")
             return []
         return [Rule(name, kind, service, others, completed, violation, doc, span=span)]
 

@@ -25,6 +25,8 @@ class Span:
     end_column: int | None = None
 
     def __str__(self) -> str:
+        if self.line <= 0:  # the file as a whole (it cannot be read, say): no made-up position
+            return self.file
         return f"{self.file}:{self.line}:{self.column}"
 
 
@@ -49,7 +51,8 @@ class Diagnostic:
         if text is None and sources is not None:
             text = sources.line(self.span.file, self.span.line)
         if text is not None and self.span.line > 0:
-            text = text.rstrip("\n")
+            # control characters (a NUL byte...) are shown as '?', one for one so the caret stays aligned
+            text = "".join(ch if ch.isprintable() or ch == "\t" else "?" for ch in text.rstrip("\n"))
             lines.append(f"    {text}")
             col = max(self.span.column, 1)
             prefix = "".join(ch if ch == "\t" else " " for ch in text[: col - 1])

@@ -1,6 +1,11 @@
 """GenoM2 front end: bad input gives diagnostics at file:line:column, every one of a file, never a traceback."""
 import pytest
 
+from genom2bip.ir import Description
+from genom2bip.parser.genom2 import parse_genom2
+from genom2bip.parser.preprocess import preprocess
+from runtime.diagnostics import Reporter
+
 from genom2bip.parser import parse_paths, parse_text
 from runtime.diagnostics import DiagnosticError
 
@@ -83,9 +88,16 @@ def test_unterminated_block_is_reported_at_its_end():
 
 
 def test_stray_character():
-    line, col, message = only_error(SDI + "request A { type: control; doc: @; };")
-    assert (line, col) == (5, 33)
+    line, col, message = only_error(SDI + "request A { type: control; rqst_num: @; };")
+    assert (line, col) == (5, 38)
     assert message.startswith("syntax error: unexpected character '@'")
+
+
+def test_an_unquoted_string_field_is_one_error_without_cascade():
+    # the module's syntax error must not make every request "outside a module"
+    found, _ = errors("typedef struct S { double v; } S;\nmodule m {\n  email: a@b.org;\n  internal_data: S; };\n"
+                      "request SetSpeed { type: control; };\n")
+    assert found == [(3, 11, "'email' needs a quoted string: write email: \"...\";")]
 
 
 def test_unknown_declaration_kind():
@@ -153,10 +165,25 @@ def test_request_outside_a_module():
     assert message.startswith("request 'A' outside a module")
 
 
-def test_second_init_request():
-    found, _ = errors(SDI + "request I { type: init; exec_task: Main; codel_start: a; };\n"
-                            "request J { type: init; exec_task: Main; codel_start: b; };\n")
-    assert any(l == 6 and m.startswith("second init request 'J'") for l, _, m in found)
+def test_second_init_request_is_a_warning_as_genom2_has_no_such_check():
+    reporter = Reporter()
+    parse_genom2(preprocess(SDI + "request I { type: init; exec_task: Main; codel_start: a; };\n"
+                                  "request J { type: init; exec_task: Main; codel_start: b; };\n",
+                            filename="w.gen", reporter=reporter), reporter, Description())
+    assert [(d.severity, d.span.line, d.span.column, d.message) for d in reporter.diagnostics] == [
+        ("warning", 6, 19, "second init request 'J' (the first is 'I')")]
+
+
+def test_init_requests_are_made_incompatible_with_all_requests():
+    reporter = Reporter()
+    d = Description()
+    parse_genom2(preprocess(SDI + "request I { type: init; exec_task: Main; codel_start: a;\n"
+                                  "  interrupt_activity: T; };\n"
+                                  "request T { type: exec; exec_task: Main; codel_start: t; };\n",
+                            filename="w.gen", reporter=reporter), reporter, d)
+    assert [(d.severity, d.span.line, d.span.column, d.message) for d in reporter.diagnostics] == [
+        ("warning", 6, 23, "init request 'I' is made incompatible with all requests")]
+    assert d.components[0].service("I").interrupts == ["I", "T"]
 
 
 def test_c_declaration_errors():

@@ -335,7 +335,7 @@ def test_defines_become_constants():
 
 def test_import_from_declares_types():
     description = parse("""
-import from "pomStruct.h" { typedef struct POM_POS { double x, y; } POM_POS; };
+import from pom { typedef struct POM_POS { double x, y; } POM_POS; };
 typedef struct S { POM_POS where; } S;
 module m { internal_data: S; };
 """)

@@ -59,7 +59,7 @@ def errors(tmp_path, description, text):
     ("rules:\n  - id: r\n    service: Arm.Move\n",
      2, 5, "rule r: give exactly one of requires, requires_running, forbidden_while, before, interrupts, exclusive"),
     ("rules:\n  - id: r\n    service: Arm.Move\n    requires: [Arm.Move]\n",
-     4, 15, "rule r: Arm.Move cannot requires itself"),
+     4, 15, "rule r: Arm.Move names itself in 'requires'"),
     ("rules:\n  - id: r\n    exclusive: [Arm.Move]\n",
      3, 16, "rule r: 'exclusive' needs at least two different services"),
     ("rules:\n  - id: r\n    service: Arm.Move\n    exclusive: [Arm.Move, Arm.Park]\n",

@@ -83,12 +83,14 @@ def parse_paths(
     paths: list[str | Path],
     include_dirs: Sequence[str] = (),
     defines: Mapping[str, str] | None = None,
+    reporter: Reporter | None = None,
 ) -> Description:
     """Parse files and directories (every ``*.gen`` in a directory, sorted) into one description.
 
     Raises :class:`DiagnosticError` with every diagnostic if any of them is an error.
+    Warnings stay in ``reporter`` when one is given (the caller prints them).
     """
-    reporter = Reporter()
+    reporter = reporter if reporter is not None else Reporter()
     description = Description()
     files: list[Path] = []
     for p in paths:

@@ -255,6 +255,8 @@ class _Builder:
         for comp in self.components:
             self.apply_pragmas(comp)
             self.merge_provided(comp)
+            if comp.ids and f"{comp.name}::ids" not in self.desc.types:  # ids only from provided interfaces
+                self.desc.types[f"{comp.name}::ids"] = StructType(f"{comp.name}::ids", comp.ids, span=comp.span)
         if self.src.file and self.src.file not in self.desc.files:
             self.desc.files.append(self.src.file)
 
@@ -1121,7 +1123,7 @@ class _Builder:
                 else target.properties.get(key)
             theirs = iface.properties.get(key)
             if ours is not None and theirs is not None and ours != theirs:
-                self.error(where, f"conflicting {key} in {what}: {ours} here, {theirs} in interface '{iface.name}'")
+                self.error(where, f"conflicting {key} for {what}: {ours}, and {theirs} from interface '{iface.name}'")
             elif theirs is not None and ours is None:
                 if key == "clock-rate" and isinstance(target, Component):
                     target.clock_rate = theirs

@@ -167,6 +167,9 @@ def explain(e: UnexpectedInput, text: str, words: dict[str, str]) -> SyntaxProbl
             end_line = end_column = None
             offset = -1
         else:
+            if tok.value == "/" and text.startswith("/*", tok.start_pos):  # cpp passes an unclosed comment through
+                return SyntaxProblem(tok.line, tok.column, tok.line, tok.column + 2, tok.start_pos,
+                                     "unterminated comment", "a comment opened with '/*' must be closed with '*/'")
             found = _found(tok)
             line, column, end_line, end_column = tok.line, tok.column, tok.end_line, tok.end_column
             offset = tok.start_pos
@@ -185,9 +188,12 @@ def explain(e: UnexpectedInput, text: str, words: dict[str, str]) -> SyntaxProbl
         exp = describe_expected(set(getattr(e, "expected", ()) or ()), words)
         return SyntaxProblem(line, column, None, None, -1, f"expected {exp}, found end of file")
     ch = e.char
-    msg = f"unexpected character '{ch}'"
+    msg = f"unexpected character '{ch}'" if ch.isprintable() else f"unexpected character {ch!r}"
     if ch == '"':
         msg = "unterminated string"
+    if text.startswith("/*", e.pos_in_stream):  # the preprocessor passes an unclosed comment through
+        return SyntaxProblem(e.line, e.column, e.line, e.column + 2, e.pos_in_stream, "unterminated comment",
+                             "a comment opened with '/*' must be closed with '*/'")
     allowed = None
     if ip is not None:
         try:

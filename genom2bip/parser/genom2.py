@@ -62,7 +62,7 @@ DEFAULT_CLOCK_RATE = 100
 
 MODULE_FIELDS: dict[str, tuple[str, ...]] = {
     "number": (), "internal_data": (), "codel_files": (), "version": (), "iface_version": (),
-    "email": (), "lang": (), "use_cxx": (), "requires": ("require",), "codels_requires": (),
+    "email": (), "lang": (), "uses_cxx": (), "requires": ("require",), "codels_requires": (),
     "clkrate": ("clock_rate",), "max_rqst_size": (), "max_reply_size": (), "doc": (),
 }
 REQUEST_FIELDS: dict[str, tuple[str, ...]] = {
@@ -84,6 +84,7 @@ EXEC_TASK_FIELDS: dict[str, tuple[str, ...]] = {
     "codel_task_main": ("c_func",),
     "codel_task_end": ("c_end_func",),
     "codel_task_main2": (),
+    "codel_task_wait": (),
     "posters_input": (), "cs_client_from": (), "poster_client_from": (), "resources": (),
     "fail_reports": ("fail_msg",), "doc": (),
 }
@@ -187,7 +188,11 @@ def split_declarations(text: str) -> Iterator[tuple[int, int, int, int]]:
         at_line_start = False
         if text.startswith("/*", i):
             end = text.find("*/", i + 2)
-            advance(n if end < 0 else end + 2)
+            if end < 0:  # unclosed: hand the rest to the parser, which reports it
+                begin = start if start is not None else (i, line, col)
+                yield begin[0], n, begin[1], begin[2]
+                return
+            advance(end + 2)
             continue
         if text.startswith("//", i):
             end = text.find("\n", i)
@@ -256,6 +261,8 @@ class Genom2Frontend:
         self.c = CDeclarations(description, reporter, self.span_of, self.symbols)
         self.blocks: list[_Block] = []
         self.component: Component | None = None
+        self.broken_module = False  # a module declaration with a syntax error (already reported)
+        self.init_requests: list[Service] = []  # type: init requests, incompatible with all others
         self.tick = 1.0 / DEFAULT_CLOCK_RATE
         self.poster_tasks: dict[str, Token] = {}
 
@@ -289,11 +296,17 @@ class Genom2Frontend:
             return _parser().parse(padded, start="start")
         except UnexpectedInput as err:
             self._syntax_error(err, text, end)
+            if _MODULE_HEAD.match(chunk):  # its requests are not "outside a module"
+                self.broken_module = True
             return None
 
     def _syntax_error(self, err: UnexpectedInput, text: str, end: int) -> None:
         if isinstance(err, UnexpectedToken) and err.token.type != "$END":
             tok = err.token
+            if str(tok) == "/" and text.startswith("/*", _offset(text, tok.line, tok.column)):
+                self.reporter.error(self.span_of(tok), "unterminated comment",
+                                    "a comment opened with '/*' must be closed with '*/'")
+                return
             shown = f"'{tok}'" if tok.type not in ("NAME", "STRING") else (
                 f"name '{tok}'" if tok.type == "NAME" else f"string {tok}")
             message = f"syntax error: unexpected {shown}; expected {_expected_text(set(err.expected))}"
@@ -301,6 +314,15 @@ class Genom2Frontend:
             return
         if isinstance(err, UnexpectedCharacters):
             ch = text and err.char
+            if err.char == "/" and text.startswith("/*", _offset(text, err.line, err.column)):
+                self.reporter.error(self._span_at(err.line, err.column), "unterminated comment",
+                                    "a comment opened with '/*' must be closed with '*/'")
+                return
+            field = _field_before(text, err.line, err.column)
+            if field in _STRING_FIELDS:
+                self.reporter.error(self._span_at(err.line, err.column),
+                                    f"'{field}' needs a quoted string: write {field}: \"...\";")
+                return
             message = f"syntax error: unexpected character {ch!r}"
             if err.allowed:
                 message += f"; expected {_expected_text(set(err.allowed))}"
@@ -333,6 +355,12 @@ class Genom2Frontend:
                                         and decl.children[1].type == "NAME" and str(decl.children[1]) != "from"):
                 self.reporter.error(self.span_of(kw), f"unknown declaration '{kw}'; expected "
                                     "'import from \"file.h\" { ... }'")
+                return
+            source = decl.children[2] if len(decl.children) > 2 else None
+            if isinstance(source, Token) and source.type == "STRING":  # parser.y: IMPORT_TYPE FROM identificateur
+                self.reporter.error(self.span_of(source), "import from takes the name of the module the types "
+                                    f"come from, not a file: {source}",
+                                    f"write import from MODULE {{ #include {source} }};")
                 return
             for child in decl.children:
                 if isinstance(child, Tree) and child.data in ("typedef", "tag_decl", "var_decl", "named_var_decl", "storage_decl"):
@@ -453,7 +481,7 @@ class Genom2Frontend:
         modules = [b for b in self.blocks if b.kind == "module"]
         others = [b for b in self.blocks if b.kind != "module"]
         if not modules:
-            if others:
+            if others and not self.broken_module:
                 first = others[0]
                 self.reporter.error(self.span_of(first.kind_token),
                                     f"{first.kind} '{first.name}' outside a module: this file has no "
@@ -547,6 +575,31 @@ class Genom2Frontend:
                 out.append(str(self._name(f, item)))
         return out
 
+    def _packages(self, f: _Field) -> list[str]:
+        """Package names (``mor-libs``, parser.l's PACKAGENAME) or strings: the lexer here reads ``-`` as minus."""
+        def word(node: Any) -> str | None:
+            if isinstance(node, Token):
+                return str(node)
+            if isinstance(node, Tree) and node.data == "path" and len(node.children) == 1:
+                return word(node.children[0])
+            if isinstance(node, Tree) and node.data == "int_lit":
+                return str(node.children[0])
+            if isinstance(node, Tree) and node.data == "binop" and str(node.children[1]) == "-":
+                left, right = word(node.children[0]), word(node.children[2])
+                return f"{left}-{right}" if left and right else None
+            return None
+
+        out = []
+        for item in self._items(f):
+            if isinstance(item, Tree) and item.data == "strings":
+                out.append(self._string(f, item))
+                continue
+            name = word(item)
+            if name is None:
+                raise _FieldError(self.span_of(item), f"field '{f.name}' expects package names or strings")
+            out.append(name)
+        return out
+
     def _type(self, f: _Field, item: Any) -> Type:
         if isinstance(item, Tree) and item.data == "value_type":
             try:
@@ -592,6 +645,12 @@ class Genom2Frontend:
         """``name::sdi.path`` items."""
         out = []
         for item in self._items(f):
+            if isinstance(item, Tree) and item.data == "obsolete_ref":
+                # parser.y accepts 'TYPE sdi_ref name' (before 2007) with a warning
+                _type, sdi, name = item.children
+                self.reporter.warning(self.span_of(item), "deprecated syntax: use 'name::sdi_ref'",
+                                      f"write {path_text(name)}::{path_text(sdi)}")
+                item = Tree("pair", [name, sdi], item.meta)
             if not (isinstance(item, Tree) and item.data == "pair"):
                 raise _FieldError(self.span_of(item), f"field '{f.name}' expects 'name::sdi_field'")
             left, right = item.children
@@ -650,8 +709,12 @@ class Genom2Frontend:
         return comp
 
     def _module_field(self, comp: Component, props: dict, canonical: str, f: _Field) -> None:
-        if canonical in ("number", "use_cxx", "max_rqst_size", "max_reply_size"):
+        if canonical in ("number", "max_rqst_size", "max_reply_size"):
             props[canonical] = self._int(f)
+        elif canonical == "uses_cxx":  # parser.y: deprecated, means lang "c++" whatever its value
+            self._int(f)
+            props["lang"] = "c++"
+            self.reporter.warning(self.span_of(f.name), "usage of uses_cxx is deprecated", 'use lang: "c++";')
         elif canonical == "clkrate":
             value = self._number(f)
             if value <= 0:
@@ -667,7 +730,7 @@ class Genom2Frontend:
                 props[canonical] = self._string(f, node) if isinstance(node, Tree) and node.data == "strings" else str(self._number(f, node))
         elif canonical in ("codel_files", "requires", "codels_requires"):
             key = {"requires": "require", "codels_requires": "codels-require"}.get(canonical, canonical)
-            props[key] = self._text(f)
+            props[key] = self._packages(f) if key != "codel_files" else self._text(f)
         elif canonical == "internal_data":
             typ = self._type(f, self._one(f, "type"))
             name = typ.name if isinstance(typ, NamedType) else None
@@ -714,6 +777,9 @@ class Genom2Frontend:
         main = self._codel_field(fs.get("codel_task_main"))
         main2 = self._codel_field(fs.get("codel_task_main2"))
         end = self._codel_field(fs.get("codel_task_end"))
+        wait = self._codel_field(fs.get("codel_task_wait"))
+        if wait:  # genom >= 2.8: an aperiodic task calls it to wait for its next wake-up instead of events
+            self.component.properties.setdefault("codel_task_wait", {})[task.name] = wait[0]
         if start:
             name, wcet, span = start
             yields = ["pause::main"] if main else ["ether"]
@@ -801,11 +867,12 @@ class Genom2Frontend:
             self._register_poster_type(typ)
             typ = NamedType(typ.name, span=self.span_of(block.name))
         elif "type" in fs:
-            types = [self._type(fs["type"], item) for item in self._items(fs["type"])]
-            if len(types) == 1:
+            named = self._poster_types(fs["type"])
+            types = [t for _, t in named]
+            if len(types) == 1 and named[0][0] is None:
                 typ = types[0]
             else:
-                members = [Member(f"data{i}", t, span=t.span) for i, t in enumerate(types)]
+                members = [Member(n or f"data{i}", t, span=t.span) for i, (n, t) in enumerate(named)]
                 struct = StructType(f"{self.component.name}_{name}_poster", members, span=self.span_of(block.name))
                 self._register_poster_type(struct)
                 typ = NamedType(struct.name, span=struct.span)
@@ -827,6 +894,20 @@ class Genom2Frontend:
         if "address" in fs:
             info["address"] = " ".join(str(t) for t in fs["address"].value.scan_values(lambda v: isinstance(v, Token)))
         props[name] = info
+
+    def _poster_types(self, f: _Field) -> list[tuple[str | None, Type]]:
+        """``type: name::TYPE, ...`` (parser.y named_type); an unnamed ``TYPE`` is deprecated, as GenoM2 warns."""
+        out: list[tuple[str | None, Type]] = []
+        for item in self._items(f):
+            if isinstance(item, Tree) and item.data == "pair":
+                left, right = item.children
+                out.append((str(self._name(f, left)), self._type(f, right)))
+                continue
+            typ = self._type(f, item)
+            self.reporter.warning(self.span_of(item), "unnamed poster member is deprecated",
+                                  f"write type: NAME::{getattr(typ, 'name', 'TYPE')};")
+            out.append((None, typ))
+        return out
 
     def _register_poster_type(self, struct: StructType) -> None:
         """The first poster of a name gets the type; a second one is a duplicate port, which the checks report."""
@@ -855,11 +936,14 @@ class Genom2Frontend:
         kind = "function" if rtype == "control" else "activity"
         service = Service(name, kind, span=self.span_of(block.name))
         if rtype == "init":
+            # GenoM2 (genom.c) does not limit init requests; the first one is the module's init service
             if "init_service" in self.component.properties:
-                self.reporter.error(self.span_of(type_tok), f"second init request '{name}' (the first is "
-                                    f"'{self.component.properties['init_service']}'); a module has at most one")
+                self.reporter.warning(self.span_of(type_tok), f"second init request '{name}' (the first is "
+                                      f"'{self.component.properties['init_service']}')",
+                                      "GenoM2 accepts it; a module usually has one")
             else:
                 self.component.properties["init_service"] = name
+            self.init_requests.append(service)
         codel_params: list[CodelParam] = []
         for canonical, f in fs.items():
             try:
@@ -893,8 +977,12 @@ class Genom2Frontend:
             if len(refs) != 1:
                 raise _FieldError(self.span_of(f.value), f"field '{f.name}' takes one 'name::sdi_field'")
             left, right = refs[0]
-            typ = self._ids_path(right)
-            path = path_text(right)
+            if path_text(right) == "all":  # parser.y sdi_ref: ALL, the whole internal data
+                typ = NamedType(str(self.component.properties.get("internal_data", "")), span=self.span_of(right))
+                path = ""
+            else:
+                typ = self._ids_path(right)
+                path = path_text(right)
             alias = path_text(left)
             param = Parameter(direction, alias, typ, source="ids", member=path, span=self.span_of(left))
             if direction == "in" and "input_info" in block.fields:
@@ -1001,9 +1089,22 @@ class Genom2Frontend:
                 self.description.exceptions[key] = ExceptionDecl(name, span=spans.get(f"throws:{name}", self.component.span))
 
     def _expand_all(self) -> None:
-        """``interrupt_activity: all`` names every activity of the module."""
+        """``interrupt_activity: all`` names every activity of the module; init requests interrupt all of them.
+
+        GenoM2 (genom.c, resolveRequests) forces every init request to be
+        incompatible with all requests, with a warning when the file says otherwise.
+        """
         assert self.component is not None
         activities = [s.name for s in self.component.services if s.kind == "activity"]
+        for init in self.init_requests:
+            if init.interrupts and init.interrupts != ["all"]:
+                self.reporter.warning(init.ref_spans.get(f"interrupts:{init.interrupts[0]}", init.span),
+                                      f"init request '{init.name}' is made incompatible with all requests",
+                                      "GenoM2 forces it whatever interrupt_activity says")
+            for key in [k for k in init.ref_spans if k.startswith("interrupts:")]:
+                del init.ref_spans[key]
+            init.interrupts = ["all"]
+            init.ref_spans["interrupts:all"] = init.span
         for service in self.component.services:
             if "all" in service.interrupts:
                 span = service.ref_spans.pop("interrupts:all", service.span)
@@ -1015,6 +1116,28 @@ class Genom2Frontend:
                 service.interrupts = expanded
                 for m in activities:
                     service.ref_spans.setdefault(f"interrupts:{m}", span)
+
+
+_MODULE_HEAD = re.compile(r"\s*module\s+[A-Za-z_]\w*\s*\{")
+_STRING_FIELDS = {"email", "version", "doc", "lang"}
+
+
+def _offset(text: str, line: int, column: int) -> int:
+    """The character offset of 1-based ``line:column`` in ``text`` (its end when out of range)."""
+    start = 0
+    for _ in range(line - 1):
+        start = text.find("\n", start) + 1
+        if start == 0:
+            return len(text)
+    return start + column - 1
+
+
+def _field_before(text: str, line: int, column: int) -> str | None:
+    """The name of the ``field:`` whose value holds output position ``line:column``, if any."""
+    head = text[:_offset(text, line, column)]
+    cut = max(head.rfind(";"), head.rfind("{"))
+    m = re.match(r"\s*([A-Za-z_]\w*)\s*:", head[cut + 1:])
+    return m.group(1) if m else None
 
 
 def parse_genom2(source: Any, reporter: Reporter, description: Description) -> None:

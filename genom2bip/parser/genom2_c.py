@@ -62,12 +62,13 @@ def first_token(node: Any) -> Token | None:
 
 
 def int_literal(text: str) -> int:
-    """A C integer literal (decimal, octal, hex; suffixes u/l ignored)."""
+    """An integer literal as GenoM2's lexer reads it: hex after ``0x``, else decimal (parser.l uses atoi).
+
+    GenoM2 has no octal: ``010`` is ten and ``09001`` is 9001.  Suffixes u/l are ignored.
+    """
     digits = text.rstrip("uUlL")
     if digits.lower().startswith("0x"):
         return int(digits, 16)
-    if len(digits) > 1 and digits.startswith("0"):
-        return int(digits, 8)
     return int(digits)
 
 

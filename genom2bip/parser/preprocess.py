@@ -100,6 +100,15 @@ class _Cpp(Preprocessor):
         self.rewrite_paths = []  # keep absolute paths in token sources
         self.auto_pragma_once_enabled = True
 
+    def add_path(self, path: str) -> None:
+        """Add an include directory, without pcpp's rewriting of token sources relative to it.
+
+        pcpp would name the tokens of every file below an include directory by a
+        relative path; the origin map knows files by absolute path, so a rewritten
+        name lost every column (errors at column 1 whenever ``-I`` covered the file).
+        """
+        self.path.append(path)
+
     # ------------------------------------------------------------------ positions
 
     def name_of(self, source: str | None) -> str:

@@ -127,7 +127,7 @@ INTERFACE = {
                     ],
                     'locals': {},
                     'throws': ['NO_DEVICE', 'MOTOR_ERROR', 'SPEED_TOO_HIGH'],
-                    'interrupts': [],
+                    'interrupts': ['Init', 'TrackSpeed', 'Stop'],
                     'after': [],
                     'before': [],
                     'codels': {

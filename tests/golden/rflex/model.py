@@ -1306,6 +1306,30 @@ def Triggered_2_3() -> ConnectorType:
     )
 
 
+def Triggered_2_4() -> ConnectorType:
+    """Connector type Triggered_2_4: the first ports together as a trigger, each receiver joining if it can."""
+    return ConnectorType(
+        'Triggered_2_4',
+        params=[
+            ConnectorParam('Port', 'p1'),
+            ConnectorParam('Port', 'p2'),
+            ConnectorParam('Port', 'p3'),
+            ConnectorParam('Port', 'p4'),
+            ConnectorParam('Port', 'p5'),
+            ConnectorParam('Port', 'p6'),
+        ],
+        define=DefineGroup(
+            [
+                DefineGroup([DefinePort('p1'), DefinePort('p2')], trigger=True),
+                DefinePort('p3'),
+                DefinePort('p4'),
+                DefinePort('p5'),
+                DefinePort('p6'),
+            ],
+        ),
+    )
+
+
 # --------------------------------------------------------------------------------------------------
 # Compound types: the functional level, module by module
 
@@ -1358,6 +1382,11 @@ def rflex_Init_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'start',
+                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+            ),
+            ConnectorInstance(
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
@@ -1382,15 +1411,10 @@ def rflex_Init_Service() -> CompoundType:
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
                 annotations=[Annotation('label', arguments={'name': 'rflex.Init:interrupted'})],
             ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'start',
-                ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:start'})],
-            ),
         ],
         ports=[
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
+            ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
     )
@@ -1544,6 +1568,11 @@ def rflex_Stop_Service() -> CompoundType:
         connectors=[
             ConnectorInstance(
                 'BroadcastX_2',
+                'Init_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
+            ConnectorInstance(
+                'BroadcastX_2',
                 'TrackSpeed_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
             ),
@@ -1575,6 +1604,7 @@ def rflex_Stop_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_exec', targets=[PortRef('activity', 'exec_exec')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'Init_start', targets=[PortRef('Init_start', 'ep')]),
             ExportPort('Port', 'TrackSpeed_start', targets=[PortRef('TrackSpeed_start', 'ep')]),
             ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
@@ -1592,6 +1622,11 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ComponentInstance('rflex_TrackSpeed_Activity', 'activity'),
         ],
         connectors=[
+            ConnectorInstance(
+                'BroadcastX_2',
+                'Init_start',
+                ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+            ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'start',
@@ -1627,6 +1662,7 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_end', targets=[PortRef('activity', 'exec_end')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
             ExportPort('Port', 'activity_exec_fail', targets=[PortRef('activity', 'exec_fail')]),
+            ExportPort('Port', 'Init_start', targets=[PortRef('Init_start', 'ep')]),
             ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
@@ -1775,6 +1811,17 @@ def rflex_Module() -> CompoundType:
                 comment='codel rflexStopInter of state stop',
             ),
             ConnectorInstance(
+                'Triggered_1_2',
+                'Init_start',
+                ports=[
+                    PortRef('Init', 'start'),
+                    PortRef('TrackSpeed', 'Init_start'),
+                    PortRef('Stop', 'Init_start'),
+                ],
+                annotations=[Annotation('label', arguments={'name': 'rflex.Init:start'})],
+                comment='Init interrupts TrackSpeed, Stop (rflex.Init.interrupts)',
+            ),
+            ConnectorInstance(
                 'Triggered_1_1',
                 'TrackSpeed_start',
                 ports=[PortRef('TrackSpeed', 'start'), PortRef('Stop', 'TrackSpeed_start')],
@@ -1837,6 +1884,54 @@ def rflex_Module() -> CompoundType:
             ),
         ],
         priorities=[
+            Priority(
+                'TrackSpeed_exec_start_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_start'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_exec_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_exec'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_end_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_end'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_stop_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_stop'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_fail_before_Init_start',
+                InteractionPattern('TrackSpeed_exec_fail'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
+            ),
+            Priority(
+                'Stop_exec_start_before_Init_start',
+                InteractionPattern('Stop_exec_start'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.Stop runs another codel',
+            ),
+            Priority(
+                'Stop_exec_exec_before_Init_start',
+                InteractionPattern('Stop_exec_exec'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.Stop runs another codel',
+            ),
+            Priority(
+                'Stop_exec_stop_before_Init_start',
+                InteractionPattern('Stop_exec_stop'),
+                InteractionPattern('Init_start'),
+                comment='an interruption by rflex.Init takes effect before rflex.Stop runs another codel',
+            ),
             Priority(
                 'Stop_exec_start_before_TrackSpeed_start',
                 InteractionPattern('Stop_exec_start'),
@@ -1967,7 +2062,7 @@ def RFLEX() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 16 atom types, 9 connector types, 10 compound types."""
+    """The whole model: 16 atom types, 10 connector types, 10 compound types."""
     return Package(
         'rflex',
         extern_functions=[
@@ -2148,6 +2243,7 @@ def package() -> Package:
             Triggered_1_2(),
             Triggered_2_2(),
             Triggered_2_3(),
+            Triggered_2_4(),
         ],
         compound_types=[
             rflex_GetOdo_Service(),
