@@ -43,7 +43,7 @@ def check_arguments(args: argparse.Namespace) -> None:
         error(f"--method {args.method} checks deadlock freedom only; --property, --aut and --dot need "
               "--method explore")
         raise Failure(EXIT_USAGE)
-    if args.engine != "explore":
+    if args.engine == "spin":
         error(f"--method {args.method} decides candidates with our explorer; it does not combine with --engine "
               f"{args.engine}")
         raise Failure(EXIT_USAGE)
