@@ -3358,16 +3358,6 @@ def RFLEX_Stop_Activity() -> AtomType:
 # Connector types: interaction
 
 
-def BroadcastX_1() -> ConnectorType:
-    """Connector type BroadcastX_1: any of the ports that can, together, offered to an enclosing connector."""
-    return ConnectorType(
-        'BroadcastX_1',
-        params=[ConnectorParam('Port', 'p1')],
-        define=DefineGroup([DefinePort('p1', trigger=True)]),
-        export=ConnectorExport('Port', 'ep'),
-    )
-
-
 def BroadcastX_2() -> ConnectorType:
     """Connector type BroadcastX_2: any of the ports that can, together, offered to an enclosing connector."""
     return ConnectorType(
@@ -3663,16 +3653,6 @@ def RFLEX_TrackSpeed_Trigger() -> ConnectorType:
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Status', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
         interactions=[InteractionSpec(['p1', 'p2', 'p3'], guard=PortData('p3', 'done'))],
-    )
-
-
-def RendezvousX_P() -> ConnectorType:
-    """Connector type RendezvousX_P: all ports together, offered to an enclosing connector."""
-    return ConnectorType(
-        'RendezvousX_P',
-        params=[ConnectorParam('Port', 'p1')],
-        define=DefineGroup([DefinePort('p1')]),
-        export=ConnectorExport('Port', 'ep'),
     )
 
 
@@ -5166,11 +5146,6 @@ def LaserRF_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'RendezvousX_P',
-                'acquisition_exec_start',
-                ports=[PortRef('acquisition', 'exec_start')],
-            ),
-            ConnectorInstance(
                 'RendezvousX_PP',
                 'Init_exec_start',
                 ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
@@ -5206,11 +5181,6 @@ def LaserRF_Module() -> CompoundType:
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('Start', 'Stop_start')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_P',
-                'acquisition_sleep',
-                ports=[PortRef('acquisition', 'sleep')],
             ),
             ConnectorInstance(
                 'Triggered_1_1',
@@ -5267,7 +5237,7 @@ def LaserRF_Module() -> CompoundType:
             ExportPort(
                 'Port',
                 'acquisition_exec_start',
-                targets=[PortRef('acquisition_exec_start', 'ep')],
+                targets=[PortRef('acquisition', 'exec_start')],
             ),
             ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
@@ -5279,7 +5249,7 @@ def LaserRF_Module() -> CompoundType:
             ExportPort('Port', 'Start_exec_acquire', targets=[PortRef('Start_exec_acquire', 'ep')]),
             ExportPort('Port', 'Start_exec_stop', targets=[PortRef('Start_exec_stop', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
-            ExportPort('Port', 'acquisition_sleep', targets=[PortRef('acquisition_sleep', 'ep')]),
+            ExportPort('Port', 'acquisition_sleep', targets=[PortRef('acquisition', 'sleep')]),
             ExportPort(
                 'Status',
                 'Start_control_status',
@@ -5353,21 +5323,10 @@ def NDD_Module() -> CompoundType:
                 ],
             ),
             ConnectorInstance(
-                'BroadcastX_1',
-                'LaserRF_Stop_start',
-                ports=[PortRef('GoTo', 'LaserRF_Stop_start')],
-            ),
-            ConnectorInstance(
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('GoTo', 'Stop_start')],
             ),
-            ConnectorInstance(
-                'BroadcastX_1',
-                'RFLEX_Stop_start',
-                ports=[PortRef('GoTo', 'RFLEX_Stop_start')],
-            ),
-            ConnectorInstance('RendezvousX_P', 'motion_sleep', ports=[PortRef('motion', 'sleep')]),
             ConnectorInstance(
                 'NDD_GoTo_Trigger_000001234_1',
                 'GoTo_trigger',
@@ -5490,10 +5449,18 @@ def NDD_Module() -> CompoundType:
             ExportPort('Port', 'GoTo_exec_plan', targets=[PortRef('GoTo_exec_plan', 'ep')]),
             ExportPort('Port', 'GoTo_exec_arrived', targets=[PortRef('GoTo_exec_arrived', 'ep')]),
             ExportPort('Port', 'GoTo_exec_stop', targets=[PortRef('GoTo_exec_stop', 'ep')]),
-            ExportPort('Port', 'LaserRF_Stop_start', targets=[PortRef('LaserRF_Stop_start', 'ep')]),
+            ExportPort(
+                'Port',
+                'GoTo_LaserRF_Stop_start',
+                targets=[PortRef('GoTo', 'LaserRF_Stop_start')],
+            ),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
-            ExportPort('Port', 'RFLEX_Stop_start', targets=[PortRef('RFLEX_Stop_start', 'ep')]),
-            ExportPort('Port', 'motion_sleep', targets=[PortRef('motion_sleep', 'ep')]),
+            ExportPort(
+                'Port',
+                'GoTo_RFLEX_Stop_start',
+                targets=[PortRef('GoTo', 'RFLEX_Stop_start')],
+            ),
+            ExportPort('Port', 'motion_sleep', targets=[PortRef('motion', 'sleep')]),
             ExportPort('Bools3', 'GoTo_trigger', targets=[PortRef('GoTo_trigger', 'ep')]),
             ExportPort(
                 'Port',
@@ -5690,11 +5657,6 @@ def RFLEX_Module() -> CompoundType:
                 ports=[PortRef('servo', 'exec_odometry'), PortRef('Odo', 'write')],
             ),
             ConnectorInstance(
-                'RendezvousX_P',
-                'servo_exec_stop',
-                ports=[PortRef('servo', 'exec_stop')],
-            ),
-            ConnectorInstance(
                 'RendezvousX_PP',
                 'Init_exec_start',
                 ports=[PortRef('servo', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
@@ -5719,7 +5681,6 @@ def RFLEX_Module() -> CompoundType:
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('TrackSpeed', 'Stop_start')],
             ),
-            ConnectorInstance('RendezvousX_P', 'servo_sleep', ports=[PortRef('servo', 'sleep')]),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_start',
@@ -5802,7 +5763,7 @@ def RFLEX_Module() -> CompoundType:
                 'servo_exec_odometry',
                 targets=[PortRef('servo_exec_odometry', 'ep')],
             ),
-            ExportPort('Port', 'servo_exec_stop', targets=[PortRef('servo_exec_stop', 'ep')]),
+            ExportPort('Port', 'servo_exec_stop', targets=[PortRef('servo', 'exec_stop')]),
             ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
                 'Port',
@@ -5820,7 +5781,7 @@ def RFLEX_Module() -> CompoundType:
                 targets=[PortRef('TrackSpeed_exec_stop', 'ep')],
             ),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
-            ExportPort('Port', 'servo_sleep', targets=[PortRef('servo_sleep', 'ep')]),
+            ExportPort('Port', 'servo_sleep', targets=[PortRef('servo', 'sleep')]),
             ExportPort(
                 'Status',
                 'TrackSpeed_control_status',
@@ -5985,7 +5946,7 @@ def DALA() -> CompoundType:
             ConnectorInstance(
                 'Triggered_1_1',
                 'LaserRF_Stop_start',
-                ports=[PortRef('LaserRF', 'Stop_start'), PortRef('NDD', 'LaserRF_Stop_start')],
+                ports=[PortRef('LaserRF', 'Stop_start'), PortRef('NDD', 'GoTo_LaserRF_Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
             ),
@@ -5999,7 +5960,7 @@ def DALA() -> CompoundType:
             ConnectorInstance(
                 'Triggered_1_1',
                 'RFLEX_Stop_start',
-                ports=[PortRef('RFLEX', 'Stop_start'), PortRef('NDD', 'RFLEX_Stop_start')],
+                ports=[PortRef('RFLEX', 'Stop_start'), PortRef('NDD', 'GoTo_RFLEX_Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
                 comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
             ),
@@ -6309,7 +6270,7 @@ def DALA() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 30 connector types, 34 compound types."""
+    """The whole model: 48 atom types, 28 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -6753,7 +6714,6 @@ def package() -> Package:
             RFLEX_Stop_Activity(),
         ],
         connector_types=[
-            BroadcastX_1(),
             BroadcastX_2(),
             LaserRF_Start_Refuse_after(),
             LaserRF_Start_Trigger(),
@@ -6769,7 +6729,6 @@ def package() -> Package:
             POM_Reset_Trigger_001(),
             RFLEX_TrackSpeed_Refuse_after(),
             RFLEX_TrackSpeed_Trigger(),
-            RendezvousX_P(),
             RendezvousX_PP(),
             RendezvousX_PPP(),
             Rendezvous_P(),
