@@ -229,3 +229,13 @@ def test_state_is_a_flat_hashable_tuple():
     assert s == (1, 0, 1, -1, 1, -1, 1, -1)
     assert e.fire(s, e.enabled(s)[0]) == (1, 1, 2, 0, 2, 0, 2, 0)
     assert s == (1, 0, 1, -1, 1, -1, 1, -1)       # fire is pure
+
+
+# -- priorities: '*:*' beside a sub-connector -------------------------------------------------------
+
+def test_star_ranges_over_connectors_that_fire_on_their_own():
+    """No cycle: '*:*' beside 'all' names no connector, since 'pair' only fires inside 'all'."""
+    e = engine("StarBesideSub")
+    s = e.initial_state()
+    assert labels(e, s) == ["all"]
+    assert labels(e, walk(e, "all")) == []
