@@ -172,7 +172,6 @@ def Aspect_SetParams_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -224,9 +223,6 @@ def Aspect_SetParams_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -544,7 +540,6 @@ def Aspect_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -586,9 +581,6 @@ def Aspect_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -726,7 +718,6 @@ def LaserRF_SetConfig_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -778,9 +769,6 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -1219,7 +1207,6 @@ def LaserRF_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -1261,9 +1248,6 @@ def LaserRF_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -1353,26 +1337,16 @@ def NDD_Requests() -> AtomType:
 
 
 def NDD_motion_Activity() -> AtomType:
-    """Permanent activity of task NDD.motion: states start, publish, stop."""
+    """Permanent activity of task NDD.motion: states start, publish."""
     return AtomType(
         'NDD_motion_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_publish', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=[
-            'ETHER',
-            'START',
-            'PUBLISH',
-            'STOP',
-            'PUBLISH_PAUSED',
-            'START_YIELD',
-            'PUBLISH_YIELD',
-            'STOP_YIELD',
-        ],
+        places=['ETHER', 'START', 'PUBLISH', 'PUBLISH_PAUSED', 'START_YIELD', 'PUBLISH_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -1418,30 +1392,6 @@ def NDD_motion_Activity() -> AtomType:
             Transition(
                 None,
                 ['PUBLISH_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('NDD_nddShutdown'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -2071,7 +2021,6 @@ def NDD_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2113,9 +2062,6 @@ def NDD_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -2211,26 +2157,16 @@ def POM_Requests() -> AtomType:
 
 
 def POM_fusion_Activity() -> AtomType:
-    """Permanent activity of task POM.fusion: states start, update, stop."""
+    """Permanent activity of task POM.fusion: states start, update."""
     return AtomType(
         'POM_fusion_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_update', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=[
-            'ETHER',
-            'START',
-            'UPDATE',
-            'STOP',
-            'UPDATE_PAUSED',
-            'START_YIELD',
-            'UPDATE_YIELD',
-            'STOP_YIELD',
-        ],
+        places=['ETHER', 'START', 'UPDATE', 'UPDATE_PAUSED', 'START_YIELD', 'UPDATE_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -2276,30 +2212,6 @@ def POM_fusion_Activity() -> AtomType:
             Transition(
                 None,
                 ['UPDATE_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('POM_pomEnd'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -2521,7 +2433,6 @@ def POM_Reset_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2563,9 +2474,6 @@ def POM_Reset_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -2680,26 +2588,16 @@ def RFLEX_Requests() -> AtomType:
 
 
 def RFLEX_servo_Activity() -> AtomType:
-    """Permanent activity of task RFLEX.servo: states start, odometry, stop."""
+    """Permanent activity of task RFLEX.servo: states start, odometry."""
     return AtomType(
         'RFLEX_servo_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_odometry', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=[
-            'ETHER',
-            'START',
-            'ODOMETRY',
-            'STOP',
-            'ODOMETRY_PAUSED',
-            'START_YIELD',
-            'ODOMETRY_YIELD',
-            'STOP_YIELD',
-        ],
+        places=['ETHER', 'START', 'ODOMETRY', 'ODOMETRY_PAUSED', 'START_YIELD', 'ODOMETRY_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -2745,30 +2643,6 @@ def RFLEX_servo_Activity() -> AtomType:
             Transition(
                 None,
                 ['ODOMETRY_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('RFLEX_rflexClose'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -2927,7 +2801,6 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2969,9 +2842,6 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -3241,7 +3111,6 @@ def RFLEX_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -3283,9 +3152,6 @@ def RFLEX_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -4552,11 +4418,6 @@ def NDD_motion_Task() -> CompoundType:
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
             ),
@@ -4573,7 +4434,6 @@ def NDD_motion_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_publish', targets=[PortRef('exec_publish', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
@@ -4713,11 +4573,6 @@ def POM_fusion_Task() -> CompoundType:
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_update')],
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
                 'TriggeredX_2_1',
                 'period',
                 ports=[
@@ -4735,7 +4590,6 @@ def POM_fusion_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_update', targets=[PortRef('exec_update', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
@@ -4958,11 +4812,6 @@ def RFLEX_servo_Task() -> CompoundType:
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
             ),
@@ -4979,7 +4828,6 @@ def RFLEX_servo_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_odometry', targets=[PortRef('exec_odometry', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
@@ -5287,11 +5135,6 @@ def NDD_Module() -> CompoundType:
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
-                'motion_exec_stop',
-                ports=[PortRef('motion', 'exec_stop'), PortRef('Speed', 'write')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
                 'GoTo_exec_start',
                 ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_start')],
             ),
@@ -5444,7 +5287,6 @@ def NDD_Module() -> CompoundType:
                 'motion_exec_publish',
                 targets=[PortRef('motion_exec_publish', 'ep')],
             ),
-            ExportPort('Port', 'motion_exec_stop', targets=[PortRef('motion_exec_stop', 'ep')]),
             ExportPort('Port', 'GoTo_exec_start', targets=[PortRef('GoTo_exec_start', 'ep')]),
             ExportPort('Port', 'GoTo_exec_plan', targets=[PortRef('GoTo_exec_plan', 'ep')]),
             ExportPort('Port', 'GoTo_exec_arrived', targets=[PortRef('GoTo_exec_arrived', 'ep')]),
@@ -5508,13 +5350,6 @@ def POM_Module() -> CompoundType:
                 ports=[PortRef('fusion', 'exec_update'), PortRef('Pos', 'write')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_update'})],
                 comment='codel pomUpdate of state update',
-            ),
-            ConnectorInstance(
-                'Rendezvous_P',
-                'fusion_exec_stop',
-                ports=[PortRef('fusion', 'exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_stop'})],
-                comment='codel pomEnd of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5597,12 +5432,6 @@ def POM_Module() -> CompoundType:
                 'fusion_sleep_before_fusion_exec_update',
                 InteractionPattern('fusion_sleep'),
                 InteractionPattern('fusion_exec_update'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'fusion_sleep_before_fusion_exec_stop',
-                InteractionPattern('fusion_sleep'),
-                InteractionPattern('fusion_exec_stop'),
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
@@ -5763,7 +5592,6 @@ def RFLEX_Module() -> CompoundType:
                 'servo_exec_odometry',
                 targets=[PortRef('servo_exec_odometry', 'ep')],
             ),
-            ExportPort('Port', 'servo_exec_stop', targets=[PortRef('servo', 'exec_stop')]),
             ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
                 'Port',
@@ -5861,13 +5689,6 @@ def DALA() -> CompoundType:
             ),
             ConnectorInstance(
                 'Rendezvous_P',
-                'NDD_motion_exec_stop',
-                ports=[PortRef('NDD', 'motion_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_stop'})],
-                comment='codel nddShutdown of state stop',
-            ),
-            ConnectorInstance(
-                'Rendezvous_P',
                 'NDD_GoTo_exec_start',
                 ports=[PortRef('NDD', 'GoTo_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'})],
@@ -5907,13 +5728,6 @@ def DALA() -> CompoundType:
                 ports=[PortRef('RFLEX', 'servo_exec_odometry')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'})],
                 comment='codel rflexOdometry of state odometry',
-            ),
-            ConnectorInstance(
-                'Rendezvous_P',
-                'RFLEX_servo_exec_stop',
-                ports=[PortRef('RFLEX', 'servo_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_stop'})],
-                comment='codel rflexClose of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -6194,12 +6008,6 @@ def DALA() -> CompoundType:
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
-                'NDD_motion_sleep_before_motion_exec_stop',
-                InteractionPattern('NDD_motion_sleep'),
-                InteractionPattern('NDD_motion_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
                 'NDD_motion_sleep_before_GoTo_exec_start',
                 InteractionPattern('NDD_motion_sleep'),
                 InteractionPattern('NDD_GoTo_exec_start'),
@@ -6233,12 +6041,6 @@ def DALA() -> CompoundType:
                 'RFLEX_servo_sleep_before_servo_exec_odometry',
                 InteractionPattern('RFLEX_servo_sleep'),
                 InteractionPattern('RFLEX_servo_exec_odometry'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'RFLEX_servo_sleep_before_servo_exec_stop',
-                InteractionPattern('RFLEX_servo_sleep'),
-                InteractionPattern('RFLEX_servo_exec_stop'),
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
@@ -6475,16 +6277,6 @@ def package() -> Package:
                 ],
             ),
             ExternFunction(
-                'NDD_nddShutdown',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'nddShutdown', 'yields': 'ether', 'throws': ''},
-                    ),
-                ],
-            ),
-            ExternFunction(
                 'NDD_nddStartGoTo',
                 return_type='int',
                 annotations=[
@@ -6511,16 +6303,6 @@ def package() -> Package:
                     Annotation(
                         'codel',
                         arguments={'codel': 'nddStopGoTo', 'yields': 'ether', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
-                    ),
-                ],
-            ),
-            ExternFunction(
-                'POM_pomEnd',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'pomEnd', 'yields': 'ether', 'throws': ''},
                     ),
                 ],
             ),
@@ -6581,16 +6363,6 @@ def package() -> Package:
                     Annotation(
                         'codel',
                         arguments={'codel': 'rflexBrake', 'yields': 'ether', 'throws': 'RFLEX::e_emergency_stop'},
-                    ),
-                ],
-            ),
-            ExternFunction(
-                'RFLEX_rflexClose',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'rflexClose', 'yields': 'ether', 'throws': ''},
                     ),
                 ],
             ),
