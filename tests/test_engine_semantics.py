@@ -229,3 +229,65 @@ def test_state_is_a_flat_hashable_tuple():
     assert s == (1, 0, 1, -1, 1, -1, 1, -1)
     assert e.fire(s, e.enabled(s)[0]) == (1, 1, 2, 0, 2, 0, 2, 0)
     assert s == (1, 0, 1, -1, 1, -1, 1, -1)       # fire is pure
+
+
+# -- priorities: '*:*' beside a sub-connector -------------------------------------------------------
+
+def test_star_ranges_over_connectors_that_fire_on_their_own():
+    """No cycle: '*:*' beside 'all' names no connector, since 'pair' only fires inside 'all'."""
+    e = engine("StarBesideSub")
+    s = e.initial_state()
+    assert labels(e, s) == ["all"]
+    assert labels(e, walk(e, "all")) == []
+
+
+# -- a rendezvous of sub-connectors that only gather ports -----------------------------------------
+
+GATHERED = """package Gathered
+  port type Port()
+  connector type Pair(Port a, Port b)
+    export port Port e()
+    define a b
+  end
+  connector type Two(Port a, Port b)
+    define a b
+  end
+  connector type Picky(Port a, Port b)
+    define a b
+    on a b provided (false)
+  end
+  atom type Step()
+    data int n
+    export port Port p()
+    place S
+    initial to S do { n = 0; }
+    on p from S to S provided (n < 2) do { n = n + 1; }
+  end
+  compound type Task()
+    component Step timer(), scheduler()
+    connector Pair tick(timer.p, scheduler.p)
+    export port tick.e as tick
+  end
+  compound type System()
+    component Task task()
+    component Step poster(), other()
+    connector Two run(task.tick, poster.p)
+    connector Picky never(task.tick, other.p)
+  end
+end
+"""
+
+
+def test_a_rendezvous_of_gathering_sub_connectors_is_one_rendezvous_of_its_leaves():
+    from runtime.bip2 import parse_text
+    from runtime.engine import Engine
+
+    e = Engine(parse_text(GATHERED), "System()")
+    kinds = {src.connector.path: src.kind for src in e.sources if src.connector is not None}
+    assert kinds == {"run": "rendezvous", "never": "generic"}  # a guard keeps the general path
+    s = e.initial_state()
+    (run,) = e.enabled(s)
+    assert run.ports == ("task.timer.p", "task.scheduler.p", "poster.p")
+    s = e.fire(e.fire(s, run), run)
+    assert e.enabled(s) == []
+    assert [atom(e, s, a)["data"]["n"] for a in ("task.timer", "task.scheduler", "poster", "other")] == [2, 2, 2, 0]

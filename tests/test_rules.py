@@ -277,9 +277,10 @@ def test_dala_rules_are_in_the_generated_model():
     for rule in ("goto-after-pom-run", "goto-needs-laser-and-map"):
         assert f'@rule(name="{rule}")' in bip  # quoted: not an identifier
     assert '@wait(rules="goto-waits-for-base")' in bip
-    assert "connector Triggered_2_4 RFLEX_Stop_start(RFLEX.Stop_control_start, RFLEX.Stop_activity_start, " \
-           "RFLEX.TrackSpeed_activity_abort, NDD.GoTo_activity_abort, RFLEX.TrackSpeed_control_cancel, " \
-           "NDD.GoTo_control_cancel)" in bip
+    # RFLEX's Stop (with the TrackSpeed it interrupts at home) aborts NDD's GoTo too: one port of each module
+    assert "connector Triggered_1_1 RFLEX_Stop_start(RFLEX.Stop_start, NDD.GoTo_RFLEX_Stop_start)" in bip
+    assert "connector TriggeredX_1_1 Stop_start(Stop.start, TrackSpeed.Stop_start)" in bip
+    assert "connector BroadcastX_2 RFLEX_Stop_start(activity.abort, control.cancel)" in bip
 
 
 def test_a_single_description_file_does_not_pick_up_the_rule_file_beside_it(tmp_path):

@@ -172,7 +172,6 @@ def Aspect_SetParams_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -224,9 +223,6 @@ def Aspect_SetParams_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -544,7 +540,6 @@ def Aspect_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -586,9 +581,6 @@ def Aspect_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -726,7 +718,6 @@ def LaserRF_SetConfig_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -778,9 +769,6 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -1219,7 +1207,6 @@ def LaserRF_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -1261,9 +1248,6 @@ def LaserRF_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -1353,26 +1337,16 @@ def NDD_Requests() -> AtomType:
 
 
 def NDD_motion_Activity() -> AtomType:
-    """Permanent activity of task NDD.motion: states start, publish, stop."""
+    """Permanent activity of task NDD.motion: states start, publish."""
     return AtomType(
         'NDD_motion_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_publish', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=[
-            'ETHER',
-            'START',
-            'PUBLISH',
-            'STOP',
-            'PUBLISH_PAUSED',
-            'START_YIELD',
-            'PUBLISH_YIELD',
-            'STOP_YIELD',
-        ],
+        places=['ETHER', 'START', 'PUBLISH', 'PUBLISH_PAUSED', 'START_YIELD', 'PUBLISH_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -1418,30 +1392,6 @@ def NDD_motion_Activity() -> AtomType:
             Transition(
                 None,
                 ['PUBLISH_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('NDD_nddShutdown'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -2071,7 +2021,6 @@ def NDD_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2113,9 +2062,6 @@ def NDD_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -2211,26 +2157,16 @@ def POM_Requests() -> AtomType:
 
 
 def POM_fusion_Activity() -> AtomType:
-    """Permanent activity of task POM.fusion: states start, update, stop."""
+    """Permanent activity of task POM.fusion: states start, update."""
     return AtomType(
         'POM_fusion_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_update', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=[
-            'ETHER',
-            'START',
-            'UPDATE',
-            'STOP',
-            'UPDATE_PAUSED',
-            'START_YIELD',
-            'UPDATE_YIELD',
-            'STOP_YIELD',
-        ],
+        places=['ETHER', 'START', 'UPDATE', 'UPDATE_PAUSED', 'START_YIELD', 'UPDATE_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -2276,30 +2212,6 @@ def POM_fusion_Activity() -> AtomType:
             Transition(
                 None,
                 ['UPDATE_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('POM_pomEnd'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -2521,7 +2433,6 @@ def POM_Reset_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2563,9 +2474,6 @@ def POM_Reset_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -2680,26 +2588,16 @@ def RFLEX_Requests() -> AtomType:
 
 
 def RFLEX_servo_Activity() -> AtomType:
-    """Permanent activity of task RFLEX.servo: states start, odometry, stop."""
+    """Permanent activity of task RFLEX.servo: states start, odometry."""
     return AtomType(
         'RFLEX_servo_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_odometry', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=[
-            'ETHER',
-            'START',
-            'ODOMETRY',
-            'STOP',
-            'ODOMETRY_PAUSED',
-            'START_YIELD',
-            'ODOMETRY_YIELD',
-            'STOP_YIELD',
-        ],
+        places=['ETHER', 'START', 'ODOMETRY', 'ODOMETRY_PAUSED', 'START_YIELD', 'ODOMETRY_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -2745,30 +2643,6 @@ def RFLEX_servo_Activity() -> AtomType:
             Transition(
                 None,
                 ['ODOMETRY_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('RFLEX_rflexClose'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -2927,7 +2801,6 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -2969,9 +2842,6 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -3241,7 +3111,6 @@ def RFLEX_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -3283,9 +3152,6 @@ def RFLEX_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -3356,16 +3222,6 @@ def RFLEX_Stop_Activity() -> AtomType:
 
 # --------------------------------------------------------------------------------------------------
 # Connector types: interaction
-
-
-def BroadcastX_1() -> ConnectorType:
-    """Connector type BroadcastX_1: any of the ports that can, together, offered to an enclosing connector."""
-    return ConnectorType(
-        'BroadcastX_1',
-        params=[ConnectorParam('Port', 'p1')],
-        define=DefineGroup([DefinePort('p1', trigger=True)]),
-        export=ConnectorExport('Port', 'ep'),
-    )
 
 
 def BroadcastX_2() -> ConnectorType:
@@ -3663,16 +3519,6 @@ def RFLEX_TrackSpeed_Trigger() -> ConnectorType:
         params=[ConnectorParam('Port', 'p1'), ConnectorParam('Port', 'p2'), ConnectorParam('Status', 'p3')],
         define=DefineGroup([DefinePort('p1'), DefinePort('p2'), DefinePort('p3')]),
         interactions=[InteractionSpec(['p1', 'p2', 'p3'], guard=PortData('p3', 'done'))],
-    )
-
-
-def RendezvousX_P() -> ConnectorType:
-    """Connector type RendezvousX_P: all ports together, offered to an enclosing connector."""
-    return ConnectorType(
-        'RendezvousX_P',
-        params=[ConnectorParam('Port', 'p1')],
-        define=DefineGroup([DefinePort('p1')]),
-        export=ConnectorExport('Port', 'ep'),
     )
 
 
@@ -4572,11 +4418,6 @@ def NDD_motion_Task() -> CompoundType:
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
             ),
@@ -4593,7 +4434,6 @@ def NDD_motion_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_publish', targets=[PortRef('exec_publish', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
@@ -4733,11 +4573,6 @@ def POM_fusion_Task() -> CompoundType:
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_update')],
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
                 'TriggeredX_2_1',
                 'period',
                 ports=[
@@ -4755,7 +4590,6 @@ def POM_fusion_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_update', targets=[PortRef('exec_update', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
@@ -4978,11 +4812,6 @@ def RFLEX_servo_Task() -> CompoundType:
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
             ),
@@ -4999,7 +4828,6 @@ def RFLEX_servo_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_odometry', targets=[PortRef('exec_odometry', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
@@ -5166,11 +4994,6 @@ def LaserRF_Module() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
-                'RendezvousX_P',
-                'acquisition_exec_start',
-                ports=[PortRef('acquisition', 'exec_start')],
-            ),
-            ConnectorInstance(
                 'RendezvousX_PP',
                 'Init_exec_start',
                 ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
@@ -5206,11 +5029,6 @@ def LaserRF_Module() -> CompoundType:
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('Start', 'Stop_start')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_P',
-                'acquisition_sleep',
-                ports=[PortRef('acquisition', 'sleep')],
             ),
             ConnectorInstance(
                 'Triggered_1_1',
@@ -5267,7 +5085,7 @@ def LaserRF_Module() -> CompoundType:
             ExportPort(
                 'Port',
                 'acquisition_exec_start',
-                targets=[PortRef('acquisition_exec_start', 'ep')],
+                targets=[PortRef('acquisition', 'exec_start')],
             ),
             ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
@@ -5279,7 +5097,7 @@ def LaserRF_Module() -> CompoundType:
             ExportPort('Port', 'Start_exec_acquire', targets=[PortRef('Start_exec_acquire', 'ep')]),
             ExportPort('Port', 'Start_exec_stop', targets=[PortRef('Start_exec_stop', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
-            ExportPort('Port', 'acquisition_sleep', targets=[PortRef('acquisition_sleep', 'ep')]),
+            ExportPort('Port', 'acquisition_sleep', targets=[PortRef('acquisition', 'sleep')]),
             ExportPort(
                 'Status',
                 'Start_control_status',
@@ -5317,11 +5135,6 @@ def NDD_Module() -> CompoundType:
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
-                'motion_exec_stop',
-                ports=[PortRef('motion', 'exec_stop'), PortRef('Speed', 'write')],
-            ),
-            ConnectorInstance(
-                'RendezvousX_PP',
                 'GoTo_exec_start',
                 ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_start')],
             ),
@@ -5353,21 +5166,10 @@ def NDD_Module() -> CompoundType:
                 ],
             ),
             ConnectorInstance(
-                'BroadcastX_1',
-                'LaserRF_Stop_start',
-                ports=[PortRef('GoTo', 'LaserRF_Stop_start')],
-            ),
-            ConnectorInstance(
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('GoTo', 'Stop_start')],
             ),
-            ConnectorInstance(
-                'BroadcastX_1',
-                'RFLEX_Stop_start',
-                ports=[PortRef('GoTo', 'RFLEX_Stop_start')],
-            ),
-            ConnectorInstance('RendezvousX_P', 'motion_sleep', ports=[PortRef('motion', 'sleep')]),
             ConnectorInstance(
                 'NDD_GoTo_Trigger_000001234_1',
                 'GoTo_trigger',
@@ -5485,15 +5287,22 @@ def NDD_Module() -> CompoundType:
                 'motion_exec_publish',
                 targets=[PortRef('motion_exec_publish', 'ep')],
             ),
-            ExportPort('Port', 'motion_exec_stop', targets=[PortRef('motion_exec_stop', 'ep')]),
             ExportPort('Port', 'GoTo_exec_start', targets=[PortRef('GoTo_exec_start', 'ep')]),
             ExportPort('Port', 'GoTo_exec_plan', targets=[PortRef('GoTo_exec_plan', 'ep')]),
             ExportPort('Port', 'GoTo_exec_arrived', targets=[PortRef('GoTo_exec_arrived', 'ep')]),
             ExportPort('Port', 'GoTo_exec_stop', targets=[PortRef('GoTo_exec_stop', 'ep')]),
-            ExportPort('Port', 'LaserRF_Stop_start', targets=[PortRef('LaserRF_Stop_start', 'ep')]),
+            ExportPort(
+                'Port',
+                'GoTo_LaserRF_Stop_start',
+                targets=[PortRef('GoTo', 'LaserRF_Stop_start')],
+            ),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
-            ExportPort('Port', 'RFLEX_Stop_start', targets=[PortRef('RFLEX_Stop_start', 'ep')]),
-            ExportPort('Port', 'motion_sleep', targets=[PortRef('motion_sleep', 'ep')]),
+            ExportPort(
+                'Port',
+                'GoTo_RFLEX_Stop_start',
+                targets=[PortRef('GoTo', 'RFLEX_Stop_start')],
+            ),
+            ExportPort('Port', 'motion_sleep', targets=[PortRef('motion', 'sleep')]),
             ExportPort('Bools3', 'GoTo_trigger', targets=[PortRef('GoTo_trigger', 'ep')]),
             ExportPort(
                 'Port',
@@ -5541,13 +5350,6 @@ def POM_Module() -> CompoundType:
                 ports=[PortRef('fusion', 'exec_update'), PortRef('Pos', 'write')],
                 annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_update'})],
                 comment='codel pomUpdate of state update',
-            ),
-            ConnectorInstance(
-                'Rendezvous_P',
-                'fusion_exec_stop',
-                ports=[PortRef('fusion', 'exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_stop'})],
-                comment='codel pomEnd of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5633,12 +5435,6 @@ def POM_Module() -> CompoundType:
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
-                'fusion_sleep_before_fusion_exec_stop',
-                InteractionPattern('fusion_sleep'),
-                InteractionPattern('fusion_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
                 'fusion_sleep_before_Run_exec_start',
                 InteractionPattern('fusion_sleep'),
                 InteractionPattern('Run_exec_start'),
@@ -5690,11 +5486,6 @@ def RFLEX_Module() -> CompoundType:
                 ports=[PortRef('servo', 'exec_odometry'), PortRef('Odo', 'write')],
             ),
             ConnectorInstance(
-                'RendezvousX_P',
-                'servo_exec_stop',
-                ports=[PortRef('servo', 'exec_stop')],
-            ),
-            ConnectorInstance(
                 'RendezvousX_PP',
                 'Init_exec_start',
                 ports=[PortRef('servo', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
@@ -5719,7 +5510,6 @@ def RFLEX_Module() -> CompoundType:
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('TrackSpeed', 'Stop_start')],
             ),
-            ConnectorInstance('RendezvousX_P', 'servo_sleep', ports=[PortRef('servo', 'sleep')]),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_start',
@@ -5802,7 +5592,6 @@ def RFLEX_Module() -> CompoundType:
                 'servo_exec_odometry',
                 targets=[PortRef('servo_exec_odometry', 'ep')],
             ),
-            ExportPort('Port', 'servo_exec_stop', targets=[PortRef('servo_exec_stop', 'ep')]),
             ExportPort('Port', 'Init_exec_start', targets=[PortRef('Init_exec_start', 'ep')]),
             ExportPort(
                 'Port',
@@ -5820,7 +5609,7 @@ def RFLEX_Module() -> CompoundType:
                 targets=[PortRef('TrackSpeed_exec_stop', 'ep')],
             ),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
-            ExportPort('Port', 'servo_sleep', targets=[PortRef('servo_sleep', 'ep')]),
+            ExportPort('Port', 'servo_sleep', targets=[PortRef('servo', 'sleep')]),
             ExportPort(
                 'Status',
                 'TrackSpeed_control_status',
@@ -5900,13 +5689,6 @@ def DALA() -> CompoundType:
             ),
             ConnectorInstance(
                 'Rendezvous_P',
-                'NDD_motion_exec_stop',
-                ports=[PortRef('NDD', 'motion_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_stop'})],
-                comment='codel nddShutdown of state stop',
-            ),
-            ConnectorInstance(
-                'Rendezvous_P',
                 'NDD_GoTo_exec_start',
                 ports=[PortRef('NDD', 'GoTo_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'})],
@@ -5949,13 +5731,6 @@ def DALA() -> CompoundType:
             ),
             ConnectorInstance(
                 'Rendezvous_P',
-                'RFLEX_servo_exec_stop',
-                ports=[PortRef('RFLEX', 'servo_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_stop'})],
-                comment='codel rflexClose of state stop',
-            ),
-            ConnectorInstance(
-                'Rendezvous_P',
                 'RFLEX_Init_exec_start',
                 ports=[PortRef('RFLEX', 'Init_exec_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'})],
@@ -5985,7 +5760,7 @@ def DALA() -> CompoundType:
             ConnectorInstance(
                 'Triggered_1_1',
                 'LaserRF_Stop_start',
-                ports=[PortRef('LaserRF', 'Stop_start'), PortRef('NDD', 'LaserRF_Stop_start')],
+                ports=[PortRef('LaserRF', 'Stop_start'), PortRef('NDD', 'GoTo_LaserRF_Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
             ),
@@ -5999,7 +5774,7 @@ def DALA() -> CompoundType:
             ConnectorInstance(
                 'Triggered_1_1',
                 'RFLEX_Stop_start',
-                ports=[PortRef('RFLEX', 'Stop_start'), PortRef('NDD', 'RFLEX_Stop_start')],
+                ports=[PortRef('RFLEX', 'Stop_start'), PortRef('NDD', 'GoTo_RFLEX_Stop_start')],
                 annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
                 comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
             ),
@@ -6233,12 +6008,6 @@ def DALA() -> CompoundType:
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
-                'NDD_motion_sleep_before_motion_exec_stop',
-                InteractionPattern('NDD_motion_sleep'),
-                InteractionPattern('NDD_motion_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
                 'NDD_motion_sleep_before_GoTo_exec_start',
                 InteractionPattern('NDD_motion_sleep'),
                 InteractionPattern('NDD_GoTo_exec_start'),
@@ -6275,12 +6044,6 @@ def DALA() -> CompoundType:
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
-                'RFLEX_servo_sleep_before_servo_exec_stop',
-                InteractionPattern('RFLEX_servo_sleep'),
-                InteractionPattern('RFLEX_servo_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
                 'RFLEX_servo_sleep_before_Init_exec_start',
                 InteractionPattern('RFLEX_servo_sleep'),
                 InteractionPattern('RFLEX_Init_exec_start'),
@@ -6309,7 +6072,7 @@ def DALA() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 30 connector types, 34 compound types."""
+    """The whole model: 48 atom types, 28 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -6514,16 +6277,6 @@ def package() -> Package:
                 ],
             ),
             ExternFunction(
-                'NDD_nddShutdown',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'nddShutdown', 'yields': 'ether', 'throws': ''},
-                    ),
-                ],
-            ),
-            ExternFunction(
                 'NDD_nddStartGoTo',
                 return_type='int',
                 annotations=[
@@ -6550,16 +6303,6 @@ def package() -> Package:
                     Annotation(
                         'codel',
                         arguments={'codel': 'nddStopGoTo', 'yields': 'ether', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
-                    ),
-                ],
-            ),
-            ExternFunction(
-                'POM_pomEnd',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'pomEnd', 'yields': 'ether', 'throws': ''},
                     ),
                 ],
             ),
@@ -6620,16 +6363,6 @@ def package() -> Package:
                     Annotation(
                         'codel',
                         arguments={'codel': 'rflexBrake', 'yields': 'ether', 'throws': 'RFLEX::e_emergency_stop'},
-                    ),
-                ],
-            ),
-            ExternFunction(
-                'RFLEX_rflexClose',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'rflexClose', 'yields': 'ether', 'throws': ''},
                     ),
                 ],
             ),
@@ -6753,7 +6486,6 @@ def package() -> Package:
             RFLEX_Stop_Activity(),
         ],
         connector_types=[
-            BroadcastX_1(),
             BroadcastX_2(),
             LaserRF_Start_Refuse_after(),
             LaserRF_Start_Trigger(),
@@ -6769,7 +6501,6 @@ def package() -> Package:
             POM_Reset_Trigger_001(),
             RFLEX_TrackSpeed_Refuse_after(),
             RFLEX_TrackSpeed_Trigger(),
-            RendezvousX_P(),
             RendezvousX_PP(),
             RendezvousX_PPP(),
             Rendezvous_P(),

@@ -201,17 +201,23 @@ class Assembly:
                 if sub is None:
                     refs.append(ref(ends[g[0]], at))
                     continue
-                child = at + (key,)
-                if child not in self.groups:
-                    raise SplitError(f"connector {local_name(w, at)} binds atom {'.'.join(child)} twice")
+                # The sub-connector lives where its ends meet, and its port is exported up to ``at``.
+                low = _common_prefix([ends[i].atom[:-1] for i in g])
+                if len(low) <= len(at):
+                    raise SplitError(f"connector {local_name(w, at)} binds atom {'.'.join(at + (key,))} twice")
                 sub = self.register(sub)
-                name = sub_name(w, child)
-                inner_type, inner = join(w, sub, [ends[i] for i in g], child)
-                connectors[child].append(ConnectorInstance(inner_type.name, name, inner))
-                if name in exports[child]:
-                    raise SplitError(f"compound {'.'.join(child)} already exports a port named {name}")
-                exports[child][name] = ExportPort(sub.export.port_type, name, [PortRef(name, sub.export.name)])
-                refs.append(PortRef(key, name))
+                name = sub_name(w, low)
+                inner_type, inner = join(w, sub, [ends[i] for i in g], low)
+                connectors[low].append(ConnectorInstance(inner_type.name, name, inner))
+                exported, target = name, PortRef(name, sub.export.name)
+                for k in range(len(low), len(at), -1):
+                    holder = low[:k]
+                    if exported in exports[holder]:
+                        raise SplitError(f"compound {'.'.join(holder)} already exports a port named {exported}")
+                    exports[holder][exported] = ExportPort(sub.export.port_type, exported, [target])
+                    target = PortRef(low[k - 1], exported)
+                    exported = f"{low[k - 1]}_{exported}"
+                refs.append(target)
             return self.register(sp.outer), [refs[k] for k in sp.order]
 
         def sub_name(w: Wire, at: Path) -> str:

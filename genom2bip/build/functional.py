@@ -176,7 +176,7 @@ class FunctionalLevel:
         self.task_execs[path] = []
         self.wakes[path] = []
         if task.codels:
-            fsm = Fsm.of(task.codels, task.throws)
+            fsm = Fsm.of(task.codels, task.throws).reachable(["start"])
             atom = self._atom_type(activity_type(m, name, fsm, permanent=True),
                                    f"Permanent activity of task {m}.{task.name}: states {', '.join(fsm.states)}.")
             self._codel_externs(m, fsm)
@@ -209,12 +209,13 @@ class FunctionalLevel:
     def _service(self, m: str, c: ir.Component, root: Path, s: ir.Service, task: Path) -> None:
         name = ident(s.name)
         path = self.asm.group(root + (name,), joined(m, name, "Service"), comment=f"{s.kind} {s.name}")
-        fsm = Fsm.of(s.fsm_codels(), list(dict.fromkeys(s.throws + c.throws)))
+        fsm = Fsm.of(s.fsm_codels(), list(dict.fromkeys(s.throws + c.throws))).reachable(["start", "stop"])
         constrained = any(r.service == (c.name, s.name) and r.kind in GUARD_KINDS and r.on_violation == "reject"
                           for r in self.rules)
         interruptible = any(r.kind == "interrupts" and (c.name, s.name) in r.others for r in self.rules)
+        observed = any(r.kind in GUARD_KINDS and (c.name, s.name) in r.others for r in self.rules)
         control = self.asm.atom(path + ("control",), self._atom_type(
-            controller_type(m, s, constrained, interruptible), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
+            controller_type(m, s, constrained, interruptible, observed), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
             activity_type(m, name, fsm), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))

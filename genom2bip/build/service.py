@@ -56,6 +56,21 @@ class Fsm:
                     paused.append(y.state)
         return cls(states, codel_of, list(throws), paused)
 
+    def reachable(self, roots: list[str]) -> "Fsm":
+        """The automaton without the states no run can reach from ``roots`` (BIP2 reports them as dead code).
+
+        A task's ``stop`` codel runs when the component shuts down, which the
+        model does not represent: a permanent activity starts at ``start`` only.
+        """
+        seen = [r for r in roots if r in self.codel_of]
+        for state in seen:
+            for y in self.codel_of[state].yields:
+                if y.state != "ether" and y.state in self.codel_of and y.state not in seen:
+                    seen.append(y.state)
+        keep = [x for x in self.states if x in seen]
+        return Fsm(keep, {x: c for x, c in self.codel_of.items() if x in seen}, self.throws,
+                   [x for x in self.paused if x in seen])
+
     @property
     def has_stop(self) -> bool:
         return "stop" in self.codel_of
@@ -163,7 +178,8 @@ def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool)
     return out
 
 
-def controller_type(module: str, service: ir.Service, constrained: bool, interruptible: bool = False) -> AtomType:
+def controller_type(module: str, service: ir.Service, constrained: bool, interruptible: bool = False,
+                    observed: bool = True) -> AtomType:
     """Execution task of a service (Fig. 6 left): trigger → validate → reject or start → report.
 
     ``cancel`` exists when another service may interrupt this one: a request
@@ -173,7 +189,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
     ``status`` is available in every place and tells constraint connectors
     whether the service has completed (at least once / latest run) and whether
     it runs now: from the moment its request is accepted until it reports, so
-    that two mutually exclusive services can never both be accepted.  ``reject`` exists when a validate codel may refuse the
+    that two mutually exclusive services can never both be accepted; it exists
+    when a rule reads it (``observed``).  ``reject`` exists when a validate codel may refuse the
     parameters, ``refuse`` when a constraint may refuse a request.
     """
     places = ["IDLE", "CHECK", "ACTIVE"]
@@ -187,8 +204,9 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         PortDecl(PORT, "finish", exported=True),
         PortDecl(PORT, "fail", exported=True),
         PortDecl(PORT, "interrupted", exported=True),
-        PortDecl(STATUS, "status", list(STATUS_FIELDS), exported=True),
     ]
+    if observed:
+        ports.append(PortDecl(STATUS, "status", list(STATUS_FIELDS), exported=True))
     ended = [Assign(Var("running"), Const(False))]
     transitions = [
         Transition("trigger", ["IDLE"], ["CHECK"], action=validate + [Assign(Var("running"), Const(True))]),
@@ -198,7 +216,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         Transition("fail", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
         Transition("interrupted", ["ACTIVE"], ["IDLE"], action=ended + [Assign(Var("ok"), Const(False))]),
     ]
-    transitions += [Transition("status", [p], [p]) for p in places]
+    if observed:
+        transitions += [Transition("status", [p], [p]) for p in places]
     if service.validate:
         ports.insert(1, PortDecl(PORT, "reject", exported=True))
         transitions.insert(1, Transition("reject", ["CHECK"], ["IDLE"], guard=Binary("!=", Var("verdict"), Const(0)),

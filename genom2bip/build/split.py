@@ -46,7 +46,6 @@ class Split:
     outer: ConnectorType
     subs: list[ConnectorType | None]
     order: list[int]  # outer parameter k takes group order[k]
-    port_types: list[PortType]  # port types the sub-connectors export data through
 
 
 class SplitError(ValueError):
@@ -101,7 +100,7 @@ def split_connector(ct: ConnectorType, groups: list[list[int]], port_types: dict
         return _split_rendezvous(ct, groups, port_types)
     if _broadcast_shape(ct):
         subs = [broadcast_type(len(g), exported=True) if len(g) > 1 else None for g in groups]
-        return Split(broadcast_type(len(groups), exported=ct.export is not None), subs, list(range(len(groups))), [])
+        return Split(broadcast_type(len(groups), exported=ct.export is not None), subs, list(range(len(groups))))
     raise SplitError(f"connector type {ct.name} binds a component twice and has a shape that cannot be split")
 
 
@@ -122,7 +121,7 @@ def _split_triggered(ct: ConnectorType, groups: list[list[int]], k: int) -> Spli
             subs.append(triggered_type(t, len(g) - t, exported=True))
     order = [groups.index(g) for g in triggering + receiving]
     outer = triggered_type(len(triggering), len(receiving), exported=ct.export is not None)
-    return Split(outer, subs, order, [])
+    return Split(outer, subs, order)
 
 
 def _carried_type(n: int, port_types: dict[str, PortType]) -> str:
@@ -205,18 +204,17 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
         for j, (port, field) in enumerate(mine):
             table[(port, field)] = PortData(outer_names[gi], f"v{j + 1}")
             up.append(Assign(Var(f"v{j + 1}"), PortData(local[g.index(names.index(port))], field)))
-        subs.append(None)  # named below, once the outer name is known
-        subs[-1] = ConnectorType(
-            name="",
+        subs.append(ConnectorType(
+            name="",  # named below, after the outer type
             params=[ConnectorParam(t, n) for t, n in zip(types, local)],
             data=[DataDecl("bool", f"v{j + 1}") for j in range(len(mine))],
             export=ConnectorExport(carried, "ep", [f"v{j + 1}" for j in range(len(mine))]),
             define=DefineGroup([DefinePort(n) for n in local]),
             interactions=[InteractionSpec(list(local), up=up, down=sub_downs)],
-        )
+        ))
     order = list(range(len(groups)))
     if guard is None and not downs:
-        return Split(rendezvous_type(tuple(outer_types), exported=ct.export is not None), subs, order, [])
+        return Split(rendezvous_type(tuple(outer_types), exported=ct.export is not None), subs, order)
     code = "".join("0123456789abcdefghijklmnopqrstuvwxyz"[m] for m in membership)
     outer = ConnectorType(
         name=f"{ct.name}_{code}",
@@ -229,4 +227,4 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
     for gi, sub in enumerate(subs):
         if sub is not None and not sub.name:
             sub.name = f"{outer.name}_{gi + 1}"
-    return Split(outer, subs, order, [])
+    return Split(outer, subs, order)

@@ -171,6 +171,7 @@ class Controller:
     def _who_interrupts(self) -> dict[str, list[str]]:
         """Service label -> the services whose start aborts it (the description's and the rules' interruptions)."""
         leaves = self._leaves
+        flat = self.engine.flat
         found: dict[str, list[str]] = {}
         for fc in self.engine.flat.connectors:
             if not fc.top:

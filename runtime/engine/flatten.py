@@ -387,7 +387,8 @@ class _Builder:
         if pat.connector == "*":
             if other.connector == "*":
                 raise FlattenError(f"{_at(span)}{t.name}: '*:*' on both sides of a priority")
-            entries = tuple((fc.id, 0) for name, fc in local.items() if name != other.connector)
+            # any other connector that fires on its own: a sub-connector is part of its parent's interactions
+            entries = tuple((fc.id, 0) for name, fc in local.items() if name != other.connector and fc.top)
             return FlatPattern(str(pat), entries)
         fc = local.get(pat.connector)
         if fc is None:

@@ -142,12 +142,26 @@ def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
 
         tree = build(fc)
         flat_params = all(len(alts) == 1 and isinstance(alts[0], Leaf) for alts in fc.params)
-        kind = ("rendezvous" if infos[fc.type.name].rendezvous else "flat") if flat_params else "generic"
+        if flat_params:
+            kind = "rendezvous" if infos[fc.type.name].rendezvous else "flat"
+        else:
+            kind = "rendezvous" if _plain_rendezvous(tree) else "generic"
         sources.append(Source(len(sources), kind, fc, None, leaves, tree, alts_seen[0]))
     for fp in flat.ports:
         if not fp.decl.exported:
             sources.append(Source(len(sources), "port", None, fp, [fp.id]))
     return infos, sources
+
+
+def _plain_rendezvous(node: TreeNode) -> bool:
+    """A tree of rendezvous with no alternative, guard or action: one rendezvous of its leaves.
+
+    Sub-connectors that only gather the ports of one component (so that a
+    connector binds each component once) then cost nothing at run time.
+    """
+    if not node.info.rendezvous or node.info.clauses:
+        return False
+    return all(len(alts) == 1 and (alts[0].node is None or _plain_rendezvous(alts[0].node)) for alts in node.params)
 
 
 def parts(node: TreeNode, mask: int) -> list[tuple[int, int]]:

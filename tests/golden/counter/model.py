@@ -302,7 +302,6 @@ def counter_GetTicks_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -344,9 +343,6 @@ def counter_GetTicks_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -398,7 +394,6 @@ def counter_SetRunning_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -440,9 +435,6 @@ def counter_SetRunning_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 

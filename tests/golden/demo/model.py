@@ -379,7 +379,6 @@ def demo_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -421,9 +420,6 @@ def demo_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -509,7 +505,6 @@ def demo_GoTo_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
@@ -562,9 +557,6 @@ def demo_GoTo_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
             Transition(
                 'cancel',
                 ['CHECK'],
@@ -750,7 +742,6 @@ def demo_MoveDistance_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
@@ -794,9 +785,6 @@ def demo_MoveDistance_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
             Transition(
                 'cancel',
                 ['CHECK'],

@@ -162,17 +162,16 @@ def rflex_Requests() -> AtomType:
 
 
 def rflex_MotorsTask_Activity() -> AtomType:
-    """Permanent activity of task rflex.MotorsTask: states start, main, stop."""
+    """Permanent activity of task rflex.MotorsTask: states start, main."""
     return AtomType(
         'rflex_MotorsTask_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
         ports=[
             PortDecl('Port', 'exec_start', exported=True),
             PortDecl('Port', 'exec_main', exported=True),
-            PortDecl('Port', 'exec_stop', exported=True),
             PortDecl('Port', 'wake', exported=True),
         ],
-        places=['ETHER', 'START', 'MAIN', 'STOP', 'MAIN_PAUSED', 'START_YIELD', 'MAIN_YIELD', 'STOP_YIELD'],
+        places=['ETHER', 'START', 'MAIN', 'MAIN_PAUSED', 'START_YIELD', 'MAIN_YIELD'],
         initial=InitialTransition(
             ['START'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -218,30 +217,6 @@ def rflex_MotorsTask_Activity() -> AtomType:
             Transition(
                 None,
                 ['MAIN_YIELD'],
-                ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                'exec_stop',
-                ['STOP'],
-                ['STOP_YIELD'],
-                action=[Assign(Var('outcome'), Call('rflex_rflexMotorsEnd'))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
-                ['ETHER'],
-                guard=Binary('==', Var('outcome'), Const(0)),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['STOP_YIELD'],
                 ['ETHER'],
                 guard=Binary(
                     '||',
@@ -312,7 +287,6 @@ def rflex_Init_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -364,9 +338,6 @@ def rflex_Init_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -452,7 +423,6 @@ def rflex_SetSpeed_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -504,9 +474,6 @@ def rflex_SetSpeed_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -558,7 +525,6 @@ def rflex_GetOdo_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
         initial=InitialTransition(
@@ -600,9 +566,6 @@ def rflex_GetOdo_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
     )
 
@@ -654,7 +617,6 @@ def rflex_TrackSpeed_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
@@ -697,9 +659,6 @@ def rflex_TrackSpeed_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
             Transition(
                 'cancel',
                 ['CHECK'],
@@ -711,7 +670,7 @@ def rflex_TrackSpeed_Control() -> AtomType:
 
 
 def rflex_TrackSpeed_Activity() -> AtomType:
-    """Activity of activity rflex.TrackSpeed: states start, exec, end, stop, fail."""
+    """Activity of activity rflex.TrackSpeed: states start, exec, end, stop."""
     return AtomType(
         'rflex_TrackSpeed_Activity',
         data=[DataDecl('int', 'outcome'), DataDecl('bool', 'aborted')],
@@ -721,7 +680,6 @@ def rflex_TrackSpeed_Activity() -> AtomType:
             PortDecl('Port', 'exec_exec', exported=True),
             PortDecl('Port', 'exec_end', exported=True),
             PortDecl('Port', 'exec_stop', exported=True),
-            PortDecl('Port', 'exec_fail', exported=True),
             PortDecl('Port', 'wake', exported=True),
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
@@ -734,14 +692,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
             'EXEC',
             'END',
             'STOP',
-            'FAIL',
             'EXEC_PAUSED',
             'END_PAUSED',
             'START_YIELD',
             'EXEC_YIELD',
             'END_YIELD',
             'STOP_YIELD',
-            'FAIL_YIELD',
             'FINISHED',
             'FAILED',
             'INTERRUPTED',
@@ -904,37 +860,6 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
             ),
-            Transition(
-                'exec_fail',
-                ['FAIL'],
-                ['FAIL_YIELD'],
-                action=[Assign(Var('outcome'), Call('rflex_rflexTrackFail'))],
-            ),
-            Transition(
-                None,
-                ['FAIL_YIELD'],
-                ['FINISHED'],
-                guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['FAIL_YIELD'],
-                ['INTERRUPTED'],
-                guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
-            Transition(
-                None,
-                ['FAIL_YIELD'],
-                ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
-                action=[Assign(Var('outcome'), Const(0))],
-            ),
             Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
             Transition('wake', ['END_PAUSED'], ['END']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -943,7 +868,6 @@ def rflex_TrackSpeed_Activity() -> AtomType:
             Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
             Transition('abort', ['EXEC'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
             Transition('abort', ['END'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['FAIL'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
             Transition(
                 'abort',
                 ['EXEC_PAUSED'],
@@ -976,7 +900,6 @@ def rflex_Stop_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
         ],
         places=['IDLE', 'CHECK', 'ACTIVE'],
@@ -1019,9 +942,6 @@ def rflex_Stop_Control() -> AtomType:
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
             Transition(
                 'cancel',
                 ['CHECK'],
@@ -1441,11 +1361,6 @@ def rflex_MotorsTask_Task() -> CompoundType:
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_main')],
             ),
             ConnectorInstance(
-                'RendezvousX_PP',
-                'exec_stop',
-                ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
-            ),
-            ConnectorInstance(
                 'TriggeredX_2_1',
                 'period',
                 ports=[
@@ -1463,7 +1378,6 @@ def rflex_MotorsTask_Task() -> CompoundType:
         ports=[
             ExportPort('Port', 'exec_start', targets=[PortRef('exec_start', 'ep')]),
             ExportPort('Port', 'exec_main', targets=[PortRef('exec_main', 'ep')]),
-            ExportPort('Port', 'exec_stop', targets=[PortRef('exec_stop', 'ep')]),
             ExportPort('Port', 'scheduler_exec', targets=[PortRef('scheduler', 'exec')]),
             ExportPort('Port', 'period', targets=[PortRef('period', 'ep')]),
             ExportPort('Port', 'sleep', targets=[PortRef('sleep', 'ep')]),
@@ -1661,7 +1575,6 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_exec', targets=[PortRef('activity', 'exec_exec')]),
             ExportPort('Port', 'activity_exec_end', targets=[PortRef('activity', 'exec_end')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
-            ExportPort('Port', 'activity_exec_fail', targets=[PortRef('activity', 'exec_fail')]),
             ExportPort('Port', 'Init_start', targets=[PortRef('Init_start', 'ep')]),
             ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
@@ -1726,13 +1639,6 @@ def rflex_Module() -> CompoundType:
                 comment='codel rflexMotorsMain of state main',
             ),
             ConnectorInstance(
-                'Rendezvous_P',
-                'MotorsTask_exec_stop',
-                ports=[PortRef('MotorsTask', 'exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_stop'})],
-                comment='codel rflexMotorsEnd of state stop',
-            ),
-            ConnectorInstance(
                 'Rendezvous_PP',
                 'Init_exec_start',
                 ports=[PortRef('MotorsTask', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
@@ -1778,16 +1684,6 @@ def rflex_Module() -> CompoundType:
                 ],
                 annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_stop'})],
                 comment='codel rflexTrackInter of state stop',
-            ),
-            ConnectorInstance(
-                'Rendezvous_PP',
-                'TrackSpeed_exec_fail',
-                ports=[
-                    PortRef('MotorsTask', 'scheduler_exec'),
-                    PortRef('TrackSpeed', 'activity_exec_fail'),
-                ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_fail'})],
-                comment='codel rflexTrackFail of state fail',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -1909,12 +1805,6 @@ def rflex_Module() -> CompoundType:
                 comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
             ),
             Priority(
-                'TrackSpeed_exec_fail_before_Init_start',
-                InteractionPattern('TrackSpeed_exec_fail'),
-                InteractionPattern('Init_start'),
-                comment='an interruption by rflex.Init takes effect before rflex.TrackSpeed runs another codel',
-            ),
-            Priority(
                 'Stop_exec_start_before_Init_start',
                 InteractionPattern('Stop_exec_start'),
                 InteractionPattern('Init_start'),
@@ -1975,12 +1865,6 @@ def rflex_Module() -> CompoundType:
                 comment='an interruption by rflex.Stop takes effect before rflex.TrackSpeed runs another codel',
             ),
             Priority(
-                'TrackSpeed_exec_fail_before_Stop_start',
-                InteractionPattern('TrackSpeed_exec_fail'),
-                InteractionPattern('Stop_start'),
-                comment='an interruption by rflex.Stop takes effect before rflex.TrackSpeed runs another codel',
-            ),
-            Priority(
                 'MotorsTask_sleep_before_MotorsTask_exec_start',
                 InteractionPattern('MotorsTask_sleep'),
                 InteractionPattern('MotorsTask_exec_start'),
@@ -1990,12 +1874,6 @@ def rflex_Module() -> CompoundType:
                 'MotorsTask_sleep_before_MotorsTask_exec_main',
                 InteractionPattern('MotorsTask_sleep'),
                 InteractionPattern('MotorsTask_exec_main'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'MotorsTask_sleep_before_MotorsTask_exec_stop',
-                InteractionPattern('MotorsTask_sleep'),
-                InteractionPattern('MotorsTask_exec_stop'),
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
@@ -2026,12 +1904,6 @@ def rflex_Module() -> CompoundType:
                 'MotorsTask_sleep_before_TrackSpeed_exec_stop',
                 InteractionPattern('MotorsTask_sleep'),
                 InteractionPattern('TrackSpeed_exec_stop'),
-                comment='a period ends only when no codel of the task can run',
-            ),
-            Priority(
-                'MotorsTask_sleep_before_TrackSpeed_exec_fail',
-                InteractionPattern('MotorsTask_sleep'),
-                InteractionPattern('TrackSpeed_exec_fail'),
                 comment='a period ends only when no codel of the task can run',
             ),
             Priority(
@@ -2089,16 +1961,6 @@ def package() -> Package:
                     Annotation(
                         'codel',
                         arguments={'codel': 'rflexInitStart', 'yields': 'ether', 'throws': 'NO_DEVICE,MOTOR_ERROR,SPEED_TOO_HIGH'},
-                    ),
-                ],
-            ),
-            ExternFunction(
-                'rflex_rflexMotorsEnd',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'rflexMotorsEnd', 'yields': 'ether', 'throws': 'MOTOR_ERROR'},
                     ),
                 ],
             ),
@@ -2169,16 +2031,6 @@ def package() -> Package:
                     Annotation(
                         'codel',
                         arguments={'codel': 'rflexTrackEnd', 'yields': 'ether', 'throws': 'MOTOR_ERROR,SPEED_TOO_HIGH,NO_DEVICE'},
-                    ),
-                ],
-            ),
-            ExternFunction(
-                'rflex_rflexTrackFail',
-                return_type='int',
-                annotations=[
-                    Annotation(
-                        'codel',
-                        arguments={'codel': 'rflexTrackFail', 'yields': 'ether', 'throws': 'MOTOR_ERROR,SPEED_TOO_HIGH,NO_DEVICE'},
                     ),
                 ],
             ),
