@@ -14,7 +14,7 @@ from runtime.engine import defines
 from runtime.engine.cexpr import coerce, default_value, evaluate
 from runtime.engine.errors import FlattenError
 from runtime.engine.flatten import FlatConnector, FlatPort, FlatSystem, Leaf
-from runtime.model import ConnectorType, InteractionSpec
+from runtime.model import ConnectorParam, ConnectorType, DefineGroup, DefinePort, InteractionSpec
 
 
 @dataclass
@@ -113,6 +113,9 @@ def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
         if fc.type.name not in infos:
             infos[fc.type.name] = connector_info(fc.type, flat.constants)
     sources: list[Source] = []
+    #: connectors a priority names with a parameter mask, or below the top: their trees stay as they are
+    referenced = {cid for p in flat.priorities for side in (p.low, p.high) for cid, mask in side.entries
+                  if mask or not flat.connectors[cid].top}
     for fc in flat.connectors:
         if not fc.top:
             continue
@@ -144,13 +147,65 @@ def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
         flat_params = all(len(alts) == 1 and isinstance(alts[0], Leaf) for alts in fc.params)
         if flat_params:
             kind = "rendezvous" if infos[fc.type.name].rendezvous else "flat"
+        elif _plain_rendezvous(tree):
+            kind = "rendezvous"
+        elif not alts_seen[0] and _data_free(tree) and not (referenced & _ids(tree)):
+            fc = _collapsed(fc, tree, [flat.ports[q] for q in leaves], infos)
+            counter[0] = 0
+            leaves.clear()
+            tree = build(fc)
+            kind = "rendezvous" if infos[fc.type.name].rendezvous else "flat"
         else:
-            kind = "rendezvous" if _plain_rendezvous(tree) else "generic"
+            kind = "generic"
         sources.append(Source(len(sources), kind, fc, None, leaves, tree, alts_seen[0]))
     for fp in flat.ports:
         if not fp.decl.exported:
             sources.append(Source(len(sources), "port", None, fp, [fp.id]))
     return infos, sources
+
+
+def _data_free(node: TreeNode) -> bool:
+    """No guard, transfer or data anywhere in the tree: its interactions are given by the defines alone."""
+    if node.info.clauses or node.info.type.data:
+        return False
+    return all(a.node is None or _data_free(a.node) for alts in node.params for a in alts)
+
+
+def _ids(node: TreeNode) -> set[int]:
+    return {node.connector.id} | {i for alts in node.params for a in alts if a.node is not None for i in _ids(a.node)}
+
+
+def _collapsed(fc: FlatConnector, tree: TreeNode, leaves: list[FlatPort],
+               infos: dict[str, ConnectorInfo]) -> FlatConnector:
+    """One connector over the tree's leaves whose define nests the sub-connectors' defines where their ports were.
+
+    A connector tree without data has the interactions and the maximal
+    progress of that single connector (BIP2: a define expression nests like
+    connectors do), so it runs on the flat paths of the step, the compiled C
+    step included; connectors that only gather the ports of one component
+    (so that a connector binds each component once) then cost nothing.
+    """
+    names = [f"p{i + 1}" for i in range(len(leaves))]
+
+    def substitute(node: TreeNode, d: defines.Node) -> defines.Node:
+        if d[0] == "p":
+            alt = node.params[d[1].bit_length() - 1][0]
+            return ("p", alt.mask) if alt.node is None else substitute(alt.node, alt.node.info.tree)
+        return ("g", tuple((substitute(node, sub), trig) for sub, trig in d[1]))
+
+    def item(d: defines.Node, trigger: bool):
+        if d[0] == "p":
+            return DefinePort(names[d[1].bit_length() - 1], trigger)
+        return DefineGroup([item(sub, t) for sub, t in d[1]], trigger)
+
+    top = substitute(tree, tree.info.tree)
+    define = item(top, False)
+    ct = ConnectorType(name=f"{fc.type.name}~{fc.id}",
+                       params=[ConnectorParam(port.decl.type, n) for port, n in zip(leaves, names)],
+                       define=define if isinstance(define, DefineGroup) else DefineGroup([define]))
+    infos[ct.name] = connector_info(ct, {})
+    return FlatConnector(fc.id, fc.path, fc.scope, fc.label, fc.instance, ct, [[Leaf(p.id)] for p in leaves],
+                         list(fc.parents), fc.named)
 
 
 def _plain_rendezvous(node: TreeNode) -> bool:
