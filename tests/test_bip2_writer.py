@@ -10,7 +10,7 @@ from runtime.bip2.syntax import parser
 from runtime.model import (
     Annotation, Assign, AtomType, Binary, ComponentInstance, CompoundType, ConnectorInstance, ConnectorParam,
     ConnectorType, Const, DataDecl, DefineGroup, DefinePort, If, InitialTransition, InteractionPattern,
-    InteractionSpec, Package, PortRef, PortType, Priority, Transition, Unary, Var,
+    Package, PortRef, PortType, Priority, Transition, Unary, Var,
 )
 
 FIXTURES = sorted((Path(__file__).parent / "fixtures" / "bip" / "roundtrip").glob("*.bip"))

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from functools import reduce
 
 from genom2bip.build import library
-from genom2bip.build.assembly import End, Path, Wire
+from genom2bip.build.assembly import End, Wire
 from genom2bip.build.names import ident
 from runtime.diagnostics import NOWHERE, Reporter, Span
 from runtime.model import (

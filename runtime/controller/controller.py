@@ -27,7 +27,6 @@ from runtime.controller.requests import FINAL, Request, RequestError, Service
 from runtime.controller.schema import completed, problems, zero
 from runtime.controller.timing import MonotonicClock, Timer, Timers
 from runtime.engine import Engine, Interaction, ModelError
-from runtime.engine.flatten import Leaf
 from runtime.model import Package
 
 Listener = Callable[[dict[str, Any]], None]
@@ -162,16 +161,11 @@ class Controller:
     def _leaves(self, fc) -> list[str]:
         """Atom ports under a connector, through its sub-connectors."""
         flat = self.engine.flat
-        out = []
-        for alts in fc.params:
-            for a in alts:
-                out += [flat.ports[a.port].path] if isinstance(a, Leaf) else self._leaves(flat.connectors[a.connector])
-        return out
+        return [flat.ports[p].path for p in flat.leaves(fc)]
 
     def _who_interrupts(self) -> dict[str, list[str]]:
         """Service label -> the services whose start aborts it (the description's and the rules' interruptions)."""
         leaves = self._leaves
-        flat = self.engine.flat
         found: dict[str, list[str]] = {}
         for fc in self.engine.flat.connectors:
             if not fc.top:

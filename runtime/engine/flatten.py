@@ -153,6 +153,14 @@ class FlatSystem:
     def atom_of(self, port: int) -> FlatAtom:
         return self.atoms[self.ports[port].atom]
 
+    def leaves(self, connector: FlatConnector) -> list[int]:
+        """Every atom port a connector may bind, through its sub-connectors, in parameter order."""
+        out: list[int] = []
+        for alternatives in connector.params:
+            for alt in alternatives:
+                out += [alt.port] if isinstance(alt, Leaf) else self.leaves(self.connectors[alt.connector])
+        return list(dict.fromkeys(out))
+
 
 def _at(span: Span | None) -> str:
     return f"{span}: " if span is not None and span.line > 0 else ""

@@ -10,7 +10,6 @@ from typing import Any, Iterable
 
 from runtime.pictures import style
 from runtime.pictures.dot import Dot
-from runtime.pictures.structure import leaves
 
 X0, DX, Y_HEAD, DY = 90, 190, 60, 42
 
@@ -20,7 +19,7 @@ def participants(engine: Any, step: Any) -> list[str]:
     if not isinstance(step, str):
         return list(engine.interaction(step.index).ports)
     flat = engine.flat
-    return [flat.ports[p].path for c in flat.connectors if c.top and c.label == str(step) for p in leaves(flat, c)]
+    return [flat.ports[p].path for c in flat.connectors if c.top and c.label == str(step) for p in flat.leaves(c)]
 
 
 def _lifeline(port_path: str, by: str) -> str:

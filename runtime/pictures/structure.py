@@ -21,7 +21,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Any
 
-from runtime.engine.flatten import FlatConnector, FlatSystem, Leaf, Sub
+from runtime.engine.flatten import FlatConnector, FlatSystem
 
 #: link kinds, in the order legends list them
 KINDS = ("sync", "write", "read", "constraint", "rule", "interrupts")
@@ -69,18 +69,6 @@ class Structure:
     def children(self, prefix: str) -> list[str]:
         """The atoms under compound path ``prefix`` ('' for all)."""
         return [a for a in self.atoms if not prefix or a == prefix or a.startswith(prefix + ".")]
-
-
-def leaves(flat: FlatSystem, connector: FlatConnector) -> list[int]:
-    """Every atom port a connector may bind, through its sub-connectors, in parameter order."""
-    out: list[int] = []
-    for alternatives in connector.params:
-        for alt in alternatives:
-            if isinstance(alt, Leaf):
-                out.append(alt.port)
-            elif isinstance(alt, Sub):
-                out += leaves(flat, flat.connectors[alt.connector])
-    return list(dict.fromkeys(out))
 
 
 def _annotation(connector: FlatConnector, name: str, key: str) -> list[str]:
@@ -134,7 +122,7 @@ def structure(flat: FlatSystem, interface: dict[str, Any] | None = None) -> Stru
     atoms = {a.name: a.type.name for a in flat.atoms}
     roles = {a.name: _role(a.type.name, [x.name for x in a.type.annotations]) for a in flat.atoms}
     owners = _owners(interface, list(atoms))
-    tops = [(c, [flat.ports[p] for p in leaves(flat, c)]) for c in flat.connectors if c.top]
+    tops = [(c, [flat.ports[p] for p in flat.leaves(c)]) for c in flat.connectors if c.top]
     refused = {(c.label.split(":")[0], flat.atoms[p.atom].name)
                for c, ports in tops if c.label.endswith(":refuse") for p in ports if p.name == "status"}
     links: list[Link] = []
