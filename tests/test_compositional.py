@@ -39,14 +39,15 @@ def test_every_deadlock_exploration_finds_is_a_candidate_and_never_deadlock_free
     result = explore(space)
     if result.error is not None:
         return  # a model error (the engine's business), not a deadlock question
-    for sid in result.deadlocks:
-        state = space.concrete(space.trace_to(sid))
-        assert tuple(analysis.abstract(state)) in candidates, text
+    if analysis.complete:  # every potential deadlock was listed (a listing past MAX_CANDIDATES is cut short)
+        for sid in result.deadlocks:
+            state = space.concrete(space.trace_to(sid))
+            assert tuple(analysis.abstract(state)) in candidates, text
     decide(analysis, package, "Top()", bfs_budget=3000, guided_budget=3000)
     if result.deadlocks:
-        assert analysis.verdict == "deadlock", text
+        assert analysis.verdict in (("deadlock",) if analysis.complete else ("deadlock", "unknown")), text
     elif result.complete:
-        assert analysis.verdict == "deadlock-free", text
+        assert analysis.verdict == ("deadlock-free" if analysis.complete else "unknown"), text
     assert not any("UNSOUND" in p.reason for p in analysis.potentials), text
     for p in analysis.candidates:
         if p.verdict == "reachable":  # the trace replays on the engine and ends in a deadlock

@@ -405,7 +405,7 @@ def test_a_pipe_given_as_a_description_is_refused_without_reading_it(tmp_path):
     # In a subprocess with a timeout: reading the pipe would wait for a writer forever.
     for argv, message in ((["check", fifo], f"genom2bip: error: {fifo}: not a regular file"),
                           (["verify", COUNTER, "--property", fifo],
-                           f"{fifo}:0:0: error: cannot read the property file: not a regular file")):
+                           f"{fifo}: error: cannot read the property file: not a regular file")):
         result = subprocess.run([sys.executable, "-m", "genom2bip", *map(str, argv)], capture_output=True, text=True,
                                 timeout=60, cwd=ROOT, check=False)
         assert (result.returncode, result.stdout) == (1, "") and message in result.stderr
