@@ -284,10 +284,77 @@ def test_a_rendezvous_of_gathering_sub_connectors_is_one_rendezvous_of_its_leave
 
     e = Engine(parse_text(GATHERED), "System()")
     kinds = {src.connector.path: src.kind for src in e.sources if src.connector is not None}
-    assert kinds == {"run": "rendezvous", "never": "generic"}  # a guard keeps the general path
+    assert kinds == {"run": "rendezvous", "never": "rendezvous"}  # a guard on the top connector collapses too
+    never = next(src for src in e.sources if src.connector is not None and src.connector.path == "never")
+    assert [p.path for p in map(e.flat.ports.__getitem__, never.leaves)] == ["task.timer.p", "task.scheduler.p",
+                                                                             "other.p"]
     s = e.initial_state()
     (run,) = e.enabled(s)
     assert run.ports == ("task.timer.p", "task.scheduler.p", "poster.p")
     s = e.fire(e.fire(s, run), run)
     assert e.enabled(s) == []
     assert [atom(e, s, a)["data"]["n"] for a in ("task.timer", "task.scheduler", "poster", "other")] == [2, 2, 2, 0]
+
+
+CARRIED = """package Carried
+  port type Port()
+  port type Flag(bool x)
+  port type Bools1(bool v1)
+  connector type Up(Flag a, Port b)
+    data bool v1
+    export port Bools1 e(v1)
+    define a b
+    on a b up { v1 = a.x; }
+  end
+  connector type Guarded(Bools1 t, Port c)
+    define t c
+    on t c provided (t.v1)
+  end
+  atom type Holder()
+    data bool x
+    export port Flag f(x)
+    export port Port flip()
+    place S
+    initial to S do { x = false; }
+    on f from S to S
+    on flip from S to S do { x = !x; }
+  end
+  atom type Step()
+    export port Port p()
+    place S
+    initial to S
+    on p from S to S
+  end
+  compound type Group()
+    component Holder h()
+    component Step s()
+    connector Up gather(h.f, s.p)
+    export port gather.e as e
+    export port h.flip as flip
+  end
+  connector type One(Port a)
+    define a
+  end
+  compound type System()
+    component Group g()
+    component Step c()
+    connector Guarded go(g.e, c.p)
+    connector One flip(g.flip)
+  end
+end
+"""
+
+
+def test_a_guard_reading_data_carried_up_by_sub_connectors_reads_the_ports_themselves():
+    from runtime.bip2 import parse_text
+    from runtime.engine import Engine
+
+    e = Engine(parse_text(CARRIED), "System()")
+    kinds = {src.connector.path: src.kind for src in e.sources if src.connector is not None}
+    assert kinds["go"] == "rendezvous"  # collapsed: one guarded rendezvous of the three atom ports
+    s = e.initial_state()
+    assert [i.label for i in e.enabled(s)] == ["flip"]  # g.h.x is false: the guard refuses go
+    s = e.fire(s, e.enabled(s)[0])
+    assert sorted(i.label for i in e.enabled(s)) == ["flip", "go"]
+    (go,) = [i for i in e.enabled(s) if i.label == "go"]
+    assert go.ports == ("g.h.f", "g.s.p", "c.p")

@@ -14,7 +14,8 @@ from runtime.engine import defines
 from runtime.engine.cexpr import coerce, default_value, evaluate
 from runtime.engine.errors import FlattenError
 from runtime.engine.flatten import FlatConnector, FlatPort, FlatSystem, Leaf
-from runtime.model import ConnectorParam, ConnectorType, DefineGroup, DefinePort, InteractionSpec
+from runtime.model import ConnectorParam, ConnectorType, DefineGroup, DefinePort, Expr, InteractionSpec
+from runtime.model.expressions import Assign, Binary, Call, PortData, Unary, Var
 
 
 @dataclass
@@ -149,8 +150,8 @@ def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
             kind = "rendezvous" if infos[fc.type.name].rendezvous else "flat"
         elif _plain_rendezvous(tree):
             kind = "rendezvous"
-        elif not alts_seen[0] and _data_free(tree) and not (referenced & _ids(tree)):
-            fc = _collapsed(fc, tree, [flat.ports[q] for q in leaves], infos)
+        elif not alts_seen[0] and _collapsible(tree, top=True) and not (referenced & _ids(tree)):
+            fc = _collapsed(fc, tree, [flat.ports[q] for q in leaves], infos, flat)
             counter[0] = 0
             leaves.clear()
             tree = build(fc)
@@ -164,11 +165,29 @@ def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
     return infos, sources
 
 
-def _data_free(node: TreeNode) -> bool:
-    """No guard, transfer or data anywhere in the tree: its interactions are given by the defines alone."""
-    if node.info.clauses or node.info.type.data:
+def _collapsible(node: TreeNode, top: bool) -> bool:
+    """A tree whose interactions are one connector's: no data anywhere, or rendezvous that only carry a guard up.
+
+    The second shape is a guarded rendezvous split so that it binds each
+    component once: the sub-connectors copy port data up (``up { v1 = p3.done; }``)
+    for the top connector's guard, and do nothing else.
+    """
+    info = node.info
+    if info.clauses:
+        if not info.rendezvous or len(info.clauses) != 1 or info.all_params not in info.clauses:
+            return False
+        spec = info.clauses[info.all_params]
+        if spec.down or (top and spec.up) or (not top and (spec.guard is not None or info.type.data != [] and
+                                                            not all(_copy(a) for a in spec.up))):
+            return False
+    elif info.type.data:
         return False
-    return all(a.node is None or _data_free(a.node) for alts in node.params for a in alts)
+    return all(a.node is None or _collapsible(a.node, top=False) for alts in node.params for a in alts)
+
+
+def _copy(stmt) -> bool:
+    """``v = p.x``: a sub-connector variable copied from a port's data."""
+    return isinstance(stmt, Assign) and isinstance(stmt.target, Var) and isinstance(stmt.value, PortData)
 
 
 def _ids(node: TreeNode) -> set[int]:
@@ -176,7 +195,7 @@ def _ids(node: TreeNode) -> set[int]:
 
 
 def _collapsed(fc: FlatConnector, tree: TreeNode, leaves: list[FlatPort],
-               infos: dict[str, ConnectorInfo]) -> FlatConnector:
+               infos: dict[str, ConnectorInfo], flat: FlatSystem) -> FlatConnector:
     """One connector over the tree's leaves whose define nests the sub-connectors' defines where their ports were.
 
     A connector tree without data has the interactions and the maximal
@@ -198,12 +217,37 @@ def _collapsed(fc: FlatConnector, tree: TreeNode, leaves: list[FlatPort],
             return DefinePort(names[d[1].bit_length() - 1], trigger)
         return DefineGroup([item(sub, t) for sub, t in d[1]], trigger)
 
+    def data(node: TreeNode, port: str, name: str) -> Expr:
+        """What ``port.name`` reads in ``node``: a leaf's data, or what a sub-connector copied up into its export."""
+        alt = node.params[node.info.index[port]][0]
+        if alt.node is None:
+            return PortData(names[alt.mask.bit_length() - 1], name)
+        sub = alt.node.info
+        fields = [d.name for d in flat.package.port_type(sub.type.export.port_type).params]
+        var = sub.type.export.data[fields.index(name)]
+        copied = next(a.value for a in sub.clauses[sub.all_params].up if a.target.name == var)
+        return data(alt.node, copied.port, copied.name)
+
+    def rewrite(node: TreeNode, e: Expr) -> Expr:
+        if isinstance(e, PortData):
+            return data(node, e.port, e.name)
+        if isinstance(e, Unary):
+            return Unary(e.op, rewrite(node, e.operand))
+        if isinstance(e, Binary):
+            return Binary(e.op, rewrite(node, e.left), rewrite(node, e.right))
+        if isinstance(e, Call):
+            return Call(e.function, tuple(rewrite(node, a) for a in e.args))
+        return e
+
     top = substitute(tree, tree.info.tree)
     define = item(top, False)
+    spec = tree.info.clauses.get(tree.info.all_params)
     ct = ConnectorType(name=f"{fc.type.name}~{fc.id}",
                        params=[ConnectorParam(port.decl.type, n) for port, n in zip(leaves, names)],
-                       define=define if isinstance(define, DefineGroup) else DefineGroup([define]))
-    infos[ct.name] = connector_info(ct, {})
+                       define=define if isinstance(define, DefineGroup) else DefineGroup([define]),
+                       interactions=[InteractionSpec(list(names), guard=rewrite(tree, spec.guard))]
+                       if spec is not None and spec.guard is not None else [])
+    infos[ct.name] = connector_info(ct, flat.constants)
     return FlatConnector(fc.id, fc.path, fc.scope, fc.label, fc.instance, ct, [[Leaf(p.id)] for p in leaves],
                          list(fc.parents), fc.named)
 
