@@ -205,3 +205,47 @@ def test_random_invariants_keep_their_verdicts(text):
         if full is None or full.error:
             continue
         assert red.holds == full.holds or red.error, item.name
+
+
+# -- the command line --------------------------------------------------------------------------------
+
+def test_verify_por_reports_the_deadlock_and_what_it_reduced(capsys, tmp_path):
+    from genom2bip.cli import main
+
+    model = tmp_path / "Ring.bip"
+    model.write_text(ring(8), encoding="utf-8")
+    code_full = main(["verify", str(model), "--quiet"])
+    full = capsys.readouterr().out
+    code = main(["verify", str(model), "--por", "--quiet"])
+    out = capsys.readouterr().out
+    assert code == code_full == 4
+    assert "deadlocks: 1 reachable state without enabled interaction\n" in out
+    assert "each with a shortest trace" in full and "shortest trace" not in out.split("note:")[0]
+    states = int(next(line for line in out.splitlines() if line.startswith("explored: ")).split()[1].replace(",", ""))
+    full_states = int(next(line for line in full.splitlines() if line.startswith("explored: ")).split()[1].replace(",", ""))
+    assert states * 2 < full_states
+    reduced = next(line for line in out.splitlines() if line.startswith("note: partial-order reduction: "))
+    assert f" of {states:,} states expanded with an ample set" in reduced
+
+
+@pytest.mark.parametrize("engine", ["python", "spin"])
+def test_por_belongs_to_the_compiled_explorer(capsys, tmp_path, engine):
+    from genom2bip.cli import main
+
+    model = tmp_path / "Ring.bip"
+    model.write_text(ring(3), encoding="utf-8")
+    code = main(["verify", str(model), "--por", "--engine", engine])
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert "--por belongs to the compiled explorer (--engine compiled); SPIN reduces by itself" in err
+    assert "explored" not in out
+
+
+def test_por_with_requests_says_it_does_not_reduce(capsys):
+    from genom2bip.cli import main
+
+    code = main(["verify", str(verifykit.NDD), "--no-rules", "--por", "--requests", "1", "--max-states", "500",
+                 "--quiet"])
+    out = capsys.readouterr().out
+    assert code == 5
+    assert "note: no partial-order reduction: the request counts of --requests are shared by every service" in out
