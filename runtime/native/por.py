@@ -2,9 +2,9 @@
 
 A source (a connector or a lone port: all its interactions and codel
 outcomes together) writes the atoms of its ports and reads them; a source
-that is low in a compound priority also reads the atoms of every source that
-is high in any rule (all atoms when priorities have guards), since its
-enabledness depends on theirs.  Two sources are dependent when one writes
+that is low in a compound priority also reads the atoms of the sources high
+in the rules its rules reach, and of the data the priority guards name,
+since its enabledness depends on them.  Two sources are dependent when one writes
 what the other reads or writes.  ``search.c`` builds, in each state, the
 closure of one enabled source under: an enabled member adds every source
 dependent on it; a disabled member adds a necessary enabling set (the
@@ -64,6 +64,40 @@ def _row(mask: int, words: int) -> str:
     return "{" + ", ".join(f"UINT64_C({(mask >> (64 * k)) & (2**64 - 1)})" for k in range(words)) + "}"
 
 
+def _priority_reads(src, sources, writes, flat, prio) -> int:
+    """Atoms (bit mask) whose state decides whether compound priorities block ``src``.
+
+    ``src`` is blocked when a rule it is low in reaches (through the rules' order, every guard assumed
+    true: a superset of what any combination of guards reaches) a rule whose high side is enabled; the
+    guards themselves read the atoms of the data they name.
+    """
+    if prio is None or src.connector is None:
+        return 0
+    cid = src.connector.id
+    mine = [i for i, rule in enumerate(prio.rules) if any(c == cid for c, _ in rule[1])]
+    if not mine:
+        return 0
+    seen, stack = set(mine), list(mine)
+    while stack:
+        for y in prio.edges[stack.pop()]:
+            if y not in seen:
+                seen.add(y)
+                stack.append(y)
+    high = {c for r in seen for c, _ in prio.rules[r][2]}
+    out = 0
+    for s in sources:
+        if s.connector is not None and s.connector.id in high:
+            out |= writes[s.index]
+    owner = {}
+    for fa in flat.atoms:
+        for slot in range(fa.offset, fa.offset + 1 + len(fa.variables)):
+            owner[slot] = fa.index
+    for r, _ in prio.guards:
+        for slot, _ty in flat.priorities[r].data.values():
+            out |= 1 << owner[slot] if slot in owner else (1 << len(flat.atoms)) - 1
+    return out
+
+
 def gen_por(w, sources, flat, prio, monitors, enabled: bool) -> None:
     """The tables search.c's ``ample`` reads: DEP, NESALL, WRITERS, the rendezvous ports, VISIBLE; POR_ON."""
     n, na = len(sources), len(flat.atoms)
@@ -72,24 +106,7 @@ def gen_por(w, sources, flat, prio, monitors, enabled: bool) -> None:
     w(f"#define SW {words}")
     w(f"#define NATOMS {max(na, 1)}")
     writes = [_bits(na, source_atoms(s, flat)) for s in sources]
-    low, high, guarded = set(), set(), False
-    if prio is not None:
-        guarded = bool(prio.guards)
-        for rule in prio.rules:
-            low |= {cid for cid, _ in rule[1]}
-            high |= {cid for cid, _ in rule[2]}
-    cid = [s.connector.id if s.connector is not None else None for s in sources]
-    high_atoms = 0
-    for s in sources:
-        if cid[s.index] is not None and cid[s.index] in high:
-            high_atoms |= writes[s.index]
-    everything = (1 << na) - 1
-    reads = []
-    for s in sources:
-        r = writes[s.index]
-        if cid[s.index] is not None and cid[s.index] in low:
-            r |= everything if guarded else high_atoms
-        reads.append(r)
+    reads = [writes[s.index] | _priority_reads(s, sources, writes, flat, prio) for s in sources]
     writers = [0] * na
     readers = [0] * na
     for s in sources:
