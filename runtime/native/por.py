@@ -42,7 +42,7 @@ def _pred_atoms(p: Pred | None, flat) -> set[int]:
 def visible_sources(sources, flat, monitors) -> list[bool]:
     """Sources some observer watches: its automaton moves on one of their interactions, or its predicate's atoms."""
     out = [False] * len(sources)
-    for mon, statics in monitors:
+    for mon, statics in monitors:  # statics list every mask a source's define allows (export.interactions)
         watched = _pred_atoms(mon.pred, flat)
         for k, st in enumerate(statics):
             if any(q2 != q for q, q2 in mon.delta[k].items()):
