@@ -188,6 +188,13 @@ def _equivalent_mb(output: str) -> float:
     return float(m.group(1)) if m else 0.0
 
 
+def _reduction(r: Row) -> str:
+    """Full states over reduced ones; a lower bound when the full search did not finish."""
+    if not r.por_states or not r.por_complete:
+        return "n/a"
+    return f"{r.c_states / r.por_states:,.1f}x" if r.c_complete else f">= {r.c_states / r.por_states:,.0f}x"
+
+
 def table(rows: list[Row]) -> str:
     head = ("| model | states (Python / compiled / SPIN) | Python states/s | compiled states/s | SPIN states/s | "
             "compiled/SPIN speed | B/state Python / compiled / SPIN | compiled/SPIN B/state |")
@@ -204,7 +211,7 @@ def table(rows: list[Row]) -> str:
     for r in rows:
         mark = "" if r.c_complete and r.por_complete else " (budget)"
         lines.append(f"| {r.model}{mark} | {r.c_states:,} / {r.por_states:,} / {r.spin_states:,} | {r.por_rate:,.0f} | "
-                     f"{r.c_states / r.por_states if r.por_states else float('nan'):,.1f}x | {r.por_bytes:,.0f} |")
+                     f"{_reduction(r)} | {r.por_bytes:,.0f} |")
     return "\n".join(lines)
 
 
