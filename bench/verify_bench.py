@@ -206,8 +206,8 @@ def table(rows: list[Row]) -> str:
         lines.append(f"| {r.model}{mark} | {r.ours_states:,} / {r.c_states:,} / {r.spin_states:,} | "
                      f"{r.ours_rate:,.0f} | {r.c_rate:,.0f} | {r.spin_rate:,.0f} | {speed:,.2f}x | "
                      f"{r.ours_bytes:,.0f} / {r.c_bytes:,.0f} / {r.spin_bytes:,.0f} | {mem:.2f}x |")
-    lines += ["", "| model | states compiled / compiled+POR / SPIN (-DNOREDUCE) | compiled+POR states/s | "
-              "reduction | B/state compiled+POR |", "| --- | --- | ---: | ---: | ---: |"]
+    lines += ["", ("| model | states compiled / compiled+POR / SPIN (-DNOREDUCE) | compiled+POR states/s | "
+                   "reduction | B/state compiled+POR |"), "| --- | --- | ---: | ---: | ---: |"]
     for r in rows:
         mark = "" if r.c_complete and r.por_complete else " (budget)"
         lines.append(f"| {r.model}{mark} | {r.c_states:,} / {r.por_states:,} / {r.spin_states:,} | {r.por_rate:,.0f} | "
