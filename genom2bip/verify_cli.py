@@ -48,6 +48,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="keep dead variables (no reset): the exact engine states, a larger state space")
     search.add_argument("--externs", metavar="MODULE",
                         help="Python module binding extern functions that are not codels")
+    search.add_argument("--por", action="store_true",
+                        help="compiled explorer: partial-order reduction (same deadlocks and safety verdicts, "
+                             "fewer states; traces not shortest)")
     search.add_argument("--progress", action="store_true", help="show progress even when stderr is not a terminal")
     search.add_argument("--quiet", action="store_true", help="no progress line")
     out = parser.add_argument_group("exports")
@@ -154,6 +157,9 @@ def _check_options(args) -> None:
             raise Failure(EXIT_USAGE)
     if args.spin_cores < 1:
         error("--spin-cores must be >= 1")
+        raise Failure(EXIT_USAGE)
+    if args.por and args.engine not in ("compiled", "explore"):
+        error("--por belongs to the compiled explorer (--engine compiled); SPIN reduces by itself")
         raise Failure(EXIT_USAGE)
     if args.engine == "spin" and (args.dfs or args.max_depth is not None or args.aut or args.dot):
         error("--dfs, --max-depth, --aut and --dot belong to --engine explore")
@@ -322,7 +328,7 @@ def _report_deadlocks(space, result, args) -> int:
         print("deadlocks: none reachable" + ("" if result.complete else " in the explored part"))
         return EXIT_OK
     n = len(result.deadlocks)
-    shortest = "" if args.dfs else ", each with a shortest trace"
+    shortest = "" if args.dfs or getattr(args, "por", False) else ", each with a shortest trace"
     print(f"deadlocks: {n} reachable state{'s' if n != 1 else ''} without enabled interaction{shortest}")
     for k, sid in enumerate(result.deadlocks, 1):
         trace = space.trace_to(sid)

@@ -39,6 +39,8 @@ def explore_model(space, args: argparse.Namespace, progress):
             found = _compiled(space, args, progress)
             if found is not None:
                 return found
+    if args.por:
+        note("no partial-order reduction in the Python explorer: every interleaving is explored")
     return explore(space, args.max_depth, args.dfs, progress), space
 
 
@@ -50,12 +52,21 @@ def check_property(space, item, args: argparse.Namespace, progress):
         from genom2bip.verify_cli import load_externs
         from runtime.native.properties import compiled_check
 
-        verdict = compiled_check(space, item, load_externs(args.externs), progress, args.max_states, _max_bytes(args))
+        verdict = compiled_check(space, item, load_externs(args.externs), progress, args.max_states, _max_bytes(args),
+                                 por=args.por)
         if verdict is not None:
             return verdict
         note(f"property {item.name} is checked with the Python step (the compiled search takes deadlock freedom "
              "and [R] false / [R] {P} shapes, on models it compiles)")
     return check(space, item, progress)
+
+
+def por_note(cs, states: int) -> str:
+    """What the partial-order reduction did, in one line."""
+    if not cs.por_available:
+        return "no partial-order reduction: the request counts of --requests are shared by every service"
+    return (f"partial-order reduction: {cs.reduced:,} of {states:,} states expanded with an ample set "
+            "(deadlocks and safety verdicts as the full search; traces are shortest in the reduced graph only)")
 
 
 def _max_bytes(args) -> int | None:
@@ -76,10 +87,13 @@ def _compiled(space, args, progress):
         print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
               "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
     try:
-        result = cs.explore(args.max_states, args.max_depth, args.dfs, progress, max_bytes=max_bytes)
+        result = cs.explore(args.max_states, args.max_depth, args.dfs, progress, max_bytes=max_bytes,
+                            por=args.por)
     except Diverged as exc:
         note(f"the compiled step met an integer past 64 bits ({exc}): exploring with the Python step")
         return None
+    if args.por:
+        note(por_note(cs, result.states))
     if result.stopped_by == "max-memory":
         note(f"the compiled search stopped at {result.memory / 2**20:,.0f} MB (--max-memory MB sets the bound)")
     return result, cs

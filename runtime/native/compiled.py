@@ -128,8 +128,11 @@ class CompiledSpace:
     # -- the search ------------------------------------------------------------------------------
     def explore(self, max_states: int | None = None, max_depth: int | None = None, dfs: bool = False,
                 progress: Progress | None = None, stop_at_deadlock: bool = False,
-                max_bytes: int | None = None, max_seconds: float | None = None) -> ExploreResult:
+                max_bytes: int | None = None, max_seconds: float | None = None, por: bool = False) -> ExploreResult:
         """Like :func:`runtime.explore.explore`; raises :class:`Diverged` if the Python step must take over.
+
+        ``por`` explores ample sets (runtime.native.por): the same deadlocks and observer verdicts on fewer
+        states; ``self.reduced`` is then the number of states expanded with a proper ample set.
 
         ``max_bytes`` bounds the visited set and ``max_seconds`` the time (stopped by ``max-memory``,
         ``max-seconds``); Ctrl-C stops the search as ``interrupted``, with everything found so far.
@@ -149,6 +152,7 @@ class CompiledSpace:
         try:
             while True:
                 r = Result()
+                self.lib.c_set_por(int(por))
                 status = self.lib.c_search(int(dfs), -1 if max_states is None else max_states,
                                            -1 if max_depth is None else max_depth,
                                            -1 if max_bytes is None else max_bytes, int(stop_at_deadlock),
@@ -161,6 +165,7 @@ class CompiledSpace:
             progress.done()
         seconds = time.perf_counter() - start
         deadlocks = [self.lib.c_deadlock(i) for i in range(r.deadlocks)]
+        self.reduced = self.lib.c_reduced()
         error = None
         self.violation = r.error_state if status == S_VIOLATED else -1  # the state an observer rejects
         if status == S_ERROR:
@@ -212,6 +217,11 @@ class CompiledSpace:
 
     def concrete(self, steps: list[Step]) -> tuple:
         return self.space.concrete(steps)
+
+    @property
+    def por_available(self) -> bool:
+        """False where the reduction is off: request counts are data every service shares."""
+        return bool(self.lib.c_por_available())
 
     def release(self) -> None:
         self.lib.c_free()

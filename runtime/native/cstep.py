@@ -33,6 +33,7 @@ from runtime.native.cexpr import (
     statements,
 )
 from runtime.native.observers import gen_observers
+from runtime.native.por import gen_por
 
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
@@ -153,6 +154,7 @@ class CGen:
         self.gen_blocked()
         self.gen_enabled()
         gen_observers(w, self.monitors, self.sources, fl, self.base)
+        gen_por(w, self.sources, fl, self.prio, self.monitors, enabled=self.externs.services is None)
         w('#include "search.c"')
         model.source = "\n".join(self.lines) + "\n"
         return model
@@ -515,6 +517,7 @@ class CGen:
     def gen_enabled(self) -> None:
         w = self.w
         fl = self.flat
+        w(f"static uint8_t PEN[{max(len(fl.ports), 1)}]; /* ports enabled in their atom: the reduction's view */")
         w("static int enabled(const V *s, uint32_t *isrc, uint32_t *imask) {")
         w("    int n = 0;")
         for fa in fl.atoms:
@@ -523,6 +526,8 @@ class CGen:
                 w(f"    const V a{fa.index}_{d.name} = s[{fa.slot(d.name)}]; (void)a{fa.index}_{d.name};")
         for fa in fl.atoms:
             self.gen_atom_enabled(fa)
+        for fp in fl.ports:
+            w(f"    PEN[{fp.id}] = (uint8_t)e{fp.id};")
         for src in self.sources:
             self.gen_source_enabled(src)
         if self.prio is not None:

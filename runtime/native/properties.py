@@ -14,8 +14,12 @@ from runtime.props.check import Verdict
 METHOD = "compiled observer search"
 
 
-def compiled_check(space, item, externs=None, progress=None, max_states=None, max_bytes=None) -> Verdict | None:
-    """The verdict of ``item`` by the compiled search, or None if it cannot take the property or the model."""
+def compiled_check(space, item, externs=None, progress=None, max_states=None, max_bytes=None,
+                   por: bool = False) -> Verdict | None:
+    """The verdict of ``item`` by the compiled search, or None if it cannot take the property or the model.
+
+    ``por``: with partial-order reduction (the observer's interactions are visible; same verdict).
+    """
     from runtime.export.interactions import all_interactions
     from runtime.export.monitors import build_monitor, spin_shape
     from runtime.native.compiled import Diverged, compile_space
@@ -36,7 +40,8 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
         return None
     start = time.perf_counter()
     try:
-        result = cs.explore(max_states, progress=progress, stop_at_deadlock=shape == "deadlock", max_bytes=max_bytes)
+        result = cs.explore(max_states, progress=progress, stop_at_deadlock=shape == "deadlock", max_bytes=max_bytes,
+                            por=por)
     except Diverged:
         return None
     prop = item.property

@@ -29,6 +29,9 @@ static int64_t VIOL = -1;
 static uint64_t *PK;
 static int SCAP;
 static int64_t EXTRA; /* bytes of the depth-first stack and marks */
+static int POR;             /* reduce: expand an ample set where one is proper */
+static int PROPER;          /* the last expansion was of a proper ample set */
+static int64_t NREDUCED;    /* states expanded with a proper ample set */
 
 static inline int same(const uint64_t *a, const uint64_t *b) {
     for (int i = 0; i < NW; i++) if (a[i] != b[i]) return 0;
@@ -56,7 +59,7 @@ static int64_t memory(void) {
 static void c_release(void) {
     free(STORE); free(PARENT); free(VIA); free(TABLE); free(DEAD); free(SUCC); free(SVIA); free(PK); free(SBAD);
     STORE = 0; PARENT = VIA = TABLE = 0; DEAD = 0; SUCC = 0; SVIA = 0; PK = 0; SBAD = 0; VIOL = -1;
-    NSTATES = CAP = NDEAD = DCAP = 0; TSIZE = 0; SCAP = 0; EXTRA = 0;
+    NSTATES = CAP = NDEAD = DCAP = NREDUCED = 0; TSIZE = 0; SCAP = 0; EXTRA = 0;
 }
 
 static void rehash(uint64_t size) {
@@ -110,11 +113,77 @@ static void ensure_succ(int n) {
 
 #define MAXSUCC 65536
 
+/* ---- partial-order reduction (tables from runtime.native.por) ---- */
+
+static inline int has(const uint64_t *b, int i) { return (int)(b[i >> 6] >> (i & 63) & 1); }
+
+/* T |= B, pushing the new members on the work list */
+static inline void join(uint64_t *T, const uint64_t *B, int *work, int *nw) {
+    for (int k = 0; k < SW; k++) {
+        uint64_t add = B[k] & ~T[k];
+        T[k] |= add;
+        while (add) { int b = __builtin_ctzll(add); add &= add - 1; work[(*nw)++] = k * 64 + b; }
+    }
+}
+
+/* the enabled interactions of the smallest invisible strong stubborn set seeded by one enabled source;
+   n unchanged when none is smaller than the whole (PROPER says which) */
+static int ample(int n, uint32_t *isrc, uint32_t *imask) {
+    static uint64_t en[SW], T[SW], best[SW];
+    static int work[NSRC + 1];
+    PROPER = 0;
+    memset(en, 0, sizeof en);
+    int nen = 0;
+    for (int i = 0; i < n; i++) if (!has(en, (int)isrc[i])) { en[isrc[i] >> 6] |= UINT64_C(1) << (isrc[i] & 63); nen++; }
+    if (nen < 2) return n;
+    int bestn = nen;
+    for (int i = 0; i < n && bestn > 1; i++) {
+        int e = (int)isrc[i];
+        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i])) continue;
+        memset(T, 0, sizeof T);
+        T[e >> 6] |= UINT64_C(1) << (e & 63);
+        int nw = 0, cnt = 0, ok = 1;
+        work[nw++] = e;
+        while (nw && ok) {
+            int t = work[--nw];
+            if (has(en, t)) {
+                if (VISIBLE[t] || ++cnt >= bestn) { ok = 0; break; }
+                join(T, DEP[t], work, &nw);
+            } else {
+                int k = RZOFF[t], found = 0;
+                for (; k < RZOFF[t + 1]; k++) if (!PEN[RZPORT[k]]) { found = 1; break; }
+                join(T, found ? WRITERS[RZATOM[k]] : NESALL[t], work, &nw);
+            }
+        }
+        if (ok) { bestn = cnt; memcpy(best, T, sizeof T); }
+    }
+    if (bestn == nen) return n;
+    int k = 0;
+    for (int i = 0; i < n; i++) if (has(best, (int)isrc[i])) { isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }
+    PROPER = 1;
+    return k;
+}
+
+/* no successor of the last expansion is stored yet: the cycle proviso's test (see c_search) */
+static int all_new(int n) {
+    for (int i = 0; i < n; i++) {
+        const uint64_t *w = PK + (size_t)i * NW;
+        uint64_t h = hash(w) & (TSIZE - 1);
+        while (TABLE[h]) {
+            if (same(STORE + (int64_t)(TABLE[h] - 1) * NW, w)) return 0;
+            h = (h + 1) & (TSIZE - 1);
+        }
+    }
+    return 1;
+}
+
 /* every successor of s (engine slots, then request counts): interactions, then the odometer over outcomes */
-static int expand(const V *s) {
+static int expand(const V *s, int reduce) {
     uint32_t isrc[MAXI], imask[MAXI];
     CUR = s;
     int ni = enabled(s, isrc, imask);
+    PROPER = 0;
+    if (reduce && POR_ON) ni = ample(ni, isrc, imask);
     int cnt = 0;
     for (int i = 0; i < ni; i++) {
         SL = 0;
@@ -156,9 +225,23 @@ static int initials(void) {
 /* successors of s packed into PK (or initial states when s is NULL); -1 on a model error (ECODE, EARG) */
 static int step_packed(const V *s) {
     if (setjmp(JB)) return -1;
-    int n = s ? expand(s) : initials();
+    int n = s ? expand(s, 0) : initials();
     for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
     return n;
+}
+
+/* the successors the search follows: an ample set's when it is proper, else all of them.  With observers,
+   only when every ample successor is also new (so a reduced state only leads to states numbered after it
+   and every cycle of the reduced graph has a fully expanded state: the cycle proviso safety needs);
+   deadlocks need no proviso (stubborn sets preserve every reachable deadlock) */
+static int step_search(const V *s) {
+    if (!POR) return step_packed(s);
+    if (setjmp(JB)) return -1;
+    int n = expand(s, 1);
+    for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
+    if (!PROPER) return n;
+    if (!NMON || all_new(n)) { NREDUCED++; return n; }
+    return step_packed(s);
 }
 
 static int label_of(uint32_t via) {
@@ -178,6 +261,9 @@ int64_t c_via(int64_t id) { return VIA[id] == UINT32_MAX ? -1 : (int64_t)VIA[id]
 int64_t c_deadlock(int64_t i) { return DEAD[i]; }
 void c_state(int64_t id, V *out) { unpack(STORE + id * NW, out); }
 void c_free(void) { c_release(); }
+void c_set_por(int on) { POR = on && POR_ON; }
+int c_por_available(void) { return POR_ON; }
+int64_t c_reduced(void) { return NREDUCED; }
 
 /* successors of one explorer state, packed then unpacked (dead variables reset): the agreement tests' view */
 int c_successors(const V *s, V *out, uint32_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
@@ -263,7 +349,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
             r->depth = depth;
             if (max_depth >= 0 && depth >= max_depth) { r->status = S_MAX_DEPTH; break; }
             unpack(STORE + sid * NW, S);
-            int m = step_packed(S);
+            int m = step_search(S);
             if (m < 0) { stopped_by_error(sid, r); break; }
             if (record(sid, m, max_states, targets, r) < 0) break;
             if (VIOL >= 0) { r->status = S_VIOLATED; r->error_state = VIOL; break; }
@@ -295,7 +381,7 @@ int c_search(int dfs, int64_t max_states, int64_t max_depth, int64_t max_bytes, 
             if (depth > r->depth) r->depth = depth;
             if (max_depth >= 0 && depth >= max_depth) { r->status = S_MAX_DEPTH; continue; }
             unpack(STORE + sid * NW, S);
-            int m = step_packed(S);
+            int m = step_search(S);
             if (m < 0) { stopped_by_error(sid, r); break; }
             int d = record(sid, m, max_states, targets, r);
             if (d < 0) break;
