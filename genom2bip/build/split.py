@@ -34,7 +34,7 @@ from runtime.model import (
     PortType,
     Var,
 )
-from runtime.model.expressions import Binary, Call, Const, Expr, Unary
+from runtime.model.expressions import Binary, Call, Const, Expr, Unary, map_port_data
 
 from genom2bip.build.library import PORT, broadcast_type, param_names, rendezvous_type, triggered_type
 
@@ -145,18 +145,6 @@ def _reads(e: Expr | None, acc: list[tuple[str, str]]) -> None:
             _reads(a, acc)
 
 
-def _rename(e: Expr, table: dict[tuple[str, str], PortData]) -> Expr:
-    if isinstance(e, PortData):
-        return table[(e.port, e.name)]
-    if isinstance(e, Unary):
-        return Unary(e.op, _rename(e.operand, table))
-    if isinstance(e, Binary):
-        return Binary(e.op, _rename(e.left, table), _rename(e.right, table))
-    if isinstance(e, Call):
-        return Call(e.function, tuple(_rename(a, table) for a in e.args))
-    return e
-
-
 def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: dict[str, PortType]) -> Split:
     """Rendezvous of rendezvous; a guard's reads go up, a constant down action goes to the level binding its port."""
     guard = ct.interactions[0].guard if ct.interactions else None
@@ -221,7 +209,7 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
         params=[ConnectorParam(t, n) for t, n in zip(outer_types, outer_names)],
         define=DefineGroup([DefinePort(n) for n in outer_names]),
         export=ConnectorExport(PORT, "ep", []) if ct.export is not None else None,
-        interactions=[InteractionSpec(list(outer_names), guard=_rename(guard, table) if guard is not None else None,
+        interactions=[InteractionSpec(list(outer_names), guard=map_port_data(guard, lambda d: table[(d.port, d.name)]) if guard is not None else None,
                                       down=outer_downs)],
     )
     for gi, sub in enumerate(subs):

@@ -15,7 +15,7 @@ from runtime.engine.cexpr import coerce, default_value, evaluate
 from runtime.engine.errors import FlattenError
 from runtime.engine.flatten import FlatConnector, FlatPort, FlatSystem, Leaf
 from runtime.model import ConnectorParam, ConnectorType, DefineGroup, DefinePort, Expr, InteractionSpec
-from runtime.model.expressions import Assign, Binary, Call, PortData, Unary, Var
+from runtime.model.expressions import Assign, PortData, Var, map_port_data
 
 
 @dataclass
@@ -177,9 +177,12 @@ def _collapsible(node: TreeNode, top: bool) -> bool:
         if not info.rendezvous or len(info.clauses) != 1 or info.all_params not in info.clauses:
             return False
         spec = info.clauses[info.all_params]
-        if spec.down or (top and spec.up) or (not top and (spec.guard is not None or info.type.data != [] and
-                                                            not all(_copy(a) for a in spec.up))):
+        if spec.down:
             return False
+        if top and spec.up:  # the top connector may guard, not transfer
+            return False
+        if not top and (spec.guard is not None or not all(_copy(a) for a in spec.up)):
+            return False  # a sub-connector may only copy port data up
     elif info.type.data:
         return False
     return all(a.node is None or _collapsible(a.node, top=False) for alts in node.params for a in alts)
@@ -228,24 +231,13 @@ def _collapsed(fc: FlatConnector, tree: TreeNode, leaves: list[FlatPort],
         copied = next(a.value for a in sub.clauses[sub.all_params].up if a.target.name == var)
         return data(alt.node, copied.port, copied.name)
 
-    def rewrite(node: TreeNode, e: Expr) -> Expr:
-        if isinstance(e, PortData):
-            return data(node, e.port, e.name)
-        if isinstance(e, Unary):
-            return Unary(e.op, rewrite(node, e.operand))
-        if isinstance(e, Binary):
-            return Binary(e.op, rewrite(node, e.left), rewrite(node, e.right))
-        if isinstance(e, Call):
-            return Call(e.function, tuple(rewrite(node, a) for a in e.args))
-        return e
-
     top = substitute(tree, tree.info.tree)
     define = item(top, False)
     spec = tree.info.clauses.get(tree.info.all_params)
     ct = ConnectorType(name=f"{fc.type.name}~{fc.id}",
                        params=[ConnectorParam(port.decl.type, n) for port, n in zip(leaves, names)],
                        define=define if isinstance(define, DefineGroup) else DefineGroup([define]),
-                       interactions=[InteractionSpec(list(names), guard=rewrite(tree, spec.guard))]
+                       interactions=[InteractionSpec(list(names), guard=map_port_data(spec.guard, lambda d: data(tree, d.port, d.name)))]
                        if spec is not None and spec.guard is not None else [])
     infos[ct.name] = connector_info(ct, flat.constants)
     return FlatConnector(fc.id, fc.path, fc.scope, fc.label, fc.instance, ct, [[Leaf(p.id)] for p in leaves],

@@ -7,7 +7,7 @@ Nodes are frozen so that models can be compared and hashed.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Union
+from typing import Callable, Union
 
 #: Binary C operators, loosest first; the writer uses this order to decide parentheses.
 BINARY_PRECEDENCE: dict[str, int] = {
@@ -111,6 +111,19 @@ def variables(node: Expr | Stmt) -> set[str]:
     if isinstance(node, Do):
         return variables(node.call)
     return set()
+
+
+def map_port_data(e: Expr, fn: Callable[[PortData], Expr]) -> Expr:
+    """``e`` with every port data read ``p.x`` replaced by ``fn(p.x)`` (moving a guard between connectors)."""
+    if isinstance(e, PortData):
+        return fn(e)
+    if isinstance(e, Unary):
+        return Unary(e.op, map_port_data(e.operand, fn))
+    if isinstance(e, Binary):
+        return Binary(e.op, map_port_data(e.left, fn), map_port_data(e.right, fn))
+    if isinstance(e, Call):
+        return Call(e.function, tuple(map_port_data(a, fn) for a in e.args))
+    return e
 
 
 def calls(node: Expr | Stmt) -> set[str]:
