@@ -13,11 +13,6 @@ def _short(label: str) -> str:
     return label.rsplit(":", 1)[-1]
 
 
-def _service_of(s: Structure, atom: str) -> str:
-    """The ``Module.Service`` (or ``Module.task``) an atom belongs to; its parent path without the interface."""
-    return s.owners.get(atom) or atom.rsplit(".", 1)[0]
-
-
 def functional_level(s: Structure) -> str:
     """Modules with their services and posters, the data flow between them, and the links that cross modules."""
     dot = Dot(s.system, rankdir="LR", fontname=style.FONT, label=f"functional level {s.system}", labelloc="t",
@@ -47,9 +42,9 @@ def functional_level(s: Structure) -> str:
         a, b = s.module_of(link.tail), s.module_of(link.head)
         if a == b or link.kind not in ("constraint", "rule", "interrupts"):
             continue
-        what = (f"{_service_of(s, link.tail)} interrupts {_service_of(s, link.head)}" if link.kind == "interrupts"
-                else f"{', '.join(link.rules) or link.label}:\n{_service_of(s, link.head)} guarded by "
-                     f"{_service_of(s, link.tail)}")
+        what = (f"{s.owner_of(link.tail)} interrupts {s.owner_of(link.head)}" if link.kind == "interrupts"
+                else f"{', '.join(link.rules) or link.label}:\n{s.owner_of(link.head)} guarded by "
+                     f"{s.owner_of(link.tail)}")
         if what not in crossing[(a, b, link.kind)]:
             crossing[(a, b, link.kind)].append(what)
     for (a, b, kind), texts in crossing.items():

@@ -4,10 +4,6 @@ from __future__ import annotations
 from runtime.pictures.structure import Structure
 
 
-def _owner(s: Structure, atom: str) -> str:
-    return s.owners.get(atom) or atom.rsplit(".", 1)[0]
-
-
 def outline(s: Structure) -> list[str]:
     """Lines under four headings; a heading with nothing under it is left out."""
     sections: dict[str, list[str]] = {"data flow": [], "interruptions": [], "constraints": [], "rules": []}
@@ -16,11 +12,11 @@ def outline(s: Structure) -> list[str]:
                                      (f" (read by {', '.join(f.codels)})" if f.codels else ""))
     for link in s.links:
         if link.kind == "interrupts" and "abort" in link.ports:
-            line = f"{_owner(s, link.tail)} interrupts {_owner(s, link.head)}"
+            line = f"{s.owner_of(link.tail)} interrupts {s.owner_of(link.head)}"
             heading = "interruptions"
         elif link.kind in ("constraint", "rule"):
             why = ", ".join(link.rules) or link.label
-            line = f"{_owner(s, link.head)} guarded by the status of {_owner(s, link.tail)} ({why})"
+            line = f"{s.owner_of(link.head)} guarded by the status of {s.owner_of(link.tail)} ({why})"
             heading = "constraints" if link.kind == "constraint" else "rules"
         else:
             continue

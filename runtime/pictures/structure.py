@@ -23,10 +23,6 @@ from typing import Any
 
 from runtime.engine.flatten import FlatConnector, FlatSystem
 
-#: link kinds, in the order legends list them
-KINDS = ("sync", "write", "read", "constraint", "rule", "interrupts")
-
-
 @dataclass
 class Link:
     """Connector ``label`` joins atom ``tail`` (its initiator) with atom ``head`` through ``ports`` of ``head``."""
@@ -60,15 +56,14 @@ class Structure:
     modules: list[str]
     roles: dict[str, str]  # atom path -> "requests", "control", "activity", "timer", "scheduler", "poster", ...
     owners: dict[str, str]  # atom path -> "Module.Service" or "Module.task" it belongs to (GenoM models)
-    codels: dict[str, list[str]] = field(default_factory=dict)  # "Module.Service" -> its codels
     periods: dict[str, str] = field(default_factory=dict)  # "Module.task" -> "every 100 ms"
 
     def module_of(self, atom: str) -> str:
         return atom.split(".", 1)[0]
 
-    def children(self, prefix: str) -> list[str]:
-        """The atoms under compound path ``prefix`` ('' for all)."""
-        return [a for a in self.atoms if not prefix or a == prefix or a.startswith(prefix + ".")]
+    def owner_of(self, atom: str) -> str:
+        """The ``Module.Service`` (or ``Module.task``) an atom belongs to; its parent path without an interface."""
+        return self.owners.get(atom) or atom.rsplit(".", 1)[0]
 
 
 def _annotation(connector: FlatConnector, name: str, key: str) -> list[str]:
@@ -150,8 +145,8 @@ def structure(flat: FlatSystem, interface: dict[str, Any] | None = None) -> Stru
             kind = "interrupts" if interrupt else "write" if names == ["write"] else "sync"
             links.append(Link(kind, tail, head, c.label, names))
     modules = list(dict.fromkeys(a.split(".", 1)[0] for a in atoms if "." in a))
-    flows, codels = _flows(interface) if interface else ([], {})
-    return Structure(flat.package.name, atoms, links, flows, modules, roles, owners, codels, _periods(interface))
+    flows = _flows(interface) if interface else []
+    return Structure(flat.package.name, atoms, links, flows, modules, roles, owners, _periods(interface))
 
 
 def _periods(interface: dict[str, Any] | None) -> dict[str, str]:
@@ -164,20 +159,19 @@ def _periods(interface: dict[str, Any] | None) -> dict[str, str]:
     return out
 
 
-def _flows(interface: dict[str, Any]) -> tuple[list[Flow], dict[str, list[str]]]:
-    """Poster reads (``port in`` matched by name to the one other module writing it) and codels per service."""
+def _flows(interface: dict[str, Any]) -> list[Flow]:
+    """Poster reads: a ``port in`` matched by name to the one other module writing it, with the codels reading it."""
     comps = interface.get("components", {})
     writers: dict[str, list[str]] = defaultdict(list)
     for cname, comp in comps.items():
         for pname, port in comp.get("ports", {}).items():
             if port.get("direction") == "out":
                 writers[pname].append(cname)
-    flows, codels = [], {}
+    flows = []
     for cname, comp in comps.items():
         reading: dict[str, list[str]] = defaultdict(list)
         for key in ("services", "tasks"):
             for name, item in comp.get(key, {}).items():
-                codels[f"{cname}.{name}"] = [c["codel"] for c in item.get("codels", {}).values()]
                 for codel in item.get("codels", {}).values():
                     for p in codel.get("params", []):
                         if p.get("source") == "port" and p.get("direction") == "in":
@@ -188,4 +182,4 @@ def _flows(interface: dict[str, Any]) -> tuple[list[Flow], dict[str, list[str]]]
             sources = [w for w in writers.get(pname, []) if w != cname]
             if len(sources) == 1:
                 flows.append(Flow(sources[0], pname, cname, list(dict.fromkeys(reading.get(pname, [])))))
-    return flows, codels
+    return flows
