@@ -7,7 +7,7 @@ import math
 import pytest
 
 from runtime.controller.codels import load_codels
-from runtime.genom import Ref
+from runtime.genom import Ref, Throw
 from tests.runkit import ROOT
 
 _codels = load_codels(str(ROOT / "descriptions" / "dala" / "codels"), ["NDD", "RFLEX", "POM", "LaserRF", "Aspect"])
@@ -15,7 +15,7 @@ _package = _codels.modules["NDD"].__package__
 nd = importlib.import_module(f"{_package}.nd")
 grid = importlib.import_module(f"{_package}.grid")
 odometry = importlib.import_module(f"{_package}.odometry")
-RFLEX, POM, LaserRF, NDD = (_codels.modules[c] for c in ("RFLEX", "POM", "LaserRF", "NDD"))
+RFLEX, POM, LaserRF, NDD, Aspect = (_codels.modules[c] for c in ("RFLEX", "POM", "LaserRF", "NDD", "Aspect"))
 
 P = nd.Params(radius=0.35, security=0.3, dmax=3.2, vmax=0.5, wmax=1.0, cell=0.1)
 
@@ -104,6 +104,25 @@ def test_a_beam_marks_the_cell_of_its_end_and_old_cells_decay():
     later = grid.fuse({**scan, "ranges": [5.0, 5.0]}, cells, 0.1, 64, 0.6)
     assert grid.points(later, 0.1, 64) == [(1.05, 0.05)]  # missed once, it stays one sweep
     assert grid.points(grid.fuse({**scan, "ranges": [5.0, 5.0]}, later, 0.1, 64, 0.6), 0.1, 64) == []
+
+
+def test_aspect_builds_its_map_with_the_setparams_cell_size_and_decay():
+    scan = {"angle_min": 0.0, "angle_step": math.pi / 2, "range_max": 5.0, "ranges": [1.0, 5.0], "seq": 1}
+    obs, last = Ref(None), Ref(0)
+    assert Aspect.aspReset(0.0, obs) == "fuse"  # before SetParams: 0.1 m cells
+    Aspect.aspFuse(scan, 0.0, 0.0, last, obs)
+    assert obs.value["resolution"] == 0.1 and grid.points(obs.value["cells"], 0.1, 64) == [(1.05, 0.05)]
+    Aspect.aspFuse({**scan, "seq": 2}, 0.25, 0.0, last, obs)  # SetParams(resolution=0.25, decay=0): a new map
+    assert obs.value["resolution"] == 0.25 and grid.points(obs.value["cells"], 0.25, 64) == [(1.125, 0.125)]
+    assert last.value == 2
+    Aspect.aspFuse({**scan, "ranges": [5.0, 5.0], "seq": 3}, 0.25, 0.0, last, obs)
+    assert grid.points(obs.value["cells"], 0.25, 64) == []  # decay 0: a return missed once is gone
+    Aspect.aspFuse({**scan, "seq": 4}, 0.25, 0.9, last, obs)
+    Aspect.aspFuse({**scan, "ranges": [5.0, 5.0], "seq": 5}, 0.25, 0.9, last, obs)
+    Aspect.aspFuse({**scan, "ranges": [5.0, 5.0], "seq": 6}, 0.25, 0.9, last, obs)
+    assert grid.points(obs.value["cells"], 0.25, 64) == [(1.125, 0.125)]  # decay 0.9: it stays for sweeps
+    with pytest.raises(Throw):
+        Aspect.aspCheckParams(0.0, 0.5)
 
 
 def test_sweep_keeps_the_configured_beams_and_range():
