@@ -130,7 +130,7 @@ INTERFACE = {
                             'schema': {'type': 'number'},
                             'source': 'ids',
                             'member': 'decay',
-                            'default': 0.9,
+                            'default': 0.6,
                             'doc': 'Decay of old obstacles',
                         },
                     ],
@@ -170,13 +170,28 @@ INTERFACE = {
                         'Aspect_aspReset': {
                             'codel': 'aspReset',
                             'role': 'fsm',
-                            'params': [{'arg': 'Obs', 'source': 'port', 'direction': 'out', 'path': 'Obs'}],
+                            'params': [
+                                {
+                                    'arg': 'resolution',
+                                    'source': 'ids',
+                                    'direction': 'in',
+                                    'path': 'resolution',
+                                },
+                                {'arg': 'Obs', 'source': 'port', 'direction': 'out', 'path': 'Obs'},
+                            ],
                         },
                         'Aspect_aspFuse': {
                             'codel': 'aspFuse',
                             'role': 'fsm',
                             'params': [
                                 {'arg': 'Scan', 'source': 'port', 'direction': 'in', 'path': 'Scan'},
+                                {
+                                    'arg': 'resolution',
+                                    'source': 'ids',
+                                    'direction': 'in',
+                                    'path': 'resolution',
+                                },
+                                {'arg': 'decay', 'source': 'ids', 'direction': 'in', 'path': 'decay'},
                                 {'arg': 'last_seq', 'source': 'ids', 'direction': 'inout', 'path': 'last_seq'},
                                 {'arg': 'Obs', 'source': 'port', 'direction': 'out', 'path': 'Obs'},
                             ],
