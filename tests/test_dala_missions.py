@@ -135,3 +135,44 @@ def test_the_trace_has_every_report_and_the_path_in_time_order(corridor, tmp_pat
     poses = [e for e in lines if e["event"] == "pose"]
     assert len(poses) == len(corridor.world.trajectory)
     assert (poses[0]["x"], poses[0]["y"]) == (1.0, 2.0)
+
+
+def _short_mission(tmp_path: Path) -> Path:
+    """The bring-up, then a 2 m drive in the open field."""
+    path = tmp_path / "live_short.yaml"
+    path.write_text(f"mission: live_short\nworld: {ROOT / 'descriptions/dala/worlds/open_field.yaml'}\nsteps:\n"
+                    + BRINGUP + "  - send: NDD.GoTo\n    with: {goal: {x: 3.0, y: 2.0, theta: 0.0}}\n"
+                                "    expect: ok\n    timeout: 30\n")
+    return path
+
+
+def _mission_cli(args: list[str], env: dict[str, str]):
+    import os
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "genom2bip", "mission", *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300, env={**os.environ, "PYTHONPATH": str(ROOT), **env})
+
+
+@pytest.mark.skipif(not __import__("os").environ.get("DISPLAY"), reason="--live needs a display (e.g. xvfb-run)")
+def test_live_shows_the_simulation_in_a_window_in_real_time(tmp_path):
+    import re
+
+    done = _mission_cli([str(_short_mission(tmp_path)), "--live", "--quiet", "--out", str(tmp_path / "out")], {})
+    assert done.returncode == 0, done.stdout + done.stderr
+    shown = re.search(r"shown live: (\d+) frames in a (\w+) window", done.stdout)
+    assert shown, done.stdout
+    assert int(shown.group(1)) > 10 and shown.group(2).lower() != "agg"
+    robot, wall = (float(x) for x in re.search(r"in ([\d.]+) s of robot time \(([\d.]+) s wall", done.stdout).groups())
+    assert wall >= 0.9 * robot  # live means in real time
+    assert (tmp_path / "out" / "live_short.png").is_file()
+
+
+def test_live_without_a_display_is_refused_and_writes_nothing(tmp_path):
+    out = tmp_path / "out"
+    done = _mission_cli([str(_short_mission(tmp_path)), "--live", "--out", str(out)],
+                        {"DISPLAY": "", "WAYLAND_DISPLAY": ""})
+    assert done.returncode == 1
+    assert "--live needs a display (DISPLAY is not set)" in done.stderr
+    assert not out.exists()

@@ -70,6 +70,10 @@ def text(run: Run) -> str:
         collisions = run.world.collisions
         lines.append(f"  driven {distance_driven(run):.2f} m in {run.sim_time:.1f} s of robot time "
                      f"({run.wall_time:.1f} s wall clock); collisions: {collisions}")
+        if getattr(run.world, "display", False):
+            window = run.world.window()
+            lines.append(f"  shown live: {run.world.frames} frames in a {window} window" if window
+                         else "  not shown live: no window could open on this display (headless backend)")
     lines.append("  requests:")
     for o in run.outcomes:
         if o.step.kind == "wait":

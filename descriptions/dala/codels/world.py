@@ -49,6 +49,7 @@ class Session:
     collisions: int = 0
     hits: set[tuple[int, int]] = field(default_factory=set)
     render_every: int = 4
+    frames: int = 0  # frames drawn in the window (display only)
 
     @property
     def robot(self) -> Any:
@@ -77,6 +78,16 @@ class Session:
             self.trajectory.append(Sample(round(self.t, 6), p["x"], p["y"], p["theta"], s["v"], s["w"]))
             if self.display and len(self.trajectory) % self.render_every == 0:
                 self.env.render(0.001)
+                self.frames += 1
+
+    def window(self) -> str | None:
+        """The matplotlib backend showing the world, None when headless (or when no window could open)."""
+        if not self.display:
+            return None
+        import matplotlib
+
+        backend = matplotlib.get_backend()
+        return None if backend.lower() == "agg" else backend
 
     def scan(self) -> dict[str, Any]:
         """The lidar's last sweep (robot frame); its hits are recorded in the world frame."""
