@@ -6,6 +6,7 @@ from itertools import pairwise
 from pathlib import Path
 
 import pytest
+import yaml
 
 from genom2bip.mission.session import run_mission
 from genom2bip.mission.spec import read_mission
@@ -13,7 +14,17 @@ from tests.runkit import ROOT, dala
 
 MISSIONS = ROOT / "descriptions" / "dala" / "missions"
 CODELS = str(ROOT / "descriptions" / "dala" / "codels")
-BRINGUP = (MISSIONS / "corridor.yaml").read_text().split("steps:\n")[1].split("  - send: NDD.GoTo")[0]
+
+
+def _bringup() -> str:
+    """The default mission's steps up to its first goal, without the GoTo it sends too early (YAML, indented)."""
+    steps = yaml.safe_load((MISSIONS / "corridor.yaml").read_text())["steps"]
+    first = next(i for i, s in enumerate(steps) if s.get("send") == "NDD.GoTo" and s.get("expect") == "ok")
+    text = yaml.safe_dump([s for s in steps[:first] if s.get("send") != "NDD.GoTo"], sort_keys=False)
+    return "".join(f"  {line}\n" for line in text.splitlines())
+
+
+BRINGUP = _bringup()
 
 
 def _run(path: Path):
@@ -83,6 +94,17 @@ def test_goto_before_pom_run_is_rejected_with_the_rule_then_served():
     assert (refused["status"], refused["reason"], refused["rule"]) == ("rejected", "rule", "goto-after-pom-run")
     assert refused["status_of"]["POM.Run"]["ok"] is False
     assert _report(run, "NDD.GoTo", 1)["status"] == "ok"
+    # the report: the rejected request with its rule, the one goal of the drive, every request's end
+    from genom2bip.mission.report import text
+
+    lines = text(run).splitlines()
+    rejected = next(o.request for o in run.outcomes if o.report.get("status") == "rejected")
+    assert f"  rejected by rules: [{rejected}] NDD.GoTo by goto-after-pom-run" in lines
+    assert [line.split(":")[0] for line in lines if line.startswith("  goal ")] == ["  goal (3, 2)"]
+    assert next(line for line in lines if line.startswith("  goal ")).startswith("  goal (3, 2): reached at ")
+    assert f"    [{rejected}] NDD.GoTo: rejected goto-after-pom-run" in lines
+    assert any(line.endswith("RFLEX.TrackSpeed: started (ran until the controller stopped)") for line in lines)
+    assert lines[-1] == "  every expectation met"
 
 
 def test_stop_interrupts_goto_and_the_robot_stops_within_a_bounded_distance():

@@ -16,7 +16,10 @@ def distance_driven(run: Run) -> float:
 
 
 def goals(run: Run) -> list[dict[str, Any]]:
-    """Each GoTo sent: its goal, whether it was reached, why not, and how far from it the robot ended."""
+    """Each GoTo accepted: its goal, whether it was reached, why not, and how far from it the robot ended.
+
+    A GoTo a rule rejected is no goal of the drive: the report lists it with the rejected requests.
+    """
     out = []
     for o in run.outcomes:
         if o.step.kind != "send" or o.step.target != GOAL_SERVICE:
@@ -24,10 +27,14 @@ def goals(run: Run) -> list[dict[str, Any]]:
         goal = o.step.inputs.get("goal", {})
         r = final_report(run, o.request) or o.report
         status = r.get("status")
+        if status == "rejected" and r.get("reason") == "rule":
+            continue
         end = _pose_at(run, r.get("time"))
         gap = math.hypot(goal.get("x", 0) - end[0], goal.get("y", 0) - end[1]) if end else None
         if status == "ok":
-            why = "reached"
+            when = f" at {r['time']:.1f} s" if r.get("time") is not None else ""
+            within = f", {gap:.2f} m from it (GoTo ends within goal_tolerance)" if gap is not None else ""
+            why = f"reached{when}{within}"
         elif status == "failed":
             where = (r.get("detail") or {}).get("where") or {}
             at = f" at ({where.get('x', 0):.2f}, {where.get('y', 0):.2f})" if where else ""
@@ -78,16 +85,18 @@ def text(run: Run) -> str:
     for o in run.outcomes:
         if o.step.kind == "wait":
             continue
-        r = o.report
+        r = (final_report(run, o.request) or o.report) if o.step.kind == "send" else o.report
         label = f"{r.get('component')}.{r.get('service')}" if r.get("component") else o.step.target
         detail = r.get("rule") or r.get("exception") or (f"by {r['by']}" if r.get("by") else "") or ""
+        if r.get("status") == "interrupted" and not r.get("by") and o.report.get("status") in ("started", "running"):
+            r, detail = o.report, "(ran until the controller stopped)"  # an activity the mission left running
         mark = "" if o.ok else f"   UNEXPECTED: {o.problem}"
         lines.append(f"    [{o.request if o.request is not None else '-'}] {label}: {r.get('status')} {detail}".rstrip()
                      + mark)
     rejected = [o for o in run.outcomes if o.report.get("status") == "rejected" and o.report.get("reason") == "rule"]
-    if rejected:
-        lines.append("  rejected by rules: " + ", ".join(
-            f"{o.report.get('component')}.{o.report.get('service')} by {o.report.get('rule')}" for o in rejected))
+    lines.append("  rejected by rules: " + (", ".join(
+        f"[{o.request}] {o.report.get('component')}.{o.report.get('service')} by {o.report.get('rule')}"
+        for o in rejected) or "none"))
     if run.error:
         lines.append(f"  controller: {run.error}")
     failed = sum(1 for o in run.outcomes if not o.ok)
