@@ -13,7 +13,8 @@ from typing import Any
 from genom2bip.mission.spec import Mission, Step
 from runtime.services.client import Client, ServiceError
 
-POLL = 0.05  # s of real time between two looks at a request
+POLL = 0.05  # s of real time between two looks at a request not yet started
+LONG_POLL = 1.0  # s of real time the server may hold a look at a request awaited until its final report
 INTERMEDIATE = {"queued": ("queued", "held", "started", "running"), "started": ("started", "running")}
 
 
@@ -100,7 +101,7 @@ class Runner:
         """The request's last report once it is final, or has reached ``until``, or ``timeout`` controller s passed."""
         end = self.now() + timeout
         while True:
-            data = self.client.request(request, wait=POLL)
+            data = self.client.request(request, wait=LONG_POLL if until == "final" else POLL)
             reports = data.get("reports") or [{}]
             last = data.get("final") or reports[-1]
             if data.get("final") or (until != "final" and any(r.get("status") in INTERMEDIATE[until][1:] or
