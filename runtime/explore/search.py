@@ -73,7 +73,11 @@ def resident_bytes() -> int | None:
 
 
 class MemoryBound:
-    """The memory a search may take: the growth of the resident set since it began, else the visited set's size."""
+    """The memory a search may take: the growth of the resident set since it began, or the visited set's size.
+
+    The visited set's size counts where the resident set does not grow (memory
+    freed earlier by the process, reused) or the system does not say.
+    """
 
     def __init__(self, space: StateSpace, limit: int) -> None:
         self.space, self.limit = space, limit
@@ -82,7 +86,8 @@ class MemoryBound:
 
     def exceeded(self) -> bool:
         now = resident_bytes()
-        self.used = now - self.base if now is not None and self.base is not None else self.space.memory()
+        grown = now - self.base if now is not None and self.base is not None else 0
+        self.used = max(grown, self.space.memory())
         return self.used > self.limit
 
 
