@@ -185,12 +185,12 @@ def _schedstat() -> tuple[float, float, float]:
 class _Whereabouts:
     """Where a late period's lateness went: the engine thread's CPU, its wait for a CPU, the rest blocked.
 
-    Samples the engine thread's scheduler counters before each choice of an
-    interaction and at each period start; the time between the last sample
-    before a deadline and the period's start, less what was slept before the
-    deadline, is CPU (the engine's own work: steps, codels), run queue (a
-    runnable thread waiting for a core) or blocked (waiting for the
-    interpreter lock or the controller's lock).  Full collections are timed too.
+    Samples the engine thread's scheduler counters each time it goes to sleep
+    and at each period start; the time between the last sleep before a
+    deadline and the period's start, less what was slept before the deadline,
+    is CPU (the engine's own work: steps, codels), run queue (a runnable
+    thread waiting for a core) or blocked (waiting for the interpreter lock or
+    the controller's lock).  Full collections are timed too.
     """
 
     def __init__(self, controller) -> None:
@@ -203,8 +203,10 @@ class _Whereabouts:
         choose, timers = controller._choose, controller.timers
 
         def sampled_choose(now):
-            self.samples.append(_schedstat())
-            return choose(now)
+            chosen = choose(now)
+            if chosen[0] is None:  # the engine thread is about to sleep: sampling here costs the steps nothing
+                self.samples.append(_schedstat())
+            return chosen
 
         controller._choose = sampled_choose
         for timer in timers.timers:
