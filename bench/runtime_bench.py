@@ -241,7 +241,8 @@ class _Whereabouts:
         import bisect
 
         times = [s[0] for s in self.samples]
-        out = {"periods": 0, "cpu_ms": 0.0, "run_queue_ms": 0.0, "blocked_ms": 0.0,
+        out = {"periods": 0, "cpu_ms": 0.0, "run_queue_ms": 0.0, "blocked_ms": 0.0, "run_queue_max_ms": 0.0,
+               "blocked_max_ms": 0.0,
                "full_collections": len(self.collections), "collection_max_ms": max(self.collections, default=0) * 1e3}
         for name, deadline, (t1, cpu1, queued1) in self.opens:
             i = bisect.bisect_right(times, deadline) - 1
@@ -251,8 +252,11 @@ class _Whereabouts:
             cpu, queued = cpu1 - cpu0, queued1 - queued0
             out["periods"] += 1
             out["cpu_ms"] += cpu * 1e3
+            blocked = max(0.0, (t1 - t0) - cpu - queued - max(0.0, deadline - t0))
             out["run_queue_ms"] += queued * 1e3
-            out["blocked_ms"] += max(0.0, (t1 - t0) - cpu - queued - max(0.0, deadline - t0)) * 1e3
+            out["blocked_ms"] += blocked * 1e3
+            out["run_queue_max_ms"] = max(out["run_queue_max_ms"], queued * 1e3)
+            out["blocked_max_ms"] = max(out["blocked_max_ms"], blocked * 1e3)
         return out
 
 
@@ -293,8 +297,9 @@ def _print_flood(args, flood: dict) -> None:
           f"max lateness {flood['late_max_ms']:.1f} ms")
     w = flood["where"]
     print(f"  where the lateness went ({w['periods']} periods over 5 ms late): engine CPU {w['cpu_ms']:.0f} ms, "
-          f"waiting for a core {w['run_queue_ms']:.0f} ms, blocked (interpreter or controller lock) "
-          f"{w['blocked_ms']:.0f} ms; {w['full_collections']} full collections, longest "
+          f"waiting for a core {w['run_queue_ms']:.0f} ms (at most {w['run_queue_max_ms']:.1f} in one period), "
+          f"blocked on the interpreter or the controller's lock {w['blocked_ms']:.0f} ms (at most "
+          f"{w['blocked_max_ms']:.1f}); {w['full_collections']} full collections, longest "
           f"{w['collection_max_ms']:.1f} ms; load average {os.getloadavg()[0]:.1f}")
 
 

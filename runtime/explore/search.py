@@ -82,13 +82,11 @@ class MemoryBound:
     def __init__(self, space: StateSpace, limit: int) -> None:
         self.space, self.limit = space, limit
         self.base = resident_bytes()
-        self.used = 0
 
     def exceeded(self) -> bool:
         now = resident_bytes()
         grown = now - self.base if now is not None and self.base is not None else 0
-        self.used = max(grown, self.space.memory())
-        return self.used > self.limit
+        return max(grown, self.space.memory()) > self.limit
 
 
 def explore(space: StateSpace, max_depth: int | None = None, dfs: bool = False,
