@@ -182,21 +182,37 @@ def _schedstat() -> tuple[float, float, float]:
         return time.monotonic(), 0.0, 0.0
 
 
+class _SampledCondition:
+    """The engine's condition, sampling the thread's counters when its wait returns (it no longer sleeps)."""
+
+    def __init__(self, condition, samples: list) -> None:
+        self._condition, self._samples = condition, samples
+
+    def wait(self, timeout=None):
+        woken = self._condition.wait(timeout)
+        self._samples.append((*_schedstat(), False))
+        return woken
+
+    def __getattr__(self, name):
+        return getattr(self._condition, name)
+
+
 class _Whereabouts:
     """Where a late period's lateness went: the engine thread's CPU, its wait for a CPU, the rest blocked.
 
-    Samples the engine thread's scheduler counters each time it goes to sleep
-    and at each period start; the time between the last sleep before a
-    deadline and the period's start, less what was slept before the deadline,
-    is CPU (the engine's own work: steps, codels), run queue (a runnable
-    thread waiting for a core) or blocked (waiting for the interpreter lock or
-    the controller's lock).  Full collections are timed too.
+    Samples the engine thread's scheduler counters each time it goes to sleep,
+    wakes up and starts a period.  From the last sample before a deadline to the
+    period's start, the time is CPU (the engine's own work: steps, codels),
+    run queue (a runnable thread waiting for a core) or blocked (waiting for
+    the interpreter lock or the controller's lock), less what was slept before
+    the deadline; when the thread did not sleep in between, the lateness takes
+    each one's share of the interval.  Full collections are timed too.
     """
 
     def __init__(self, controller) -> None:
         import gc
 
-        self.samples: list[tuple[float, float, float]] = []
+        self.samples: list[tuple[float, float, float, bool]] = []  # (..., the thread then slept)
         self.opens: list[tuple[str, float, tuple[float, float, float]]] = []
         self.collections: list[float] = []
         self.since = math.inf  # set when the flood starts: what came before is left out
@@ -205,15 +221,18 @@ class _Whereabouts:
         def sampled_choose(now):
             chosen = choose(now)
             if chosen[0] is None:  # the engine thread is about to sleep: sampling here costs the steps nothing
-                self.samples.append(_schedstat())
+                self.samples.append((*_schedstat(), True))
             return chosen
 
         controller._choose = sampled_choose
+        controller._wake = _SampledCondition(controller._wake, self.samples)
         for timer in timers.timers:
             opened = timer.open
 
             def sampled_open(now, _timer=timer, _open=opened):
-                self.opens.append((_timer.task, _timer.deadline, _schedstat()))
+                sample = _schedstat()
+                self.opens.append((_timer.task, _timer.deadline, sample))
+                self.samples.append((*sample, False))
                 _open(now)
 
             timer.open = sampled_open
@@ -248,11 +267,14 @@ class _Whereabouts:
             i = bisect.bisect_right(times, deadline) - 1
             if name != task or deadline < self.since or t1 - deadline <= over or i < 0:
                 continue
-            t0, cpu0, queued0 = self.samples[i]
+            t0, cpu0, queued0, slept = self.samples[i]
             cpu, queued = cpu1 - cpu0, queued1 - queued0
+            blocked = max(0.0, (t1 - t0) - cpu - queued - (max(0.0, deadline - t0) if slept else 0.0))
+            if not slept:  # busy since an earlier period start: the lateness takes each share of the interval
+                share = (t1 - deadline) / max(t1 - t0, 1e-9)
+                cpu, queued, blocked = cpu * share, queued * share, blocked * share
             out["periods"] += 1
             out["cpu_ms"] += cpu * 1e3
-            blocked = max(0.0, (t1 - t0) - cpu - queued - max(0.0, deadline - t0))
             out["run_queue_ms"] += queued * 1e3
             out["blocked_ms"] += blocked * 1e3
             out["run_queue_max_ms"] = max(out["run_queue_max_ms"], queued * 1e3)
