@@ -13,12 +13,16 @@
    DALA attributes from ``--clients`` threads, each with its own connection,
    until every one has its final report; the p99 latency of a request (POST
    sent to final report, from the reports' times) and what the flood cost
-   RFLEX.servo, the 25 ms task: periods missed, overruns, worst lateness.
+   RFLEX.servo, the 25 ms task: periods missed, overruns, worst lateness, and
+   where the lateness of its late periods went (engine CPU, waiting for a
+   core, blocked on the interpreter or a lock; full collections).
 """
 from __future__ import annotations
 
 import argparse
+import math
 import multiprocessing
+import os
 import sys
 import threading
 import time
@@ -84,7 +88,7 @@ def _pct(values: list[float], q: float) -> float:
 
 def _flood(url: str, requests: int, clients: int, targets: list, out=None) -> tuple[list[int], list[float]]:
     """``clients`` threads each send their share of ``requests``, then wait for every final report."""
-    from runtime.services.client import Client
+    from runtime.services.client import Client, ServiceError
 
     ids: list[int] = []
     posts: list[float] = []
@@ -95,7 +99,14 @@ def _flood(url: str, requests: int, clients: int, targets: list, out=None) -> tu
         mine, took = [], []
         for i in range(requests // clients):
             t0 = time.perf_counter()
-            mine.append(client.send(*targets[(k + i) % len(targets)]))
+            while True:
+                try:
+                    mine.append(client.send(*targets[(k + i) % len(targets)]))
+                    break
+                except ServiceError as err:  # 429: too many waiting, send it again a little later
+                    if err.status != 429:
+                        raise
+                    time.sleep(0.05)
             took.append(time.perf_counter() - t0)
         for rid in mine:
             client.wait(rid, timeout=60)
@@ -121,8 +132,10 @@ def http_rate(requests: int, clients: int, apart: bool = False) -> dict:
 
     package = dala.package()
     controller = Controller(package, dala.ROOT, dala.INTERFACE, noop_codels(package, dala.INTERFACE))
+    server = ServiceServer(controller)  # built first, as `run` does
     controller.start()
-    server = ServiceServer(controller).start()
+    server.start()
+    where = _Whereabouts(controller)
     targets = [("NDD", "SetSpeed"), ("NDD", "SetParams"), ("Aspect", "SetParams"), ("LaserRF", "SetConfig"),
                ("RFLEX", "SetAcceleration")]
     try:
@@ -133,6 +146,7 @@ def http_rate(requests: int, clients: int, apart: bool = False) -> dict:
         sequential = 200 / (time.perf_counter() - t)
         servo = next(t for t in controller.timers.timers if t.task == "RFLEX.servo")
         before = (servo.periods, servo.missed, servo.overruns)
+        where.since = time.monotonic()
         t = time.perf_counter()
         if apart:
             ctx = multiprocessing.get_context("fork")
@@ -151,10 +165,121 @@ def http_rate(requests: int, clients: int, apart: bool = False) -> dict:
                 "p99_ms": _pct(latency, 0.99) * 1e3,
                 "post_p99_ms": _pct(posts, 0.99) * 1e3, "periods": servo.periods - before[0],
                 "missed": servo.missed - before[1], "overruns": servo.overruns - before[2],
-                "late_max_ms": max(late, default=0.0) * 1e3}
+                "late_max_ms": max(late, default=0.0) * 1e3, "where": where.late(servo.task, 0.005)}
     finally:
+        where.close()
         server.stop()
         controller.stop()
+
+
+def _schedstat() -> tuple[float, float, float]:
+    """(now, CPU time, time spent waiting for a CPU) of the calling thread, in s (Linux; zeros elsewhere)."""
+    try:
+        with open("/proc/thread-self/schedstat") as f:
+            cpu, queued, _ = f.read().split()
+        return time.monotonic(), int(cpu) / 1e9, int(queued) / 1e9
+    except OSError:
+        return time.monotonic(), 0.0, 0.0
+
+
+class _SampledCondition:
+    """The engine's condition, sampling the thread's counters when its wait returns (it no longer sleeps)."""
+
+    def __init__(self, condition, samples: list) -> None:
+        self._condition, self._samples = condition, samples
+
+    def wait(self, timeout=None):
+        woken = self._condition.wait(timeout)
+        self._samples.append((*_schedstat(), False))
+        return woken
+
+    def __getattr__(self, name):
+        return getattr(self._condition, name)
+
+
+class _Whereabouts:
+    """Where a late period's lateness went: the engine thread's CPU, its wait for a CPU, the rest blocked.
+
+    Samples the engine thread's scheduler counters each time it goes to sleep,
+    wakes up and starts a period.  From the last sample before a deadline to the
+    period's start, the time is CPU (the engine's own work: steps, codels),
+    run queue (a runnable thread waiting for a core) or blocked (waiting for
+    the interpreter lock or the controller's lock), less what was slept before
+    the deadline; when the thread did not sleep in between, the lateness takes
+    each one's share of the interval.  Full collections are timed too.
+    """
+
+    def __init__(self, controller) -> None:
+        import gc
+
+        self.samples: list[tuple[float, float, float, bool]] = []  # (..., the thread then slept)
+        self.opens: list[tuple[str, float, tuple[float, float, float]]] = []
+        self.collections: list[float] = []
+        self.since = math.inf  # set when the flood starts: what came before is left out
+        choose, timers = controller._choose, controller.timers
+
+        def sampled_choose(now):
+            chosen = choose(now)
+            if chosen[0] is None:  # the engine thread is about to sleep: sampling here costs the steps nothing
+                self.samples.append((*_schedstat(), True))
+            return chosen
+
+        controller._choose = sampled_choose
+        controller._wake = _SampledCondition(controller._wake, self.samples)
+        for timer in timers.timers:
+            opened = timer.open
+
+            def sampled_open(now, _timer=timer, _open=opened):
+                sample = _schedstat()
+                self.opens.append((_timer.task, _timer.deadline, sample))
+                self.samples.append((*sample, False))
+                _open(now)
+
+            timer.open = sampled_open
+        self._gc_start = 0.0
+
+        def collected(phase, info):
+            if info["generation"] == 2:
+                if phase == "start" and time.monotonic() >= self.since:
+                    self._gc_start = time.monotonic()
+                elif phase == "stop" and self._gc_start:
+                    self.collections.append(time.monotonic() - self._gc_start)
+                    self._gc_start = 0.0
+
+        self._callback = collected
+        gc.callbacks.append(collected)
+
+    def close(self) -> None:
+        import gc
+
+        if self._callback in gc.callbacks:
+            gc.callbacks.remove(self._callback)
+
+    def late(self, task: str, over: float) -> dict:
+        """Sums over the periods of ``task`` that started more than ``over`` s late (ms)."""
+        import bisect
+
+        times = [s[0] for s in self.samples]
+        out = {"periods": 0, "cpu_ms": 0.0, "run_queue_ms": 0.0, "blocked_ms": 0.0, "run_queue_max_ms": 0.0,
+               "blocked_max_ms": 0.0,
+               "full_collections": len(self.collections), "collection_max_ms": max(self.collections, default=0) * 1e3}
+        for name, deadline, (t1, cpu1, queued1) in self.opens:
+            i = bisect.bisect_right(times, deadline) - 1
+            if name != task or deadline < self.since or t1 - deadline <= over or i < 0:
+                continue
+            t0, cpu0, queued0, slept = self.samples[i]
+            cpu, queued = cpu1 - cpu0, queued1 - queued0
+            blocked = max(0.0, (t1 - t0) - cpu - queued - (max(0.0, deadline - t0) if slept else 0.0))
+            if not slept:  # busy since an earlier period start: the lateness takes each share of the interval
+                share = (t1 - deadline) / max(t1 - t0, 1e-9)
+                cpu, queued, blocked = cpu * share, queued * share, blocked * share
+            out["periods"] += 1
+            out["cpu_ms"] += cpu * 1e3
+            out["run_queue_ms"] += queued * 1e3
+            out["blocked_ms"] += blocked * 1e3
+            out["run_queue_max_ms"] = max(out["run_queue_max_ms"], queued * 1e3)
+            out["blocked_max_ms"] = max(out["blocked_max_ms"], blocked * 1e3)
+        return out
 
 
 def main() -> None:
@@ -192,6 +317,12 @@ def _print_flood(args, flood: dict) -> None:
           f"POST answered p99 {flood['post_p99_ms']:.1f} ms; "
           f"RFLEX.servo (25 ms): {flood['periods']} periods, {flood['missed']} missed, {flood['overruns']} overruns, "
           f"max lateness {flood['late_max_ms']:.1f} ms")
+    w = flood["where"]
+    print(f"  where the lateness went ({w['periods']} periods over 5 ms late): engine CPU {w['cpu_ms']:.0f} ms, "
+          f"waiting for a core {w['run_queue_ms']:.0f} ms (at most {w['run_queue_max_ms']:.1f} in one period), "
+          f"blocked on the interpreter or the controller's lock {w['blocked_ms']:.0f} ms (at most "
+          f"{w['blocked_max_ms']:.1f}); {w['full_collections']} full collections, longest "
+          f"{w['collection_max_ms']:.1f} ms; load average {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -38,7 +38,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="our explorer compiled to C (default; Python where it cannot be compiled), our explorer "
                              "in Python, or SPIN on the Promela translation ('explore' is 'compiled')")
     search.add_argument("--max-memory", type=int, metavar="MB",
-                        help="stop the compiled search past MB megabytes (default: half the machine's memory)")
+                        help="stop the search past MB megabytes (default: half the machine's memory)")
     search.add_argument("--max-states", type=int, metavar="N", help="stop after N states")
     search.add_argument("--max-depth", type=int, metavar="N", help="do not expand states deeper than N steps")
     search.add_argument("--dfs", action="store_true", help="depth-first (traces are then not shortest)")

@@ -41,7 +41,12 @@ def explore_model(space, args: argparse.Namespace, progress):
                 return found
     if args.por:
         note("no partial-order reduction in the Python explorer: every interleaving is explored")
-    return explore(space, args.max_depth, args.dfs, progress), space
+    max_bytes = _max_bytes(args)
+    _say_unbounded(args, max_bytes)
+    result = explore(space, args.max_depth, args.dfs, progress, max_bytes=max_bytes)
+    if result.stopped_by == "max-memory":
+        note(f"the Python search stopped past {max_bytes / 2**20:,.0f} MB (--max-memory MB sets the bound)")
+    return result, space
 
 
 def check_property(space, item, args: argparse.Namespace, progress):
@@ -73,6 +78,14 @@ def _max_bytes(args) -> int | None:
     return args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()
 
 
+def _say_unbounded(args, max_bytes: int | None) -> None:
+    """On a terminal, a search given no bound says which one it has and how to stop it."""
+    if args.max_states is None and args.max_depth is None and (args.progress or sys.stderr.isatty()) \
+            and not args.quiet and max_bytes is not None:
+        print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
+              "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
+
+
 def _compiled(space, args, progress):
     from genom2bip.verify_cli import load_externs
     from runtime.native.compiled import Diverged, compile_space
@@ -82,10 +95,7 @@ def _compiled(space, args, progress):
         note(why)
         return None
     max_bytes = _max_bytes(args)
-    if args.max_states is None and args.max_depth is None and (args.progress or sys.stderr.isatty()) \
-            and not args.quiet and max_bytes is not None:
-        print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
-              "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
+    _say_unbounded(args, max_bytes)
     try:
         result = cs.explore(args.max_states, args.max_depth, args.dfs, progress, max_bytes=max_bytes,
                             por=args.por)

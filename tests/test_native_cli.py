@@ -120,8 +120,17 @@ def test_ctrl_c_prints_a_summary_of_what_was_explored(tmp_path, engine):
     err = "".join(seen)
     assert proc.returncode == 5, err
     assert "states/s" in err and "depth" in err  # the progress line appeared after a second
-    if engine == "compiled":
-        assert "until complete or 0.3 GB (--max-memory); Ctrl-C stops and reports what was explored" in err
+    assert "until complete or 0.3 GB (--max-memory); Ctrl-C stops and reports what was explored" in err
     summary = next(line for line in out.splitlines() if line.startswith("explored: "))
     assert "stopped at interrupted" in summary
     assert "deadlocks: none reachable in the explored part" in out or "deadlocks:" in out
+
+
+def test_the_python_search_stops_at_its_memory_bound_and_reports_what_it_explored(tmp_path, capsys):
+    model = big_dining(tmp_path, 12)
+    code, out, err = run(capsys, "verify", model, "--engine", "python", "--max-memory", "2", "--progress")
+    assert code == 5, (out, err)
+    assert "until complete or 0.0 GB (--max-memory); Ctrl-C stops and reports what was explored" in err
+    summary = next(line for line in out if line.startswith("explored: "))
+    assert "stopped at max-memory" in summary
+    assert "note: the Python search stopped past 2 MB (--max-memory MB sets the bound)" in out

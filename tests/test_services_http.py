@@ -295,3 +295,63 @@ def test_a_flood_of_requests_from_concurrent_clients_gets_exactly_one_final_repo
         reports = client.request(rid)["reports"]
         assert [r["final"] for r in reports].count(True) == 1
     assert elapsed < 40
+
+    def servo_accounted():  # every deadline of the 25 ms task so far: a period run or a period counted missed
+        servo = next(t for t in client.tasks() if t["task"] == "RFLEX.servo")
+        due = int((controller.clock.now() - controller.started_at) / (servo["period_ms"] / 1e3)) + 1
+        return due - 2 <= servo["periods"] + servo["missed"] <= due
+
+    until(servo_accounted)
+
+
+def _unsent(port: int, peer: int) -> int:
+    """Bytes the server on ``port`` holds in its socket to the client port ``peer`` (Linux /proc/net/tcp)."""
+    with open("/proc/net/tcp") as table:
+        for line in table.readlines()[1:]:
+            fields = line.split()
+            local, remote, queues = fields[1], fields[2], fields[4]
+            if int(local.rsplit(":", 1)[1], 16) == port and int(remote.rsplit(":", 1)[1], 16) == peer:
+                return int(queues.split(":")[0], 16)
+    return 0
+
+
+def test_an_event_stream_blocked_on_a_full_socket_does_not_hold_the_stop(capfd):
+    """The stream's writer is stuck on a connection whose buffers are full: the stop cuts it, quietly and soon."""
+    import socket
+
+    from runtime.controller import Controller
+    from runtime.services.server import ServiceServer
+    from runkit import DALA_CODELS, dala
+
+    pkg = dala()
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
+    server = ServiceServer(controller)
+    server.socket.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)  # inherited: the buffer fills at once
+    controller.start()
+    server.start()
+    client = Client(server.url, timeout=10)
+    stalled = socket.socket()
+    stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    stalled.connect(("127.0.0.1", server.port))
+    stalled.sendall(b"GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")  # and never reads
+    peer = stalled.getsockname()[1]
+    try:
+        sent, unsent = 0, []
+        while sent < 3000 and not (len(unsent) > 20 and len(set(unsent[-20:])) == 1 and unsent[-1] > 0):
+            client.call("NDD", "SetSpeed", timeout=5)  # three reports on the stream each
+            sent += 1
+            unsent.append(_unsent(server.port, peer))
+        assert sent < 3000, f"the stalled client's buffers did not fill: {unsent[-5:]}"
+        for _ in range(200):  # and more, that the server can only keep: its writer to the stream waits
+            client.send("NDD", "SetSpeed")
+        t0 = time.monotonic()
+        server.stop()
+        took = time.monotonic() - t0
+    finally:
+        stalled.close()
+        server.stop()
+        controller.stop()
+    assert took < 2.5, took
+    assert not server._thread.is_alive()
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "CancelledError" not in err, err

@@ -11,6 +11,7 @@ of the interactions that fired (docs/runtime.md).
 from __future__ import annotations
 
 import ctypes
+import gc
 import random
 import sys
 import threading
@@ -344,14 +345,21 @@ class Controller:
     def start(self, limit: int | None = None, duration: float | None = None,
               then: Callable[[], None] | None = None) -> None:
         """Run in a thread of its own (``stop()`` ends it); ``then()`` is called when the run has ended."""
+        real_time = not self.clock.virtual
+
         def body() -> None:
             try:
                 self.run(limit, duration)
             finally:
+                if real_time:
+                    gc.unfreeze()  # what the run left behind is collected as usual
                 if then is not None:
                     then()
-        if not self.clock.virtual:
+        if real_time:
             sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_INTERVAL))
+            # The model, codels and server are built: while the run lasts, full collections leave them out.  A
+            # full collection walking them held the interpreter for up to 100 ms, a period missed by any task.
+            gc.freeze()
         self._thread = threading.Thread(target=body, name="bip-controller", daemon=True)
         self._thread.start()
 

@@ -4,10 +4,12 @@
 :class:`~runtime.explore.space.StateSpace` and reports the deadlocks (states
 without an enabled interaction), the first model error met (non-determinism,
 1-safety, a variable leaving its declared domain...) and whether the
-exploration was complete or stopped at ``max_states`` / ``max_depth``.
+exploration was complete or stopped at ``max_states`` / ``max_depth`` /
+``max_bytes`` (memory) or by Ctrl-C.
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -57,9 +59,43 @@ class ExploreResult:
                 f"({self.bits} bits packed)")
 
 
+#: States expanded between two looks at the memory the search holds.
+MEMORY_EVERY = 1024
+
+
+def resident_bytes() -> int | None:
+    """The process's resident memory in bytes (Linux ``/proc``; None where the system does not say)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+class MemoryBound:
+    """The memory a search may take: the growth of the resident set since it began, or the visited set's size.
+
+    The visited set's size counts where the resident set does not grow (memory
+    freed earlier by the process, reused) or the system does not say.
+    """
+
+    def __init__(self, space: StateSpace, limit: int) -> None:
+        self.space, self.limit = space, limit
+        self.base = resident_bytes()
+
+    def exceeded(self) -> bool:
+        now = resident_bytes()
+        grown = now - self.base if now is not None and self.base is not None else 0
+        return max(grown, self.space.memory()) > self.limit
+
+
 def explore(space: StateSpace, max_depth: int | None = None, dfs: bool = False,
-            progress: Progress | None = None, stop_at_deadlock: bool = False) -> ExploreResult:
+            progress: Progress | None = None, stop_at_deadlock: bool = False,
+            max_bytes: int | None = None) -> ExploreResult:
     """Number every reachable state (up to the limits); collect deadlocks; stop at the first model error.
+
+    ``max_bytes`` bounds the memory the search takes (:class:`MemoryBound`):
+    past it the search stops at ``max-memory``, what was explored reported.
 
     Breadth-first needs no queue: states are numbered in discovery order, so
     the frontier is the range of numbers not expanded yet, and a level ends
@@ -67,7 +103,7 @@ def explore(space: StateSpace, max_depth: int | None = None, dfs: bool = False,
     """
     progress = progress or null_progress()
     start = time.perf_counter()
-    found = _Found()
+    found = _Found(bound=MemoryBound(space, max_bytes) if max_bytes is not None else None)
     try:
         if dfs:
             _depth_first(space, max_depth, progress, found, stop_at_deadlock)
@@ -92,6 +128,16 @@ class _Found:
     error: Finding | None = None
     stopped: str = ""
     depth: int = 0
+    bound: MemoryBound | None = None
+    expanded: int = 0
+
+    def out_of_memory(self) -> bool:
+        """Every :data:`MEMORY_EVERY` expansions, whether the search has passed its memory bound."""
+        self.expanded += 1
+        if self.bound is None or self.expanded % MEMORY_EVERY or not self.bound.exceeded():
+            return False
+        self.stopped = "max-memory"
+        return True
 
 
 def _expand(space: StateSpace, sid: int, found: _Found, stop_at_deadlock: bool) -> tuple[int, ...] | None:
@@ -122,7 +168,7 @@ def _breadth_first(space: StateSpace, max_depth, progress: Progress, found: _Fou
         if max_depth is not None and depth >= max_depth:
             found.stopped = "max-depth"
             return
-        if _expand(space, sid, found, stop_at_deadlock) is None:
+        if _expand(space, sid, found, stop_at_deadlock) is None or found.out_of_memory():
             return
         sid += 1
         progress.tick(len(space), space.transitions, len(space) - sid, space.memory, depth)
@@ -143,7 +189,7 @@ def _depth_first(space: StateSpace, max_depth, progress: Progress, found: _Found
             found.stopped = "max-depth"
             continue
         succ = _expand(space, sid, found, stop_at_deadlock)
-        if succ is None:
+        if succ is None or found.out_of_memory():
             return
         for k in range(len(succ) - 1, 0, -2):
             t = succ[k]

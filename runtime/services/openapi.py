@@ -81,7 +81,7 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
         "/requests": {"get": {"summary": "recent requests", "parameters": [
             {"name": "status", "in": "query", "schema": {"type": "string"}},
             {"name": "limit", "in": "query", "schema": {"type": "integer", "minimum": 1}}],
-            "responses": {"200": {"description": "list"}}}},
+            "responses": {"200": {"description": "list"}, "400": _error("a limit that is not a number from 1")}}},
         "/requests/{id}": {"get": {
             "summary": "a request and its reports", "parameters": [
                 {"name": "id", "in": "path", "required": True, "schema": {"type": "integer"}}, wait],
@@ -91,7 +91,8 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
             "summary": "server-sent events: report, poster, overrun, codel_error, controller",
             "parameters": [{"name": "types", "in": "query", "schema": {"type": "string"},
                             "description": "comma-separated event types (default: all)"}],
-            "responses": {"200": {"description": "an event stream", "content": {"text/event-stream": {}}}}}},
+            "responses": {"200": {"description": "an event stream", "content": {"text/event-stream": {}}},
+                          "400": _error("an unknown event type")}}},
         "/tasks": {"get": {"summary": "periods, lateness and overruns of every task",
                            "responses": {"200": {"description": "list"}}}},
     }
@@ -114,7 +115,9 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
                 "post": {
                     "summary": f"send a request to {svc['kind']} {cname}.{sname}", "tags": [cname],
                     "description": svc.get("doc") or "", "parameters": [wait],
-                    "requestBody": {"required": False, "content": _json(body)},
+                    "requestBody": {"required": True, "content": _json(body),
+                                    "description": "the inputs; {} for the defaults (a POST without "
+                                                   "application/json is refused: a cross-site form could send it)"},
                     "responses": {
                         "202": {"description": "queued", "content": _json("Accepted")},
                         "200": {"description": "with wait: the request and its reports", "content": _json("Request")},
