@@ -137,11 +137,26 @@ def load_externs(spec: str | None) -> dict[str, Any]:
 # --------------------------------------------------------------------------- printing
 
 
-def print_trace(steps, indent: str = "    ") -> None:
+def print_trace(steps, indent: str = "    ", sources: dict[str, str] | None = None) -> None:
+    """One line per step; with ``sources`` (:func:`step_sources`), each names the description line it comes from."""
     if not steps:
         print(f"{indent}(the initial state)")
+    where = sources or {}
     for n, step in enumerate(steps, 1):
-        print(f"{indent}{n:4d}  {step}")
+        source = where.get(getattr(step, "label", str(step)))
+        print(f"{indent}{n:4d}  {step}" + (f"    ({source})" if source else ""))
+
+
+def step_sources(flat) -> dict[str, str]:
+    """Interaction label -> ``file:line:column`` of the service, codel or task it models (``@source``)."""
+    from runtime.model import source_of
+
+    out: dict[str, str] = {}
+    for fc in flat.connectors:
+        source = source_of(fc.instance.annotations)
+        if source and fc.label not in out:
+            out[fc.label] = source
+    return out
 
 
 def print_state(engine, state, indent: str = "    ") -> None:
@@ -288,7 +303,7 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             worst = EXIT_VIOLATED
             print(f"model error in state {result.error.state}: {result.error.message}")
             print("  trace to the state where it happens:")
-            print_trace(result.error.trace)
+            print_trace(result.error.trace, sources=step_sources(space.engine.flat))
             _trace_picture(args, space.engine, result.error.trace, [f"model error: {result.error.message}"])
         if deadlock:
             worst = max(worst, _report_deadlocks(view, result, args))
@@ -310,7 +325,7 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
         if verdict.evidence:
             what = "counterexample" if verdict.evidence == "counterexample" else "witness"
             print(f"  {what} ({len(verdict.trace)} step{'s' if len(verdict.trace) != 1 else ''}):")
-            print_trace(verdict.trace)
+            print_trace(verdict.trace, sources=step_sources(space.engine.flat))
             if verdict.loop >= 0:
                 print(f"    ... and back to the state after step {verdict.loop}, forever")
             if verdict.holds is False:
@@ -333,7 +348,7 @@ def _report_deadlocks(space, result, args) -> int:
     for k, sid in enumerate(result.deadlocks, 1):
         trace = space.trace_to(sid)
         print(f"deadlock {k} of {n} (state {sid}, {len(trace)} steps):")
-        print_trace(trace)
+        print_trace(trace, sources=step_sources(space.engine.flat))
         print("  state:")
         state = space.concrete(trace)
         print_state(space.engine, state)

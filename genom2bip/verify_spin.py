@@ -8,7 +8,9 @@ from __future__ import annotations
 import argparse
 
 from genom2bip.cli import EXIT_ERRORS, EXIT_OK, error
-from genom2bip.verify_cli import EXIT_INCONCLUSIVE, EXIT_VIOLATED, _progress, print_state, print_trace
+from genom2bip.verify_cli import (
+    EXIT_INCONCLUSIVE, EXIT_VIOLATED, _progress, print_state, print_trace, step_sources,
+)
 
 
 def _spin_summary(report, title: str) -> None:
@@ -47,7 +49,7 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 print(f"deadlocks: {errors} invalid end state(s) found by SPIN; trails replayed on the engine:")
                 for k, trail in enumerate(result.trails, 1):
                     print(f"deadlock {k} ({trail.message}, {len(trail.steps)} steps):")
-                    print_trace(trail.steps)
+                    print_trace(trail.steps, sources=step_sources(space.engine.flat))
                     print("  state:")
                     print_state(space.engine, space.concrete(trail.steps))
             if not result.report.complete and worst == EXIT_OK:
@@ -71,7 +73,7 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 worst = max(worst, EXIT_VIOLATED)
                 print("  violated: counterexample (SPIN's trail, replayed on the engine):")
                 if result.trails:
-                    print_trace(result.trails[0].steps)
+                    print_trace(result.trails[0].steps, sources=step_sources(space.engine.flat))
             else:
                 approximate = args.spin_bitstate or args.spin_swarm or not result.report.complete
                 print("  holds" + (" in the part SPIN covered (bitstate: not exhaustive)" if approximate else ""))
