@@ -3,9 +3,10 @@
 A verb is added by writing ``def verb_x(args) -> int`` decorated with
 ``@verb("x", help=..., arguments=...)``; ``arguments`` adds its options to
 its argparse subparser.  Every verb gets errors the same way: diagnostics
-(``file:line:column``, the source line, a caret) on stderr and exit code 1;
-bad usage exits 2; an unexpected exception is reported on one "internal
-error" line with exit code 3, never as a traceback.
+(``file:line:column``, the source line, a caret) or any other
+:class:`~runtime.errors.Genom2bipError` as a message on stderr and exit code 1
+(:func:`exit_status`); bad usage exits 2; an unexpected exception is a bug,
+reported on one "internal error" line with exit code 3 (``--traceback`` shows it).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from typing import Callable, Sequence
 
 from genom2bip.ir import Description
 from runtime.diagnostics import Diagnostic, DiagnosticError, Reporter, SourceCache
+from runtime.errors import Genom2bipError
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 
@@ -48,7 +50,7 @@ def verb(name: str, help: str, arguments: Callable[[argparse.ArgumentParser], No
     return register
 
 
-class Failure(Exception):
+class Failure(Genom2bipError):
     """Stops a verb with an exit code after its messages have been printed."""
 
     def __init__(self, code: int = EXIT_ERRORS) -> None:
@@ -313,11 +315,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
     try:
         return args.run(args)
-    except Failure as exc:
-        return exc.code
-    except DiagnosticError as exc:  # a verb that let its input's problems through
-        print_diagnostics(exc.diagnostics, exc.sources)
-        return EXIT_ERRORS
+    except Genom2bipError as exc:
+        return exit_status(exc)
     except KeyboardInterrupt:
         print("genom2bip: interrupted", file=sys.stderr)
         return 130
@@ -330,6 +329,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not show_traceback:
             print("genom2bip: run again with --traceback (or GENOM2BIP_TRACEBACK=1) to see where", file=sys.stderr)
         return EXIT_INTERNAL
+
+
+def exit_status(exc: Genom2bipError) -> int:
+    """The one place where the product's errors become an exit status (and a message, unless already printed)."""
+    if isinstance(exc, Failure):
+        return exc.code
+    if isinstance(exc, DiagnosticError):  # a verb that let its input's problems through
+        print_diagnostics(exc.diagnostics, exc.sources)
+        return EXIT_ERRORS
+    error(str(exc))
+    return EXIT_ERRORS
 
 
 def entry_point() -> None:

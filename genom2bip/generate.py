@@ -27,12 +27,13 @@ from genom2bip.output import OutputError, write_tree
 from genom2bip.rules import Rule
 from genom2bip.summary import no_component
 from runtime.bip2 import validate
+from runtime.errors import Genom2bipError
 from runtime.model import Package
 
 TEMPLATES = Path(__file__).parent / "templates" / "python"
 
 
-class GenerateError(Exception):
+class GenerateError(Genom2bipError):
     """The model could not be generated; nothing was written."""
 
 

@@ -150,7 +150,7 @@ class FunctionalLevel:
         requests = [(ident(s.name), f"{c.name}.{s.name}") for s in c.services]
         self.asm.atom(root + ("requests",), self._atom_type(acceptor_type(m, requests), f"Request acceptor of {c.name}."))
         for port in c.ports:
-            if port.direction == "out":
+            if port.direction == ir.Direction.OUT:
                 self.asm.atom(root + (ident(port.name),), "Poster")
 
         tasks: dict[str, Path] = {}
@@ -160,7 +160,7 @@ class FunctionalLevel:
         tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK), taken)
 
         for s in c.services:
-            on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == "activity" else tasks[CONTROL_TASK + "\0"]
+            on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == ir.ServiceKind.ACTIVITY else tasks[CONTROL_TASK + "\0"]
             self._service(m, c, root, s, on)
 
     def _task(self, component: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
@@ -199,7 +199,7 @@ class FunctionalLevel:
         """``exec_<state>``: the task's scheduler lets the activity run the codel of ``state``; posters it writes join."""
         ends = [End(task + ("scheduler",), "exec"), End(activity, exec_port(state))]
         for p in codel.params:
-            if p.source == "port" and p.direction in ("out", "inout"):
+            if p.source == ir.Origin.PORT and p.direction in (ir.Direction.OUT, ir.Direction.INOUT):
                 poster = (m, ident(p.path.split(".")[0].split("[")[0]))
                 if poster in self.asm.atoms and End(poster, "write") not in ends:
                     ends.append(End(poster, "write"))

@@ -656,8 +656,7 @@ class _Builder:
                 target = owner.provides if name == "provides" else owner.uses
                 target.extend(n for n in names if n not in target)
                 if name == "provides":
-                    owner.properties.setdefault("_provides_spans", {}).update(
-                        {str(t): self.span(t) for t in ch[0].children})
+                    owner.ref_spans.update({f"provides:{t}": self.span(t) for t in ch[0].children})
             else:
                 owner.properties.setdefault(name, []).extend(names)
         elif name == "extends":
@@ -1094,17 +1093,17 @@ class _Builder:
                 for name in args.replace(",", " ").split():
                     if name not in comp.provides:
                         comp.provides.append(name)
-                        comp.properties.setdefault("_provides_spans", {})[name] = pragma.span
+                        comp.ref_spans[f"provides:{name}"] = pragma.span
 
     def merge_provided(self, comp: Component) -> None:
-        spans = comp.properties.pop("_provides_spans", {})
         for name in comp.provides:
+            where = comp.ref_spans.get(f"provides:{name}", comp.span)
             iface = self.desc.interfaces.get(name)
             if iface is None:
-                self.error(spans.get(name, comp.span), f"component '{comp.name}' provides unknown interface '{name}'",
+                self.error(where, f"component '{comp.name}' provides unknown interface '{name}'",
                            hint="declare or #include the interface before the component")
                 continue
-            self.merge_checked(comp, iface, f"component '{comp.name}'", spans.get(name, comp.span))
+            self.merge_checked(comp, iface, f"component '{comp.name}'", where)
 
     def merge_checked(self, target: Component | Interface, iface: Interface, what: str, where: Span) -> None:
         """Merge ``iface`` into ``target``, refusing what genom3's prop_merge and comp_addids refuse.
