@@ -86,7 +86,8 @@ def model_of(description: ir.Description, system: str,
     problems = validate(package)
     if problems:
         raise GenerateError("the generated model is invalid (a generator bug):\n" +
-                            "\n".join(f"  {d.message}" for d in problems))
+                            "\n".join(f"  {d.span}: {d.message}" if d.span.line > 0 else f"  {d.message}"
+                                      for d in problems))
     root = package.compound_types[-1].name + "()"
     return package, root, level.docs
 

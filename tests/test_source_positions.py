@@ -81,3 +81,36 @@ def test_model_error_at_run_time_names_the_description_line():
     sources = re.findall(r"from PLAN_YIELD to \w+ \(from (\S+NDD\.gen:\d+:\d+)\)", message)
     assert len(sources) >= 2, message
     assert all("yield" in _line(s) or "nddPlan" in _line(s) for s in sources)
+
+
+def _break_exec_plan(package) -> None:
+    """Make the connector of NDD.GoTo:exec_plan name a port its component does not export."""
+    from runtime.model import PortRef
+
+    for ct in package.compound_types:
+        for c in ct.connectors:
+            if {"name": "NDD.GoTo:exec_plan"} in [a.arguments for a in c.annotations if a.name == "label"]:
+                c.ports[1] = PortRef(c.ports[1].component, "no_such_port")
+
+
+def test_a_refused_connector_of_a_generated_model_names_its_codel_line(monkeypatch):
+    import genom2bip.generate as generate
+    from genom2bip.parser import parse_paths
+
+    build = generate.FunctionalLevel.build
+
+    def broken(self):
+        package = build(self)
+        _break_exec_plan(package)
+        return package
+
+    monkeypatch.setattr(generate.FunctionalLevel, "build", broken)
+    try:
+        generate.model_of(parse_paths([str(NDD)]), "NDD")
+    except generate.GenerateError as exc:
+        message = str(exc)
+    else:
+        raise AssertionError("the broken model was accepted")
+    found = re.search(r"^  (\S+NDD\.gen:\d+:\d+): component 'GoTo' .* exports no port 'no_such_port'$", message, re.M)
+    assert found, message
+    assert "codel <plan> nddPlan(" in _line(found.group(1))

@@ -57,6 +57,16 @@ def source_annotation(span: Span) -> list[Annotation]:
     return [Annotation(SOURCE, {"file": span.file, "line": str(span.line), "column": str(span.column)})]
 
 
+def source_span(annotations: list[Annotation]) -> Span | None:
+    """The :class:`Span` a ``@source`` annotation among ``annotations`` names, if there is a well-formed one."""
+    for a in annotations:
+        if a.name == SOURCE and "file" in a.arguments:
+            line, column = a.arguments.get("line", ""), a.arguments.get("column", "1")
+            if line.isdigit() and column.isdigit():
+                return Span(a.arguments["file"], int(line), int(column))
+    return None
+
+
 def source_of(annotations: list[Annotation]) -> str | None:
     """``file:line:column`` from a ``@source`` annotation among ``annotations``, if there is one."""
     for a in annotations:
