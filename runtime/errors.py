@@ -2,7 +2,7 @@
 
 Front end, generator, engine and explorer errors all derive from
 :class:`Genom2bipError`, so that a command line catches one class and maps it
-to an exit status in one place (``genom2bip.cli``), and anything else is a
+to an exit status in one place (``genom2bip.cli.verbs``), and anything else is a
 bug.  It lives in ``runtime`` because the runtime never imports the generator.
 """
 from __future__ import annotations

@@ -7,10 +7,8 @@ from __future__ import annotations
 
 import argparse
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, error
-from genom2bip.verify_cli import (
-    EXIT_INCONCLUSIVE, EXIT_VIOLATED, _progress, print_state, print_trace, step_sources,
-)
+from genom2bip.cli.printers import print_state, print_trace, progress, step_sources
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_VIOLATED, error
 
 
 def _spin_summary(report, title: str) -> None:
@@ -38,7 +36,7 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 result = spin.swarm(space, args.spin_swarm, None, min(args.spin_hash_bits, 30))
             else:
                 result = spin.verify_deadlocks(space, args.spin_cores, args.spin_bitstate, args.spin_hash_bits,
-                                               workdir=args.spin_dir, progress=_progress(args))
+                                               workdir=args.spin_dir, progress=progress(args))
             _spin_summary(result.report, "SPIN")
             errors = result.report.errors
             if errors == 0:
@@ -67,7 +65,7 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 result = spin.swarm(space, args.spin_swarm, [monitor], min(args.spin_hash_bits, 30))
             else:
                 result = spin.verify_safety(space, [monitor], args.spin_cores, args.spin_bitstate,
-                                            args.spin_hash_bits, workdir=args.spin_dir, progress=_progress(args))
+                                            args.spin_hash_bits, workdir=args.spin_dir, progress=progress(args))
             _spin_summary(result.report, "  SPIN")
             if result.report.errors:
                 worst = max(worst, EXIT_VIOLATED)
