@@ -213,6 +213,7 @@ def exit_status(exc: Genom2bipError) -> int:
 
 
 def load_externs(spec: str | None) -> dict[str, Any]:
+    """``--externs MODULE``: the public names of that Python module, binding extern functions that are not codels."""
     if not spec:
         return {}
     from runtime.engine.externs import load_module
