@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterator
 
-from genom2bip.ir import Codel, CodelParam, Component, Parameter, Service, Task
+from genom2bip.ir import Codel, CodelParam, Component, Direction, Origin, Parameter, Service, Task
 from runtime.diagnostics import Reporter
 
 CONTROL = ""  # the task of functions and attributes
@@ -125,7 +125,7 @@ def _codel_access(comp: Component, site: _Site, param: CodelParam) -> _Access | 
 
 
 def _service_access(param: Parameter) -> _Access | None:
-    if param.source != "ids":
+    if param.source != Origin.IDS:
         return None
     return _Access("ids", param.direction, _split(param.member or ""))
 
@@ -134,8 +134,8 @@ def _mutex(p: _Access, q: _Access, inverse: bool) -> bool:
     """genom3's param_mutex: same resource, not both reading (a service's ``out`` parameter reads the ids)."""
     if p.source != q.source:
         return False
-    if p.source == "port":
+    if p.source == Origin.PORT:
         return p.path[:1] == q.path[:1]
-    if p.direction == "in" and q.direction == ("out" if inverse else "in"):
+    if p.direction == Direction.IN and q.direction == ("out" if inverse else "in"):
         return False
     return all(a == b for a, b in zip(p.path, q.path))

@@ -19,12 +19,16 @@ from genom2bip.ir import (
     Codel,
     Component,
     Description,
+    Dialect,
+    Direction,
     ExceptionDecl,
     Member,
     NamedType,
     OptionalType,
+    Origin,
     SequenceType,
     Service,
+    ServiceKind,
     StructType,
     Task,
     Type,
@@ -95,10 +99,10 @@ class _Checker:
             self._service(comp, service)
         for member in comp.ids:
             self._type_refs(member.type, member.span, comp)
-        if comp.dialect == "genom3":
+        if comp.dialect == Dialect.GENOM3:
             check_async(comp, self.reporter)
         for port in comp.ports:
-            self._type_refs(port.type, port.span, comp, in_port=port.direction == "in")
+            self._type_refs(port.type, port.span, comp, in_port=port.direction == Direction.IN)
 
     # ------------------------------------------------------------------ duplicates
 
@@ -128,7 +132,7 @@ class _Checker:
             states = fsm_states(task.codels)
             what = f"task '{task.name}'"
             if self._yields(task.codels, states, what, task.span):
-                self._connected(task.codels, what, task.span, comp.dialect == "genom3")
+                self._connected(task.codels, what, task.span, comp.dialect == Dialect.GENOM3)
         for codel in task.codels:
             self._codel_params(comp, codel, None)
 
@@ -137,7 +141,7 @@ class _Checker:
     def _service(self, comp: Component, service: Service) -> None:
         names = [s.name for s in comp.services]
         what = f"{service.kind} '{service.name}'"
-        if service.kind == "activity":
+        if service.kind == ServiceKind.ACTIVITY:
             if service.task is None:
                 self.error(service.span, f"activity '{service.name}' has no task",
                            "an activity runs in an execution task: name one ('task T;' / 'exec_task: T;')")
@@ -164,21 +168,21 @@ class _Checker:
 
     def _fsm(self, comp: Component, service: Service) -> None:
         what = f"{service.kind} '{service.name}'"
-        if service.kind == "attribute" or (service.kind == "function" and comp.dialect == "genom2"):
+        if service.kind == ServiceKind.ATTRIBUTE or (service.kind == ServiceKind.FUNCTION and comp.dialect == Dialect.GENOM2):
             # genom3 (since 2.99.x) lets an attribute run simple codels; never an automaton
-            fsm = [c for c in service.codels if c.triggers or comp.dialect == "genom2"]
+            fsm = [c for c in service.codels if c.triggers or comp.dialect == Dialect.GENOM2]
             if fsm:
                 codel = fsm[0]
-                kind = "control request" if comp.dialect == "genom2" else service.kind
+                kind = "control request" if comp.dialect == Dialect.GENOM2 else service.kind
                 self.error(_where(codel.span, service.span),
                            f"{kind} '{service.name}' has FSM codel '{codel.name}' (state "
                            f"{', '.join(codel.triggers) or '?'}); it runs in the control task and takes only a "
-                           "validate codel" + (" (codel_control)" if comp.dialect == "genom2" else ""),
-                           "make it an exec request" if comp.dialect == "genom2" else "make it an activity")
+                           "validate codel" + (" (codel_control)" if comp.dialect == Dialect.GENOM2 else ""),
+                           "make it an exec request" if comp.dialect == Dialect.GENOM2 else "make it an activity")
             return
         codels = service.fsm_codels()
         if not codels:
-            if service.kind == "activity":
+            if service.kind == ServiceKind.ACTIVITY:
                 self.error(service.span, f"activity '{service.name}' has no codel for state 'start'",
                            "its FSM begins in state 'start'")
             return
@@ -190,7 +194,7 @@ class _Checker:
             return
         if not self._yields(codels, states, what, service.span):
             return  # an undeclared state already explains why ether may be unreachable
-        self._connected(codels, what, service.span, comp.dialect == "genom3")
+        self._connected(codels, what, service.span, comp.dialect == Dialect.GENOM3)
 
     def _connected(self, codels: list[Codel], what: str, fallback: Span, all_reached: bool) -> None:
         """genom3's rules (codel.c, codel_fsmcreate): ``stop`` must lead to ether; every codel is reached.
@@ -259,9 +263,9 @@ class _Checker:
         for param in codel.params:
             head = param.path.replace("[", ".").split(".")[0].strip()
             where = _where(param.span, codel.span)
-            if param.source == "port" and head and head not in ports:
+            if param.source == Origin.PORT and head and head not in ports:
                 self.error(where, f"unknown port '{head}' in codel '{codel.name}'", _suggest(head, ports, "ports"))
-            elif param.source == "ids" and head and comp.ids and head not in ids:
+            elif param.source == Origin.IDS and head and comp.ids and head not in ids:
                 self.error(where, f"unknown ids member '{head}' in codel '{codel.name}'",
                            _suggest(head, ids, "ids members"))
 

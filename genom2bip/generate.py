@@ -27,12 +27,13 @@ from genom2bip.output import OutputError, write_tree
 from genom2bip.rules import Rule
 from genom2bip.summary import no_component
 from runtime.bip2 import validate
+from runtime.errors import Genom2bipError
 from runtime.model import Package
 
 TEMPLATES = Path(__file__).parent / "templates" / "python"
 
 
-class GenerateError(Exception):
+class GenerateError(Genom2bipError):
     """The model could not be generated; nothing was written."""
 
 
@@ -85,7 +86,8 @@ def model_of(description: ir.Description, system: str,
     problems = validate(package)
     if problems:
         raise GenerateError("the generated model is invalid (a generator bug):\n" +
-                            "\n".join(f"  {d.message}" for d in problems))
+                            "\n".join(f"  {d.span}: {d.message}" if d.span.line > 0 else f"  {d.message}"
+                                      for d in problems))
     root = package.compound_types[-1].name + "()"
     return package, root, level.docs
 

@@ -12,18 +12,60 @@ BIP reserved words happens in the back end.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, is_dataclass, replace
+from enum import StrEnum
 from typing import Any
 
 from runtime.diagnostics import NOWHERE, Span
+
+# --------------------------------------------------------------------------- vocabularies
+# String enums: a member equals its value ("activity"), prints as it and goes to JSON as it.
+
+
+class Dialect(StrEnum):
+    """The language a component was written in."""
+
+    GENOM3 = "genom3"
+    GENOM2 = "genom2"
+
+
+class ServiceKind(StrEnum):
+    """``attribute`` and ``function`` run in the control task, ``activity`` in an execution task."""
+
+    ATTRIBUTE = "attribute"
+    FUNCTION = "function"
+    ACTIVITY = "activity"
+
+
+class Direction(StrEnum):
+    """Which way data flows: through a port (``in``/``out``), a parameter or a codel argument (also ``inout``)."""
+
+    IN = "in"
+    OUT = "out"
+    INOUT = "inout"
+
+
+class Origin(StrEnum):
+    """Where a codel argument or a service parameter takes its value from."""
+
+    IDS = "ids"
+    LOCAL = "local"
+    PORT = "port"
+    REMOTE = "remote"
+
 
 # --------------------------------------------------------------------------- types
 
 
 @dataclass
-class Type:
-    """Base of IDL type expressions."""
+class Node:
+    """Base of every IR node that was written somewhere: the :class:`Span` it came from (not compared)."""
 
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+
+@dataclass
+class Type(Node):
+    """Base of IDL type expressions."""
 
 
 @dataclass
@@ -97,14 +139,13 @@ class EnumValue(int):
 
 
 @dataclass
-class Member:
+class Member(Node):
     """A struct/exception member, an ids member, or a local variable."""
 
     name: str
     type: Type
     initializer: Any = None
     doc: str | None = None
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
@@ -114,10 +155,9 @@ class StructType(Type):
 
 
 @dataclass
-class UnionCase:
+class UnionCase(Node):
     labels: list[Any]  # constant values; the string "default" for ``default:``
     member: Member
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
@@ -134,27 +174,24 @@ class EnumType(Type):
 
 
 @dataclass
-class Typedef:
+class Typedef(Node):
     name: str
     type: Type
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
-class Constant:
+class Constant(Node):
     name: str
     type: Type
     value: Any
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
-class ExceptionDecl:
+class ExceptionDecl(Node):
     """An IDL/GenoM exception; members carry detail data with the failure."""
 
     name: str
     members: list[Member] = field(default_factory=list)
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 # --------------------------------------------------------------------------- codels
@@ -172,19 +209,18 @@ class Duration:
 
 
 @dataclass
-class Yield:
+class Yield(Node):
     """A target of a codel: ``main`` (run at once) or ``pause::main`` (wait for the next period)."""
 
     state: str
     pause: bool = False
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
     def __str__(self) -> str:
         return f"pause::{self.state}" if self.pause else self.state
 
 
 @dataclass
-class CodelParam:
+class CodelParam(Node):
     """One codel argument: where it comes from, its direction, the variable path and an optional alias.
 
     ``source`` is ``ids``, ``local``, ``port``, ``remote`` or ``None`` when the
@@ -192,14 +228,17 @@ class CodelParam:
     """
 
     path: str
-    direction: str | None = None  # in, out, inout
-    source: str | None = None
+    direction: Direction | None = None
+    source: Origin | None = None
     alias: str | None = None
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+    def __post_init__(self) -> None:
+        self.direction = None if self.direction is None else Direction(self.direction)
+        self.source = None if self.source is None else Origin(self.source)
 
 
 @dataclass
-class Codel:
+class Codel(Node):
     """A C function of the module.  FSM codels have ``triggers`` (the states that run them) and ``yields``."""
 
     name: str
@@ -208,7 +247,6 @@ class Codel:
     params: list[CodelParam] = field(default_factory=list)
     is_async: bool = False
     wcet: Duration | None = None
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 def fsm_states(codels: list[Codel]) -> list[str]:
@@ -225,19 +263,21 @@ def fsm_states(codels: list[Codel]) -> list[str]:
 
 
 @dataclass
-class Port:
+class Port(Node):
     """A GenoM port: ``out`` ports are posters written by this component, ``in`` ports read others'."""
 
     name: str
-    direction: str  # "in" or "out"
+    direction: Direction  # IN or OUT
     type: Type
     multiple: bool = False
     doc: str | None = None
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+    def __post_init__(self) -> None:
+        self.direction = Direction(self.direction)
 
 
 @dataclass
-class Task:
+class Task(Node):
     """An execution task: its period (None = aperiodic), its permanent-activity codels and scheduling data."""
 
     name: str
@@ -249,34 +289,35 @@ class Task:
     throws: list[str] = field(default_factory=list)
     doc: str | None = None
     scheduling: str | None = None  # "real-time" when the description asks for it
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
     # Where the names this task refers to were written ("period", "throws:e_x"), for messages.
     ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
-class Parameter:
+class Parameter(Node):
     """A service parameter: ``in``/``out``/``inout``, named after an ids member or local, with a default and doc."""
 
-    direction: str
+    direction: Direction
     name: str
     type: Type | None = None  # None when it names an ids member whose type is found by lookup
-    source: str = "local"  # "ids" (the value is an ids member) or "local" (a service argument)
+    source: Origin = Origin.LOCAL  # IDS (the value is an ids member) or LOCAL (a service argument)
     default: Any = None
     doc: str | None = None
-    # source="ids": the ids member path bound to the parameter (``pos.x``); "" binds the whole ids
+    # source IDS: the ids member path bound to the parameter (``pos.x``); "" binds the whole ids
     member: str | None = None
     # docs of parts of a structured default (``{ .x = 1 : "x doc" }``), keyed by path ("x", "[2]", "a.b")
     member_docs: dict[str, str] = field(default_factory=dict)
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+
+    def __post_init__(self) -> None:
+        self.direction, self.source = Direction(self.direction), Origin(self.source)
 
 
 @dataclass
-class Service:
+class Service(Node):
     """A service: ``attribute`` and ``function`` run in the control task, ``activity`` in its ``task``."""
 
     name: str
-    kind: str  # "attribute", "function" or "activity"
+    kind: ServiceKind
     parameters: list[Parameter] = field(default_factory=list)
     task: str | None = None
     validate: Codel | None = None
@@ -287,10 +328,12 @@ class Service:
     throws: list[str] = field(default_factory=list)
     locals: list[Member] = field(default_factory=list)
     doc: str | None = None
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
     # Where the names this service refers to were written, keyed "task", "interrupts:Stop",
     # "after:Init", "before:X", "throws:e_x": checks point at the offending name, not the service.
     ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
+
+    def __post_init__(self) -> None:
+        self.kind = ServiceKind(self.kind)
 
     def fsm_codels(self) -> list[Codel]:
         """The codels as an automaton: a plain ``codel f()`` (a function's) runs as ``<start> f() yield ether``."""
@@ -303,7 +346,7 @@ class Service:
 
 
 @dataclass
-class Interface:
+class Interface(Node):
     """A GenoM3 ``interface``: a component-like template merged into components that provide/use it."""
 
     name: str
@@ -313,15 +356,14 @@ class Interface:
     throws: list[str] = field(default_factory=list)
     properties: dict[str, Any] = field(default_factory=dict)
     tasks: list[Task] = field(default_factory=list)
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
-class Component:
+class Component(Node):
     """A GenoM module (GenoM3 ``component``, GenoM2 ``module``)."""
 
     name: str
-    dialect: str  # "genom3" or "genom2"
+    dialect: Dialect
     ids: list[Member] = field(default_factory=list)
     tasks: list[Task] = field(default_factory=list)
     ports: list[Port] = field(default_factory=list)
@@ -332,7 +374,11 @@ class Component:
     clock_rate: Duration | None = None
     properties: dict[str, Any] = field(default_factory=dict)  # doc, version, lang, email, require, codels-require...
     file: str = ""
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
+    # Where the names this component refers to were written ("provides:Iface"), for messages.
+    ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
+
+    def __post_init__(self) -> None:
+        self.dialect = Dialect(self.dialect)
 
     def task(self, name: str) -> Task | None:
         return next((t for t in self.tasks if t.name == name), None)
@@ -345,12 +391,11 @@ class Component:
 
 
 @dataclass
-class Pragma:
+class Pragma(Node):
     """A ``#pragma`` line kept for later stages (``requires``, ``provides``, ...)."""
 
     name: str
     arguments: str
-    span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
 @dataclass
@@ -378,13 +423,15 @@ def to_json(node: Any) -> Any:
         return str(node) if node is not NOWHERE else None
     if is_dataclass(node) and not isinstance(node, type):
         out: dict[str, Any] = {"node": type(node).__name__}
-        for f in fields(node):
+        for f in sorted(fields(node), key=lambda f: f.name == "span"):  # the span last, as it always was
             value = getattr(node, f.name)
             if isinstance(value, Span):
                 out[f.name] = str(value) if value is not NOWHERE else None
             else:
                 out[f.name] = to_json(value)
         return out
+    if isinstance(node, StrEnum):
+        return node.value
     if isinstance(node, dict):
         return {str(k): to_json(v) for k, v in node.items()}
     if isinstance(node, (list, tuple)):

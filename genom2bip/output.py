@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO, TypeVar
 
+from runtime.errors import Genom2bipError
+
 T = TypeVar("T")
 
 MARKER = ".genom2bip"
@@ -31,7 +33,7 @@ _HEADER = ("genom2bip output: `genom2bip ... -o DIR` replaces the files listed b
 _ENTRY = re.compile(r"^([0-9a-f]{64})  (\S.*)$")
 
 
-class OutputError(Exception):
+class OutputError(Genom2bipError):
     """The output directory cannot be written safely; nothing was changed."""
 
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from runtime.errors import Genom2bipError
+
 
 @dataclass(frozen=True)
 class Span:
@@ -87,7 +89,7 @@ class SourceCache:
 
 
 @dataclass
-class DiagnosticError(Exception):
+class DiagnosticError(Genom2bipError):
     """Raised when an input has one or more errors; carries all of them."""
 
     diagnostics: list[Diagnostic] = field(default_factory=list)

@@ -175,9 +175,11 @@ def test_traceback_on_request_shows_where_an_unexpected_exception_came_from(caps
     assert err.strip().splitlines()[-1] == "genom2bip: internal error: RuntimeError: kaboom"
 
 
-def test_verbs_are_one_function_each():
-    assert "check" in cli.VERBS
-    assert cli.VERBS["check"].run is cli.verb_check
+def test_verbs_are_one_function_each_listed_by_the_command():
+    from genom2bip.cli import check, command
+
+    assert list(command.VERBS) == ["check", "generate", "call", "verify", "graph", "mission"]
+    assert command.VERBS["check"].run is check.verb_check
 
 
 def test_the_installed_command_never_prints_a_traceback(tmp_path):

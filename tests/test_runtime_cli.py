@@ -12,7 +12,7 @@ import time
 import pytest
 
 from genom2bip.back.interface import codel_params
-from genom2bip.call_cli import parse_assignments
+from genom2bip.cli.call import parse_assignments
 from genom2bip.cli import main as genom2bip_main
 from genom2bip.ir import Codel, CodelParam
 from runkit import DALA_CODELS, ROOT, dala

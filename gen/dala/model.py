@@ -192,6 +192,12 @@ def Aspect_SetParams_Control() -> AtomType:
                     Assign(Var('verdict'), Call('Aspect_aspCheckParams')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '14'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -224,6 +230,12 @@ def Aspect_SetParams_Control() -> AtomType:
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+            ),
+        ],
     )
 
 
@@ -254,6 +266,12 @@ def Aspect_SetParams_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+            ),
         ],
     )
 
@@ -293,6 +311,12 @@ def Aspect_Run_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -325,6 +349,12 @@ def Aspect_Run_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
             ),
         ],
     )
@@ -374,6 +404,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('Aspect_aspReset'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -381,6 +417,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FUSE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '48'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -392,12 +434,24 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_fuse',
                 ['FUSE'],
                 ['FUSE_YIELD'],
                 action=[Assign(Var('outcome'), Call('Aspect_aspFuse'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -405,6 +459,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FUSE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -412,6 +472,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['WAIT'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '26'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -423,12 +489,24 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_wait',
                 ['WAIT'],
                 ['WAIT_YIELD'],
                 action=[Assign(Var('outcome'), Call('Aspect_aspWaitScan'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -436,6 +514,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['WAIT_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '50'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -443,6 +527,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FUSE'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '63'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -450,6 +540,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '69'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -457,6 +553,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '69'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -468,12 +570,24 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('Aspect_aspStop'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -481,6 +595,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '34'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -488,6 +608,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '34'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -499,6 +625,12 @@ def Aspect_Run_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['FUSE_PAUSED'], ['FUSE']),
             Transition('wake', ['WAIT_PAUSED'], ['WAIT']),
@@ -519,6 +651,12 @@ def Aspect_Run_Activity() -> AtomType:
                 ['WAIT_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
             ),
         ],
     )
@@ -557,6 +695,12 @@ def Aspect_Stop_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -580,6 +724,12 @@ def Aspect_Stop_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
             ),
         ],
     )
@@ -612,6 +762,12 @@ def Aspect_Stop_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+            ),
         ],
     )
 
@@ -678,6 +834,12 @@ def LaserRF_acquisition_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('LaserRF_lrfInitTask'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -685,6 +847,12 @@ def LaserRF_acquisition_Activity() -> AtomType:
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '52'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -696,6 +864,18 @@ def LaserRF_acquisition_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
             ),
         ],
     )
@@ -738,6 +918,12 @@ def LaserRF_SetConfig_Control() -> AtomType:
                     Assign(Var('verdict'), Call('LaserRF_lrfCheckConfig')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '14'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -770,6 +956,12 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+            ),
+        ],
     )
 
 
@@ -800,6 +992,12 @@ def LaserRF_SetConfig_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+            ),
         ],
     )
 
@@ -838,6 +1036,12 @@ def LaserRF_Init_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -865,6 +1069,12 @@ def LaserRF_Init_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+            ),
         ],
     )
 
@@ -904,6 +1114,12 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('LaserRF_lrfOpen'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -911,6 +1127,12 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['CONFIGURE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '60'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -922,12 +1144,24 @@ def LaserRF_Init_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_configure',
                 ['CONFIGURE'],
                 ['CONFIGURE_YIELD'],
                 action=[Assign(Var('outcome'), Call('LaserRF_lrfConfigure'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -935,6 +1169,12 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '74'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -942,6 +1182,12 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '74'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -953,6 +1199,12 @@ def LaserRF_Init_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -968,6 +1220,12 @@ def LaserRF_Init_Activity() -> AtomType:
                 ['CONFIGURE'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
             ),
         ],
     )
@@ -1009,6 +1267,12 @@ def LaserRF_Start_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('refuse', ['IDLE'], ['IDLE']),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
@@ -1042,6 +1306,12 @@ def LaserRF_Start_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
             ),
         ],
     )
@@ -1087,6 +1357,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('LaserRF_lrfStartAcquisition'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1094,6 +1370,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['ACQUIRE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '64'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1105,12 +1387,24 @@ def LaserRF_Start_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_acquire',
                 ['ACQUIRE'],
                 ['ACQUIRE_YIELD'],
                 action=[Assign(Var('outcome'), Call('LaserRF_lrfAcquire'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1118,6 +1412,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['ACQUIRE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '53'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1125,6 +1425,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '69'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1132,6 +1438,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '69'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1143,12 +1455,24 @@ def LaserRF_Start_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('LaserRF_lrfStopAcquisition'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1156,6 +1480,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '62'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1163,6 +1493,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '62'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1174,6 +1510,12 @@ def LaserRF_Start_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['ACQUIRE_PAUSED'], ['ACQUIRE']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -1186,6 +1528,12 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['ACQUIRE_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
             ),
         ],
     )
@@ -1224,6 +1572,12 @@ def LaserRF_Stop_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -1247,6 +1601,12 @@ def LaserRF_Stop_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
             ),
         ],
     )
@@ -1279,6 +1639,12 @@ def LaserRF_Stop_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+            ),
         ],
     )
 
@@ -1357,6 +1723,12 @@ def NDD_motion_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddInit'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1364,6 +1736,12 @@ def NDD_motion_Activity() -> AtomType:
                 ['PUBLISH'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '69'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1375,12 +1753,24 @@ def NDD_motion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_publish',
                 ['PUBLISH'],
                 ['PUBLISH_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddPublishIdle'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1388,6 +1778,12 @@ def NDD_motion_Activity() -> AtomType:
                 ['PUBLISH_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '50', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1399,8 +1795,20 @@ def NDD_motion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                    ),
+                ],
             ),
             Transition('wake', ['PUBLISH_PAUSED'], ['PUBLISH']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+            ),
         ],
     )
 
@@ -1443,6 +1851,12 @@ def NDD_SetParams_Control() -> AtomType:
                     Assign(Var('verdict'), Call('NDD_nddCheckParams')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '57', 'column': '14'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -1478,6 +1892,12 @@ def NDD_SetParams_Control() -> AtomType:
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+            ),
+        ],
     )
 
 
@@ -1508,6 +1928,12 @@ def NDD_SetParams_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+            ),
         ],
     )
 
@@ -1550,6 +1976,12 @@ def NDD_SetSpeed_Control() -> AtomType:
                     Assign(Var('verdict'), Call('NDD_nddCheckSpeed')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '63', 'column': '14'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -1585,6 +2017,12 @@ def NDD_SetSpeed_Control() -> AtomType:
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+            ),
+        ],
     )
 
 
@@ -1615,6 +2053,12 @@ def NDD_SetSpeed_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+            ),
         ],
     )
 
@@ -1653,6 +2097,12 @@ def NDD_SetDataSource_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -1680,6 +2130,12 @@ def NDD_SetDataSource_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+            ),
         ],
     )
 
@@ -1709,6 +2165,12 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddSetDataSource'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1716,6 +2178,12 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '71', 'column': '82'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1723,6 +2191,12 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '71', 'column': '82'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1734,6 +2208,12 @@ def NDD_SetDataSource_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -1743,6 +2223,12 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
             ),
         ],
     )
@@ -1788,6 +2274,12 @@ def NDD_GoTo_Control() -> AtomType:
                     Assign(Var('verdict'), Call('NDD_nddCheckGoal')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '16'},
+                    ),
+                ],
             ),
             Transition('refuse', ['IDLE'], ['IDLE']),
             Transition(
@@ -1828,6 +2320,12 @@ def NDD_GoTo_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
             ),
         ],
     )
@@ -1876,6 +2374,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddStartGoTo'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1883,6 +2387,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['PLAN'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '82', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1894,12 +2404,24 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_plan',
                 ['PLAN'],
                 ['PLAN_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddPlan'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1907,6 +2429,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['PLAN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1914,6 +2442,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['ARRIVED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '26'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1925,12 +2459,24 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_arrived',
                 ['ARRIVED'],
                 ['ARRIVED_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddArrived'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1938,6 +2484,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '74'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1945,6 +2497,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '74'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1956,12 +2514,24 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddStopGoTo'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1969,6 +2539,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '72'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1976,6 +2552,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '72'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1987,6 +2569,12 @@ def NDD_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['PLAN_PAUSED'], ['PLAN']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -2000,6 +2588,12 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['PLAN_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
             ),
         ],
     )
@@ -2038,6 +2632,12 @@ def NDD_Stop_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -2061,6 +2661,12 @@ def NDD_Stop_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
             ),
         ],
     )
@@ -2091,6 +2697,12 @@ def NDD_Stop_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('NDD_nddStop'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2098,6 +2710,12 @@ def NDD_Stop_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '49'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2105,6 +2723,12 @@ def NDD_Stop_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '49'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2116,6 +2740,12 @@ def NDD_Stop_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -2125,6 +2755,12 @@ def NDD_Stop_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
             ),
         ],
     )
@@ -2177,6 +2813,12 @@ def POM_fusion_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('POM_pomInitTask'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2184,6 +2826,12 @@ def POM_fusion_Activity() -> AtomType:
                 ['UPDATE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '58'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2195,12 +2843,24 @@ def POM_fusion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_update',
                 ['UPDATE'],
                 ['UPDATE_YIELD'],
                 action=[Assign(Var('outcome'), Call('POM_pomUpdate'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2208,6 +2868,12 @@ def POM_fusion_Activity() -> AtomType:
                 ['UPDATE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '31', 'column': '50'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2219,8 +2885,20 @@ def POM_fusion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                    ),
+                ],
             ),
             Transition('wake', ['UPDATE_PAUSED'], ['UPDATE']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+            ),
         ],
     )
 
@@ -2260,6 +2938,12 @@ def POM_Run_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -2292,6 +2976,12 @@ def POM_Run_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
             ),
         ],
     )
@@ -2334,6 +3024,12 @@ def POM_Run_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('POM_pomWaitOdometry'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2341,6 +3037,12 @@ def POM_Run_Activity() -> AtomType:
                 ['START_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '54'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2348,6 +3050,12 @@ def POM_Run_Activity() -> AtomType:
                 ['FIX'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '68'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2359,12 +3067,24 @@ def POM_Run_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_fix',
                 ['FIX'],
                 ['FIX_YIELD'],
                 action=[Assign(Var('outcome'), Call('POM_pomFix'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2372,6 +3092,12 @@ def POM_Run_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '65'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2379,6 +3105,12 @@ def POM_Run_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '65'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2390,6 +3122,12 @@ def POM_Run_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
+                    ),
+                ],
             ),
             Transition('wake', ['START_PAUSED'], ['START']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -2412,6 +3150,12 @@ def POM_Run_Activity() -> AtomType:
                 ['START_PAUSED'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
             ),
         ],
     )
@@ -2450,6 +3194,12 @@ def POM_Reset_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -2473,6 +3223,12 @@ def POM_Reset_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
             ),
         ],
     )
@@ -2503,6 +3259,12 @@ def POM_Reset_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('POM_pomReset'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2510,6 +3272,12 @@ def POM_Reset_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '55'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2517,6 +3285,12 @@ def POM_Reset_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '55'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2528,6 +3302,12 @@ def POM_Reset_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -2537,6 +3317,12 @@ def POM_Reset_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
             ),
         ],
     )
@@ -2608,6 +3394,12 @@ def RFLEX_servo_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexInitOdometry'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2615,6 +3407,12 @@ def RFLEX_servo_Activity() -> AtomType:
                 ['ODOMETRY'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '57'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2626,12 +3424,24 @@ def RFLEX_servo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_odometry',
                 ['ODOMETRY'],
                 ['ODOMETRY_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexOdometry'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2639,6 +3449,12 @@ def RFLEX_servo_Activity() -> AtomType:
                 ['ODOMETRY_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '56'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2650,8 +3466,20 @@ def RFLEX_servo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             Transition('wake', ['ODOMETRY_PAUSED'], ['ODOMETRY']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+            ),
         ],
     )
 
@@ -2690,6 +3518,12 @@ def RFLEX_Init_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -2717,6 +3551,12 @@ def RFLEX_Init_Control() -> AtomType:
             Transition('status', ['IDLE'], ['IDLE']),
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+            ),
         ],
     )
 
@@ -2746,6 +3586,12 @@ def RFLEX_Init_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexOpen'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2753,6 +3599,12 @@ def RFLEX_Init_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '68'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2760,6 +3612,12 @@ def RFLEX_Init_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '68'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2771,6 +3629,12 @@ def RFLEX_Init_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -2780,6 +3644,12 @@ def RFLEX_Init_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
             ),
         ],
     )
@@ -2818,6 +3688,12 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -2841,6 +3717,12 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
             ),
         ],
     )
@@ -2873,6 +3755,12 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+            ),
         ],
     )
 
@@ -2913,6 +3801,12 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('refuse', ['IDLE'], ['IDLE']),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
@@ -2946,6 +3840,12 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
             ),
         ],
     )
@@ -2991,6 +3891,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexStartTracking'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -2998,6 +3904,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['TRACK'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '58'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3009,12 +3921,24 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_track',
                 ['TRACK'],
                 ['TRACK_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexTrack'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3022,6 +3946,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['TRACK_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3029,6 +3959,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '27'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3036,6 +3972,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '27'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3047,12 +3989,24 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexBrake'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3060,6 +4014,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '66'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3067,6 +4027,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '66'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3078,6 +4044,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['TRACK_PAUSED'], ['TRACK']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -3090,6 +4062,12 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['TRACK_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
             ),
         ],
     )
@@ -3128,6 +4106,12 @@ def RFLEX_Stop_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -3151,6 +4135,12 @@ def RFLEX_Stop_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
             ),
         ],
     )
@@ -3181,6 +4171,12 @@ def RFLEX_Stop_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('RFLEX_rflexStop'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3188,6 +4184,12 @@ def RFLEX_Stop_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '52'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3195,6 +4197,12 @@ def RFLEX_Stop_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '52'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -3206,6 +4214,12 @@ def RFLEX_Stop_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -3215,6 +4229,12 @@ def RFLEX_Stop_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
             ),
         ],
     )
@@ -3707,25 +4727,49 @@ def Aspect_Run_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -3754,32 +4798,62 @@ def Aspect_SetParams_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.SetParams:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.SetParams:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '14'},
+                    ),
+                ],
                 comment='the validate codel aspCheckParams refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.SetParams:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.SetParams:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.SetParams:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.SetParams:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.SetParams:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.SetParams:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.SetParams:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.SetParams:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -3804,19 +4878,37 @@ def Aspect_Stop_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Stop:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Stop:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Stop:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -3889,25 +4981,49 @@ def LaserRF_Init_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -3936,32 +5052,62 @@ def LaserRF_SetConfig_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.SetConfig:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.SetConfig:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '14'},
+                    ),
+                ],
                 comment='the validate codel lrfCheckConfig refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.SetConfig:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.SetConfig:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.SetConfig:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.SetConfig:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.SetConfig:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.SetConfig:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.SetConfig:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.SetConfig:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -3986,25 +5132,49 @@ def LaserRF_Start_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4042,19 +5212,37 @@ def LaserRF_Stop_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Stop:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Stop:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Stop:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4149,32 +5337,62 @@ def NDD_GoTo_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '16'},
+                    ),
+                ],
                 comment='the validate codel nddCheckGoal refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4210,25 +5428,49 @@ def NDD_SetDataSource_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetDataSource:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetDataSource:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetDataSource:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetDataSource:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4252,32 +5494,62 @@ def NDD_SetParams_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetParams:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetParams:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '57', 'column': '14'},
+                    ),
+                ],
                 comment='the validate codel nddCheckParams refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetParams:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetParams:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetParams:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetParams:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetParams:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetParams:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetParams:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetParams:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4300,32 +5572,62 @@ def NDD_SetSpeed_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetSpeed:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetSpeed:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '63', 'column': '14'},
+                    ),
+                ],
                 comment='the validate codel nddCheckSpeed refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetSpeed:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetSpeed:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetSpeed:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetSpeed:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetSpeed:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetSpeed:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetSpeed:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetSpeed:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4353,19 +5655,37 @@ def NDD_Stop_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.Stop:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.Stop:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.Stop:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4459,19 +5779,37 @@ def POM_Reset_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Reset:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Reset:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Reset:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Reset:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Reset:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Reset:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4500,25 +5838,49 @@ def POM_Run_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4610,25 +5972,49 @@ def RFLEX_Init_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Init:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Init:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Init:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Init:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4652,25 +6038,49 @@ def RFLEX_SetAcceleration_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -4695,19 +6105,37 @@ def RFLEX_Stop_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Stop:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Stop:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Stop:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4736,25 +6164,49 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -4857,7 +6309,13 @@ def Aspect_Module() -> CompoundType:
                     PortRef('Run', 'activity_exec_start'),
                     PortRef('Obs', 'write'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
+                    ),
+                ],
                 comment='codel aspReset of state start',
             ),
             ConnectorInstance(
@@ -4868,60 +6326,114 @@ def Aspect_Module() -> CompoundType:
                     PortRef('Run', 'activity_exec_fuse'),
                     PortRef('Obs', 'write'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:exec_fuse'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:exec_fuse'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
+                    ),
+                ],
                 comment='codel aspFuse of state fuse',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Run_exec_wait',
                 ports=[PortRef('map', 'scheduler_exec'), PortRef('Run', 'activity_exec_wait')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:exec_wait'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:exec_wait'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
+                    ),
+                ],
                 comment='codel aspWaitScan of state wait',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Run_exec_stop',
                 ports=[PortRef('map', 'scheduler_exec'), PortRef('Run', 'activity_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
+                    ),
+                ],
                 comment='codel aspStop of state stop',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('Run', 'Stop_start')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Stop:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
                 comment='Stop interrupts Run (Aspect.Stop.interrupts)',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'map_period',
                 ports=[PortRef('map', 'period'), PortRef('Run', 'activity_wake')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.map:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.map:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'map_sleep',
                 ports=[PortRef('map', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.map:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.map:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'SetParams_trigger',
                 ports=[PortRef('requests', 'SetParams'), PortRef('SetParams', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.SetParams:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.SetParams:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Run_trigger',
                 ports=[PortRef('requests', 'Run'), PortRef('Run', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Run:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_trigger',
                 ports=[PortRef('requests', 'Stop'), PortRef('Stop', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.Stop:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Stop:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         priorities=[
@@ -5034,20 +6546,38 @@ def LaserRF_Module() -> CompoundType:
                 'Triggered_1_1',
                 'acquisition_period',
                 ports=[PortRef('acquisition', 'period'), PortRef('Start', 'activity_wake')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.acquisition:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'SetConfig_trigger',
                 ports=[PortRef('requests', 'SetConfig'), PortRef('SetConfig', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.SetConfig:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.SetConfig:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Init_trigger',
                 ports=[PortRef('requests', 'Init'), PortRef('Init', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'LaserRF_Start_Trigger',
@@ -5057,7 +6587,13 @@ def LaserRF_Module() -> CompoundType:
                     PortRef('Start', 'control_trigger'),
                     PortRef('Init', 'control_status'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
                 comment='LaserRF.Start.after: LaserRF.Start only after LaserRF.Init completed',
             ),
             ConnectorInstance(
@@ -5071,6 +6607,10 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation('label', arguments={'name': 'LaserRF.Start:refuse'}),
                     Annotation('rule', arguments={'name': 'LaserRF.Start.after'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
                 ],
                 comment='rule LaserRF.Start.after: refuse the request unless LaserRF.Start only after LaserRF.Init completed',
             ),
@@ -5078,7 +6618,13 @@ def LaserRF_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'Stop_trigger',
                 ports=[PortRef('requests', 'Stop'), PortRef('Stop', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Stop:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -5198,7 +6744,13 @@ def NDD_Module() -> CompoundType:
                     PortRef('control', 'scheduler_exec'),
                     PortRef('SetDataSource', 'activity_exec_start'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetDataSource:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
+                    ),
+                ],
                 comment='codel nddSetDataSource of state start',
             ),
             ConnectorInstance(
@@ -5209,14 +6761,26 @@ def NDD_Module() -> CompoundType:
                     PortRef('Stop', 'activity_exec_start'),
                     PortRef('Speed', 'write'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.Stop:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
+                    ),
+                ],
                 comment='codel nddStop of state start',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'motion_period',
                 ports=[PortRef('motion', 'period'), PortRef('GoTo', 'activity_wake')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.motion:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
@@ -5229,19 +6793,37 @@ def NDD_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'SetParams_trigger',
                 ports=[PortRef('requests', 'SetParams'), PortRef('SetParams', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetParams:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetParams:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'SetSpeed_trigger',
                 ports=[PortRef('requests', 'SetSpeed'), PortRef('SetSpeed', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetSpeed:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetSpeed:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'SetDataSource_trigger',
                 ports=[PortRef('requests', 'SetDataSource'), PortRef('SetDataSource', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.SetDataSource:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.SetDataSource:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'NDD_GoTo_Refuse_after',
@@ -5256,6 +6838,10 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation('label', arguments={'name': 'NDD.GoTo:refuse'}),
                     Annotation('rule', arguments={'name': 'NDD.GoTo.after'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
                 ],
                 comment='rule NDD.GoTo.after: refuse the request unless NDD.GoTo only after NDD.SetParams, NDD.SetSpeed, NDD.SetDataSource completed',
             ),
@@ -5263,7 +6849,13 @@ def NDD_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'Stop_trigger',
                 ports=[PortRef('requests', 'Stop'), PortRef('Stop', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.Stop:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         priorities=[
@@ -5341,21 +6933,39 @@ def POM_Module() -> CompoundType:
                 'Rendezvous_P',
                 'fusion_exec_start',
                 ports=[PortRef('fusion', 'exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.fusion:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                    ),
+                ],
                 comment='codel pomInitTask of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fusion_exec_update',
                 ports=[PortRef('fusion', 'exec_update'), PortRef('Pos', 'write')],
-                annotations=[Annotation('label', arguments={'name': 'POM.fusion:exec_update'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.fusion:exec_update'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                    ),
+                ],
                 comment='codel pomUpdate of state update',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Run_exec_start',
                 ports=[PortRef('fusion', 'scheduler_exec'), PortRef('Run', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
+                    ),
+                ],
                 comment='codel pomWaitOdometry of state start',
             ),
             ConnectorInstance(
@@ -5366,35 +6976,65 @@ def POM_Module() -> CompoundType:
                     PortRef('Run', 'activity_exec_fix'),
                     PortRef('Pos', 'write'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:exec_fix'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:exec_fix'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
+                    ),
+                ],
                 comment='codel pomFix of state fix',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Reset_exec_start',
                 ports=[PortRef('control', 'scheduler_exec'), PortRef('Reset', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Reset:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Reset:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
                 comment='codel pomReset of state start',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'Reset_start',
                 ports=[PortRef('Reset', 'start'), PortRef('Run', 'Reset_start')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Reset:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Reset:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
                 comment='Reset interrupts Run (POM.Reset.interrupts)',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'fusion_period',
                 ports=[PortRef('fusion', 'period'), PortRef('Run', 'activity_wake')],
-                annotations=[Annotation('label', arguments={'name': 'POM.fusion:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.fusion:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'fusion_sleep',
                 ports=[PortRef('fusion', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'POM.fusion:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.fusion:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -5406,7 +7046,13 @@ def POM_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'Run_trigger',
                 ports=[PortRef('requests', 'Run'), PortRef('Run', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'POM.Run:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.Run:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         priorities=[
@@ -5514,14 +7160,26 @@ def RFLEX_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'Stop_exec_start',
                 ports=[PortRef('control', 'scheduler_exec'), PortRef('Stop', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Stop:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexStop of state start',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'servo_period',
                 ports=[PortRef('servo', 'period'), PortRef('TrackSpeed', 'activity_wake')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.servo:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
@@ -5534,7 +7192,13 @@ def RFLEX_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'Init_trigger',
                 ports=[PortRef('requests', 'Init'), PortRef('Init', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Init:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5543,7 +7207,13 @@ def RFLEX_Module() -> CompoundType:
                     PortRef('requests', 'SetAcceleration'),
                     PortRef('SetAcceleration', 'control_trigger'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RFLEX_TrackSpeed_Trigger',
@@ -5553,7 +7223,13 @@ def RFLEX_Module() -> CompoundType:
                     PortRef('TrackSpeed', 'control_trigger'),
                     PortRef('Init', 'control_status'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
                 comment='RFLEX.TrackSpeed.after: RFLEX.TrackSpeed only after RFLEX.Init completed',
             ),
             ConnectorInstance(
@@ -5567,6 +7243,10 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:refuse'}),
                     Annotation('rule', arguments={'name': 'RFLEX.TrackSpeed.after'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
                 ],
                 comment='rule RFLEX.TrackSpeed.after: refuse the request unless RFLEX.TrackSpeed only after RFLEX.Init completed',
             ),
@@ -5574,7 +7254,13 @@ def RFLEX_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'Stop_trigger',
                 ports=[PortRef('requests', 'Stop'), PortRef('Stop', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Stop:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         priorities=[
@@ -5635,166 +7321,310 @@ def DALA() -> CompoundType:
                 'Rendezvous_P',
                 'LaserRF_acquisition_exec_start',
                 ports=[PortRef('LaserRF', 'acquisition_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.acquisition:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                    ),
+                ],
                 comment='codel lrfInitTask of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'LaserRF_Init_exec_start',
                 ports=[PortRef('LaserRF', 'Init_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                    ),
+                ],
                 comment='codel lrfOpen of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'LaserRF_Init_exec_configure',
                 ports=[PortRef('LaserRF', 'Init_exec_configure')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Init:exec_configure'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Init:exec_configure'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                    ),
+                ],
                 comment='codel lrfConfigure of state configure',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'LaserRF_Start_exec_start',
                 ports=[PortRef('LaserRF', 'Start_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                    ),
+                ],
                 comment='codel lrfStartAcquisition of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'LaserRF_Start_exec_acquire',
                 ports=[PortRef('LaserRF', 'Start_exec_acquire')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_acquire'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:exec_acquire'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                    ),
+                ],
                 comment='codel lrfAcquire of state acquire',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'LaserRF_Start_exec_stop',
                 ports=[PortRef('LaserRF', 'Start_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Start:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                    ),
+                ],
                 comment='codel lrfStopAcquisition of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_motion_exec_start',
                 ports=[PortRef('NDD', 'motion_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.motion:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                    ),
+                ],
                 comment='codel nddInit of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_motion_exec_publish',
                 ports=[PortRef('NDD', 'motion_exec_publish')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:exec_publish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.motion:exec_publish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                    ),
+                ],
                 comment='codel nddPublishIdle of state publish',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_GoTo_exec_start',
                 ports=[PortRef('NDD', 'GoTo_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                    ),
+                ],
                 comment='codel nddStartGoTo of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_GoTo_exec_plan',
                 ports=[PortRef('NDD', 'GoTo_exec_plan')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_plan'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:exec_plan'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                    ),
+                ],
                 comment='codel nddPlan of state plan',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_GoTo_exec_arrived',
                 ports=[PortRef('NDD', 'GoTo_exec_arrived')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_arrived'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:exec_arrived'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                    ),
+                ],
                 comment='codel nddArrived of state arrived',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_GoTo_exec_stop',
                 ports=[PortRef('NDD', 'GoTo_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.GoTo:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                    ),
+                ],
                 comment='codel nddStopGoTo of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_servo_exec_start',
                 ports=[PortRef('RFLEX', 'servo_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.servo:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexInitOdometry of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_servo_exec_odometry',
                 ports=[PortRef('RFLEX', 'servo_exec_odometry')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
                 comment='codel rflexOdometry of state odometry',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_Init_exec_start',
                 ports=[PortRef('RFLEX', 'Init_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexOpen of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_TrackSpeed_exec_start',
                 ports=[PortRef('RFLEX', 'TrackSpeed_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexStartTracking of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_TrackSpeed_exec_track',
                 ports=[PortRef('RFLEX', 'TrackSpeed_exec_track')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_track'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_track'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexTrack of state track',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_TrackSpeed_exec_stop',
                 ports=[PortRef('RFLEX', 'TrackSpeed_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                    ),
+                ],
                 comment='codel rflexBrake of state stop',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'LaserRF_Stop_start',
                 ports=[PortRef('LaserRF', 'Stop_start'), PortRef('NDD', 'GoTo_LaserRF_Stop_start')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.Stop:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Stop:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
             ),
             ConnectorInstance(
                 'Triggered_1_0',
                 'NDD_Stop_start',
                 ports=[PortRef('NDD', 'Stop_start')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.Stop:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.Stop:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
                 comment='Stop interrupts GoTo (NDD.Stop.interrupts)',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'RFLEX_Stop_start',
                 ports=[PortRef('RFLEX', 'Stop_start'), PortRef('NDD', 'GoTo_RFLEX_Stop_start')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.Stop:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.Stop:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
                 comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'LaserRF_acquisition_sleep',
                 ports=[PortRef('LaserRF', 'acquisition_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.acquisition:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.acquisition:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'NDD_motion_sleep',
                 ports=[PortRef('NDD', 'motion_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.motion:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.motion:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'RFLEX_servo_sleep',
                 ports=[PortRef('RFLEX', 'servo_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.servo:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.servo:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'NDD_GoTo_Trigger_000001234',
@@ -5808,6 +7638,10 @@ def DALA() -> CompoundType:
                 ],
                 annotations=[
                     Annotation('label', arguments={'name': 'NDD.GoTo:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
                     Annotation('wait', arguments={'rules': 'goto-waits-for-base'}),
                 ],
                 comment='NDD.GoTo.after: NDD.GoTo only after NDD.SetParams, NDD.SetSpeed, NDD.SetDataSource completed; goto-after-pom-run: NDD.GoTo only after POM.Run completed; goto-needs-laser-and-map: NDD.GoTo only while LaserRF.Start, Aspect.Run run; goto-waits-for-base: NDD.GoTo only while RFLEX.TrackSpeed run',
@@ -5822,6 +7656,10 @@ def DALA() -> CompoundType:
                 annotations=[
                     Annotation('label', arguments={'name': 'NDD.GoTo:refuse'}),
                     Annotation('rule', arguments={'name': 'goto-after-pom-run'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
                 ],
                 comment='rule goto-after-pom-run: refuse the request unless NDD.GoTo only after POM.Run completed',
             ),
@@ -5836,6 +7674,10 @@ def DALA() -> CompoundType:
                 annotations=[
                     Annotation('label', arguments={'name': 'NDD.GoTo:refuse'}),
                     Annotation('rule', arguments={'name': 'goto-needs-laser-and-map'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
                 ],
                 comment='rule goto-needs-laser-and-map: refuse the request unless NDD.GoTo only while LaserRF.Start, Aspect.Run run',
             ),
@@ -5845,6 +7687,10 @@ def DALA() -> CompoundType:
                 ports=[PortRef('POM', 'Reset_trigger'), PortRef('NDD', 'GoTo_control_status')],
                 annotations=[
                     Annotation('label', arguments={'name': 'POM.Reset:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
                     Annotation('wait', arguments={'rules': 'no-reset-while-navigating'}),
                 ],
                 comment='no-reset-while-navigating: POM.Reset never while NDD.GoTo run',

@@ -17,6 +17,7 @@ from genom2bip.output import write_file
 from runtime.bip2.printer import action as print_action
 from runtime.bip2.printer import expr as print_expr
 from runtime.bip2.reserved import IDENTIFIER, RESERVED, is_identifier
+from runtime.errors import Genom2bipError
 from runtime.model import (
     BUILTIN_TYPES, Annotation, Assign, AtomType, Binary, Call, CompoundType, ConnectorType, Const, DefineGroup,
     DefinePort, Do, If, InteractionSpec, Package, PortData, Transition, Unary, Var,
@@ -31,7 +32,7 @@ BINARY_OPERATORS = tuple(op for op in BINARY_PRECEDENCE if op not in ("<<", ">>"
 WIDTH = 100
 
 
-class BipWriteError(ValueError):
+class BipWriteError(Genom2bipError, ValueError):
     """The model cannot be written as BIP2; ``problems`` names each offending declaration."""
 
     def __init__(self, package: str, problems: list[str]) -> None:

@@ -169,10 +169,10 @@ def codel_params(codel: ir.Codel, local_names: set[str], ids_inputs: set[str], v
     out = []
     for p in codel.params:
         root = re.split(r"[.\[]", p.path, maxsplit=1)[0]
-        source = p.source or ("local" if root in local_names else "ids")
+        source = str(p.source or ("local" if root in local_names else "ids"))
         if validate and source == "ids" and root in ids_inputs:
             source = "local"
-        out.append({"arg": p.alias or _python_name(p.path), "source": source, "direction": p.direction or "in",
+        out.append({"arg": p.alias or _python_name(p.path), "source": source, "direction": str(p.direction or "in"),
                     "path": p.path})
     names = [a["arg"] for a in out]
     for a in out:
@@ -205,7 +205,7 @@ def component_interface(schemas: Schemas, c: ir.Component) -> dict[str, Any]:
         schema = schemas.of(member.type)
         initial = json_value(member.initializer) if member.initializer is not None else zero(schema, schemas.named)
         ids[member.name] = {"schema": schema, "initial": initial} | ({"doc": member.doc} if member.doc else {})
-    ports = {p.name: {"direction": p.direction, "schema": schemas.of(p.type), "multiple": p.multiple}
+    ports = {p.name: {"direction": str(p.direction), "schema": schemas.of(p.type), "multiple": p.multiple}
              | ({"doc": p.doc} if p.doc else {}) for p in c.ports}
     tasks = {}
     taken = {ident(s.name) for s in c.services}
@@ -221,12 +221,12 @@ def component_interface(schemas: Schemas, c: ir.Component) -> dict[str, Any]:
     for s in c.services:
         params = []
         for p in s.parameters:
-            if p.source == "ids":
+            if p.source == ir.Origin.IDS:
                 schema = _member_type(schemas, c.ids, p.member or p.name) if p.type is None else schemas.of(p.type)
             else:
                 schema = schemas.of(p.type)
-            entry = {"name": p.name, "direction": p.direction, "schema": schema, "source": p.source}
-            if p.source == "ids":
+            entry = {"name": p.name, "direction": str(p.direction), "schema": schema, "source": str(p.source)}
+            if p.source == ir.Origin.IDS:
                 entry["member"] = p.member if p.member is not None else p.name
             if p.default is not None:
                 entry["default"] = json_value(p.default)
@@ -238,9 +238,9 @@ def component_interface(schemas: Schemas, c: ir.Component) -> dict[str, Any]:
                              else zero(schemas.of(m_.type), schemas.named)} for m_ in s.locals}
         local_names = {p.name for p in s.parameters} | set(locals_)
         ids_inputs = {(p.member or p.name).split(".")[0] for p in s.parameters
-                      if p.source == "ids" and p.direction in ("in", "inout")}
+                      if p.source == ir.Origin.IDS and p.direction in (ir.Direction.IN, ir.Direction.INOUT)}
         services[s.name] = {
-            "instance": f"{m}.{ident(s.name)}", "kind": s.kind, "task": s.task if s.kind == "activity" else None,
+            "instance": f"{m}.{ident(s.name)}", "kind": str(s.kind), "task": s.task if s.kind == ir.ServiceKind.ACTIVITY else None,
             "doc": s.doc, "parameters": params, "locals": locals_,
             "throws": list(dict.fromkeys(s.throws + c.throws)), "interrupts": list(s.interrupts),
             "after": list(s.after), "before": list(s.before),

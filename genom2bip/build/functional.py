@@ -27,7 +27,9 @@ from runtime.model import (
     Package,
     PortData,
     Unary,
+    source_annotation,
 )
+from runtime.diagnostics import NOWHERE, Span
 from runtime.model.expressions import Expr
 
 CONTROL_TASK = "control"
@@ -82,6 +84,7 @@ class FunctionalLevel:
         self.wakes: dict[Path, list[End]] = {}
         self.docs: dict[str, str] = {}  # type name -> one line saying what it stands for
         self.task_labels: dict[Path, str] = {}  # task compound -> "Component.task" as its labels say it
+        self.task_spans: dict[Path, Span] = {}  # task compound -> where the description declares the task
 
     # -- registries ---------------------------------------------------------------------
     def _port_type(self, atom_type: str, port: str) -> str:
@@ -147,7 +150,7 @@ class FunctionalLevel:
         requests = [(ident(s.name), f"{c.name}.{s.name}") for s in c.services]
         self.asm.atom(root + ("requests",), self._atom_type(acceptor_type(m, requests), f"Request acceptor of {c.name}."))
         for port in c.ports:
-            if port.direction == "out":
+            if port.direction == ir.Direction.OUT:
                 self.asm.atom(root + (ident(port.name),), "Poster")
 
         tasks: dict[str, Path] = {}
@@ -157,7 +160,7 @@ class FunctionalLevel:
         tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK), taken)
 
         for s in c.services:
-            on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == "activity" else tasks[CONTROL_TASK + "\0"]
+            on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == ir.ServiceKind.ACTIVITY else tasks[CONTROL_TASK + "\0"]
             self._service(m, c, root, s, on)
 
     def _task(self, component: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
@@ -169,6 +172,7 @@ class FunctionalLevel:
         taken.add(name)
         path = self.asm.group(root + (name,), joined(m, name, "Task"), comment=f"task {task.name}")
         self.task_labels[path] = f"{component}.{shown}"
+        self.task_spans[path] = task.span
         if task.period is not None:
             period_us = round(task.period.seconds * 1e6)
             self.asm.atom(path + ("timer",), "Timer", [Const(period_us)])
@@ -177,7 +181,7 @@ class FunctionalLevel:
         self.wakes[path] = []
         if task.codels:
             fsm = Fsm.of(task.codels, task.throws).reachable(["start"])
-            atom = self._atom_type(activity_type(m, name, fsm, permanent=True),
+            atom = self._atom_type(activity_type(m, name, fsm, permanent=True, origin=task.span),
                                    f"Permanent activity of task {m}.{task.name}: states {', '.join(fsm.states)}.")
             self._codel_externs(m, fsm)
             activity = self.asm.atom(path + ("permanent",), atom)
@@ -195,13 +199,13 @@ class FunctionalLevel:
         """``exec_<state>``: the task's scheduler lets the activity run the codel of ``state``; posters it writes join."""
         ends = [End(task + ("scheduler",), "exec"), End(activity, exec_port(state))]
         for p in codel.params:
-            if p.source == "port" and p.direction in ("out", "inout"):
+            if p.source == ir.Origin.PORT and p.direction in (ir.Direction.OUT, ir.Direction.INOUT):
                 poster = (m, ident(p.path.split(".")[0].split("[")[0]))
                 if poster in self.asm.atoms and End(poster, "write") not in ends:
                     ends.append(End(poster, "write"))
         w = self.asm.wire(
             Wire(self._rendezvous(ends), ends, name=exec_port(state), owner=owner, label=f"{label}:{exec_port(state)}",
-                 comment=f"codel {codel.name} of state {state}")
+                 comment=f"codel {codel.name} of state {state}", annotations=source_annotation(codel.span))
         )
         self.task_execs[task].append(w)
         return w
@@ -218,7 +222,7 @@ class FunctionalLevel:
             controller_type(m, s, constrained, interruptible, observed), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
-            activity_type(m, name, fsm), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
+            activity_type(m, name, fsm, origin=s.span), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
         self._codel_externs(m, fsm)
         if s.validate is not None:
             v = s.validate
@@ -231,10 +235,12 @@ class FunctionalLevel:
         if s.validate is not None:
             reject = [End(control, "reject")]
             self.asm.wire(Wire(self._rendezvous(reject), reject, "reject", path, f"{label}:reject",
-                               comment=f"the validate codel {s.validate.name} refused the parameters"))
+                               comment=f"the validate codel {s.validate.name} refused the parameters",
+                               annotations=source_annotation(s.validate.span)))
         for port in ("finish", "fail", "interrupted"):
             ends = [End(control, port), End(activity, port)]
-            self.asm.wire(Wire(self._rendezvous(ends), ends, port, path, f"{label}:{port}"))
+            self.asm.wire(Wire(self._rendezvous(ends), ends, port, path, f"{label}:{port}",
+                               annotations=source_annotation(s.span)))
         for state in fsm.states:
             self._exec(m, label, task, activity, state, fsm.codel_of[state], owner=path)
         if fsm.paused:
@@ -258,7 +264,8 @@ class FunctionalLevel:
             start = [End(parts.control, "start"), End(parts.activity, "start")]
             mine = victims.get(key, [])
             if not mine:
-                self.asm.wire(Wire(self._rendezvous(start), start, "start", parts.path, f"{parts.label}:start"))
+                self.asm.wire(Wire(self._rendezvous(start), start, "start", parts.path, f"{parts.label}:start",
+                                   annotations=source_annotation(parts.service.span)))
                 continue
             # A running victim is aborted; one accepted but not started yet is cancelled.
             aborts = [End(self.services[v].activity, "abort") for v in mine]
@@ -267,7 +274,8 @@ class FunctionalLevel:
             outer = self.asm.wire(
                 Wire(self._connector(library.triggered_type(len(start), len(aborts))), [*start, *aborts], "start",
                      parts.path, f"{parts.label}:start",
-                     comment=f"{key[1]} interrupts {names} ({', '.join(reasons[key])})")
+                     comment=f"{key[1]} interrupts {names} ({', '.join(reasons[key])})",
+                     annotations=source_annotation(parts.service.span))
             )
             for v in mine:
                 victim = self.services[v]
@@ -287,14 +295,17 @@ class FunctionalLevel:
         opening = ([End(timer, "trigger")] if has_timer else []) + [End(task + ("scheduler",), "period")]
         wakes = self.wakes[task]
         tname = task[-1]
+        at = source_annotation(self.task_spans.get(task, NOWHERE))
         if wakes:
             self.asm.wire(Wire(self._connector(library.triggered_type(len(opening), len(wakes))), [*opening, *wakes],
                                "period", task, f"{self.task_labels[task]}:period",
-                               comment="a period starts: paused activities wake up"))
+                               comment="a period starts: paused activities wake up", annotations=at))
         else:
-            self.asm.wire(Wire(self._rendezvous(opening), opening, "period", task, f"{self.task_labels[task]}:period"))
+            self.asm.wire(Wire(self._rendezvous(opening), opening, "period", task, f"{self.task_labels[task]}:period",
+                               annotations=at))
         closing = ([End(timer, "sleep")] if has_timer else []) + [End(task + ("scheduler",), "sleep")]
-        sleep = self.asm.wire(Wire(self._rendezvous(closing), closing, "sleep", task, f"{self.task_labels[task]}:sleep"))
+        sleep = self.asm.wire(Wire(self._rendezvous(closing), closing, "sleep", task, f"{self.task_labels[task]}:sleep",
+                                   annotations=at))
         for w in execs:
             self.asm.rank(Rank(f"{tname}_sleep_before_{w.owner[-1] if len(w.owner) > 1 else m}_{w.name}", sleep, w,
                                owner=(m,), comment="a period ends only when no codel of the task can run"))
@@ -321,7 +332,8 @@ class FunctionalLevel:
             waits = [r.id for r in mine if r.on_violation == "wait"]
             self.asm.wire(Wire(ttype, ends, "trigger", parts.path, f"{parts.label}:trigger",
                                comment="; ".join(f"{r.id}: {r.describe()}" for r in mine) or None,
-                               annotations=[Annotation("wait", {"rules": ",".join(waits)})] if waits else []))
+                               annotations=source_annotation(parts.service.span)
+                               + ([Annotation("wait", {"rules": ",".join(waits)})] if waits else [])))
             for r in mine:
                 if r.on_violation != "reject":
                     continue
@@ -331,7 +343,7 @@ class FunctionalLevel:
                 rtype = self._guarded(f"{m}_{name}_Refuse_{ident(tag)}", rends, Unary("!", rule_condition(r, 3)))
                 self.asm.wire(Wire(rtype, rends, f"refuse_{ident(tag)}", parts.path, f"{parts.label}:refuse",
                                    comment=f"rule {r.id}: refuse the request unless {r.describe()}",
-                                   annotations=[Annotation("rule", {"name": r.id})]))
+                                   annotations=[Annotation("rule", {"name": r.id})] + source_annotation(parts.service.span)))
 
     def _guarded(self, name: str, ends: list[End], guard: Expr) -> ConnectorType:
         return self._connector(library.guarded_type(name, self._types(ends), guard))

@@ -28,7 +28,9 @@ from runtime.model import (
     Transition,
     Unary,
     Var,
+    source_annotation,
 )
+from runtime.diagnostics import NOWHERE, Span
 
 ETHER, FINISHED, FAILED, INTERRUPTED = "ETHER", "FINISHED", "FAILED", "INTERRUPTED"
 
@@ -91,11 +93,13 @@ def codel_extern(module: str, codel: ir.Codel, throws: list[str]) -> ExternFunct
     return ExternFunction(joined(module, codel.name), "int", [], [Annotation("codel", args)])
 
 
-def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> AtomType:
+def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, origin: Span = NOWHERE) -> AtomType:
     """Activity automaton (Fig. 3): ETHER → start → codel steps → finish / fail / interrupted.
 
     A permanent activity (the codels of a task) starts at once and has no
     start/finish/abort ports: nobody requests it and nobody waits for it.
+    ``origin`` is the service or task it models; each codel step carries the
+    codel's line and each outcome the line of its yield (``@source``).
     """
     data = [DataDecl("int", "outcome"), DataDecl("bool", "aborted")]
     places = [ETHER] + [place(s) for s in fsm.states]
@@ -120,6 +124,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> 
                 [place(state)],
                 [place(state) + "_YIELD"],
                 action=[Assign(Var("outcome"), Call(joined(module, codel.name)))],
+                annotations=source_annotation(codel.span),
             )
         )
         transitions += _outcome_transitions(state, codel, fsm, permanent)
@@ -147,6 +152,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False) -> 
         places=places,
         initial=InitialTransition([init], [Assign(Var("outcome"), Const(0)), Assign(Var("aborted"), Const(False))]),
         transitions=transitions,
+        annotations=source_annotation(origin),
     )
 
 
@@ -158,23 +164,25 @@ def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool)
     spent = [Assign(outcome, Const(0))]  # read once: reset so that states differ only in what matters
     for k, y in enumerate(codel.yields):
         is_k = Binary("==", outcome, Const(k))
+        at = source_annotation(y.span if y.span.line > 0 else codel.span)
         if y.state == "ether":
             if permanent:
-                out.append(Transition(None, source, [ETHER], guard=is_k, action=spent))
+                out.append(Transition(None, source, [ETHER], guard=is_k, action=spent, annotations=at))
             else:
                 # Reaching ether after an interruption reports "interrupted", otherwise "finished".
                 out.append(Transition(None, source, [FINISHED], guard=Binary("&&", is_k, Unary("!", Var("aborted"))),
-                                      action=spent))
+                                      action=spent, annotations=at))
                 out.append(Transition(None, source, [INTERRUPTED], guard=Binary("&&", is_k, Var("aborted")),
-                                      action=spent))
+                                      action=spent, annotations=at))
         else:
             target = place(y.state) + "_PAUSED" if y.pause else place(y.state)
-            out.append(Transition(None, source, [target], guard=is_k, action=spent))
+            out.append(Transition(None, source, [target], guard=is_k, action=spent, annotations=at))
     failed = [ETHER] if permanent else [FAILED]
     n = len(codel.yields)
     thrown = Binary(">=", outcome, Const(n))
     undeclared = Binary("<", outcome, Const(0))
-    out.append(Transition(None, source, failed, guard=Binary("||", thrown, undeclared), action=spent))
+    out.append(Transition(None, source, failed, guard=Binary("||", thrown, undeclared), action=spent,
+                          annotations=source_annotation(codel.span)))
     return out
 
 
@@ -209,7 +217,8 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         ports.append(PortDecl(STATUS, "status", list(STATUS_FIELDS), exported=True))
     ended = [Assign(Var("running"), Const(False))]
     transitions = [
-        Transition("trigger", ["IDLE"], ["CHECK"], action=validate + [Assign(Var("running"), Const(True))]),
+        Transition("trigger", ["IDLE"], ["CHECK"], action=validate + [Assign(Var("running"), Const(True))],
+                   annotations=source_annotation(service.validate.span if service.validate else service.span)),
         Transition("start", ["CHECK"], ["ACTIVE"], guard=Binary("==", Var("verdict"), Const(0))),  # verdict is 0
         Transition("finish", ["ACTIVE"], ["IDLE"],
                    action=ended + [Assign(Var("done"), Const(True)), Assign(Var("ok"), Const(True))]),
@@ -235,6 +244,7 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         places=places,
         initial=InitialTransition(["IDLE"], [Assign(Var(v), Const(0 if v == "verdict" else False)) for v in ("verdict",) + STATUS_FIELDS]),
         transitions=transitions,
+        annotations=source_annotation(service.span),
     )
 
 

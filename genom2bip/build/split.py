@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from runtime.errors import Genom2bipError
 from runtime.model import (
     Assign,
     ConnectorExport,
@@ -48,7 +49,7 @@ class Split:
     order: list[int]  # outer parameter k takes group order[k]
 
 
-class SplitError(ValueError):
+class SplitError(Genom2bipError, ValueError):
     """A connector whose shape this module does not know how to split."""
 
 

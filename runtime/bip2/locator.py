@@ -7,6 +7,7 @@ reader notes them here, keyed by the object that holds them.
 from __future__ import annotations
 
 from runtime.diagnostics import NOWHERE, Span
+from runtime.model.common import source_span
 
 
 class Locator:
@@ -21,7 +22,8 @@ class Locator:
         self._keep.append(obj)
 
     def at(self, obj: object, key: object = None, default: Span | None = None) -> Span:
-        """The span noted for ``obj`` (and ``key``), else the object's own span, else ``default``."""
+        """The span noted for ``obj`` (and ``key``), else the object's own span, else the description line
+        its ``@source`` names (a generated model), else ``default``."""
         span = self._spans.get((id(obj), key))
         if span is None and key is not None:
             span = self._spans.get((id(obj), None))
@@ -29,4 +31,6 @@ class Locator:
             own = getattr(obj, "span", None)
             if isinstance(own, Span) and own is not NOWHERE and own.line > 0:
                 span = own
+        if span is None and isinstance(getattr(obj, "annotations", None), list):
+            span = source_span(obj.annotations)
         return span or default or NOWHERE

@@ -20,7 +20,7 @@ from runtime.engine.cexpr import Name, Scope, condition, default_value, literal,
 from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom, FlatSystem
 from runtime.engine.plan import ConnectorInfo, Source
-from runtime.model import AtomType, Transition
+from runtime.model import AtomType, Transition, source_of
 
 #: Internal transitions fired in a row by one atom before the engine calls it a livelock.
 MAX_INTERNAL = 10_000
@@ -49,11 +49,19 @@ class Generated:
 
 
 def describe(t: Transition) -> str:
-    """A transition as a user reads it in an error: ``on p from A to B (file:line)``."""
+    """A transition as a user reads it in an error: ``on p from A to B (m.bip:9:5, from ndd.gen:42:3)``.
+
+    The ``.bip`` position when the model was read from text, the description
+    line (``@source``) when it was generated from one.
+    """
     head = "internal" if t.port is None else f"on {t.port}"
     text = f"{head} from {', '.join(t.sources)} to {', '.join(t.targets)}"
-    if t.span.line > 0:
-        text += f" ({t.span})"
+    where = [str(t.span)] if t.span.line > 0 else []
+    source = source_of(t.annotations)
+    if source:
+        where.append(f"from {source}")
+    if where:
+        text += f" ({', '.join(where)})"
     return text
 
 

@@ -5,8 +5,10 @@ them into a one-paragraph message and a non-zero exit status.
 """
 from __future__ import annotations
 
+from runtime.errors import Genom2bipError
 
-class EngineError(Exception):
+
+class EngineError(Genom2bipError):
     """Base class: anything the engine refuses, with a message meant for a user."""
 
 

@@ -9,7 +9,7 @@ matched asserts the predicate (``false`` for ``never``/``precedes``).
 from __future__ import annotations
 
 from runtime.export.interactions import Static
-from runtime.export.promela import Monitor, PromelaError
+from runtime.export.promela_base import Monitor, PromelaError
 from runtime.props.actions import matcher
 from runtime.props.check import Checkable
 from runtime.props.formulas import PAnd, PAt, PCmp, PConst, PNot, POr, Pred, SBox, SConst, SPred

@@ -4,7 +4,7 @@
 running system is a package plus the root instance (``System()``).
 """
 from runtime.model.behaviors import AtomPriority, AtomType, InitialTransition, PortDecl, PortType, Transition
-from runtime.model.common import BUILTIN_TYPES, Annotation, DataDecl, DataParam
+from runtime.model.common import BUILTIN_TYPES, SOURCE, Annotation, DataDecl, DataParam, source_annotation, source_of
 from runtime.model.compounds import (
     ComponentInstance,
     CompoundType,
@@ -32,5 +32,6 @@ __all__ = [
     "CompoundType", "ConnectorExport", "ConnectorInstance", "ConnectorParam", "ConnectorType", "Const",
     "Constant", "DataDecl", "DataParam", "DefineGroup", "DefineItem", "DefinePort", "Do", "ExportData",
     "ExportPort", "Expr", "ExternFunction", "If", "InitialTransition", "InteractionPattern", "InteractionSpec",
-    "Package", "PortData", "PortDecl", "PortRef", "PortType", "Priority", "Stmt", "Transition", "Unary", "Var",
+    "Package", "PortData", "PortDecl", "PortRef", "PortType", "Priority", "SOURCE", "Stmt", "Transition", "Unary", "Var",
+    "source_annotation", "source_of",
 ]

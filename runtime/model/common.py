@@ -44,3 +44,33 @@ class DataDecl:
     exported: bool = False
     annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
+
+
+#: The annotation that names the description line an element of a generated model comes from.
+SOURCE = "source"
+
+
+def source_annotation(span: Span) -> list[Annotation]:
+    """``@source(file="ndd.gen", line="42", column="3")`` for an element built from ``span``; none if unknown."""
+    if span.line <= 0:
+        return []
+    return [Annotation(SOURCE, {"file": span.file, "line": str(span.line), "column": str(span.column)})]
+
+
+def source_span(annotations: list[Annotation]) -> Span | None:
+    """The :class:`Span` a ``@source`` annotation among ``annotations`` names, if there is a well-formed one."""
+    for a in annotations:
+        if a.name == SOURCE and "file" in a.arguments:
+            line, column = a.arguments.get("line", ""), a.arguments.get("column", "1")
+            if line.isdigit() and column.isdigit():
+                return Span(a.arguments["file"], int(line), int(column))
+    return None
+
+
+def source_of(annotations: list[Annotation]) -> str | None:
+    """``file:line:column`` from a ``@source`` annotation among ``annotations``, if there is one."""
+    for a in annotations:
+        if a.name == SOURCE and "file" in a.arguments:
+            where = [a.arguments["file"], a.arguments.get("line"), a.arguments.get("column")]
+            return ":".join(x for x in where if x)
+    return None

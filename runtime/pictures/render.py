@@ -13,10 +13,12 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from runtime.errors import Genom2bipError
+
 FORMATS = (".dot", ".gv", ".svg", ".png")
 
 
-class PictureError(Exception):
+class PictureError(Genom2bipError):
     """A picture that cannot be written: unknown format, no layout engine, or the engine failed."""
 
 

@@ -168,6 +168,12 @@ def counter_clock__Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('counter_clock_init'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '25'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -175,6 +181,12 @@ def counter_clock__Activity() -> AtomType:
                 ['COUNT'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '59'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -186,12 +198,24 @@ def counter_clock__Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '25'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_count',
                 ['COUNT'],
                 ['COUNT_YIELD'],
                 action=[Assign(Var('outcome'), Call('counter_clock_count'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -199,6 +223,12 @@ def counter_clock__Activity() -> AtomType:
                 ['COUNT_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '70'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -206,6 +236,12 @@ def counter_clock__Activity() -> AtomType:
                 ['IDLE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '84'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -213,6 +249,12 @@ def counter_clock__Activity() -> AtomType:
                 ['STOP'],
                 guard=Binary('==', Var('outcome'), Const(2)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '97'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -224,12 +266,24 @@ def counter_clock__Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_idle',
                 ['IDLE'],
                 ['IDLE_YIELD'],
                 action=[Assign(Var('outcome'), Call('counter_clock_idle'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -237,6 +291,12 @@ def counter_clock__Activity() -> AtomType:
                 ['IDLE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '51'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -244,6 +304,12 @@ def counter_clock__Activity() -> AtomType:
                 ['COUNT_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '64'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -255,12 +321,24 @@ def counter_clock__Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('counter_clock_stop'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -268,6 +346,12 @@ def counter_clock__Activity() -> AtomType:
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '37'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -279,9 +363,21 @@ def counter_clock__Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['COUNT_PAUSED'], ['COUNT']),
             Transition('wake', ['IDLE_PAUSED'], ['IDLE']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '11', 'column': '8'},
+            ),
         ],
     )
 
@@ -319,6 +415,12 @@ def counter_GetTicks_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -342,6 +444,12 @@ def counter_GetTicks_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
             ),
         ],
     )
@@ -374,6 +482,12 @@ def counter_GetTicks_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+            ),
         ],
     )
 
@@ -411,6 +525,12 @@ def counter_SetRunning_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -434,6 +554,12 @@ def counter_SetRunning_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
             ),
         ],
     )
@@ -466,6 +592,12 @@ def counter_SetRunning_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+            ),
         ],
     )
 
@@ -539,25 +671,49 @@ def counter_GetTicks_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'counter.GetTicks:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.GetTicks:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'counter.GetTicks:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.GetTicks:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'counter.GetTicks:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.GetTicks:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'counter.GetTicks:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.GetTicks:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -577,25 +733,49 @@ def counter_SetRunning_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'counter.SetRunning:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.SetRunning:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'counter.SetRunning:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.SetRunning:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'counter.SetRunning:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.SetRunning:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'counter.SetRunning:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.SetRunning:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -645,7 +825,13 @@ def counter_clock__Task() -> CompoundType:
                     PortRef('scheduler', 'period'),
                     PortRef('permanent', 'wake'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.clock:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '11', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
         ],
@@ -698,47 +884,89 @@ def counter_Module() -> CompoundType:
                 'Rendezvous_P',
                 'clock__exec_start',
                 ports=[PortRef('clock_', 'exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.clock:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '25'},
+                    ),
+                ],
                 comment='codel clock_init of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'clock__exec_count',
                 ports=[PortRef('clock_', 'exec_count'), PortRef('Ticks', 'write')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_count'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.clock:exec_count'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '19'},
+                    ),
+                ],
                 comment='codel clock_count of state count',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'clock__exec_idle',
                 ports=[PortRef('clock_', 'exec_idle')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_idle'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.clock:exec_idle'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '18'},
+                    ),
+                ],
                 comment='codel clock_idle of state idle',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'clock__exec_stop',
                 ports=[PortRef('clock_', 'exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.clock:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '18'},
+                    ),
+                ],
                 comment='codel clock_stop of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'clock__sleep',
                 ports=[PortRef('clock_', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'counter.clock:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.clock:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '11', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'GetTicks_trigger',
                 ports=[PortRef('requests', 'GetTicks'), PortRef('GetTicks', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'counter.GetTicks:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.GetTicks:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'SetRunning_trigger',
                 ports=[PortRef('requests', 'SetRunning'), PortRef('SetRunning', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'counter.SetRunning:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.SetRunning:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         priorities=[

@@ -177,6 +177,12 @@ def demo_motion_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_motion_start'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -184,6 +190,12 @@ def demo_motion_Activity() -> AtomType:
                 ['MAIN'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '53'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -195,12 +207,24 @@ def demo_motion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_main',
                 ['MAIN'],
                 ['MAIN_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_motion_main'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -208,6 +232,12 @@ def demo_motion_Activity() -> AtomType:
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '70'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -215,6 +245,12 @@ def demo_motion_Activity() -> AtomType:
                 ['STOP'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '83'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -226,12 +262,24 @@ def demo_motion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_motion_stop'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -239,6 +287,12 @@ def demo_motion_Activity() -> AtomType:
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '51'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -250,8 +304,20 @@ def demo_motion_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '42', 'column': '8'},
+            ),
         ],
     )
 
@@ -294,6 +360,12 @@ def demo_SetSpeed_Control() -> AtomType:
                     Assign(Var('verdict'), Call('demo_check_speed')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '55', 'column': '14'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -329,6 +401,12 @@ def demo_SetSpeed_Control() -> AtomType:
             Transition('status', ['CHECK'], ['CHECK']),
             Transition('status', ['ACTIVE'], ['ACTIVE']),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+            ),
+        ],
     )
 
 
@@ -359,6 +437,12 @@ def demo_SetSpeed_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+            ),
         ],
     )
 
@@ -396,6 +480,12 @@ def demo_Stop_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -419,6 +509,12 @@ def demo_Stop_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
             ),
         ],
     )
@@ -449,6 +545,12 @@ def demo_Stop_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_stop_motion'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -456,6 +558,12 @@ def demo_Stop_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -463,6 +571,12 @@ def demo_Stop_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -474,6 +588,12 @@ def demo_Stop_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -483,6 +603,12 @@ def demo_Stop_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
             ),
         ],
     )
@@ -526,6 +652,12 @@ def demo_GoTo_Control() -> AtomType:
                     Assign(Var('verdict'), Call('demo_check_position')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '68', 'column': '14'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -562,6 +694,12 @@ def demo_GoTo_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
             ),
         ],
     )
@@ -607,6 +745,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_goto_start'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -614,6 +758,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['DRIVE'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '63'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -621,6 +771,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '70'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -628,6 +784,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '70'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -639,12 +801,24 @@ def demo_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_drive',
                 ['DRIVE'],
                 ['DRIVE_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_goto_drive'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '70', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -652,6 +826,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['DRIVE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '71', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -659,6 +839,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '71', 'column': '27'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -666,6 +852,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '71', 'column': '27'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -677,12 +869,24 @@ def demo_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '70', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_goto_stop'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -690,6 +894,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '53'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -697,6 +907,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '53'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -708,6 +924,12 @@ def demo_GoTo_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['DRIVE_PAUSED'], ['DRIVE']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -720,6 +942,12 @@ def demo_GoTo_Activity() -> AtomType:
                 ['DRIVE_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
             ),
         ],
     )
@@ -760,6 +988,12 @@ def demo_MoveDistance_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             Transition('refuse', ['IDLE'], ['IDLE']),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
@@ -790,6 +1024,12 @@ def demo_MoveDistance_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
             ),
         ],
     )
@@ -832,6 +1072,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_md_start'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '80', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -839,6 +1085,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['MAIN'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '80', 'column': '65'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -850,12 +1102,24 @@ def demo_MoveDistance_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '80', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_main',
                 ['MAIN'],
                 ['MAIN_YIELD'],
                 action=[Assign(Var('outcome'), Call('demo_md_main'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '81', 'column': '18'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -863,6 +1127,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '82', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -870,6 +1140,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '82', 'column': '26'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -877,6 +1153,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '82', 'column': '26'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -888,6 +1170,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '81', 'column': '18'},
+                    ),
+                ],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -910,6 +1198,12 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['MAIN_PAUSED'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
             ),
         ],
     )
@@ -1077,32 +1371,62 @@ def demo_GoTo_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '68', 'column': '14'},
+                    ),
+                ],
                 comment='the validate codel check_position refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1134,25 +1458,49 @@ def demo_MoveDistance_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1179,32 +1527,62 @@ def demo_SetSpeed_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'demo.SetSpeed:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.SetSpeed:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '55', 'column': '14'},
+                    ),
+                ],
                 comment='the validate codel check_speed refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'demo.SetSpeed:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.SetSpeed:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'demo.SetSpeed:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.SetSpeed:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'demo.SetSpeed:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.SetSpeed:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'demo.SetSpeed:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.SetSpeed:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1232,19 +1610,37 @@ def demo_Stop_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'demo.Stop:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.Stop:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'demo.Stop:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.Stop:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'demo.Stop:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.Stop:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1345,35 +1741,65 @@ def demo_Module() -> CompoundType:
                 'Rendezvous_P',
                 'motion_exec_start',
                 ports=[PortRef('motion', 'exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'demo.motion:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.motion:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
                 comment='codel motion_start of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'motion_exec_main',
                 ports=[PortRef('motion', 'exec_main'), PortRef('Mobile', 'write')],
-                annotations=[Annotation('label', arguments={'name': 'demo.motion:exec_main'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.motion:exec_main'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '18'},
+                    ),
+                ],
                 comment='codel motion_main of state main',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'motion_exec_stop',
                 ports=[PortRef('motion', 'exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'demo.motion:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.motion:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '18'},
+                    ),
+                ],
                 comment='codel motion_stop of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_start',
                 ports=[PortRef('control', 'scheduler_exec'), PortRef('Stop', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'demo.Stop:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.Stop:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
+                    ),
+                ],
                 comment='codel stop_motion of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'GoTo_exec_start',
                 ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '19'},
+                    ),
+                ],
                 comment='codel goto_start of state start',
             ),
             ConnectorInstance(
@@ -1384,14 +1810,26 @@ def demo_Module() -> CompoundType:
                     PortRef('GoTo', 'activity_exec_drive'),
                     PortRef('Mobile', 'write'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:exec_drive'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:exec_drive'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '70', 'column': '19'},
+                    ),
+                ],
                 comment='codel goto_drive of state drive',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'GoTo_exec_stop',
                 ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '18'},
+                    ),
+                ],
                 comment='codel goto_stop of state stop',
             ),
             ConnectorInstance(
@@ -1401,14 +1839,26 @@ def demo_Module() -> CompoundType:
                     PortRef('motion', 'scheduler_exec'),
                     PortRef('MoveDistance', 'activity_exec_start'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '80', 'column': '19'},
+                    ),
+                ],
                 comment='codel md_start of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'MoveDistance_exec_main',
                 ports=[PortRef('motion', 'scheduler_exec'), PortRef('MoveDistance', 'activity_exec_main')],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:exec_main'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:exec_main'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '81', 'column': '18'},
+                    ),
+                ],
                 comment='codel md_main of state main',
             ),
             ConnectorInstance(
@@ -1419,7 +1869,13 @@ def demo_Module() -> CompoundType:
                     PortRef('GoTo', 'Stop_start'),
                     PortRef('MoveDistance', 'Stop_start'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'demo.Stop:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.Stop:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
                 comment='Stop interrupts GoTo, MoveDistance (demo.Stop.interrupts)',
             ),
             ConnectorInstance(
@@ -1430,14 +1886,26 @@ def demo_Module() -> CompoundType:
                     PortRef('GoTo', 'activity_wake'),
                     PortRef('MoveDistance', 'activity_wake'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'demo.motion:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.motion:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '42', 'column': '8'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'motion_sleep',
                 ports=[PortRef('motion', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'demo.motion:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.motion:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '42', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -1449,19 +1917,37 @@ def demo_Module() -> CompoundType:
                 'Rendezvous_PP',
                 'SetSpeed_trigger',
                 ports=[PortRef('requests', 'SetSpeed'), PortRef('SetSpeed', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'demo.SetSpeed:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.SetSpeed:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_trigger',
                 ports=[PortRef('requests', 'Stop'), PortRef('Stop', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'demo.Stop:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.Stop:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'GoTo_trigger',
                 ports=[PortRef('requests', 'GoTo'), PortRef('GoTo', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'demo.GoTo:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'demo_MoveDistance_Trigger',
@@ -1471,7 +1957,13 @@ def demo_Module() -> CompoundType:
                     PortRef('MoveDistance', 'control_trigger'),
                     PortRef('SetSpeed', 'control_status'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'demo.MoveDistance:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.MoveDistance:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
                 comment='demo.MoveDistance.after: demo.MoveDistance only after demo.SetSpeed completed',
             ),
             ConnectorInstance(
@@ -1485,6 +1977,10 @@ def demo_Module() -> CompoundType:
                 annotations=[
                     Annotation('label', arguments={'name': 'demo.MoveDistance:refuse'}),
                     Annotation('rule', arguments={'name': 'demo.MoveDistance.after'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
                 ],
                 comment='rule demo.MoveDistance.after: refuse the request unless demo.MoveDistance only after demo.SetSpeed completed',
             ),

@@ -182,6 +182,12 @@ def rflex_MotorsTask_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexMotorsInit'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '95', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -189,6 +195,12 @@ def rflex_MotorsTask_Activity() -> AtomType:
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '95', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -200,12 +212,24 @@ def rflex_MotorsTask_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '95', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_main',
                 ['MAIN'],
                 ['MAIN_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexMotorsMain'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '96', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -213,6 +237,12 @@ def rflex_MotorsTask_Activity() -> AtomType:
                 ['MAIN_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '96', 'column': '21'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -224,8 +254,20 @@ def rflex_MotorsTask_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '96', 'column': '21'},
+                    ),
+                ],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '91', 'column': '11'},
+            ),
         ],
     )
 
@@ -247,6 +289,12 @@ def rflex_SonarTask_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexSonarsInit'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '106', 'column': '16'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -254,6 +302,12 @@ def rflex_SonarTask_Activity() -> AtomType:
                 ['ETHER'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '106', 'column': '16'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -265,6 +319,18 @@ def rflex_SonarTask_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '106', 'column': '16'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '101', 'column': '11'},
             ),
         ],
     )
@@ -307,6 +373,12 @@ def rflex_Init_Control() -> AtomType:
                     Assign(Var('verdict'), Call('rflex_rflexInitCheck')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '32', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -339,6 +411,12 @@ def rflex_Init_Control() -> AtomType:
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+            ),
+        ],
     )
 
 
@@ -367,6 +445,12 @@ def rflex_Init_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexInitStart'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -374,6 +458,12 @@ def rflex_Init_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -381,6 +471,12 @@ def rflex_Init_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -392,6 +488,12 @@ def rflex_Init_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
@@ -401,6 +503,12 @@ def rflex_Init_Activity() -> AtomType:
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
             ),
         ],
     )
@@ -443,6 +551,12 @@ def rflex_SetSpeed_Control() -> AtomType:
                     Assign(Var('verdict'), Call('rflex_rflexSetSpeedCheck')),
                     Assign(Var('running'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '42', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'reject',
@@ -475,6 +589,12 @@ def rflex_SetSpeed_Control() -> AtomType:
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
             ),
         ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+            ),
+        ],
     )
 
 
@@ -505,6 +625,12 @@ def rflex_SetSpeed_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+            ),
         ],
     )
 
@@ -542,6 +668,12 @@ def rflex_GetOdo_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -565,6 +697,12 @@ def rflex_GetOdo_Control() -> AtomType:
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
             ),
         ],
     )
@@ -597,6 +735,12 @@ def rflex_GetOdo_Activity() -> AtomType:
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+            ),
         ],
     )
 
@@ -635,6 +779,12 @@ def rflex_TrackSpeed_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -664,6 +814,12 @@ def rflex_TrackSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
             ),
         ],
     )
@@ -713,6 +869,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexTrackStart'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -720,6 +882,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -727,6 +895,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['END_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -734,6 +908,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -741,6 +921,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -752,12 +938,24 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_exec',
                 ['EXEC'],
                 ['EXEC_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexTrackMain'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -765,6 +963,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -772,6 +976,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['END_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -779,6 +989,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -786,6 +1002,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(2)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -797,12 +1019,24 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_end',
                 ['END'],
                 ['END_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexTrackEnd'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '57', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -810,6 +1044,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '57', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -817,6 +1057,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '57', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -828,12 +1074,24 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '57', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexTrackInter'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '58', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -841,6 +1099,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '58', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -848,6 +1112,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '58', 'column': '19'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -859,6 +1129,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '58', 'column': '19'},
+                    ),
+                ],
             ),
             Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
             Transition('wake', ['END_PAUSED'], ['END']),
@@ -879,6 +1155,12 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                 ['END_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
             ),
         ],
     )
@@ -918,6 +1200,12 @@ def rflex_Stop_Control() -> AtomType:
                 ['IDLE'],
                 ['CHECK'],
                 action=[Assign(Var('verdict'), Const(0)), Assign(Var('running'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
             Transition(
@@ -947,6 +1235,12 @@ def rflex_Stop_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
             ),
         ],
     )
@@ -992,6 +1286,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['START'],
                 ['START_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexStopMain'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -999,6 +1299,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1006,6 +1312,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1013,6 +1325,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1024,12 +1342,24 @@ def rflex_Stop_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_exec',
                 ['EXEC'],
                 ['EXEC_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexStopMain'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1037,6 +1367,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['EXEC_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1044,6 +1380,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1051,6 +1393,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(1)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1062,12 +1410,24 @@ def rflex_Stop_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 'exec_stop',
                 ['STOP'],
                 ['STOP_YIELD'],
                 action=[Assign(Var('outcome'), Call('rflex_rflexStopInter'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '69', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1075,6 +1435,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['FINISHED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Unary('!', Var('aborted'))),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '69', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1082,6 +1448,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['INTERRUPTED'],
                 guard=Binary('&&', Binary('==', Var('outcome'), Const(0)), Var('aborted')),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '69', 'column': '22'},
+                    ),
+                ],
             ),
             Transition(
                 None,
@@ -1093,6 +1465,12 @@ def rflex_Stop_Activity() -> AtomType:
                     Binary('<', Var('outcome'), Const(0)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '69', 'column': '22'},
+                    ),
+                ],
             ),
             Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
             Transition('finish', ['FINISHED'], ['ETHER']),
@@ -1105,6 +1483,12 @@ def rflex_Stop_Activity() -> AtomType:
                 ['EXEC_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
             ),
         ],
     )
@@ -1267,25 +1651,49 @@ def rflex_GetOdo_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.GetOdo:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.GetOdo:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.GetOdo:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.GetOdo:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.GetOdo:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.GetOdo:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.GetOdo:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.GetOdo:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -1310,26 +1718,50 @@ def rflex_Init_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '32', 'column': '22'},
+                    ),
+                ],
                 comment='the validate codel rflexInitCheck refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1398,32 +1830,62 @@ def rflex_SetSpeed_Service() -> CompoundType:
                 'Rendezvous_P',
                 'reject',
                 ports=[PortRef('control', 'reject')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SetSpeed:reject'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SetSpeed:reject'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '42', 'column': '19'},
+                    ),
+                ],
                 comment='the validate codel rflexSetSpeedCheck refused the parameters',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SetSpeed:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SetSpeed:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SetSpeed:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SetSpeed:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SetSpeed:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SetSpeed:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SetSpeed:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SetSpeed:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         ports=[ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')])],
@@ -1444,20 +1906,38 @@ def rflex_SonarTask_Task() -> CompoundType:
                 'Rendezvous_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SonarTask:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SonarTask:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '106', 'column': '16'},
+                    ),
+                ],
                 comment='codel rflexSonarsInit of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'period',
                 ports=[PortRef('timer', 'trigger'), PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SonarTask:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SonarTask:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '101', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SonarTask:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SonarTask:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '101', 'column': '11'},
+                    ),
+                ],
             ),
         ],
         priorities=[
@@ -1499,19 +1979,37 @@ def rflex_Stop_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1555,19 +2053,37 @@ def rflex_TrackSpeed_Service() -> CompoundType:
                 'Rendezvous_PP',
                 'finish',
                 ports=[PortRef('control', 'finish'), PortRef('activity', 'finish')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:finish'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:finish'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'fail',
                 ports=[PortRef('control', 'fail'), PortRef('activity', 'fail')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:fail'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:fail'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'interrupted',
                 ports=[PortRef('control', 'interrupted'), PortRef('activity', 'interrupted')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:interrupted'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:interrupted'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1628,21 +2144,39 @@ def rflex_Module() -> CompoundType:
                 'Rendezvous_P',
                 'MotorsTask_exec_start',
                 ports=[PortRef('MotorsTask', 'exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '95', 'column': '21'},
+                    ),
+                ],
                 comment='codel rflexMotorsInit of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'MotorsTask_exec_main',
                 ports=[PortRef('MotorsTask', 'exec_main')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_main'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.MotorsTask:exec_main'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '96', 'column': '21'},
+                    ),
+                ],
                 comment='codel rflexMotorsMain of state main',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Init_exec_start',
                 ports=[PortRef('MotorsTask', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
                 comment='codel rflexInitStart of state start',
             ),
             ConnectorInstance(
@@ -1652,7 +2186,13 @@ def rflex_Module() -> CompoundType:
                     PortRef('MotorsTask', 'scheduler_exec'),
                     PortRef('TrackSpeed', 'activity_exec_start'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '55', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexTrackStart of state start',
             ),
             ConnectorInstance(
@@ -1662,7 +2202,13 @@ def rflex_Module() -> CompoundType:
                     PortRef('MotorsTask', 'scheduler_exec'),
                     PortRef('TrackSpeed', 'activity_exec_exec'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_exec'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_exec'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '56', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexTrackMain of state exec',
             ),
             ConnectorInstance(
@@ -1672,7 +2218,13 @@ def rflex_Module() -> CompoundType:
                     PortRef('MotorsTask', 'scheduler_exec'),
                     PortRef('TrackSpeed', 'activity_exec_end'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_end'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_end'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '57', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexTrackEnd of state end',
             ),
             ConnectorInstance(
@@ -1682,28 +2234,52 @@ def rflex_Module() -> CompoundType:
                     PortRef('MotorsTask', 'scheduler_exec'),
                     PortRef('TrackSpeed', 'activity_exec_stop'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '58', 'column': '19'},
+                    ),
+                ],
                 comment='codel rflexTrackInter of state stop',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_start',
                 ports=[PortRef('MotorsTask', 'scheduler_exec'), PortRef('Stop', 'activity_exec_start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:exec_start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:exec_start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
                 comment='codel rflexStopMain of state start',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_exec',
                 ports=[PortRef('MotorsTask', 'scheduler_exec'), PortRef('Stop', 'activity_exec_exec')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:exec_exec'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:exec_exec'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '68', 'column': '22'},
+                    ),
+                ],
                 comment='codel rflexStopMain of state exec',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_exec_stop',
                 ports=[PortRef('MotorsTask', 'scheduler_exec'), PortRef('Stop', 'activity_exec_stop')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:exec_stop'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:exec_stop'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '69', 'column': '22'},
+                    ),
+                ],
                 comment='codel rflexStopInter of state stop',
             ),
             ConnectorInstance(
@@ -1714,21 +2290,39 @@ def rflex_Module() -> CompoundType:
                     PortRef('TrackSpeed', 'Init_start'),
                     PortRef('Stop', 'Init_start'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
                 comment='Init interrupts TrackSpeed, Stop (rflex.Init.interrupts)',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'TrackSpeed_start',
                 ports=[PortRef('TrackSpeed', 'start'), PortRef('Stop', 'TrackSpeed_start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
                 comment='TrackSpeed interrupts Stop (rflex.TrackSpeed.interrupts)',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('TrackSpeed', 'Stop_start')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:start'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:start'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
                 comment='Stop interrupts TrackSpeed (rflex.Stop.interrupts)',
             ),
             ConnectorInstance(
@@ -1739,44 +2333,86 @@ def rflex_Module() -> CompoundType:
                     PortRef('TrackSpeed', 'activity_wake'),
                     PortRef('Stop', 'activity_wake'),
                 ],
-                annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.MotorsTask:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '91', 'column': '11'},
+                    ),
+                ],
                 comment='a period starts: paused activities wake up',
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'MotorsTask_sleep',
                 ports=[PortRef('MotorsTask', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.MotorsTask:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.MotorsTask:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '91', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Init_trigger',
                 ports=[PortRef('requests', 'Init'), PortRef('Init', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Init:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'SetSpeed_trigger',
                 ports=[PortRef('requests', 'SetSpeed'), PortRef('SetSpeed', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.SetSpeed:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.SetSpeed:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'GetOdo_trigger',
                 ports=[PortRef('requests', 'GetOdo'), PortRef('GetOdo', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.GetOdo:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.GetOdo:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'TrackSpeed_trigger',
                 ports=[PortRef('requests', 'TrackSpeed'), PortRef('TrackSpeed', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.TrackSpeed:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
                 'Stop_trigger',
                 ports=[PortRef('requests', 'Stop'), PortRef('Stop', 'control_trigger')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.Stop:trigger'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Stop:trigger'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         priorities=[

@@ -13,7 +13,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from genom2bip.cli import EXIT_ERRORS, Failure, error, print_diagnostics
+from genom2bip.cli.verbs import EXIT_ERRORS, Failure, error, print_diagnostics
 from runtime.diagnostics import Reporter
 
 EXIT_OK, EXIT_VIOLATED, EXIT_INCONCLUSIVE = 0, 4, 5

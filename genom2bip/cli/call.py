@@ -12,7 +12,7 @@ import json
 import sys
 from typing import Any
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, error, verb
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, error, verb
 
 
 def parse_assignments(items: list[str]) -> dict[str, Any]:

@@ -11,13 +11,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
 
-from genom2bip.cli import (
-    EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, add_preprocessor_arguments, add_rules_arguments, error, verb,
+from genom2bip.cli.printers import print_state, print_trace, progress, step_sources
+from genom2bip.cli.verbs import (
+    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, add_preprocessor_arguments,
+    add_rules_arguments, error, load_externs, verb,
 )
-
-EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
@@ -66,9 +65,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     spin.add_argument("--spin-hash-bits", type=int, default=27, metavar="B", help="hash table / bit array of 2^B")
     spin.add_argument("--spin-swarm", type=int, metavar="N", help="N bitstate runs with different hashes and orders")
     spin.add_argument("--spin-dir", metavar="DIR", help="keep SPIN's files (model.pml, pan.c, trails) in DIR")
-    from genom2bip.verify_compositional import add_arguments as add_compositional_arguments
+    from genom2bip.cli.verify_compositional import add_arguments as add_compositional_arguments
     add_compositional_arguments(parser)
-    from genom2bip.verify_timed import add_time_arguments
+    from genom2bip.cli.verify_timed import add_time_arguments
     add_time_arguments(parser, verify=True)
 
 
@@ -98,9 +97,9 @@ def load_model(args: argparse.Namespace):
     if any(p.endswith(".bip") for p in paths):
         error("give either one .bip file or description files, not both")
         raise Failure(EXIT_USAGE)
-    from genom2bip.cli import load, load_rules
+    from genom2bip.cli.verbs import load, load_rules
     from genom2bip.generate import GenerateError, model_of, system_name
-    from genom2bip.verify_timed import time_options, warn_untimed
+    from genom2bip.cli.verify_timed import time_options, warn_untimed
     from runtime.diagnostics import DiagnosticError
 
     description = load(args)
@@ -118,35 +117,6 @@ def load_model(args: argparse.Namespace):
     if args.root:
         root = args.root
     return package, root, f"{system} ({root})"
-
-
-def load_externs(spec: str | None) -> dict[str, Any]:
-    if not spec:
-        return {}
-    from runtime.engine.externs import load_module
-    from runtime.engine.errors import EngineError
-
-    try:
-        module = load_module(spec)
-    except EngineError as exc:
-        error(str(exc))
-        raise Failure(EXIT_ERRORS) from None
-    return {k: getattr(module, k) for k in dir(module) if not k.startswith("_")}
-
-
-# --------------------------------------------------------------------------- printing
-
-
-def print_trace(steps, indent: str = "    ") -> None:
-    if not steps:
-        print(f"{indent}(the initial state)")
-    for n, step in enumerate(steps, 1):
-        print(f"{indent}{n:4d}  {step}")
-
-
-def print_state(engine, state, indent: str = "    ") -> None:
-    for line in engine.format_state(state).splitlines():
-        print(f"{indent}{line}")
 
 
 def _check_options(args) -> None:
@@ -186,7 +156,7 @@ def verb_verify(args: argparse.Namespace) -> int:
     from runtime.props import read_property_file
 
     _check_options(args)
-    from genom2bip.verify_compositional import check_arguments as check_compositional
+    from genom2bip.cli.verify_compositional import check_arguments as check_compositional
     check_compositional(args)
     package, root, title = load_model(args)
     try:
@@ -196,7 +166,7 @@ def verb_verify(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     compositional = EXIT_OK
     if args.method != "explore":
-        from genom2bip.verify_compositional import run as run_compositional
+        from genom2bip.cli.verify_compositional import run as run_compositional
         print(f"model {title}")
         compositional = run_compositional(flat, package, root, args, load_externs(args.externs))
         if args.method == "compositional":
@@ -230,12 +200,12 @@ def verb_verify(args: argparse.Namespace) -> int:
     if args.method == "explore":
         print(f"model {title}")
     if args.engine == "spin":
-        from genom2bip.verify_spin import run_spin
+        from genom2bip.cli.verify_spin import run_spin
         return run_spin(space, args, deadlock, properties)
     worst = max(compositional, _run_explorer(space, args, deadlock, properties))
     if observers:
-        from genom2bip.verify_timed import check_observers
-        worst = max(worst, check_observers(space, flat, package, root, observers, _progress(args)))
+        from genom2bip.cli.verify_timed import check_observers
+        worst = max(worst, check_observers(space, flat, package, root, observers, progress(args)))
     return worst
 
 
@@ -270,25 +240,20 @@ def _write_promela(space, properties, path: str) -> int:
     return EXIT_OK
 
 
-def _progress(args):
-    from runtime.explore import Progress
-    return Progress(force=args.progress, enabled=not args.quiet)
-
-
 def _run_explorer(space, args, deadlock: bool, properties) -> int:
     from runtime.props import describe
 
     worst = EXIT_OK
     need_full = deadlock or args.aut or args.dot
     if need_full:
-        from genom2bip.verify_native import explore_model
-        result, view = explore_model(space, args, _progress(args))
+        from genom2bip.cli.verify_native import explore_model
+        result, view = explore_model(space, args, progress(args))
         print(f"explored: {result.summary()}")
         if result.error is not None:
             worst = EXIT_VIOLATED
             print(f"model error in state {result.error.state}: {result.error.message}")
             print("  trace to the state where it happens:")
-            print_trace(result.error.trace)
+            print_trace(result.error.trace, sources=step_sources(space.engine.flat))
             _trace_picture(args, space.engine, result.error.trace, [f"model error: {result.error.message}"])
         if deadlock:
             worst = max(worst, _report_deadlocks(view, result, args))
@@ -301,8 +266,8 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
             else:
                 worst = max(worst, _export_lts(space, args))
     for item in properties:
-        from genom2bip.verify_native import check_property
-        verdict = check_property(space, item, args, _progress(args))
+        from genom2bip.cli.verify_native import check_property
+        verdict = check_property(space, item, args, progress(args))
         print(f"property {describe(item)}")
         head = f"  {verdict.word}"
         stats = f"{verdict.method}, {verdict.states:,} states, {verdict.seconds:.2f} s" if verdict.method else ""
@@ -310,7 +275,7 @@ def _run_explorer(space, args, deadlock: bool, properties) -> int:
         if verdict.evidence:
             what = "counterexample" if verdict.evidence == "counterexample" else "witness"
             print(f"  {what} ({len(verdict.trace)} step{'s' if len(verdict.trace) != 1 else ''}):")
-            print_trace(verdict.trace)
+            print_trace(verdict.trace, sources=step_sources(space.engine.flat))
             if verdict.loop >= 0:
                 print(f"    ... and back to the state after step {verdict.loop}, forever")
             if verdict.holds is False:
@@ -333,7 +298,7 @@ def _report_deadlocks(space, result, args) -> int:
     for k, sid in enumerate(result.deadlocks, 1):
         trace = space.trace_to(sid)
         print(f"deadlock {k} of {n} (state {sid}, {len(trace)} steps):")
-        print_trace(trace)
+        print_trace(trace, sources=step_sources(space.engine.flat))
         print("  state:")
         state = space.concrete(trace)
         print_state(space.engine, state)

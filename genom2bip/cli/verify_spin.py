@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import argparse
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, error
-from genom2bip.verify_cli import EXIT_INCONCLUSIVE, EXIT_VIOLATED, _progress, print_state, print_trace
+from genom2bip.cli.printers import print_state, print_trace, progress, step_sources
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_VIOLATED, error
 
 
 def _spin_summary(report, title: str) -> None:
@@ -36,7 +36,7 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 result = spin.swarm(space, args.spin_swarm, None, min(args.spin_hash_bits, 30))
             else:
                 result = spin.verify_deadlocks(space, args.spin_cores, args.spin_bitstate, args.spin_hash_bits,
-                                               workdir=args.spin_dir, progress=_progress(args))
+                                               workdir=args.spin_dir, progress=progress(args))
             _spin_summary(result.report, "SPIN")
             errors = result.report.errors
             if errors == 0:
@@ -47,7 +47,7 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 print(f"deadlocks: {errors} invalid end state(s) found by SPIN; trails replayed on the engine:")
                 for k, trail in enumerate(result.trails, 1):
                     print(f"deadlock {k} ({trail.message}, {len(trail.steps)} steps):")
-                    print_trace(trail.steps)
+                    print_trace(trail.steps, sources=step_sources(space.engine.flat))
                     print("  state:")
                     print_state(space.engine, space.concrete(trail.steps))
             if not result.report.complete and worst == EXIT_OK:
@@ -65,13 +65,13 @@ def run_spin(space, args: argparse.Namespace, deadlock: bool, properties) -> int
                 result = spin.swarm(space, args.spin_swarm, [monitor], min(args.spin_hash_bits, 30))
             else:
                 result = spin.verify_safety(space, [monitor], args.spin_cores, args.spin_bitstate,
-                                            args.spin_hash_bits, workdir=args.spin_dir, progress=_progress(args))
+                                            args.spin_hash_bits, workdir=args.spin_dir, progress=progress(args))
             _spin_summary(result.report, "  SPIN")
             if result.report.errors:
                 worst = max(worst, EXIT_VIOLATED)
                 print("  violated: counterexample (SPIN's trail, replayed on the engine):")
                 if result.trails:
-                    print_trace(result.trails[0].steps)
+                    print_trace(result.trails[0].steps, sources=step_sources(space.engine.flat))
             else:
                 approximate = args.spin_bitstate or args.spin_swarm or not result.report.complete
                 print("  holds" + (" in the part SPIN covered (bitstate: not exhaustive)" if approximate else ""))

@@ -54,7 +54,7 @@ def check_property(space, item, args: argparse.Namespace, progress):
     from runtime.props import check
 
     if args.engine in ("compiled", "explore"):
-        from genom2bip.verify_cli import load_externs
+        from genom2bip.cli.verbs import load_externs
         from runtime.native.properties import compiled_check
 
         verdict = compiled_check(space, item, load_externs(args.externs), progress, args.max_states, _max_bytes(args),
@@ -87,7 +87,7 @@ def _say_unbounded(args, max_bytes: int | None) -> None:
 
 
 def _compiled(space, args, progress):
-    from genom2bip.verify_cli import load_externs
+    from genom2bip.cli.verbs import load_externs
     from runtime.native.compiled import Diverged, compile_space
 
     cs, why = compile_space(space, load_externs(args.externs))

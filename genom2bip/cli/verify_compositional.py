@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, Failure, error
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error
 
 METHODS = ("explore", "compositional", "both")
 #: Potential deadlocks refuted by invariants printed in full; the rest are counted.
@@ -62,7 +62,7 @@ def check_arguments(args: argparse.Namespace) -> None:
 
 def run(flat, package, root: str, args: argparse.Namespace, externs) -> int:
     """Analyse, decide the candidates, print the report; the exit status of the verdict."""
-    from genom2bip.verify_cli import EXIT_INCONCLUSIVE, EXIT_VIOLATED, print_trace
+    from genom2bip.cli.printers import print_trace, step_sources
     from runtime.compositional import analyse, decide
 
     started = time.perf_counter()
@@ -77,7 +77,8 @@ def run(flat, package, root: str, args: argparse.Namespace, externs) -> int:
     decide(analysis, package, root, externs, progress=phase, **budgets)
     if args.graph and _write_graph(analysis, args.graph) != EXIT_OK:
         return EXIT_ERRORS
-    _report(analysis, print_trace)
+    sources = step_sources(flat)
+    _report(analysis, lambda trace: print_trace(trace, sources=sources))
     verdict = analysis.verdict
     total = time.perf_counter() - started
     if verdict == "deadlock-free":

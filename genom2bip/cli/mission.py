@@ -12,7 +12,7 @@ import argparse
 import os
 from pathlib import Path
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, error, verb
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, error, verb
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:

@@ -1,9 +1,10 @@
-"""Human wording and error recovery for syntax errors of the dotgen grammar.
+"""The "expected …" wording of syntax errors, for both dialects, and error recovery for dotgen.
 
 Turns lark's ``UnexpectedToken``/``UnexpectedCharacters`` into "expected ';' or
-'yield' after codel parameters, found 'task'" at the original position, and
-finds the declaration around an error so that the parser can skip it and go on
-to report the next error in the same file.
+'yield' after codel parameters, found 'task'" at the original position (dotgen,
+:func:`explain`) or "expected ';', '}' or a name" (GenoM2,
+:func:`expected_genom2`), and finds the dotgen declaration around an error so
+that the parser can skip it and go on to report the next error in the same file.
 """
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from dataclasses import dataclass
 from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from lark.lexer import PatternStr
+
+from genom2bip.parser.genom2_base import grammar_parser
 
 _CATEGORY = {
     "IDENT": "identifier",
@@ -291,3 +294,47 @@ def blank(text: str, start: int, end: int) -> str:
     """Replace a range by spaces, keeping newlines so that later positions do not move."""
     middle = "".join(c if c == "\n" else " " for c in text[start:end])
     return text[:start] + middle + text[end:]
+
+
+# --------------------------------------------------------------------------- GenoM2
+
+_GENOM2_TERMINALS = {
+    "NAME": "a name", "STRING": "a string", "INT_NUMBER": "a number", "FLOAT_NUMBER": "a number",
+    "CHAR_LIT": "a character", "BASE_WORD": "a C type", "QUALIFIER": "'const'", "STORAGE": "'extern'",
+    "STRUCT": "'struct'", "UNION": "'union'", "ENUM": "'enum'", "TYPEDEF": "'typedef'", "WCET": "'wcet'",
+    "STAR": "'*'", "ELLIPSIS": "'...'", "OROR": "'||'", "ANDAND": "'&&'", "BAR": "'|'", "CARET": "'^'",
+    "AMP": "'&'", "EQOP": "'=='", "RELOP": "'<'", "SHIFTOP": "'<<'", "ADDOP": "'+'", "MULOP": "'/'",
+    "UNOP": "'!'", "$END": "end of input",
+}
+
+
+def _genom2_terminal(name: str) -> str:
+    if name in _GENOM2_TERMINALS:
+        return _GENOM2_TERMINALS[name]
+    try:
+        pattern = grammar_parser().get_terminal(name).pattern
+    except KeyError:
+        return name
+    if pattern.type == "str":
+        return f"'{pattern.value}'"
+    return name.lower()
+
+
+_GENOM2_OPERATORS = {"OROR", "ANDAND", "BAR", "CARET", "AMP", "EQOP", "RELOP", "SHIFTOP", "ADDOP", "MULOP", "UNOP",
+              "STAR", "QMARK", "DOT", "LSQB", "LPAR", "COLON"}
+_GENOM2_FIRST = ["';'", "'}'", "'{'", "':'", "','", "a name"]
+
+
+def expected_genom2(names: set[str]) -> str:
+    """The expected terminals in words, punctuation that ends things first, operators dropped when other choices exist."""
+    if names & {"SEMICOLON", "COMMA", "RBRACE"}:
+        names = names - _GENOM2_OPERATORS
+    texts = sorted({_genom2_terminal(n) for n in names})
+    if "ADDOP" in names and "INT_NUMBER" in names:
+        texts = [t for t in texts if t not in ("'+'", "'!'", "'('")] + ["an expression"]
+    texts = [t for t in _GENOM2_FIRST if t in texts] + [t for t in texts if t not in _GENOM2_FIRST]
+    if len(texts) > 8:
+        texts = texts[:8] + ["..."]
+    if len(texts) == 1:
+        return texts[0]
+    return ", ".join(texts[:-1]) + " or " + texts[-1]

@@ -10,7 +10,7 @@ import argparse
 import difflib
 import sys
 
-from genom2bip.cli import EXIT_ERRORS, EXIT_OK, Failure, add_preprocessor_arguments, add_rules_arguments, error, verb
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, Failure, add_preprocessor_arguments, add_rules_arguments, error, verb
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
@@ -34,12 +34,12 @@ def load_structure(args: argparse.Namespace):
 
     interface = None
     if len(args.paths) == 1 and args.paths[0].endswith(".bip"):
-        from genom2bip.verify_cli import load_model
+        from genom2bip.cli.verify import load_model
 
         package, root, title = load_model(args)
     else:
         from genom2bip.back.interface import interface_data
-        from genom2bip.cli import load, load_rules
+        from genom2bip.cli.verbs import load, load_rules
         from genom2bip.generate import GenerateError, model_of, system_name
 
         description = load(args)

@@ -1,0 +1,28 @@
+"""``genom2bip check PATH...``: parse and check descriptions, print a summary of each component (or JSON)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from genom2bip.cli.verbs import EXIT_OK, add_source_arguments, load, verb
+
+
+def _check_arguments(parser: argparse.ArgumentParser) -> None:
+    add_source_arguments(parser)
+    parser.add_argument("--json", action="store_true", help="print the description IR as JSON instead of a summary")
+
+
+@verb("check", help="parse and check descriptions; print a summary of each component", arguments=_check_arguments)
+def verb_check(args: argparse.Namespace) -> int:
+    """Parse, check, and print what each component contains (or the IR as JSON)."""
+    from genom2bip.ir import to_json
+    from genom2bip.summary import description_summary
+
+    description = load(args)
+    if args.json:
+        json.dump(to_json(description), sys.stdout, indent=2, default=str)
+        sys.stdout.write("\n")
+    else:
+        print(description_summary(description))
+    return EXIT_OK

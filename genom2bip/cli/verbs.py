@@ -1,0 +1,227 @@
+"""The ``genom2bip`` command: one subcommand (verb) per job, each a single function.
+
+A verb is added by writing ``def verb_x(args) -> int`` marked with
+``@verb("x", help=..., arguments=...)``; ``arguments`` adds its options to
+its argparse subparser.  Every verb gets errors the same way: diagnostics
+(``file:line:column``, the source line, a caret) or any other
+:class:`~runtime.errors.Genom2bipError` as a message on stderr and exit code 1
+(:func:`exit_status`); bad usage exits 2; an unexpected exception is a bug,
+reported on one "internal error" line with exit code 3 (``--traceback`` shows it).
+
+This is the leaf of :mod:`genom2bip.cli`: exit codes, the ``@verb`` mark and
+the argument helpers every verb shares.  It imports no other module of the
+command line; each verb has a module of its own, listed by
+:mod:`genom2bip.cli.command`.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from genom2bip.ir import Description
+from runtime.diagnostics import Diagnostic, DiagnosticError, Reporter, SourceCache
+from runtime.errors import Genom2bipError
+
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+#: ``verify``: a deadlock, a violated property or a model error was found; a limit stopped the search first.
+EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
+
+#: The verb run when the first argument is not a verb (``genom2bip descriptions/dala -o gen/``).
+DEFAULT_VERB = "generate"
+
+DESCRIPTION_SUFFIXES = (".gen",)
+
+
+@dataclass
+class Verb:
+    name: str
+    help: str
+    run: Callable[[argparse.Namespace], int]
+    arguments: Callable[[argparse.ArgumentParser], None] | None
+
+
+def verb(name: str, help: str, arguments: Callable[[argparse.ArgumentParser], None] | None = None):
+    """Mark ``fn(args) -> exit code`` as the subcommand ``name``: ``fn.verb`` is its :class:`Verb`."""
+    def mark(fn: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+        fn.verb = Verb(name, help, fn, arguments)  # type: ignore[attr-defined]
+        return fn
+    return mark
+
+
+class Failure(Genom2bipError):
+    """Stops a verb with an exit code after its messages have been printed."""
+
+    def __init__(self, code: int = EXIT_ERRORS) -> None:
+        super().__init__(code)
+        self.code = code
+
+
+# --------------------------------------------------------------------------- shared helpers
+
+
+def version() -> str:
+    try:
+        from importlib.metadata import version as dist_version
+        return dist_version("genom2bip")
+    except Exception:  # noqa: BLE001 - not installed: fall back to the package's own idea
+        return getattr(sys.modules.get("genom2bip"), "__version__", "unknown")
+
+
+def add_source_arguments(parser: argparse.ArgumentParser) -> None:
+    """PATH... (files, or directories of .gen files), -I DIR, -D NAME[=VALUE]: what every reading verb takes."""
+    parser.add_argument("paths", metavar="PATH", nargs="+",
+                        help="description files (.gen), or directories whose .gen files are read")
+    add_preprocessor_arguments(parser)
+
+
+def add_preprocessor_arguments(parser: argparse.ArgumentParser) -> None:
+    """-I DIR, -D NAME[=VALUE], as cpp takes them."""
+    parser.add_argument("-I", dest="include_dirs", metavar="DIR", action="append", default=[],
+                        help="add DIR to the #include search path")
+    parser.add_argument("-D", dest="defines", metavar="NAME[=VALUE]", action="append", default=[],
+                        help="define a preprocessor macro (VALUE defaults to 1)")
+
+
+def description_files(paths: Sequence[str]) -> list[Path]:
+    """Expand directories into their description files (sorted); missing paths are reported."""
+    files: list[Path] = []
+    missing: list[str] = []
+    for raw in paths:
+        path = Path(raw)
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir() if p.suffix in DESCRIPTION_SUFFIXES and p.is_file())
+            if not found:
+                error(f"{raw}: no {'/'.join(DESCRIPTION_SUFFIXES)} file in this directory")
+                missing.append(raw)
+            files.extend(found)
+        elif path.exists() and not path.is_file():
+            error(f"{raw}: not a regular file (a device or a pipe cannot be read as a description)")
+            missing.append(raw)
+        elif path.exists():
+            files.append(path)
+        else:
+            error(f"{raw}: no such file or directory")
+            missing.append(raw)
+    if missing:
+        raise Failure(EXIT_ERRORS)
+    return files
+
+
+def parse_defines(items: Sequence[str]) -> dict[str, str]:
+    defines: dict[str, str] = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        if not name.isidentifier():
+            error(f"-D {item}: '{name}' is not a macro name")
+            raise Failure(EXIT_USAGE)
+        defines[name] = value if _ else "1"
+    return defines
+
+
+def error(message: str) -> None:
+    print(f"genom2bip: error: {message}", file=sys.stderr)
+
+
+def print_diagnostics(diagnostics: Sequence[Diagnostic], sources: SourceCache | None) -> None:
+    """All diagnostics sorted by location, errors counted at the end."""
+    ordered = sorted(diagnostics, key=lambda d: (d.span.file, d.span.line, d.span.column))
+    for diag in ordered:
+        print(diag.render(sources), file=sys.stderr)
+    n = sum(1 for d in ordered if d.severity == "error")
+    if n > 1:
+        print(f"{n} errors", file=sys.stderr)
+
+
+def load(args: argparse.Namespace, check: bool = True) -> Description:
+    """Parse (and check) the descriptions named on the command line; print problems and fail on errors."""
+    files = description_files(args.paths)
+    defines = parse_defines(args.defines)
+    from genom2bip.checks import check_description
+    from genom2bip.parser import parse_paths
+
+    reporter = Reporter()  # the parsers' warnings, then the checks' diagnostics
+    try:
+        description = parse_paths([str(f) for f in files], include_dirs=tuple(args.include_dirs), defines=defines,
+                                  reporter=reporter)
+    except DiagnosticError as exc:
+        print_diagnostics(exc.diagnostics, exc.sources)
+        raise Failure(EXIT_ERRORS) from None
+    if not check and reporter.diagnostics:
+        print_diagnostics(reporter.diagnostics, reporter.sources)
+    if check:
+        check_description(description, reporter)
+        if reporter.diagnostics:
+            print_diagnostics(reporter.diagnostics, reporter.sources)
+        if reporter.has_errors:
+            raise Failure(EXIT_ERRORS)
+    return description
+
+
+def rules_file(args: argparse.Namespace) -> Path | None:
+    """``--rules FILE``; else, when descriptions are given as a directory, its ``rules.yaml``.
+
+    A single description file does not pick up the rule file beside it: that
+    file names the other modules of the system (verify one module alone).
+    ``--no-rules`` keeps only the descriptions' own constraints.
+    """
+    if getattr(args, "no_rules", False):
+        return None
+    if getattr(args, "rules", None):
+        return Path(args.rules)
+    first = Path(args.paths[0])
+    default = first / "rules.yaml"
+    return default if first.is_dir() and default.is_file() else None
+
+
+def load_rules(args: argparse.Namespace, description: Description) -> list:
+    """The description's constraints plus the rule file's; print problems and fail on errors."""
+    from genom2bip.rules import all_rules
+
+    reporter = Reporter()
+    path = rules_file(args)
+    if path is not None and args.rules and not path.is_file():
+        error(f"{args.rules}: no such rule file")
+        raise Failure(EXIT_ERRORS)
+    rules = all_rules(description, path, reporter)
+    if reporter.diagnostics:
+        print_diagnostics(reporter.diagnostics, reporter.sources)
+    if reporter.has_errors:
+        raise Failure(EXIT_ERRORS)
+    return rules
+
+
+def add_rules_arguments(parser: argparse.ArgumentParser) -> None:
+    """--rules FILE / --no-rules: what every verb that builds a model takes."""
+    parser.add_argument("--rules", metavar="FILE",
+                        help="rules between services (YAML, docs/rules.md); default: rules.yaml in the directory given")
+    parser.add_argument("--no-rules", action="store_true",
+                        help="only the descriptions' own constraints, no rule file")
+
+
+def exit_status(exc: Genom2bipError) -> int:
+    """The one place where the product's errors become an exit status (and a message, unless already printed)."""
+    if isinstance(exc, Failure):
+        return exc.code
+    if isinstance(exc, DiagnosticError):  # a verb that let its input's problems through
+        print_diagnostics(exc.diagnostics, exc.sources)
+        return EXIT_ERRORS
+    error(str(exc))
+    return EXIT_ERRORS
+
+
+def load_externs(spec: str | None) -> dict[str, Any]:
+    """``--externs MODULE``: the public names of that Python module, binding extern functions that are not codels."""
+    if not spec:
+        return {}
+    from runtime.engine.externs import load_module
+    from runtime.engine.errors import EngineError
+
+    try:
+        module = load_module(spec)
+    except EngineError as exc:
+        error(str(exc))
+        raise Failure(EXIT_ERRORS) from None
+    return {k: getattr(module, k) for k in dir(module) if not k.startswith("_")}
