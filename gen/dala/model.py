@@ -420,7 +420,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '48'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '67'},
                     ),
                 ],
             ),
