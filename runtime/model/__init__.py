@@ -26,6 +26,7 @@ from runtime.model.interactions import (
     InteractionSpec,
 )
 from runtime.model.priorities import InteractionPattern, PortRef, Priority
+from runtime.model.timing import ClockDecl, Invariant, Rate, Resume
 
 __all__ = [
     "Annotation", "Assign", "AtomPriority", "AtomType", "BUILTIN_TYPES", "Binary", "Call", "ComponentInstance",
@@ -33,4 +34,5 @@ __all__ = [
     "Constant", "DataDecl", "DataParam", "DefineGroup", "DefineItem", "DefinePort", "Do", "ExportData",
     "ExportPort", "Expr", "ExternFunction", "If", "InitialTransition", "InteractionPattern", "InteractionSpec",
     "Package", "PortData", "PortDecl", "PortRef", "PortType", "Priority", "Stmt", "Transition", "Unary", "Var",
+    "ClockDecl", "Invariant", "Rate", "Resume",
 ]
