@@ -11,6 +11,7 @@ import argparse
 import sys
 
 from runtime.diagnostics import DiagnosticError
+from runtime.timed_cli import is_timed, run_timed_command
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -22,6 +23,8 @@ def _parser() -> argparse.ArgumentParser:
     add_run_options(run)
     run.add_argument("--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions")
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
+    run.add_argument("--real-time", action="store_true",
+                     help="timed models: follow the engine's clock (wait for real) instead of simulated time")
     return ap
 
 
@@ -33,6 +36,8 @@ def run_command(args, out=None, err=None) -> int:
     err = err or sys.stderr
     try:
         package = parse_file(args.model)
+        if is_timed(package) and not args.show_source:
+            return run_timed_command(package, args, out, err)
         engine = Engine(package, args.root, externs=args.externs)
     except DiagnosticError as e:
         print(e.render(), file=err)
