@@ -11,7 +11,7 @@ import argparse
 import sys
 
 from runtime.diagnostics import DiagnosticError
-from runtime.timed_cli import is_timed, run_timed_command
+from runtime.timed_cli import explore_command, is_timed, run_timed_command
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -25,6 +25,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
     run.add_argument("--real-time", action="store_true",
                      help="timed models: follow the engine's clock (wait for real) instead of simulated time")
+    explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)")
+    explore.add_argument("model", help="the .bip file")
+    explore.add_argument("--root", default="System()", help="root instance")
+    explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")
+    explore.add_argument("--max-states", type=int, default=1_000_000, help="stop after this many states")
+    explore.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions")
     return ap
 
 
@@ -90,6 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
+        if args.command == "explore":
+            return explore_command(args, sys.stdout, sys.stderr)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -335,34 +335,51 @@ class TimedEngine:
         return out
 
     def schedule(self, state: tuple, resuming: frozenset[int] = frozenset()) -> "Schedule":
-        """The enabled interactions with the delays where each may fire, and how far time may pass."""
+        """The enabled interactions with the delays where each may fire, and how far time may pass.
+
+        Samples are evaluated in increasing delay and only up to the bound on time found so far: nothing
+        beyond it can fire from this state.
+        """
         samples = self.samples(self.critical_delays(state, self.relevant(state, resuming)))
-        at = [self.delay(state, d) for d in samples]
-        enabled_at = [self.engine.enabled(s) for s in at]
-        seen: dict[Interaction, None] = {}
-        for e in enabled_at:
-            for i in e:
-                seen.setdefault(i, None)
-        wait = ALWAYS
-        windows: dict[Interaction, Window] = {}
-        for inter in seen:
-            if resuming and self._touches(inter, resuming):
-                continue
-            w = self.window_of([inter in set(e) for e in enabled_at], samples)
-            if w is None:
-                continue
-            windows[inter] = w
-            wait = wait & urgent_bound(w, URGENCIES[self.urgency(state, inter)])
-        for a in self.timed_atoms:
-            if a.index in resuming:
-                continue
-            for name, c in a.invariants:
-                if state[a.offset] & c.mask == c.mask:
-                    w = self.window_of([c.holds(s) for s in at], samples)
-                    wait = wait & (w if w is not None and w.lo == 0 and not w.lo_open
-                                   else Window(Fraction(0), Fraction(0), False, True))
+        invariants = [c for a in self.timed_atoms if a.index not in resuming
+                      for _, c in a.invariants if state[a.offset] & c.mask == c.mask]
+        flags: dict[Interaction, list[bool]] = {}
+        held: list[list[bool]] = [[] for _ in invariants]
+        urgency: dict[Interaction, int] = {}
+        wait, n = ALWAYS, 0
+        for k, d in enumerate(samples):
+            if wait.hi is not None and d > wait.hi:
+                break
+            at = self.delay(state, d)
+            for inter in self.engine.enabled(at):
+                if resuming and self._touches(inter, resuming):
+                    continue
+                if inter not in flags:
+                    flags[inter] = [False] * k
+                    urgency[inter] = self.urgency(state, inter)
+                flags[inter].append(True)
+            for f in flags.values():
+                if len(f) == k:
+                    f.append(False)
+            for c, h in zip(invariants, held):
+                h.append(bool(c.holds(at)))
+            n = k + 1
+            wait = self._wait(flags, urgency, held, samples[:n])
+        cut = samples[:n]
+        windows = {i: w for i, f in flags.items() if (w := self.window_of(f, cut)) is not None}
         candidates = {i: w & wait for i, w in windows.items() if not (w & wait).empty()}
         return Schedule(candidates, wait, windows)
+
+    def _wait(self, flags, urgency, held, samples) -> Window:
+        wait = ALWAYS
+        for inter, f in flags.items():
+            w = self.window_of(f, samples)
+            if w is not None:
+                wait = wait & urgent_bound(w, URGENCIES[urgency[inter]])
+        for h in held:
+            w = self.window_of(h, samples)
+            wait = wait & (w if w is not None and w.lo == 0 and not w.lo_open else Window(Fraction(0), Fraction(0), False, True))
+        return wait
 
     def _touches(self, inter: Interaction, atoms: frozenset[int]) -> bool:
         return any(self.port_owner[p][0] in atoms for p in inter.ports)
