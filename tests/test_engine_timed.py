@@ -155,3 +155,34 @@ def test_explore_cli(capsys):
     assert "time-lock at state 3: tick tick tick" in capsys.readouterr().out
     assert main(["explore", str(TIMED / "locked.bip"), "--root", "Top()", "--tick", "fast"]) == 1
     assert "a tick is a positive duration" in capsys.readouterr().err
+
+
+def test_violation_names_the_deadline_that_was_passed():
+    # the worker's action sleeps past the moment the eager watcher had to fire
+    src = """package late
+  extern function nap(int)
+  port type Port()
+  atom type Worker()
+    port Port work()
+    place A, B
+    initial to A
+    on work from A to B do { nap(300); }
+  end
+  atom type Watcher()
+    clock w unit millisecond
+    port Port ring()
+    place A, B
+    initial to A do { w = 0; }
+    on ring from A to B provided (w >= 100) eager
+  end
+  compound type Top()
+    component Worker k()
+    component Watcher v()
+  end
+end
+"""
+    te = TimedEngine(parse_text(src, "late.bip"), "Top()", naps())
+    out = io.StringIO()
+    summary = run_timed(te, first, None, out, real_time=True)
+    assert summary.outcome == "violation"
+    assert "  v.ring [ 100ms, +INFTY ] eager" in out.getvalue()

@@ -90,7 +90,7 @@ def format_time(ns: Fraction | int | None) -> str:
 def format_window(w: Window, now: Fraction) -> str:
     """``[ 1s, 2s [`` in absolute time, as the reference prints intervals."""
     left = "]" if w.lo_open else "["
-    right = "[" if w.hi_open or w.hi is None else "]"
+    right = "[" if w.hi_open and w.hi is not None else "]"
     hi = None if w.hi is None else now + w.hi
     return f"{left} {format_time(now + w.lo)}, {format_time(hi)} {right}"
 

@@ -19,7 +19,8 @@ from typing import Callable, TextIO
 
 from runtime.engine.errors import ModelError
 from runtime.engine.interaction import Interaction
-from runtime.engine.timed import TimedEngine, Window, format_time, format_window
+from runtime.engine.timed import TimedEngine, Window, format_time, format_window, urgent_bound
+from runtime.model.timing import URGENCIES
 
 #: Exit statuses of a timed run, those of the Verimag reference engine where it has one.
 EXIT = {"deadlock": 0, "limit": 0, "stopped": 0, "time-lock": 0, "error": 2, "invariant": 5, "violation": 7}
@@ -163,8 +164,11 @@ def _resume(te: TimedEngine, state, now: Fraction, resumes: dict, clock, say, st
     lines = [f"state #{steps} and global time {format_time(done)}: violation of the following timing constraints:"]
     sched = te.schedule(state, resuming)
     for inter, w in sched.windows.items():
-        if not _within(wait, d) and not _within(w, d):
-            lines.append(f"  {_describe(inter)} {format_window(w, now)}")
+        urgency = URGENCIES[te.urgency(state, inter)]
+        if not _within(urgent_bound(w, urgency), d):
+            lines.append(f"  {_describe(inter)} {format_window(w, now)} {urgency}")
+    for name in te.invariants_broken(te.delay(state, d), resuming):
+        lines.append(f"  invariant {name}")
     for atom in resumes:
         if not _within(window, d):
             hi = "+INFTY" if window.hi is None else format_time(now + window.hi)
