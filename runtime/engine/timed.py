@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Callable
 
+from runtime.bip2.printer import expr as print_expr
 from runtime.engine.cexpr import Name, Scope, expr as compile_expr
 from runtime.engine.engine import Engine
 from runtime.engine.errors import ModelError
@@ -25,7 +26,6 @@ from runtime.model import Assign, AtomType, Binary, Const, DataDecl, If, Package
 from runtime.model.timing import URGENCIES
 
 SECOND = 10**9
-INF = None  # an interval's right end when it has none
 _COMPARISONS = ("==", "<", "<=", ">", ">=")
 
 
@@ -51,6 +51,11 @@ class Window:
             return Window(lo, None, lo_open)
         hi, closed = min(his)
         return Window(lo, hi, lo_open, not closed)
+
+    def contains(self, d) -> bool:
+        if d < self.lo or (d == self.lo and self.lo_open):
+            return False
+        return self.hi is None or d < self.hi or (d == self.hi and not self.hi_open)
 
     def earliest(self) -> Fraction:
         """The first delay in the window (one nanosecond after an open left end, as the reference engine does)."""
@@ -237,7 +242,6 @@ class TimedEngine:
         return eval(f"lambda s: {src}", self.engine.namespace)  # noqa: S307 - our own compiled guard
 
     def _constraint(self, fa, mask: int, e, clocks: set[str]) -> _Constraint:
-        from runtime.bip2.printer import expr as print_expr
         if e is None:
             return _Constraint(mask, lambda s: True, [], "true")
         diffs = [self._compile(fa, Binary("-", c.left, c.right)) for c in _clock_comparisons(e, clocks)]

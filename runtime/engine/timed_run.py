@@ -158,29 +158,22 @@ def _resume(te: TimedEngine, state, now: Fraction, resumes: dict, clock, say, st
     done = clock.elapsed() if isinstance(clock, RealClock) else clock.now
     d = done - now
     allowed = wait & window
-    ok = not allowed.empty() and _within(allowed, d)
+    ok = not allowed.empty() and allowed.contains(d)
     if ok:
         return te.delay(state, d), done, None
     lines = [f"state #{steps} and global time {format_time(done)}: violation of the following timing constraints:"]
     sched = te.schedule(state, resuming)
     for inter, w in sched.windows.items():
         urgency = URGENCIES[te.urgency(state, inter)]
-        if not _within(urgent_bound(w, urgency), d):
+        if not urgent_bound(w, urgency).contains(d):
             lines.append(f"  {_describe(inter)} {format_window(w, now)} {urgency}")
     for name in te.invariants_broken(te.delay(state, d), resuming):
         lines.append(f"  invariant {name}")
     for atom in resumes:
-        if not _within(window, d):
+        if not window.contains(d):
             hi = "+INFTY" if window.hi is None else format_time(now + window.hi)
             lines.append(f"  {te.atoms[atom].name} resume [ -INFTY, {hi} {'[' if window.hi_open else ']'}")
     for line in lines:
         say(line)
     return state, done, TimedSummary(steps, "violation", done, "; ".join(x.strip() for x in lines[1:]) or "deadline")
 
-
-def _within(w: Window, d: Fraction) -> bool:
-    if d < w.lo or (d == w.lo and w.lo_open):
-        return False
-    if w.hi is None:
-        return True
-    return d < w.hi or (d == w.hi and not w.hi_open)

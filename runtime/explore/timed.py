@@ -15,10 +15,11 @@ from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
 
+from runtime.bip2.timed_checks import uses_clock
 from runtime.engine.cexpr import evaluate
 from runtime.engine.errors import EngineError
 from runtime.engine.timed import TimedEngine, _clock_comparisons
-from runtime.engine.timed_run import _within
+from runtime.model import Var
 
 TICK = "tick"
 
@@ -76,7 +77,6 @@ def clock_caps(te: TimedEngine, tick_ns: int) -> tuple[dict[int, Fraction], list
 def _constant_side(cmp, clock: str, clocks: set[str], constants):
     """The constant ``clock`` is compared with in ``cmp``; False when ``cmp`` does not read it; None when the
     other side is not a constant or the clock is not alone on its side."""
-    from runtime.model import Var
     sides = [(cmp.left, cmp.right), (cmp.right, cmp.left)]
     for mine, other in sides:
         if isinstance(mine, Var) and mine.name == clock:
@@ -85,7 +85,6 @@ def _constant_side(cmp, clock: str, clocks: set[str], constants):
             except EngineError:
                 return None
             return value if isinstance(value, (int, float)) and not isinstance(value, bool) else None
-    from runtime.bip2.timed_checks import uses_clock
     return None if uses_clock(cmp, {clock}) else False
 
 
@@ -130,7 +129,7 @@ def explore_timed(te: TimedEngine, tick_ns: int, max_states: int = 1_000_000) ->
             result.traces[sid] = _trace(parent, sid)
             result.complete = False
             break
-        if _within(wait, Fraction(tick_ns)):
+        if wait.contains(Fraction(tick_ns)):
             after = cap(te.delay(state, tick_ns))
             if after != state or succ:
                 succ.append((TICK, after))
