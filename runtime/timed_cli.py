@@ -56,14 +56,10 @@ def explore_command(args, out, err) -> int:
     try:
         tick = parse_tick(args.tick)
         te = TimedEngine(parse_file(args.model), args.root, externs=args.externs)
-    except ValueError as e:
-        print(f"error: {e}", file=err)
-        return 1
-    except DiagnosticError as e:
-        print(e.render(), file=err)
-        return 1
-    except EngineError as e:
-        print(f"{args.model}: error: {e}", file=err)
+    except (ValueError, DiagnosticError, EngineError) as e:
+        message = e.render() if isinstance(e, DiagnosticError) else \
+            f"{'error' if isinstance(e, ValueError) else args.model + ': error'}: {e}"
+        print(message, file=err)
         return 1
     result = explore_timed(te, tick, args.max_states)
     print(result.summary(), file=out)
