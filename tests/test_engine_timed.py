@@ -186,3 +186,14 @@ end
     summary = run_timed(te, first, None, out, real_time=True)
     assert summary.outcome == "violation"
     assert "  v.ring [ 100ms, +INFTY ] eager" in out.getvalue()
+
+
+def test_eager_after_a_strict_bound_locks_time_at_the_bound():
+    # an eager transition stops time at the start of its window even when the window excludes it: x > 3
+    # cannot fire at 3 ms, and time cannot pass it: the reference engine says "time-lock at 3ms"
+    src = (TIMED / "locked.bip").read_text().replace("    invariant wait at SHUT provided (c <= 3)\n", "")
+    src = src.replace("provided (c > 3)", "provided (c > 3) eager")
+    te = TimedEngine(parse_text(src, "locked.bip"), "Top()")
+    out = io.StringIO()
+    assert run_timed(te, first, None, out).outcome == "time-lock"
+    assert out.getvalue().startswith("state #0 and global time 0: time-lock at 3ms!")

@@ -67,11 +67,11 @@ ALWAYS = Window(Fraction(0), None)
 
 def urgent_bound(window: Window, urgency: str) -> Window:
     """How far time may pass because of one enabled interaction: an eager one stops it at the start of its
-    window, a delayable one at the end, a lazy one never."""
+    window, a delayable one at its end, a lazy one never (the reference engine's ``Interval::urgent``)."""
     if urgency == "eager":
-        return Window(Fraction(0), window.lo, False, window.lo_open)
-    if urgency == "delayable" and window.hi is not None:
-        return Window(Fraction(0), window.hi, False, window.hi_open)
+        return Window(Fraction(0), window.lo)  # up to its start, included even when the window excludes it
+    if urgency == "delayable" and window.hi is not None and not window.hi_open:
+        return Window(Fraction(0), window.hi)  # a delayable window open on the right has no last instant
     return ALWAYS
 
 
