@@ -29,6 +29,21 @@ SECOND = 10**9
 _COMPARISONS = ("==", "<", "<=", ">", ">=")
 
 
+def exact(v):
+    """A time or clock value as an int when it is whole (ints are much faster than Fractions)."""
+    if type(v) is Fraction and v.denominator == 1:
+        return v.numerator
+    return v
+
+
+def _ratio(a, b):
+    """a / b, exactly."""
+    if type(a) is int and type(b) is int:
+        q, r = divmod(a, b)
+        return q if not r else Fraction(a, b)
+    return exact(Fraction(a) / Fraction(b))
+
+
 # ---------------------------------------------------------------------------------------------- intervals
 @dataclass(frozen=True)
 class Window:
@@ -62,16 +77,16 @@ class Window:
         return self.lo + 1 if self.lo_open else self.lo
 
 
-ALWAYS = Window(Fraction(0), None)
+ALWAYS = Window(0, None)
 
 
 def urgent_bound(window: Window, urgency: str) -> Window:
     """How far time may pass because of one enabled interaction: an eager one stops it at the start of its
     window, a delayable one at its end, a lazy one never (the reference engine's ``Interval::urgent``)."""
     if urgency == "eager":
-        return Window(Fraction(0), window.lo)  # up to its start, included even when the window excludes it
+        return Window(0, window.lo)  # up to its start, included even when the window excludes it
     if urgency == "delayable" and window.hi is not None and not window.hi_open:
-        return Window(Fraction(0), window.hi)  # a delayable window open on the right has no last instant
+        return Window(0, window.hi)  # a delayable window open on the right has no last instant
     return ALWAYS
 
 
@@ -249,26 +264,27 @@ class TimedEngine:
 
     # -- time ---------------------------------------------------------------------------------------
     def delay(self, state: tuple, d) -> tuple:
-        """``state`` after ``d`` nanoseconds: every clock advanced by ``d * rate / unit``."""
+        """``state`` after ``d`` nanoseconds: every clock advanced by ``d * rate / unit`` (exact; ints when whole)."""
         if not d:
             return state
         s = list(state)
         for a in self.timed_atoms:
             for slot, rate_slot, unit in a.clocks:
-                v = s[slot] + Fraction(d) * Fraction(s[rate_slot]) / unit
-                s[slot] = v.numerator if isinstance(v, Fraction) and v.denominator == 1 else v
+                rate = s[rate_slot]
+                step = _ratio(d, unit) if rate == 1 else Fraction(d) * Fraction(rate) / unit
+                s[slot] = exact(s[slot] + step)
         return tuple(s)
 
-    def critical_delays(self, state: tuple, constraints: list[tuple[int, _Constraint]]) -> list[Fraction]:
+    def critical_delays(self, state: tuple, constraints: list[tuple[int, _Constraint]]) -> list:
         """The delays (> 0) where one of the clock comparisons of ``constraints`` changes value."""
         later = self.delay(state, SECOND)
         roots = set()
         for _atom, c in constraints:
             for diff in c.diffs:
                 f0, f1 = diff(state), diff(later)
-                slope = Fraction(f1) - Fraction(f0)
+                slope = f1 - f0
                 if slope:
-                    root = -Fraction(f0) / slope * SECOND
+                    root = _ratio(-f0 * SECOND, slope)
                     if root > 0:
                         roots.add(root)
         return sorted(roots)
@@ -287,12 +303,12 @@ class TimedEngine:
     @staticmethod
     def samples(points: list[Fraction]) -> list[Fraction]:
         """0, every critical point, a point between each two, and one beyond the last (which stands for +inf)."""
-        pts = [Fraction(0)] + [p for p in points if p > 0]
+        pts = [0] + [p for p in points if p > 0]
         out = []
         for i, p in enumerate(pts):
             out.append(p)
             nxt = pts[i + 1] if i + 1 < len(pts) else p + SECOND
-            out.append((p + nxt) / 2)
+            out.append(exact((p + nxt) / 2) if nxt - p < 2 else p + (nxt - p) // 2)  # any instant strictly between
         return out
 
     @staticmethod
@@ -382,7 +398,7 @@ class TimedEngine:
                 wait = wait & urgent_bound(w, URGENCIES[urgency[inter]])
         for h in held:
             w = self.window_of(h, samples)
-            wait = wait & (w if w is not None and w.lo == 0 and not w.lo_open else Window(Fraction(0), Fraction(0), False, True))
+            wait = wait & (w if w is not None and w.lo == 0 and not w.lo_open else Window(0, 0, False, True))
         return wait
 
     def _touches(self, inter: Interaction, atoms: frozenset[int]) -> bool:
@@ -396,7 +412,7 @@ class TimedEngine:
         w = ALWAYS
         for _i, c in constraints:
             got = self.window_of([c.holds(s) for s in at], samples)
-            w = w & (got if got is not None else Window(Fraction(0), Fraction(0), False, True))
+            w = w & (got if got is not None else Window(0, 0, False, True))
         return w
 
     def fired_resumes(self, state: tuple, inter: Interaction) -> dict[int, _Constraint]:

@@ -47,7 +47,7 @@ class SimulatedClock:
     """Model time that jumps: waiting costs nothing and actions take no time."""
 
     def __init__(self) -> None:
-        self.now = Fraction(0)
+        self.now = 0
 
     def wait_until(self, t: Fraction) -> None:
         self.now = max(self.now, t)
@@ -68,7 +68,7 @@ class RealClock:
             time.sleep(float(left))
 
     def elapsed(self) -> Fraction:
-        return Fraction(time.monotonic_ns() - self.start)
+        return time.monotonic_ns() - self.start
 
 
 def _describe(inter: Interaction) -> str:
@@ -92,7 +92,7 @@ def run_timed(te: TimedEngine, policy: Callable, limit: int | None = None, out: 
     clock = RealClock() if real_time else SimulatedClock()
     say = (lambda line: print(line, file=out)) if out is not None else (lambda line: None)
     steps = 0
-    now = Fraction(0)
+    now = 0
     try:
         state = te.engine.initial_state()
         resuming = {a.index: a.initial_resume for a in te.atoms if a.initial_resume is not None}
@@ -148,7 +148,7 @@ def _resume(te: TimedEngine, state, now: Fraction, resumes: dict, clock, say, st
     (simulated) or when their action returned (real time); check that no timing constraint was passed."""
     resuming = frozenset(resumes)
     wait = te.schedule(state, resuming).wait
-    window = te.resume_window(state, resumes) if resumes else Window(Fraction(0), None)
+    window = te.resume_window(state, resumes) if resumes else Window(0, None)
     if isinstance(clock, SimulatedClock):
         if window.empty():
             done = now
