@@ -1,6 +1,8 @@
 """``python -m runtime run`` on a timed model: the timed run loop, simulated or real time (``--real-time``)."""
 from __future__ import annotations
 
+import json
+
 from runtime.model import Package
 
 
@@ -25,7 +27,18 @@ def run_timed_command(package: Package, args, out, err) -> int:
         print(f"{args.model}: error: {e}", file=err)
         return 1
     policy = make_policy(args.policy, args.seed, te.engine.format_state)
-    summary = run_timed(te, policy, args.limit, None if args.quiet else out, real_time=args.real_time)
+    try:
+        trace = open(args.trace, "w", encoding="utf-8") if args.trace else None
+    except OSError as e:
+        print(f"error: cannot write trace: {e}", file=err)
+        return 1
+    record = (lambda step: print(json.dumps(step), file=trace, flush=True)) if trace else None
+    try:
+        summary = run_timed(te, policy, args.limit, None if args.quiet else out, real_time=args.real_time,
+                            record=record)
+    finally:
+        if trace:
+            trace.close()
     print(summary.line(), file=out)
     if summary.outcome in ("error", "invariant", "violation"):
         print(f"{args.model}: {summary.line()}", file=err)

@@ -206,3 +206,14 @@ def test_eager_after_a_strict_bound_locks_time_at_the_bound():
     out = io.StringIO()
     assert run_timed(te, first, None, out).outcome == "time-lock"
     assert out.getvalue().startswith("state #0 and global time 0: time-lock at 3ms!")
+
+
+def test_cli_trace_records_steps_with_their_time(tmp_path, capsys):
+    import json
+    trace = tmp_path / "t.jsonl"
+    assert main(["run", str(TIMED / "resumer.bip"), "--root", "Top()", "--quiet", "--trace", str(trace)]) == 0
+    lines = [json.loads(line) for line in trace.read_text().splitlines()]
+    assert [(x["interaction"], x["time_ns"]) for x in lines[:-1]] == [("w.start", 2 * 10**9), ("w.hand", 4 * 10**9)]
+    assert lines[-1] == {"end": "deadlock", "steps": 2, "time_ns": 4 * 10**9, "message": ""}
+    assert main(["run", str(TIMED / "resumer.bip"), "--root", "Top()", "--trace", str(tmp_path / "no" / "t")]) == 1
+    assert "cannot write trace" in capsys.readouterr().err

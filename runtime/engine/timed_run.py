@@ -87,8 +87,18 @@ def _count(connectors: int, lone: int) -> str:
 
 
 def run_timed(te: TimedEngine, policy: Callable, limit: int | None = None, out: TextIO | None = None,
-              real_time: bool = False, show_enabled: bool = True) -> TimedSummary:
-    """Run ``te`` from its initial state; ``policy(state, interactions)`` chooses among the earliest ones."""
+              real_time: bool = False, show_enabled: bool = True,
+              record: Callable[[dict], None] | None = None) -> TimedSummary:
+    """Run ``te`` from its initial state; ``policy(state, interactions)`` chooses among the earliest ones.
+    ``record`` receives one dict per step (step, time in ns, interaction, ports) and one for the end."""
+    summary = _run(te, policy, limit, out, real_time, show_enabled, record or (lambda step: None))
+    if record is not None:
+        record({"end": summary.outcome, "steps": summary.steps, "time_ns": int(summary.time),
+                "message": summary.message})
+    return summary
+
+
+def _run(te, policy, limit, out, real_time, show_enabled, record) -> TimedSummary:
     clock = RealClock() if real_time else SimulatedClock()
     say = (lambda line: print(line, file=out)) if out is not None else (lambda line: None)
     steps = 0
@@ -135,6 +145,7 @@ def run_timed(te: TimedEngine, policy: Callable, limit: int | None = None, out: 
             state = te.engine.fire(before, chosen)
             steps += 1
             now = at
+            record({"step": steps, "time_ns": int(at), "interaction": chosen.label, "ports": list(chosen.ports)})
             state, now, problem = _resume(te, state, now, resumes, clock, say, steps)
             if problem:
                 return problem
