@@ -1,4 +1,4 @@
-"""Timed BIP2 text: clocks, urgency, resume, invariants and rates are read, checked (with their place) and written back."""
+"""Timed BIP2 text: clocks, urgency, resume, invariants and rates are read, checked (where they are) and written."""
 from pathlib import Path
 
 import pytest
@@ -25,7 +25,8 @@ def test_timed_fixtures_read_back_equal(path):
 def test_what_is_read():
     pkg = parse_file(TIMED / "resumer.bip")
     worker = pkg.atom_types[0]
-    assert [(c.name, c.unit, c.nanoseconds) for c in worker.clocks] == [("x", "second", 10**9), ("slow", "second", 10**9)]
+    assert [(c.name, c.unit, c.nanoseconds) for c in worker.clocks] == [("x", "second", 10**9),
+                                                                        ("slow", "second", 10**9)]
     start, hand = worker.transitions
     assert (start.urgency, hand.urgency) == ("eager", "lazy")
     assert start.resume.guard is not None and hand.resume is None
@@ -134,3 +135,12 @@ def test_rate_statement_prints_with_a_quote():
     pkg = parse_file(TIMED / "resumer.bip")
     assert "slow' = 0.5;" in write_package(pkg)
     assert Var("slow") not in pkg.atom_types[0].initial.action
+
+
+def test_clock_out_of_order_gets_the_order_hint():
+    text = ATOM.format(clock="clock c unit millisecond", guard="c >= 1", extra="").replace(
+        "    place S, T\n", "    place S, T\n    clock late\n")
+    with pytest.raises(DiagnosticError) as err:
+        parse_text(text, "bad.bip")
+    (d,) = err.value.diagnostics
+    assert "data, clocks and ports, then place" in d.hint

@@ -66,8 +66,8 @@ def rates(checker, stmts, clocks: set[str], where: str, at) -> None:
         if isinstance(s, Rate):
             span = checker.loc.at(s, default=at)
             if s.clock not in clocks:
-                checker.error(span, f"'{s.clock}' is not a clock of {where}: only a clock has a rate ({s.clock}' = ...)",
-                              hint=suggestion(s.clock, clocks))
+                checker.error(span, f"'{s.clock}' is not a clock of {where}: only a clock has a rate "
+                                    f"({s.clock}' = ...)", hint=suggestion(s.clock, clocks))
             elif uses_clock(s.value, clocks):
                 checker.error(span, f"the rate of clock '{s.clock}' in {where} reads a clock")
         elif isinstance(s, If):
@@ -100,7 +100,8 @@ def constraint_shape(checker, e, clocks: set[str], at, what: str) -> None:
                 return
             if node.op in _COMPARISON and (left or right):
                 if in_comparison:
-                    report(node, "nested comparison applied to an expression involving clocks")  # nestedComparisonOnClocks
+                    # Verimag: nestedComparisonOnClocks
+                    report(node, "nested comparison applied to an expression involving clocks")
                     return
                 walk(node.left, True)
                 walk(node.right, True)
