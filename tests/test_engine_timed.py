@@ -157,6 +157,7 @@ def test_clocks_compared_with_data_are_not_capped():
     src = (TIMED / "heartbeat.bip").read_text().replace("t >= 5", "t >= count")
     r = explore_timed(TimedEngine(parse_text(src, "heartbeat.bip"), "Top()"), 10**6, 2000)
     assert r.uncapped == ["s.t"]
+    assert not r.complete and r.states == 2000  # t grows for ever in DONE: only the limit stops it
 
 
 def test_explore_cli(capsys):
@@ -217,3 +218,12 @@ def test_cli_trace_records_steps_with_their_time(tmp_path, capsys):
     assert lines[-1] == {"end": "deadlock", "steps": 2, "time_ns": 4 * 10**9, "message": ""}
     assert main(["run", str(TIMED / "resumer.bip"), "--root", "Top()", "--trace", str(tmp_path / "no" / "t")]) == 1
     assert "cannot write trace" in capsys.readouterr().err
+
+
+def test_explore_cli_warns_about_uncapped_clocks(tmp_path, capsys):
+    model = tmp_path / "heartbeat.bip"
+    model.write_text((TIMED / "heartbeat.bip").read_text().replace("t >= 5", "t >= count"))
+    assert main(["explore", str(model), "--root", "Top()", "--max-states", "500"]) == 4
+    captured = capsys.readouterr()
+    assert "500 states" in captured.out and "stopped at the state limit" in captured.out
+    assert "warning: clock s.t is compared with a non-constant" in captured.err
