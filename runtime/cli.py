@@ -25,6 +25,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
     run.add_argument("--real-time", action="store_true",
                      help="timed models: follow the engine's clock (wait for real) instead of simulated time")
+    run.add_argument("--random-time", action="store_true",
+                     help="timed models: plan each interaction at a random instant of its window (seeded by --seed), "
+                          "as the Verimag engine does, instead of the earliest")
     explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)")
     explore.add_argument("model", help="the .bip file")
     explore.add_argument("--root", default="System()", help="root instance")

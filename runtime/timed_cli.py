@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import random
 
 from runtime.model import Package
 
@@ -16,7 +17,7 @@ def run_timed_command(package: Package, args, out, err) -> int:
     (0 deadlock/time-lock/limit, 5 invariant violated, 7 timing constraint violated, 2 other model error)."""
     from runtime.engine import EngineError, make_policy
     from runtime.engine.timed import TimedEngine
-    from runtime.engine.timed_run import EXIT, run_timed
+    from runtime.engine.timed_run import EXIT, Planner, run_timed
 
     if args.limit is not None and args.limit < 0:
         print("error: --limit must be >= 0", file=err)
@@ -34,8 +35,9 @@ def run_timed_command(package: Package, args, out, err) -> int:
         return 1
     record = (lambda step: print(json.dumps(step), file=trace, flush=True)) if trace else None
     try:
+        planner = Planner(random.Random(args.seed)) if args.random_time else None
         summary = run_timed(te, policy, args.limit, None if args.quiet else out, real_time=args.real_time,
-                            record=record)
+                            record=record, planner=planner)
     finally:
         if trace:
             trace.close()

@@ -227,3 +227,46 @@ def test_explore_cli_warns_about_uncapped_clocks(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "500 states" in captured.out and "stopped at the state limit" in captured.out
     assert "warning: clock s.t is compared with a non-constant" in captured.err
+
+
+def test_random_instants_stay_in_their_windows():
+    import random
+    from runtime.engine.timed_run import Planner
+    te = TimedEngine(parse_file(TIMED / "resumer.bip"), "Top()")
+    hands = set()
+    for seed in range(20):
+        out = io.StringIO()
+        summary = run_timed(te, first, None, out, planner=Planner(random.Random(seed)))
+        go, hand = chosen(out.getvalue())
+        assert go.endswith("at global time 2s")  # a single instant: no choice
+        t = parse_time(hand.split(" at global time ")[1])
+        assert 4 * 10**9 <= t <= 6 * 10**9       # anywhere in [ 4s, 6s ]
+        hands.add(t)
+        assert summary.outcome == "deadlock"
+    assert len(hands) > 10
+
+
+def test_random_resume_can_reach_the_deadlock_the_earliest_instant_avoids():
+    # 'go' resumes somewhere in [0, 200 ms] after its start; 'done' needs x <= 1000, always true: compare with a
+    # tighter bound where a late completion leaves 'done' disabled for ever
+    import random
+    from runtime.engine.timed_run import Planner
+    src = (TIMED / "overrun.bip").read_text().replace("(x <= 1000)", "(x <= 100)")
+    te = TimedEngine(parse_text(src, "overrun.bip"), "Top()", naps())
+    ends = set()
+    for seed in range(12):
+        out = io.StringIO()
+        summary = run_timed(te, first, None, out, planner=Planner(random.Random(seed)))
+        ends.add(summary.steps)
+    assert ends == {1, 2}
+    out = io.StringIO()
+    assert run_timed(te, first, None, out).steps == 2
+
+
+def test_cli_random_time_is_seeded(capsys):
+    args = ["run", str(TIMED / "resumer.bip"), "--root", "Top()", "--random-time", "--seed", "3"]
+    assert main(args) == 0
+    once = capsys.readouterr().out
+    assert main(args) == 0
+    assert capsys.readouterr().out == once
+    assert "w.hand at global time 4s" not in once or "w.hand at global time 4s\\n" not in once

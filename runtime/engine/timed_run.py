@@ -12,6 +12,8 @@ Verimag engine).  The trace speaks the reference engine's words.
 """
 from __future__ import annotations
 
+import math
+import random
 import time
 from dataclasses import dataclass
 from fractions import Fraction
@@ -86,19 +88,39 @@ def _count(connectors: int, lone: int) -> str:
     return " and ".join(parts)
 
 
+class Planner:
+    """When in its window each candidate is planned: the earliest instant, or (with a random generator) an
+    instant drawn as the Verimag engine draws it: uniform to the nanosecond in a bounded window, the start
+    plus an exponential number of nanoseconds (mean 10) in an unbounded one."""
+
+    def __init__(self, rng: random.Random | None = None) -> None:
+        self.rng = rng
+
+    def instant(self, w: Window):
+        first = w.earliest()
+        if self.rng is None:
+            return first
+        if w.hi is None:
+            return first + int(-10.0 * math.log(1.0 - self.rng.random()))
+        last = w.hi - 1 if w.hi_open else w.hi
+        span = math.floor(last - first)
+        return first + self.rng.randint(0, span) if span > 0 else first
+
+
 def run_timed(te: TimedEngine, policy: Callable, limit: int | None = None, out: TextIO | None = None,
               real_time: bool = False, show_enabled: bool = True,
-              record: Callable[[dict], None] | None = None) -> TimedSummary:
-    """Run ``te`` from its initial state; ``policy(state, interactions)`` chooses among the earliest ones.
+              record: Callable[[dict], None] | None = None, planner: Planner | None = None) -> TimedSummary:
+    """Run ``te`` from its initial state; ``policy(state, interactions)`` chooses among those planned earliest.
     ``record`` receives one dict per step (step, time in ns, interaction, ports) and one for the end."""
-    summary = _run(te, policy, limit, out, real_time, show_enabled, record or (lambda step: None))
+    summary = _run(te, policy, limit, out, real_time, show_enabled, record or (lambda step: None),
+                   planner or Planner())
     if record is not None:
         record({"end": summary.outcome, "steps": summary.steps, "time_ns": int(summary.time),
                 "message": summary.message})
     return summary
 
 
-def _run(te, policy, limit, out, real_time, show_enabled, record) -> TimedSummary:
+def _run(te, policy, limit, out, real_time, show_enabled, record, planner) -> TimedSummary:
     clock = RealClock() if real_time else SimulatedClock()
     say = (lambda line: print(line, file=out)) if out is not None else (lambda line: None)
     steps = 0
@@ -106,7 +128,7 @@ def _run(te, policy, limit, out, real_time, show_enabled, record) -> TimedSummar
     try:
         state = te.engine.initial_state()
         resuming = {a.index: a.initial_resume for a in te.atoms if a.initial_resume is not None}
-        state, now, problem = _resume(te, state, now, resuming, clock, say, steps)
+        state, now, problem = _resume(te, state, now, resuming, clock, say, steps, planner)
         if problem:
             return problem
         while True:
@@ -132,8 +154,9 @@ def _run(te, policy, limit, out, real_time, show_enabled, record) -> TimedSummar
             if show_enabled:
                 for k, inter in enumerate(ordered):
                     say(f"  [{k}] {_describe(inter)} {format_window(sched.candidates[inter], now)}")
-            first = min(sched.candidates[i].earliest() for i in ordered)
-            earliest = [i for i in ordered if sched.candidates[i].earliest() == first]
+            planned = {i: planner.instant(sched.candidates[i]) for i in ordered}
+            first = min(planned.values())
+            earliest = [i for i in ordered if planned[i] == first]
             chosen = policy(te.delay(state, first), earliest)
             if chosen is None:
                 return TimedSummary(steps, "stopped", now)
@@ -146,7 +169,7 @@ def _run(te, policy, limit, out, real_time, show_enabled, record) -> TimedSummar
             steps += 1
             now = at
             record({"step": steps, "time_ns": int(at), "interaction": chosen.label, "ports": list(chosen.ports)})
-            state, now, problem = _resume(te, state, now, resumes, clock, say, steps)
+            state, now, problem = _resume(te, state, now, resumes, clock, say, steps, planner)
             if problem:
                 return problem
     except ModelError as err:
@@ -154,7 +177,7 @@ def _run(te, policy, limit, out, real_time, show_enabled, record) -> TimedSummar
         return TimedSummary(steps, "error", now, str(err))
 
 
-def _resume(te: TimedEngine, state, now: Fraction, resumes: dict, clock, say, steps: int):
+def _resume(te: TimedEngine, state, now: Fraction, resumes: dict, clock, say, steps: int, planner: Planner):
     """Let time pass until the step completes: the atoms of ``resumes`` resume when their guard allows
     (simulated) or when their action returned (real time); check that no timing constraint was passed."""
     resuming = frozenset(resumes)
@@ -164,7 +187,7 @@ def _resume(te: TimedEngine, state, now: Fraction, resumes: dict, clock, say, st
         if window.empty():
             done = now
         else:
-            done = now + window.earliest()
+            done = now + planner.instant(window)
         clock.wait_until(done)
     done = clock.elapsed() if isinstance(clock, RealClock) else clock.now
     d = done - now
