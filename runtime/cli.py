@@ -4,6 +4,9 @@ Every failure (unreadable or malformed file, bad root, missing extern
 binding, model error at a step) is a message on stderr and a non-zero exit
 status, never a traceback: 1 for bad input, 2 for a model error during the run.
 A run that ends in a deadlock or at the step limit exits with 0.
+A timed model (clocks, invariants: runtime/timed_cli.py) exits as the Verimag
+engine does: 0 also on a time-lock, 5 when an invariant fails, 7 when a
+timing constraint is violated; ``explore`` runs the discrete-time exploration.
 """
 from __future__ import annotations
 
