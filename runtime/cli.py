@@ -4,6 +4,9 @@ Every failure (unreadable or malformed file, bad root, missing extern
 binding, model error at a step) is a message on stderr and a non-zero exit
 status, never a traceback: 1 for bad input, 2 for a model error during the run.
 A run that ends in a deadlock or at the step limit exits with 0.
+A timed model (clocks, invariants: runtime/timed_cli.py) exits as the Verimag
+engine does: 0 also on a time-lock, 5 when an invariant fails, 7 when a
+timing constraint is violated; ``explore`` runs the discrete-time exploration.
 """
 from __future__ import annotations
 
@@ -11,6 +14,7 @@ import argparse
 import sys
 
 from runtime.diagnostics import DiagnosticError
+from runtime.timed_cli import explore_command, is_timed, run_timed_command
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -22,6 +26,17 @@ def _parser() -> argparse.ArgumentParser:
     add_run_options(run)
     run.add_argument("--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions")
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
+    run.add_argument("--real-time", action="store_true",
+                     help="timed models: follow the engine's clock (wait for real) instead of simulated time")
+    run.add_argument("--random-time", action="store_true",
+                     help="timed models: plan each interaction at a random instant of its window (seeded by --seed), "
+                          "as the Verimag engine does, instead of the earliest")
+    explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)")
+    explore.add_argument("model", help="the .bip file")
+    explore.add_argument("--root", default="System()", help="root instance")
+    explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")
+    explore.add_argument("--max-states", type=int, default=1_000_000, help="stop after this many states")
+    explore.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions")
     return ap
 
 
@@ -33,6 +48,8 @@ def run_command(args, out=None, err=None) -> int:
     err = err or sys.stderr
     try:
         package = parse_file(args.model)
+        if is_timed(package) and not args.show_source:
+            return run_timed_command(package, args, out, err)
         engine = Engine(package, args.root, externs=args.externs)
     except DiagnosticError as e:
         print(e.render(), file=err)
@@ -85,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
+        if args.command == "explore":
+            return explore_command(args, sys.stdout, sys.stderr)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -77,7 +77,7 @@ def test_base_is_valid():
 SYNTAX = [
     # (old, new, message, needle in the new text)
     ("    place S, T\n    initial to S\n", "    initial to S\n    place S, T\n",
-     "expected ',', '@', 'data', 'export', 'place' or 'port', found 'initial'", "initial to S"),
+     "expected ',', '@', 'clock', 'data', 'export', 'place' or 'port', found 'initial'", "initial to S"),
     ("    on q from T to S\n", "    on q from T to S\n    data int z\n",
      "expected ", "data int z"),
     ("port type Port()", "port type Port", "expected '(', found 'port'", "port type IntPort"),
@@ -208,7 +208,7 @@ VALIDATION = [
     ("do { x = f(x); }", "do { x = a.v; }", "dotted data references are allowed only in connectors", "a.v"),
     ("  compound type K()\n", "  compound type L() component K k() end\n  compound type K()\n    component L l()\n",
      "compound type L contains itself (L -> K -> L)", "L l()"),
-    ("data int x = 0", "data int x = 0, clock", "'clock' is a reserved word of BIP2", "clock"),
+    ("data int x = 0", "data int x = 0, minute", "'minute' is a reserved word of BIP2", "minute"),
     ("data int x = 0", "data int x = 0, error", "'error' is a reserved word of BIP2", "error"),
     ("export port c.e as e", "export port Port e is c.e",
      "exported port 'e' of compound type K is Port, but c.e is IntPort", "c.e\n"),

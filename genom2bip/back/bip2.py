@@ -13,6 +13,7 @@ from pathlib import Path
 
 import jinja2
 
+from genom2bip.back.bip2_timed import resume_clause, timed_atom_problems
 from genom2bip.output import write_file
 from runtime.bip2.printer import action as print_action
 from runtime.bip2.printer import expr as print_expr
@@ -20,7 +21,7 @@ from runtime.bip2.reserved import IDENTIFIER, RESERVED, is_identifier
 from runtime.errors import Genom2bipError
 from runtime.model import (
     BUILTIN_TYPES, Annotation, Assign, AtomType, Binary, Call, CompoundType, ConnectorType, Const, DefineGroup,
-    DefinePort, Do, If, InteractionSpec, Package, PortData, Transition, Unary, Var,
+    DefinePort, Do, If, InteractionSpec, Package, PortData, Rate, Transition, Unary, Var,
 )
 from runtime.model.expressions import BINARY_PRECEDENCE
 
@@ -117,6 +118,9 @@ class _Problems:
                 self.expr(where, s.value)
             elif isinstance(s, Do):
                 self.expr(where, s.call)
+            elif isinstance(s, Rate):
+                self.name(where, "clock", s.clock)
+                self.expr(where, s.value)
             elif isinstance(s, If):
                 self.expr(where, s.cond)
                 if not s.then:
@@ -219,6 +223,7 @@ class _Problems:
                     self.name(w, "port", port)
             if pr.guard is not None:
                 self.expr(w, pr.guard)
+        timed_atom_problems(self, a, where)
 
     def transition_places(self, where: str, sources, targets, initial: bool = False) -> None:
         if not initial and not sources:
@@ -374,7 +379,8 @@ def _define(group: DefineGroup) -> str:
 def _clauses(head: str, clauses: list[tuple[str, str | None]], margin: str) -> str:
     """``head clause clause`` on one line when it fits, else each clause on its own line under ``head``."""
     inner = margin + "  "
-    rendered = [f"{kw} {print_action(body, inner) if isinstance(body, list) else body}" for kw, body in clauses]
+    rendered = [kw if body is None else f"{kw} {print_action(body, inner) if isinstance(body, list) else body}"
+                for kw, body in clauses]
     line = " ".join([head] + rendered)
     if len(margin) + len(line) <= WIDTH and "\n" not in line:
         return line
@@ -387,8 +393,11 @@ def _transition(t: Transition, margin: str) -> str:
     clauses = []
     if t.guard is not None:
         clauses.append(("provided", f"({print_expr(t.guard)})"))
+    if t.urgency is not None:
+        clauses.append((t.urgency, None))
     if t.action:
         clauses.append(("do", t.action))
+    clauses += resume_clause(t.resume)
     return _clauses(head, clauses, margin)
 
 
@@ -418,6 +427,7 @@ def _environment() -> jinja2.Environment:
     env.filters.update({
         "expr": print_expr, "action": print_action, "annotations": _annotations, "comment": _comment,
         "define": _define, "transition": _transition, "interaction": _interaction, "pattern": _pattern,
+        "resume": lambda r: "".join(f" {kw}" if body is None else f" {kw} {body}" for kw, body in resume_clause(r)),
     })
     return env
 

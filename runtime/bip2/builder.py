@@ -8,12 +8,13 @@ from lark import Token, Transformer, v_args
 from runtime.bip2.literals import decode_string
 from runtime.bip2.locator import Locator
 from runtime.bip2.reserved import UNUSED_KEYWORDS
+from runtime.bip2.timed_builder import TimedBuilder
 from runtime.diagnostics import Reporter, Span
 from runtime.model import (
     Annotation, Assign, AtomPriority, AtomType, Binary, Call, ComponentInstance, CompoundType, ConnectorExport,
     ConnectorInstance, ConnectorParam, ConnectorType, Const, Constant, DataDecl, DataParam, DefineGroup, DefinePort,
-    Do, ExportData, ExportPort, ExternFunction, If, InitialTransition, InteractionPattern, InteractionSpec, Package,
-    PortData, PortDecl, PortRef, PortType, Priority, Transition, Unary, Var,
+    ClockDecl, Do, ExportData, ExportPort, ExternFunction, If, InitialTransition, InteractionPattern, InteractionSpec, Package,
+    Invariant, PortData, PortDecl, PortRef, PortType, Priority, Transition, Unary, Var,
 )
 
 
@@ -48,7 +49,7 @@ class _ExternType:
     span: Span
 
 
-class Builder(Transformer):
+class Builder(TimedBuilder, Transformer):
     """Bottom-up construction of a :class:`Package`; structural problems go to ``reporter``."""
 
     def __init__(self, filename: str, text: str, reporter: Reporter, locator: Locator) -> None:
@@ -191,6 +192,8 @@ class Builder(Transformer):
                 atom.params.append(item)
             elif isinstance(item, list) and item and isinstance(item[0], DataDecl):
                 atom.data.extend(item)
+            elif isinstance(item, list) and item and isinstance(item[0], ClockDecl):
+                atom.clocks.extend(item)
             elif isinstance(item, list):
                 atom.ports.extend(item)
             elif isinstance(item, _Places):
@@ -201,6 +204,8 @@ class Builder(Transformer):
                 atom.transitions.append(item)
             elif isinstance(item, AtomPriority):
                 atom.priorities.append(item)
+            elif isinstance(item, Invariant):
+                atom.invariants.append(item)
         return atom
 
     def data_decl(self, children):
@@ -239,8 +244,8 @@ class Builder(Transformer):
         return _Places(list(tokens))
 
     def initial(self, children):
-        keyword, targets, act = children
-        init = InitialTransition([], act.stmts if act else [], span=self.span(keyword))
+        keyword, targets, act, resume = children
+        init = InitialTransition([], act.stmts if act else [], span=self.span(keyword), resume=resume)
         init.targets = self._note_names(init, "targets", targets.tokens)
         return init
 
@@ -250,9 +255,13 @@ class Builder(Transformer):
         if keyword.type == "ON":
             port_tok, *rest = rest
             port = port_tok.value
-        sources, targets, guard, act = rest
+        if port:
+            sources, targets, guard, urgency, act, resume = rest
+        else:
+            (sources, targets, guard, act), urgency, resume = rest, None, None
         t = Transition(port, [], [], guard, act.stmts if act else [], annotations=annotations,
-                       span=self.span(port_tok if port else keyword))
+                       span=self.span(port_tok if port else keyword),
+                       urgency=urgency.value if urgency else None, resume=resume)
         if port:
             self.locator.note(t, self.span(port_tok), "port")
         t.sources = self._note_names(t, "sources", sources.tokens)

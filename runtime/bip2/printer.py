@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from runtime.bip2.literals import format_literal
 from runtime.model.expressions import BINARY_PRECEDENCE, Assign, Binary, Call, Const, Do, Expr, If, PortData, Stmt, Unary, Var
+from runtime.model.timing import Rate
 
 _ATOM = 100          # names, calls, non-negative literals, parenthesised expressions
 _UNARY = 50          # -x, !x, ~x and negative literals
@@ -64,6 +65,8 @@ def stmt_lines(stmts: list[Stmt] | tuple[Stmt, ...], indent: str = "  ") -> list
             lines.append(f"{expr(s.target)} = {expr(s.value)};")
         elif isinstance(s, Do):
             lines.append(f"{expr(s.call)};")
+        elif isinstance(s, Rate):
+            lines.append(f"{s.clock}' = {expr(s.value)};")
         elif isinstance(s, If):
             lines.append(f"if ({expr(s.cond)}) then")
             lines += [indent + line for line in stmt_lines(s.then, indent)]

@@ -14,14 +14,15 @@ KEYWORDS = frozenset({
     "connector", "compound", "component", "export", "place", "initial", "to", "from", "on",
     "internal", "provided", "do", "priority", "define", "up", "down", "as", "if", "then", "else",
     "fi", "true", "false", "int", "bool", "float", "string",
+    # timed BIP2
+    "clock", "unit", "nanosecond", "microsecond", "millisecond", "second", "lazy", "delayable", "eager",
+    "resume", "invariant", "at",
 })
 
-#: Words the Verimag grammars reserve for constructs we do not read (time, urgency,
-#: extern ports, operators, invariants, type refinement).
+#: Words the Verimag grammars reserve for constructs we do not read (extern ports, operators,
+#: type refinement, longer time units).
 UNUSED_KEYWORDS = frozenset({
-    "refine", "operator", "remember", "ignore", "error", "at", "invariant", "clock", "unit",
-    "nanosecond", "microsecond", "millisecond", "second", "minute", "hour", "day",
-    "lazy", "delayable", "eager", "resume", "sync", "async",
+    "refine", "operator", "remember", "ignore", "error", "minute", "hour", "day", "sync", "async",
 })
 
 RESERVED = KEYWORDS | UNUSED_KEYWORDS

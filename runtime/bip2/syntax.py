@@ -19,10 +19,10 @@ _OPERATORS = {"OROR", "ANDAND", "BOR", "BXOR", "BAND", "EQ", "NE", "LT", "GT", "
               "PLUS", "MINUS", "STAR", "SLASH", "PERCENT"}
 _COMPARISONS = {"EQ", "NE", "LT", "GT", "LE", "GE"}
 _ORDER_WORDS = {"data", "port", "place", "initial", "on", "internal", "priority", "component", "connector",
-                "export", "define"}
-_ORDER_HINT = ("the order is fixed: in an atom, data and ports, then place, then initial, then on/internal "
-               "transitions, then priorities; in a connector, data, then export port, then define, then on; "
-               "in a compound, components and connectors, then priorities, then exports")
+                "export", "define", "clock", "invariant"}
+_ORDER_HINT = ("the order is fixed: in an atom, data, clocks and ports, then place, then initial, then "
+               "on/internal transitions, then priorities and invariants; in a connector, data, then export port, "
+               "then define, then on; in a compound, components and connectors, then priorities, then exports")
 
 
 @lru_cache(maxsize=1)

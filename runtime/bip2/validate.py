@@ -8,6 +8,7 @@ from __future__ import annotations
 from runtime.bip2.defines import allows, define_ports
 from runtime.bip2.interfaces import data_offer, port_offer
 from runtime.bip2.locator import Locator
+from runtime.bip2.timed_checks import check_atom_timing
 from runtime.bip2.scope import ExpressionChecker, Scope, suggestion
 from runtime.diagnostics import NOWHERE, Diagnostic, Reporter, Span
 from runtime.model import BUILTIN_TYPES, AtomType, CompoundType, ConnectorType, Package, PortData, PortRef, PortType
@@ -194,9 +195,11 @@ class _Checker:
     def atom(self, a: AtomType) -> None:
         where = f"atom type {a.name}"
         variables = {**self.constants, **self._params(a.params, where)}
-        self.unique(a.params + a.data, "variable", where)
+        self.unique(a.params + a.data + a.clocks, "variable", where)
         assignable: set[str] = set()
         self._data(a.data, where, variables, assignable)
+        variables.update({c.name: "clock" for c in a.clocks})
+        assignable.update(c.name for c in a.clocks)
         self.unique(a.ports, "port", where)
         for p in a.ports:
             self._atom_port(a, p, where, variables)
@@ -234,6 +237,7 @@ class _Checker:
                 self.error(self.loc.at(pr), f"priority {pr.name} of {where} has '*' on both sides")
             if pr.guard is not None:
                 self.exprs.guard(pr.guard, Scope(where, variables), self.loc.at(pr))
+        check_atom_timing(self, a, where, scope)
 
     def _atom_port(self, a: AtomType, p, where: str, variables: dict[str, str]) -> None:
         decls = {d.name: d.type for d in a.params + a.data}

@@ -26,6 +26,7 @@ from runtime.model.interactions import (
     InteractionSpec,
 )
 from runtime.model.priorities import InteractionPattern, PortRef, Priority
+from runtime.model.timing import ClockDecl, Invariant, Rate, Resume
 
 __all__ = [
     "Annotation", "Assign", "AtomPriority", "AtomType", "BUILTIN_TYPES", "Binary", "Call", "ComponentInstance",
@@ -34,4 +35,5 @@ __all__ = [
     "ExportPort", "Expr", "ExternFunction", "If", "InitialTransition", "InteractionPattern", "InteractionSpec",
     "Package", "PortData", "PortDecl", "PortRef", "PortType", "Priority", "SOURCE", "Stmt", "Transition", "Unary", "Var",
     "source_annotation", "source_of",
+    "ClockDecl", "Invariant", "Rate", "Resume",
 ]

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from runtime.diagnostics import Span
 from runtime.model.common import Annotation, DataDecl, DataParam, _span
 from runtime.model.expressions import Expr, Stmt
+from runtime.model.timing import ClockDecl, Invariant, Resume
 
 
 @dataclass
@@ -37,6 +38,8 @@ class InitialTransition:
     targets: list[str]
     action: list[Stmt] = field(default_factory=list)
     span: Span = _span()
+    # timed BIP2 (runtime/model/timing.py)
+    resume: Resume | None = None
 
 
 @dataclass
@@ -50,6 +53,9 @@ class Transition:
     action: list[Stmt] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
+    # timed BIP2 (runtime/model/timing.py): None is lazy, the default
+    urgency: str | None = None
+    resume: Resume | None = None
 
     @property
     def internal(self) -> bool:
@@ -81,6 +87,13 @@ class AtomType:
     priorities: list[AtomPriority] = field(default_factory=list)
     annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
+    # timed BIP2 (runtime/model/timing.py)
+    clocks: list[ClockDecl] = field(default_factory=list)
+    invariants: list[Invariant] = field(default_factory=list)
+
+    @property
+    def timed(self) -> bool:
+        return bool(self.clocks or self.invariants)
 
     def port(self, name: str) -> PortDecl | None:
         return next((p for p in self.ports if p.name == name), None)
