@@ -13,7 +13,7 @@ after the model.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from runtime.engine import defines
@@ -29,11 +29,20 @@ from runtime.native.cexpr import (
     Unsupported,
     c_type,
     condition,
+    intern,
     literal,
     statements,
+    stored,
 )
+from runtime.native.ctree import TreeGen, node_pm, nodes
+from runtime.native.ctree import width as offer_width
 from runtime.native.observers import gen_observers
 from runtime.native.por import gen_por
+
+def at(sc: CScope, what: str) -> CScope:
+    """The same scope, its place in the model made precise (for refusals)."""
+    return replace(sc, where=f"{sc.where}, {what}")
+
 
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
@@ -56,6 +65,8 @@ class CModel:
     bits: int = 0
     label_ids: dict[int, int] = field(default_factory=dict)  # interaction index -> label id (static ones)
     labels: list[str] = field(default_factory=list)
+    floats: list[int] = field(default_factory=list)  # state slots holding the bits of a double
+    strings: dict[int, list[str]] = field(default_factory=dict)  # state slot -> its strings by number
 
 
 class CGen:
@@ -74,7 +85,8 @@ class CGen:
         self.externs = Externs({name: k for k, name in enumerate(choices)},
                                list(space.services) if budget is not None else None)
         self.type_index = {name: k for k, name in enumerate(self.infos)}
-        self.maxf = max([len(fp.fields) for fp in self.flat.ports] + [1])
+        self.maxf = max([len(fp.fields) for fp in self.flat.ports] + [1]
+                        + [offer_width(s.tree) for s in self.sources if s.kind == "generic"])
 
     def w(self, line: str = "") -> None:
         self.lines.append(line)
@@ -90,8 +102,11 @@ class CGen:
 
     def connector_scope(self, info, mask: int, ports_rw: bool, with_locals: bool) -> CScope:
         ct = info.type
-        sc = CScope(f"connector type {ct.name}", self.externs, constants=dict(self.flat.constants),
-                    in_guard=not with_locals)
+        where = f"connector type {ct.name}"
+        spec = info.clauses.get(mask)
+        if spec is not None:
+            where += f", on {' '.join(spec.ports)}" + (f" ({spec.span})" if spec.span.line > 0 else "")
+        sc = CScope(where, self.externs, constants=dict(self.flat.constants), in_guard=not with_locals)
         for k, d in enumerate(ct.data):
             t = c_type(d.type, f"{sc.where}, {d.name}")
             if with_locals:
@@ -109,12 +124,15 @@ class CGen:
     # -- the whole file -------------------------------------------------------------------------
     def generate(self) -> CModel:
         fl = self.flat
+        self.value_types = {}
         for s in self.slots:
             if s.kind == "value":
-                raise Unsupported(f"{s.title}: data of this type are explored in Python only")
+                fa = next(a for a in fl.atoms if a.name == s.atom)
+                decl = next(d for d in fa.variables if d.name == s.name)
+                self.value_types[s.index] = c_type(decl.type, f"atom {fa.name} ({fa.type.name}), data {s.name}")
+        self.check_port_types()
+        self.trees = {src.index: TreeGen(self, src) for src in self.sources if src.kind == "generic"}
         for src in self.sources:
-            if src.kind == "generic":
-                raise Unsupported(f"connector {src.connector.path}: nested connectors are explored in Python only")
             if len(src.leaves) > MAX_PARAMS:
                 raise Unsupported(f"connector {src.connector.path}: more than {MAX_PARAMS} ports")
         nsrc = len(self.sources)
@@ -144,17 +162,24 @@ class CGen:
         self.gen_initial()
         for name, info in self.infos.items():
             self.gen_clauses(name, info)
+        for tree in self.trees.values():
+            tree.gen_offers()
         for src in self.sources:
             self.gen_fire(src)
         self.gen_fire_table()
-        self.gen_slots()
-        model = CModel("", self.width, bits=self.bits)
+        model = CModel("", self.width)
         self.gen_labels(model)
         self.gen_priorities()
         self.gen_blocked()
         self.gen_enabled()
         gen_observers(w, self.monitors, self.sources, fl, self.base)
         gen_por(w, self.sources, fl, self.prio, self.monitors, enabled=self.externs.services is None)
+        intern(self.externs.strings, "")  # every string variable starts as ""
+        self.gen_slots()  # last: string fields are as wide as the strings met
+        model.bits = self.bits
+        names = sorted(self.externs.strings, key=self.externs.strings.get)
+        model.floats = [i for i, t in self.value_types.items() if t == "float"]
+        model.strings = {i: names for i, t in self.value_types.items() if t == "string"}
         w('#include "search.c"')
         model.source = "\n".join(self.lines) + "\n"
         return model
@@ -193,7 +218,7 @@ class CGen:
         return f"(({var} & {src}) == {src})" if src else "1"
 
     def enabled_expr(self, fa: FlatAtom, t, var: str, sc: CScope) -> str:
-        guard = condition(t.guard, sc)
+        guard = condition(t.guard, at(sc, f"transition {describe(t)}"))
         mk = self.marked(fa, t, var)
         return mk if guard == "1" else f"({mk} && {guard})"
 
@@ -204,7 +229,7 @@ class CGen:
         if tgt:
             self.w(f"{indent}if (m & {tgt}) fail({E_UNSAFE}, {fa.index});")
             self.w(f"{indent}m |= {tgt};")
-        self.lines.extend(statements(t.action, sc, indent))
+        self.lines.extend(statements(t.action, at(sc, f"transition {describe(t)}"), indent))
 
     def gen_internal(self, fa: FlatAtom) -> None:
         ts = [t for t in fa.type.transitions if t.internal]
@@ -263,15 +288,16 @@ class CGen:
             sc = self.atom_scope(fa, in_enabled=False)
             w("    {")
             for d in fa.variables:
-                w(f"        V v_{d.name} = {literal(default_value(d.type), sc.where)[0]};")
+                w(f"        V v_{d.name} = {stored(default_value(d.type), sc.where, self.externs.strings)};")
             for d in fa.variables:
                 if d.init is not None:
-                    self.lines.extend(statements([Assign(Var(d.name), d.init)], sc, "        "))
+                    where = at(sc, f"data {d.name}" + (f" ({d.span})" if d.span.line > 0 else ""))
+                    self.lines.extend(statements([Assign(Var(d.name), d.init)], where, "        "))
             targets = t.initial.targets
             if any(p not in fa.places for p in targets) or len(set(targets)) != len(targets):
                 raise Unsupported(f"atom {fa.name}: its initial transition is refused by the engine")
             w(f"        V m = {fa.place_mask(targets)};")
-            self.lines.extend(statements(t.initial.action, sc, "        "))
+            self.lines.extend(statements(t.initial.action, at(sc, "initial transition"), "        "))
             self.store(fa, "        ")
             if any(tr.internal for tr in t.transitions):
                 w(f"        in{fa.index}(L);")
@@ -294,12 +320,15 @@ class CGen:
                     w("}")
 
     def locals_init(self, info) -> str:
-        vals = [literal(v, f"connector type {info.type.name}")[0] for v in info.local_defaults]
+        vals = [stored(v, f"connector type {info.type.name}", self.externs.strings) for v in info.local_defaults]
         return f"V lv[{max(len(vals), 1)}] = {{{', '.join(vals) or '0'}}};"
 
     def gen_fire(self, src) -> None:
         w = self.w
         fl = self.flat
+        if src.kind == "generic":
+            self.trees[src.index].gen_fire()
+            return
         w(f"static void f{src.index}(V *L, uint32_t mask) {{")
         if src.kind == "port":
             w(f"    (void)mask; ap{src.port.id}(L, 0);")
@@ -343,7 +372,23 @@ class CGen:
             return 1
         if s.domain is not None:
             return max((s.domain[1] - s.domain[0]).bit_length(), 1)
+        if s.kind == "value":
+            return 64 if self.value_types[s.index] == "float" else max((len(self.externs.strings) - 1).bit_length(), 1)
         return self.widths.get(k, START_BITS)
+
+    def default(self, s: Slot) -> str:
+        """What a dead variable is reset to, as the C state stores it."""
+        return stored(s.default if s.default is not None else 0, s.title, self.externs.strings)
+
+    def check_port_types(self) -> None:
+        """A port field and the variable it binds hold the same kind of word (a float's bits, a string's number)."""
+        for fp in self.flat.ports:
+            fa = self.flat.atoms[fp.atom]
+            types = {d.name: d.type for d in fa.variables}
+            for f, v, ty in zip(fp.fields, fp.decl.data, fp.field_types):
+                kinds = {"float" if t == "float" else "string" if t == "string" else "word" for t in (ty, types.get(v))}
+                if len(kinds) > 1:
+                    raise Unsupported(f"port {fp.path}: field {f} of type {ty} binds {v} of type {types.get(v)}")
 
     def gen_slots(self) -> None:
         """Straight-line ``pack`` and ``unpack`` (runtime.explore.codec's fields), widths fixed in the text.
@@ -372,10 +417,14 @@ class CGen:
             if s.domain is not None:
                 w(f"    if (x < {s.domain[0]} || x > {s.domain[1]}) fail({E_DOMAIN}, {k});")
             if s.live is not None:
-                w(f"    if (!(L[{s.marking}] & {s.live})) x = {literal(s.default or 0, s.title)[0]};")
+                w(f"    if (!(L[{s.marking}] & {s.live})) x = {self.default(s)};")
             if s.domain is not None:
                 w(f"    u = (uint64_t)(x - ({s.domain[0]}));")
             elif s.kind in ("marking", "bool"):
+                w("    u = (uint64_t)x;")
+            elif s.kind == "value":
+                if self.value_types[s.index] == "float":
+                    w(f"    if (isnan(F(x))) fail({E_ARITH}, 4);  /* the Python explorer never meets a NaN state again */")
                 w("    u = (uint64_t)x;")
             else:
                 w("    u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
@@ -390,7 +439,7 @@ class CGen:
         w("    uint64_t u;")
         for k, s, width, off in fields:
             if not width:
-                w(f"    L[{s.index}] = {literal(s.default or 0, s.title)[0]};")
+                w(f"    L[{s.index}] = {self.default(s)};")
                 continue
             word, sh = divmod(off, 64)
             expr = f"(o[{word}] >> {sh})" if sh else f"o[{word}]"
@@ -400,7 +449,7 @@ class CGen:
             w(f"    u = {expr}{mask};")
             if s.domain is not None:
                 w(f"    L[{s.index}] = (V)u + ({s.domain[0]});")
-            elif s.kind in ("marking", "bool"):
+            elif s.kind in ("marking", "bool", "value"):
                 w(f"    L[{s.index}] = (V)u;")
             else:
                 w(f"    L[{s.index}] = (V)(u >> 1) ^ -(V)(u & 1);")
@@ -487,9 +536,10 @@ class CGen:
             for side, name in ((1, "lo"), (2, "hi")):
                 terms = []
                 if src.tree is not None:
-                    cid = src.connector.id
+                    pms = {node.connector.id: node_pm(node) for node in nodes(src.tree)}
                     for i, rule in enumerate(pr.rules):
-                        conds = [f"(mask & {pm}) == {pm}" for c, pm in rule[side] if c == cid]
+                        conds = [f"({pms[c]} & {pm}u) == {pm}u" + ("" if pm else f" && {pms[c]}")
+                                 for c, pm in rule[side] if c in pms]
                         if conds:
                             terms.append(f"((({' || '.join(conds)})) ? UINT64_C({1 << i}) : 0)")
                 self.w(f"static uint64_t {name}{src.index}(uint32_t mask) {{ (void)mask; return "
@@ -528,6 +578,8 @@ class CGen:
             self.gen_atom_enabled(fa)
         for fp in fl.ports:
             w(f"    PEN[{fp.id}] = (uint8_t)e{fp.id};")
+        if self.trees:
+            w(f"    const uint8_t EP[{max(len(fl.ports), 1)}] = {{{', '.join(f'(uint8_t)e{fp.id}' for fp in fl.ports)}}};")
         for src in self.sources:
             self.gen_source_enabled(src)
         if self.prio is not None:
@@ -593,6 +645,9 @@ class CGen:
         fl = self.flat
         if src.kind == "port":
             w(f"    if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
+            return
+        if src.kind == "generic":
+            self.trees[src.index].gen_enabled()
             return
         info = self.infos[src.connector.type.name]
         enabled = [f"e{p}" for p in src.leaves]
