@@ -235,7 +235,7 @@ def verb_verify(args: argparse.Namespace) -> int:
     worst = max(compositional, _run_explorer(space, args, deadlock, properties))
     if observers:
         from genom2bip.verify_timed import check_observers
-        worst = max(worst, check_observers(space, flat, package, root, observers, _progress(args)))
+        worst = max(worst, check_observers(space, flat, package, root, observers, _progress(args), args))
     return worst
 
 

@@ -191,3 +191,29 @@ def test_random_models_with_floats_have_the_same_successors(text):
     cs, note = native.compile_space(space)
     assert cs is not None, note
     agree(space, cs, limit=500)
+
+
+# -- verify --timed on the compiled explorer -------------------------------------------------------
+
+def _verify(capsys, *argv):
+    import re
+
+    from genom2bip.cli import main
+
+    code = main(["verify", *argv])
+    out = capsys.readouterr().out
+    return code, re.sub(r"\([\d,]+ states, [\d.]+ s\)", "(...)", out)
+
+
+@pytest.mark.parametrize("argv", [
+    ("tests/fixtures/timed/Cruise.gen", "--timed", "--schedulability"),
+    ("tests/fixtures/timed/Cruise.gen", "--timed", "--schedulability", "-DPERIOD=15"),
+    ("tests/fixtures/timed/Cruise.gen", "--timed", "--observers", "tests/fixtures/timed/observers.yaml",
+     "-DPERIOD=15"),
+])
+def test_timed_verdicts_and_traces_are_the_python_explorers(capsys, argv):
+    argv = (str(ROOT / argv[0]),) + tuple(str(ROOT / a) if a.endswith(".yaml") else a for a in argv[1:])
+    code, out = _verify(capsys, *argv)
+    expected_code, expected = _verify(capsys, *argv, "--engine", "python")
+    assert (code, out) == (expected_code, expected)
+    assert "note:" not in out and "reachable" in out
