@@ -217,3 +217,77 @@ def test_timed_verdicts_and_traces_are_the_python_explorers(capsys, argv):
     expected_code, expected = _verify(capsys, *argv, "--engine", "python")
     assert (code, out) == (expected_code, expected)
     assert "note:" not in out and "reachable" in out
+
+
+# -- connectors of many ports ------------------------------------------------------------------------
+
+def wide(n: int, guarded: bool) -> str:
+    """A broadcast of n receivers in pairs (a nested define), each receiver toggling; optionally guarded."""
+    receivers = [f"r{i}" for i in range(n)]
+    pairs = " ".join(f"({receivers[i]} {receivers[i + 1]})" if i + 1 < n else receivers[i] for i in range(0, n, 2))
+    clause = f"    on s r0 r1 provided (s.v + r0.v + r1.v < 2)\n" if guarded else ""
+    comps = ", ".join(f"u{i}()" for i in range(n))
+    args = ", ".join(f"u{i}.p" for i in range(n))
+    return f"""package Wide
+  port type IPort(int v)
+  atom type U()
+    data int v
+    export port IPort p(v)
+    place a, b
+    initial to a
+    on p from a to b do {{ v = 1 - v; }}
+    on p from b to a provided (v == 0)
+  end
+  connector type Fan(IPort s, {', '.join(f'IPort {r}' for r in receivers)})
+    define s' {pairs}
+{clause}  end
+  compound type Main()
+    component U src(), {comps}
+    connector Fan fan(src.p, {args})
+  end
+end
+"""
+
+
+@pytest.mark.parametrize("n, guarded", [(13, False), (19, False), (14, True), (20, True)])
+def test_connectors_of_many_ports_have_the_same_successors(n, guarded):
+    space = verifykit.text_space(wide(n, guarded))
+    assert agree(space, compiled(space), limit=300) == min(len(space), 300)
+
+
+def test_a_connector_past_32_ports_is_refused_by_name():
+    cs, note = native.compile_space(verifykit.text_space(wide(33, False)))
+    assert cs is None and "connector fan: 34 ports, more than the 32 bits of the compiled step's interaction masks" \
+        in note
+
+
+def test_more_than_64_compound_priorities_filter_as_the_python_step():
+    n = 70
+    atoms = ", ".join(f"a{i}()" for i in range(n + 1))
+    conns = "\n".join(f"    connector Sync c{i}(a{i}.p, a{i + 1}.q)" for i in range(n))
+    prios = "\n".join(f"    priority r{i} c{i}:* < c{i + 1}:*" + (" provided (a0.x == 0)" if i == 3 else "")
+                      for i in range(n - 1))
+    text = f"""package Many
+  port type Port()
+  atom type A()
+    export data int x
+    export port Port p(), q()
+    place s, t
+    initial to s
+    on p from s to t do {{ x = 1; }}
+    on q from s to s
+    on q from t to t
+    on p from t to s do {{ x = 0; }}
+  end
+  connector type Sync(Port a, Port b)
+    define a b
+  end
+  compound type Main()
+    component A {atoms}
+{conns}
+{prios}
+  end
+end
+"""
+    space = verifykit.text_space(text)
+    assert agree(space, compiled(space), limit=200) == len(space) >= 2  # 70 sources enabled, one kept

@@ -47,8 +47,10 @@ def at(sc: CScope, what: str) -> CScope:
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
 MAX_GUARDED = 10
-#: Port parameters of a connector past which its interaction tables would be too large.
-MAX_PARAMS = 16
+#: Ports of a connector: its interactions are masks of 32 bits.
+MAX_PARAMS = 32
+#: Ports of a flat connector up to which its largest interactions are a table rather than computed.
+MAX_TABLE = 12
 #: Bits of an int field without a declared domain at first (zig-zag: -8..7); doubled when a value outgrows it.
 START_BITS = 4
 
@@ -134,10 +136,12 @@ class CGen:
         self.trees = {src.index: TreeGen(self, src) for src in self.sources if src.kind == "generic"}
         for src in self.sources:
             if len(src.leaves) > MAX_PARAMS:
-                raise Unsupported(f"connector {src.connector.path}: more than {MAX_PARAMS} ports")
+                raise Unsupported(f"connector {src.connector.path}: {len(src.leaves)} ports, more than the {MAX_PARAMS} "
+                                  "bits of the compiled step's interaction masks")
         nsrc = len(self.sources)
         if max((s.full for s in self.sources), default=0) * nsrc + nsrc >= (1 << 32) - 1:
-            raise Unsupported("too many interactions to number them in 32 bits")
+            raise Unsupported(f"{nsrc} sources with up to {max(len(s.leaves) for s in self.sources)} ports: too many "
+                              "interactions to number them in 32 bits")
         self.base = fl.state_size + (len(self.space.services) if self.externs.services is not None else 0)
         self.width = self.base + len(self.monitors)
         for m, (mon, _) in enumerate(self.monitors):
@@ -484,7 +488,8 @@ class CGen:
             n = len(ap.ports)
             g = len(ap.guard_bit)
             if g > MAX_GUARDED or n > 32:
-                raise Unsupported(f"atom {fa.name}: too many priorities for the compiled tables")
+                raise Unsupported(f"atom {fa.name}: {g} guarded priorities over {n} ports; the compiled tables take "
+                                  f"at most {MAX_GUARDED} guarded ones over 32 ports")
             rows, cyc = [], []
             for active in range(1 << g):
                 try:
@@ -509,8 +514,11 @@ class CGen:
             return
         pr: support.Priorities = self.prio
         nr = len(pr.rules)
-        if nr > 64 or len(pr.guards) > MAX_GUARDED:
-            raise Unsupported("too many compound priorities for the compiled tables")
+        if len(pr.guards) > MAX_GUARDED:
+            names = ", ".join(self.flat.priorities[r].name for r, _ in pr.guards[:3])
+            raise Unsupported(f"compound priorities of {self.flat.root}: {len(pr.guards)} guarded ones ({names}, ...); "
+                              f"the compiled tables take at most {MAX_GUARDED}")
+        words = (nr + 63) // 64
         rows, cyc = [], []
         for key in range(1 << len(pr.guards)):
             bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
@@ -520,9 +528,10 @@ class CGen:
             except ModelError:
                 reach = [0] * nr
                 cyc.append("1")
-            rows.append("{" + ", ".join(f"UINT64_C({r})" for r in reach) + "}")
+            rows.append("{" + ", ".join(_words(r, words) for r in reach) + "}")
         self.w(f"#define NRULES {nr}")
-        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}] = {{{', '.join(rows)}}};")
+        self.w(f"#define NRW {words}")
+        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}][NRW] = {{{', '.join(rows)}}};")
         self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
         # guard functions of compound priorities, reading exported data from the state
         for k, (r, _) in enumerate(pr.guards):
@@ -541,20 +550,23 @@ class CGen:
                         conds = [f"({pms[c]} & {pm}u) == {pm}u" + ("" if pm else f" && {pms[c]}")
                                  for c, pm in rule[side] if c in pms]
                         if conds:
-                            terms.append(f"((({' || '.join(conds)})) ? UINT64_C({1 << i}) : 0)")
-                self.w(f"static uint64_t {name}{src.index}(uint32_t mask) {{ (void)mask; return "
-                       f"{' | '.join(terms) or '0'}; }}")
+                            terms.append(f"if ({' || '.join(conds)}) o[{i >> 6}] |= UINT64_C({1 << (i & 63)});")
+                self.w(f"static void {name}{src.index}(uint32_t mask, uint64_t *o) {{ (void)mask; (void)o; "
+                       f"{' '.join(terms)} }}")
         for name in ("lo", "hi"):
-            self.w(f"static uint64_t (*const {name.upper()}T[NSRC])(uint32_t) = "
+            self.w(f"static void (*const {name.upper()}T[NSRC])(uint32_t, uint64_t *) = "
                    f"{{{', '.join(f'{name}{s.index}' for s in self.sources)}}};")
-        self.w("#define LO(s, m) LOT[s](m)")
-        self.w("#define HI(s, m) HIT[s](m)")
 
     def gen_blocked(self) -> None:
-        """``blocked<k>(m, pv)``: the guard of interaction ``m`` of a flat connector source is false."""
+        """``blocked<k>(m, pv)``: the guard of interaction ``m`` of a flat connector source is false.
+
+        Also ``maxa<k>(em)``: the largest interaction within the enabled ports ``em`` (defines.max_allowed),
+        a table up to MAX_TABLE ports, computed from the define tree past that.
+        """
         for src in self.sources:
             if src.kind != "flat":
                 continue
+            self.gen_max_allowed(src)
             info = self.infos[src.connector.type.name]
             k = self.type_index[src.connector.type.name]
             cases = " ".join(f"case {m}: return !k{k}_{m}_g(pv);" for m, spec in info.clauses.items()
@@ -562,6 +574,21 @@ class CGen:
             if cases:
                 self.w(f"static int blocked{src.index}(uint32_t m, V pv[][MAXF]) "
                        f"{{ switch (m) {{ {cases} default: return 0; }} }}")
+
+    def gen_max_allowed(self, src) -> None:
+        tree = self.infos[src.connector.type.name].tree
+        n = len(src.leaves)
+        if n <= MAX_TABLE:
+            table = ", ".join(str(defines.max_allowed(tree, em)) for em in range(1 << n))
+            self.w(f"static uint32_t maxa{src.index}(uint32_t em) {{ static const uint32_t T[] = {{{table}}}; "
+                   "return T[em]; }")
+            return
+        lines: list[str] = []
+        top = max_allowed_c(tree, lines)
+        self.w(f"static uint32_t maxa{src.index}(uint32_t em) {{")
+        self.lines.extend(f"    {line}" for line in lines)
+        self.w(f"    return {top};")
+        self.w("}")
 
     # -- enabled ----------------------------------------------------------------------------------
     def gen_enabled(self) -> None:
@@ -588,14 +615,24 @@ class CGen:
             w("    if (n) {")
             w(f"        int key = {key};")
             w(f"        if (PCYC[key]) fail({E_CYCLE}, -1);")
-            w("        uint64_t high = 0, blocked = 0;")
-            w("        for (int i = 0; i < n; i++) high |= HI(isrc[i], imask[i]);")
-            w("        if (high) {")
-            w("            for (int r = 0; r < NRULES; r++) if (PREACH[key][r] & high) blocked |= UINT64_C(1) << r;")
-            w("            if (blocked) {")
+            w("        uint64_t high[NRW] = {0}, blocked[NRW] = {0};")
+            w("        int any = 0;")
+            w("        for (int i = 0; i < n; i++) HIT[isrc[i]](imask[i], high);")
+            w("        for (int x = 0; x < NRW; x++) any |= high[x] != 0;")
+            w("        if (any) {")
+            w("            int b = 0;")
+            w("            for (int r = 0; r < NRULES; r++)")
+            w("                for (int x = 0; x < NRW; x++)")
+            w("                    if (PREACH[key][r][x] & high[x]) { blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }")
+            w("            if (b) {")
             w("                int k = 0;")
-            w("                for (int i = 0; i < n; i++) if (!(LO(isrc[i], imask[i]) & blocked)) "
-              "{ isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
+            w("                for (int i = 0; i < n; i++) {")
+            w("                    uint64_t low[NRW] = {0};")
+            w("                    int hit = 0;")
+            w("                    LOT[isrc[i]](imask[i], low);")
+            w("                    for (int x = 0; x < NRW; x++) hit |= (low[x] & blocked[x]) != 0;")
+            w("                    if (!hit) { isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
+            w("                }")
             w("                n = k;")
             w("            }")
             w("        }")
@@ -659,9 +696,7 @@ class CGen:
             w(f"    if ({cond}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
             return
         nparams = len(src.leaves)
-        table = [defines.max_allowed(info.tree, em) for em in range(1 << nparams)]
         w("    {")
-        w(f"        static const uint32_t MAXA[{1 << nparams}] = {{{', '.join(map(str, table))}}};")
         w(f"        uint32_t em = {' | '.join(f'((uint32_t){e} << {i})' for i, e in enumerate(enabled))};")
         guarded = {mask: spec for mask, spec in info.clauses.items() if spec.guard is not None}
         if guarded:
@@ -672,14 +707,13 @@ class CGen:
                 fa = fl.atoms[fp.atom]
                 for j, v in enumerate(fp.decl.data):
                     w(f"            pv[{i}][{j}] = a{fa.index}_{v};")
-            w(f"            n = maximal_enabled(MAXA, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
+            w(f"            n = maximal_enabled(maxa{src.index}, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
             w("        }")
         elif defines.is_flat(info.tree):
             w(f"        if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")
         else:
-            w("        uint32_t k = MAXA[em];")
+            w(f"        uint32_t k = maxa{src.index}(em);")
             w(f"        if (k) {{ isrc[n] = {src.index}; imask[n] = k; n++; }}")
-        w("        (void)MAXA;")
         w("    }")
 
     def inline_scope(self, src, info) -> CScope:
@@ -690,6 +724,28 @@ class CGen:
             for f, v, ty in zip(fp.fields, fp.decl.data, fp.field_types):
                 sc.ports[(p.name, f)] = CName(f"a{fa.index}_{v}", c_type(ty, sc.where))
         return sc
+
+
+def _words(value: int, words: int) -> str:
+    """A set of rules as a C initialiser of ``words`` 64-bit words."""
+    return "{" + ", ".join(f"UINT64_C({value >> (64 * k) & ((1 << 64) - 1)})" for k in range(words)) + "}"
+
+
+def max_allowed_c(node, lines: list[str]) -> str:
+    """C statements computing :func:`defines.max_allowed` of ``node`` within ``em``; returns the result's name."""
+    name = f"t{len(lines)}"
+    if node[0] == "p":
+        lines.append(f"uint32_t {name} = em & {node[1]}u;")
+        return name
+    subs = [(max_allowed_c(sub, lines), trig) for sub, trig in node[1]]
+    union = " | ".join(t for t, _ in subs)
+    if any(trig for _, trig in subs):
+        cond = " || ".join(t for t, trig in subs if trig)
+    else:
+        cond = " && ".join(t for t, _ in subs)
+    name = f"t{len(lines)}"
+    lines.append(f"uint32_t {name} = ({cond}) ? ({union}) : 0u;")
+    return name
 
 
 def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = None, monitors=()) -> CModel:
