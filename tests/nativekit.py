@@ -45,14 +45,18 @@ def agree(space: StateSpace, cs: CompiledSpace, limit: int = 2000) -> int:
 
 
 @st.composite
-def models(draw, atoms_range=(2, 3), connectors_range=(1, 3)) -> str:
-    """Small random models: atoms with guarded, counting transitions and priorities; rendezvous, broadcasts."""
+def models(draw, atoms_range=(2, 3), connectors_range=(1, 3), floats: bool = False) -> str:
+    """Small random models: atoms with guarded, counting transitions and priorities; rendezvous, broadcasts.
+
+    With ``floats`` every atom also has a float ``f`` that its transitions compute, compare and truncate.
+    """
     natoms = draw(st.integers(*atoms_range))
     atoms, comps = [], []
     for a in range(natoms):
         nplaces = draw(st.integers(1, 3))
         places = [f"P{k}" for k in range(nplaces)]
-        lines = ["    export data int x", "    export port IntPort p0(x), p1(x)", "    port Port q()",
+        lines = ["    export data int x"] + (["    data float f"] if floats else []) + [
+                 "    export port IntPort p0(x), p1(x)", "    port Port q()",
                  f"    place {', '.join(places)}", f"    initial to P0 do {{ x = {draw(st.integers(0, 2))}; }}"]
         for port in ("p0", "p1", "q", None):
             for _ in range(draw(st.integers(0, 2 if port else 1))):
@@ -62,8 +66,15 @@ def models(draw, atoms_range=(2, 3), connectors_range=(1, 3)) -> str:
                     if src == dst or guard == "":
                         continue  # an unguarded internal self-loop is a livelock in every state
                     guard = " provided (x == 0)"
-                act = draw(st.sampled_from(["", " do { x = (x + 1) % 3; }", " do { x = 2 - x; }",
-                                            " do { if (x > 0) then x = x - 1; fi }"]))
+                acts = ["", " do { x = (x + 1) % 3; }", " do { x = 2 - x; }", " do { if (x > 0) then x = x - 1; fi }"]
+                if floats:
+                    extra = draw(st.sampled_from(["", "f < 1.5", "x >= f", "f != 0.75"]))
+                    if extra:
+                        guard = f" provided ({guard[11:-1] + ' && ' if guard else ''}{extra})"
+                    acts += [" do { f = 1.5 - f; }", " do { f = x * 0.75; }", " do { x = f + 0.5; }",
+                             " do { f = f / 3.0; x = f * 4.0; }", " do { f = (f + 1.0) % 2.0; }",
+                             " do { if (f > x) then f = 0.0; else f = -f; fi }", " do { f = f / x; }"]
+                act = draw(st.sampled_from(acts))
                 head = f"on {port}" if port else "internal"
                 lines.append(f"    {head} from {src} to {dst}{guard}{act}")
         if draw(st.booleans()):

@@ -139,6 +139,23 @@ def test_an_int_past_64_bits_gives_way_to_the_python_step():
         compiled(verifykit.text_space(BIG)).explore()
 
 
+PYTHON_EXTERN = """package Ext
+  extern function int twice(const int)
+  port type Port()
+  atom type A()
+    data int x
+    export port Port p()
+    place s
+    initial to s
+    on p from s to s do { x = twice(1); }
+  end
+  compound type Main()
+    component A a()
+  end
+end
+"""
+
+
 def test_without_a_compiler_the_note_says_so(monkeypatch):
     monkeypatch.setenv("PATH", "")
     monkeypatch.delenv("CC", raising=False)
@@ -147,8 +164,10 @@ def test_without_a_compiler_the_note_says_so(monkeypatch):
 
 
 def test_unsupported_models_say_why():
-    cs, note = native.compile_space(verifykit.space("Mix", "Main()"))
-    assert cs is None and "nested connectors are explored in Python only" in note
+    cs, note = native.compile_space(verifykit.text_space(PYTHON_EXTERN, externs={"twice": lambda x: 2 * x}))
+    assert cs is None and note == ("compiled exploration does not take this model (atom a (A), transition on p from s "
+                                   "to s (Inline.bip:9:8): extern twice is bound to Python code): exploring with the "
+                                   "Python step")
 
 
 def test_the_library_is_cached_by_model(tmp_path, monkeypatch):

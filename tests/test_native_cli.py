@@ -53,10 +53,27 @@ def test_without_a_compiler_one_note_and_the_same_answers(capsys, monkeypatch):
 
 
 @needs_cc
-def test_a_model_the_c_step_does_not_take_is_explored_in_python(capsys):
-    code, out, _ = run(capsys, "verify", str(FIXTURES / "Mix.bip"))
-    assert out[1].startswith("note: compiled exploration does not take this model (connector kick: nested")
-    assert out[2].startswith("explored: ") and code in (0, 4)
+def test_a_model_the_c_step_does_not_take_is_explored_in_python(capsys, tmp_path):
+    model = tmp_path / "Halves.bip"
+    model.write_text("""package Halves
+  port type Port()
+  atom type A()
+    data float h
+    port Port p()
+    place s, t
+    initial to s
+    on p from s to t do { h = 7; h = h / 2; }
+  end
+  compound type Main()
+    component A a()
+  end
+end
+""")
+    code, out, _ = run(capsys, "verify", str(model))
+    assert out[1] == (f"note: compiled exploration does not take this model (atom a (A), transition on p from s to t "
+                      f"({model}:8:8): an int value assigned to a float variable (the Python step keeps it an int, "
+                      "with int arithmetic; write a float constant such as 1.0)): exploring with the Python step")
+    assert out[2].startswith("explored: 2 states") and code == 4
 
 
 @needs_cc

@@ -205,7 +205,7 @@ def verb_verify(args: argparse.Namespace) -> int:
     worst = max(compositional, _run_explorer(space, args, deadlock, properties))
     if observers:
         from genom2bip.cli.verify_timed import check_observers
-        worst = max(worst, check_observers(space, flat, package, root, observers, progress(args)))
+        worst = max(worst, check_observers(space, flat, package, root, observers, progress(args), args))
     return worst
 
 

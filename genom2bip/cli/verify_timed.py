@@ -3,7 +3,8 @@
 Each observer of the timed model (an atom whose type is annotated
 ``@observer``: the period observer of every periodic task, the latency
 observers of the observer file) is checked as ``invariant not (ATOM @ ERROR)``
-on the explorer; a violation is printed with a shortest trace whose steps
+by the compiled explorer (the Python one with ``--engine python``, or where
+the C step does not take the model, with a note); a violation is printed with a shortest trace whose steps
 carry their time (ticks times the model's resolution, ``@timed(tick_us=...)``).
 """
 from __future__ import annotations
@@ -171,8 +172,13 @@ def timed_trace(steps, tick: int | None, indent: str = "    ") -> None:
         print(f"{indent}(the initial state)")
 
 
-def check_observers(space, flat, package, root: str, kinds: set[str], progress) -> int:
-    """Check ``invariant not (OBS @ ERROR)`` for every observer of the given kinds; print verdicts and traces."""
+def check_observers(space, flat, package, root: str, kinds: set[str], progress, args=None) -> int:
+    """Check ``invariant not (OBS @ ERROR)`` for every observer of the given kinds; print verdicts and traces.
+
+    With the command line's ``args`` the compiled explorer checks them (``--engine``, ``--max-states``,
+    ``--por``, ...), else the Python checker.
+    """
+    from genom2bip.verify_native import check_property
     from runtime.props import check, read_property_text
 
     tick = tick_us(package)
@@ -185,7 +191,7 @@ def check_observers(space, flat, package, root: str, kinds: set[str], progress) 
     worst = EXIT_OK
     for a in atoms:
         item = read_property_text(f"invariant not ({a.path} @ ERROR)", flat)
-        verdict = check(space, item, progress)
+        verdict = check(space, item, progress) if args is None else check_property(space, item, args, progress)
         what = ("overrun" if a.kind == "overrun" else "violation")
         limit = f"{a.bound * tick / 1000:g} ms" if tick else f"{a.bound} ticks"
         subject = (f"period of {a.path.rsplit('.', 1)[0]} ({limit})" if a.kind == "overrun"

@@ -24,6 +24,7 @@ from runtime.explore.space import StateSpace, Step
 from runtime.native.build import PROGRESS, BuildError, Result, build, compiler, load
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
+from runtime.native.values import from_words, to_words
 
 STATUS = {0: "", 1: "max-states", 2: "max-depth", 3: "error", 4: "deadlock", 5: "interrupted", 6: "max-memory",
           8: "violated"}
@@ -93,6 +94,7 @@ class CompiledSpace:
         model = generate(self.space, self.choices, self.widths, self.monitors)
         self.lib = load(build(model.source, self.cc))
         self.width, self.source, self.bits = model.width, model.source, model.bits
+        self.model = model
 
     def _widen(self, slot: int) -> None:
         """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits."""
@@ -101,7 +103,7 @@ class CompiledSpace:
 
     # -- one step -------------------------------------------------------------------------------
     def _typed(self, values) -> tuple:
-        out = list(values)
+        out = from_words(self.model, values)
         for i in self.bools:
             out[i] = bool(out[i])
         return tuple(out)
@@ -110,7 +112,7 @@ class CompiledSpace:
         """``(interaction index, next state)`` for every successor of an explorer state, dead variables reset."""
         cap = 1024
         while True:
-            s = (ctypes.c_int64 * self.width)(*[int(v) for v in state])
+            s = (ctypes.c_int64 * self.width)(*to_words(self.model, state))
             out = (ctypes.c_int64 * (self.width * cap))()
             via = (ctypes.c_uint32 * cap)()
             code, arg = ctypes.c_int(0), ctypes.c_int64(0)

@@ -13,7 +13,7 @@ after the model.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from runtime.engine import defines
@@ -29,17 +29,28 @@ from runtime.native.cexpr import (
     Unsupported,
     c_type,
     condition,
+    intern,
     literal,
     statements,
+    stored,
 )
+from runtime.native.ctree import TreeGen, node_pm, nodes
+from runtime.native.ctree import width as offer_width
 from runtime.native.observers import gen_observers
 from runtime.native.por import gen_por
+
+def at(sc: CScope, what: str) -> CScope:
+    """The same scope, its place in the model made precise (for refusals)."""
+    return replace(sc, where=f"{sc.where}, {what}")
+
 
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
 MAX_GUARDED = 10
-#: Port parameters of a connector past which its interaction tables would be too large.
-MAX_PARAMS = 16
+#: Ports of a connector: its interactions are masks of 32 bits.
+MAX_PARAMS = 32
+#: Ports of a flat connector up to which its largest interactions are a table rather than computed.
+MAX_TABLE = 12
 #: Bits of an int field without a declared domain at first (zig-zag: -8..7); doubled when a value outgrows it.
 START_BITS = 4
 
@@ -56,6 +67,8 @@ class CModel:
     bits: int = 0
     label_ids: dict[int, int] = field(default_factory=dict)  # interaction index -> label id (static ones)
     labels: list[str] = field(default_factory=list)
+    floats: list[int] = field(default_factory=list)  # state slots holding the bits of a double
+    strings: dict[int, list[str]] = field(default_factory=dict)  # state slot -> its strings by number
 
 
 class CGen:
@@ -74,7 +87,8 @@ class CGen:
         self.externs = Externs({name: k for k, name in enumerate(choices)},
                                list(space.services) if budget is not None else None)
         self.type_index = {name: k for k, name in enumerate(self.infos)}
-        self.maxf = max([len(fp.fields) for fp in self.flat.ports] + [1])
+        self.maxf = max([len(fp.fields) for fp in self.flat.ports] + [1]
+                        + [offer_width(s.tree) for s in self.sources if s.kind == "generic"])
 
     def w(self, line: str = "") -> None:
         self.lines.append(line)
@@ -90,8 +104,11 @@ class CGen:
 
     def connector_scope(self, info, mask: int, ports_rw: bool, with_locals: bool) -> CScope:
         ct = info.type
-        sc = CScope(f"connector type {ct.name}", self.externs, constants=dict(self.flat.constants),
-                    in_guard=not with_locals)
+        where = f"connector type {ct.name}"
+        spec = info.clauses.get(mask)
+        if spec is not None:
+            where += f", on {' '.join(spec.ports)}" + (f" ({spec.span})" if spec.span.line > 0 else "")
+        sc = CScope(where, self.externs, constants=dict(self.flat.constants), in_guard=not with_locals)
         for k, d in enumerate(ct.data):
             t = c_type(d.type, f"{sc.where}, {d.name}")
             if with_locals:
@@ -109,17 +126,22 @@ class CGen:
     # -- the whole file -------------------------------------------------------------------------
     def generate(self) -> CModel:
         fl = self.flat
+        self.value_types = {}
         for s in self.slots:
             if s.kind == "value":
-                raise Unsupported(f"{s.title}: data of this type are explored in Python only")
+                fa = next(a for a in fl.atoms if a.name == s.atom)
+                decl = next(d for d in fa.variables if d.name == s.name)
+                self.value_types[s.index] = c_type(decl.type, f"atom {fa.name} ({fa.type.name}), data {s.name}")
+        self.check_port_types()
+        self.trees = {src.index: TreeGen(self, src) for src in self.sources if src.kind == "generic"}
         for src in self.sources:
-            if src.kind == "generic":
-                raise Unsupported(f"connector {src.connector.path}: nested connectors are explored in Python only")
             if len(src.leaves) > MAX_PARAMS:
-                raise Unsupported(f"connector {src.connector.path}: more than {MAX_PARAMS} ports")
+                raise Unsupported(f"connector {src.connector.path}: {len(src.leaves)} ports, more than the {MAX_PARAMS} "
+                                  "bits of the compiled step's interaction masks")
         nsrc = len(self.sources)
         if max((s.full for s in self.sources), default=0) * nsrc + nsrc >= (1 << 32) - 1:
-            raise Unsupported("too many interactions to number them in 32 bits")
+            raise Unsupported(f"{nsrc} sources with up to {max(len(s.leaves) for s in self.sources)} ports: too many "
+                              "interactions to number them in 32 bits")
         self.base = fl.state_size + (len(self.space.services) if self.externs.services is not None else 0)
         self.width = self.base + len(self.monitors)
         for m, (mon, _) in enumerate(self.monitors):
@@ -144,17 +166,24 @@ class CGen:
         self.gen_initial()
         for name, info in self.infos.items():
             self.gen_clauses(name, info)
+        for tree in self.trees.values():
+            tree.gen_offers()
         for src in self.sources:
             self.gen_fire(src)
         self.gen_fire_table()
-        self.gen_slots()
-        model = CModel("", self.width, bits=self.bits)
+        model = CModel("", self.width)
         self.gen_labels(model)
         self.gen_priorities()
         self.gen_blocked()
         self.gen_enabled()
         gen_observers(w, self.monitors, self.sources, fl, self.base)
         gen_por(w, self.sources, fl, self.prio, self.monitors, enabled=self.externs.services is None)
+        intern(self.externs.strings, "")  # every string variable starts as ""
+        self.gen_slots()  # last: string fields are as wide as the strings met
+        model.bits = self.bits
+        names = sorted(self.externs.strings, key=self.externs.strings.get)
+        model.floats = [i for i, t in self.value_types.items() if t == "float"]
+        model.strings = {i: names for i, t in self.value_types.items() if t == "string"}
         w('#include "search.c"')
         model.source = "\n".join(self.lines) + "\n"
         return model
@@ -193,7 +222,7 @@ class CGen:
         return f"(({var} & {src}) == {src})" if src else "1"
 
     def enabled_expr(self, fa: FlatAtom, t, var: str, sc: CScope) -> str:
-        guard = condition(t.guard, sc)
+        guard = condition(t.guard, at(sc, f"transition {describe(t)}"))
         mk = self.marked(fa, t, var)
         return mk if guard == "1" else f"({mk} && {guard})"
 
@@ -204,7 +233,7 @@ class CGen:
         if tgt:
             self.w(f"{indent}if (m & {tgt}) fail({E_UNSAFE}, {fa.index});")
             self.w(f"{indent}m |= {tgt};")
-        self.lines.extend(statements(t.action, sc, indent))
+        self.lines.extend(statements(t.action, at(sc, f"transition {describe(t)}"), indent))
 
     def gen_internal(self, fa: FlatAtom) -> None:
         ts = [t for t in fa.type.transitions if t.internal]
@@ -263,15 +292,16 @@ class CGen:
             sc = self.atom_scope(fa, in_enabled=False)
             w("    {")
             for d in fa.variables:
-                w(f"        V v_{d.name} = {literal(default_value(d.type), sc.where)[0]};")
+                w(f"        V v_{d.name} = {stored(default_value(d.type), sc.where, self.externs.strings)};")
             for d in fa.variables:
                 if d.init is not None:
-                    self.lines.extend(statements([Assign(Var(d.name), d.init)], sc, "        "))
+                    where = at(sc, f"data {d.name}" + (f" ({d.span})" if d.span.line > 0 else ""))
+                    self.lines.extend(statements([Assign(Var(d.name), d.init)], where, "        "))
             targets = t.initial.targets
             if any(p not in fa.places for p in targets) or len(set(targets)) != len(targets):
                 raise Unsupported(f"atom {fa.name}: its initial transition is refused by the engine")
             w(f"        V m = {fa.place_mask(targets)};")
-            self.lines.extend(statements(t.initial.action, sc, "        "))
+            self.lines.extend(statements(t.initial.action, at(sc, "initial transition"), "        "))
             self.store(fa, "        ")
             if any(tr.internal for tr in t.transitions):
                 w(f"        in{fa.index}(L);")
@@ -294,12 +324,15 @@ class CGen:
                     w("}")
 
     def locals_init(self, info) -> str:
-        vals = [literal(v, f"connector type {info.type.name}")[0] for v in info.local_defaults]
+        vals = [stored(v, f"connector type {info.type.name}", self.externs.strings) for v in info.local_defaults]
         return f"V lv[{max(len(vals), 1)}] = {{{', '.join(vals) or '0'}}};"
 
     def gen_fire(self, src) -> None:
         w = self.w
         fl = self.flat
+        if src.kind == "generic":
+            self.trees[src.index].gen_fire()
+            return
         w(f"static void f{src.index}(V *L, uint32_t mask) {{")
         if src.kind == "port":
             w(f"    (void)mask; ap{src.port.id}(L, 0);")
@@ -343,7 +376,23 @@ class CGen:
             return 1
         if s.domain is not None:
             return max((s.domain[1] - s.domain[0]).bit_length(), 1)
+        if s.kind == "value":
+            return 64 if self.value_types[s.index] == "float" else max((len(self.externs.strings) - 1).bit_length(), 1)
         return self.widths.get(k, START_BITS)
+
+    def default(self, s: Slot) -> str:
+        """What a dead variable is reset to, as the C state stores it."""
+        return stored(s.default if s.default is not None else 0, s.title, self.externs.strings)
+
+    def check_port_types(self) -> None:
+        """A port field and the variable it binds hold the same kind of word (a float's bits, a string's number)."""
+        for fp in self.flat.ports:
+            fa = self.flat.atoms[fp.atom]
+            types = {d.name: d.type for d in fa.variables}
+            for f, v, ty in zip(fp.fields, fp.decl.data, fp.field_types):
+                kinds = {"float" if t == "float" else "string" if t == "string" else "word" for t in (ty, types.get(v))}
+                if len(kinds) > 1:
+                    raise Unsupported(f"port {fp.path}: field {f} of type {ty} binds {v} of type {types.get(v)}")
 
     def gen_slots(self) -> None:
         """Straight-line ``pack`` and ``unpack`` (runtime.explore.codec's fields), widths fixed in the text.
@@ -372,10 +421,14 @@ class CGen:
             if s.domain is not None:
                 w(f"    if (x < {s.domain[0]} || x > {s.domain[1]}) fail({E_DOMAIN}, {k});")
             if s.live is not None:
-                w(f"    if (!(L[{s.marking}] & {s.live})) x = {literal(s.default or 0, s.title)[0]};")
+                w(f"    if (!(L[{s.marking}] & {s.live})) x = {self.default(s)};")
             if s.domain is not None:
                 w(f"    u = (uint64_t)(x - ({s.domain[0]}));")
             elif s.kind in ("marking", "bool"):
+                w("    u = (uint64_t)x;")
+            elif s.kind == "value":
+                if self.value_types[s.index] == "float":
+                    w(f"    if (isnan(F(x))) fail({E_ARITH}, 4);  /* the Python explorer never meets a NaN state again */")
                 w("    u = (uint64_t)x;")
             else:
                 w("    u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
@@ -390,7 +443,7 @@ class CGen:
         w("    uint64_t u;")
         for k, s, width, off in fields:
             if not width:
-                w(f"    L[{s.index}] = {literal(s.default or 0, s.title)[0]};")
+                w(f"    L[{s.index}] = {self.default(s)};")
                 continue
             word, sh = divmod(off, 64)
             expr = f"(o[{word}] >> {sh})" if sh else f"o[{word}]"
@@ -400,7 +453,7 @@ class CGen:
             w(f"    u = {expr}{mask};")
             if s.domain is not None:
                 w(f"    L[{s.index}] = (V)u + ({s.domain[0]});")
-            elif s.kind in ("marking", "bool"):
+            elif s.kind in ("marking", "bool", "value"):
                 w(f"    L[{s.index}] = (V)u;")
             else:
                 w(f"    L[{s.index}] = (V)(u >> 1) ^ -(V)(u & 1);")
@@ -435,7 +488,8 @@ class CGen:
             n = len(ap.ports)
             g = len(ap.guard_bit)
             if g > MAX_GUARDED or n > 32:
-                raise Unsupported(f"atom {fa.name}: too many priorities for the compiled tables")
+                raise Unsupported(f"atom {fa.name}: {g} guarded priorities over {n} ports; the compiled tables take "
+                                  f"at most {MAX_GUARDED} guarded ones over 32 ports")
             rows, cyc = [], []
             for active in range(1 << g):
                 try:
@@ -460,8 +514,11 @@ class CGen:
             return
         pr: support.Priorities = self.prio
         nr = len(pr.rules)
-        if nr > 64 or len(pr.guards) > MAX_GUARDED:
-            raise Unsupported("too many compound priorities for the compiled tables")
+        if len(pr.guards) > MAX_GUARDED:
+            names = ", ".join(self.flat.priorities[r].name for r, _ in pr.guards[:3])
+            raise Unsupported(f"compound priorities of {self.flat.root}: {len(pr.guards)} guarded ones ({names}, ...); "
+                              f"the compiled tables take at most {MAX_GUARDED}")
+        words = (nr + 63) // 64
         rows, cyc = [], []
         for key in range(1 << len(pr.guards)):
             bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
@@ -471,9 +528,10 @@ class CGen:
             except ModelError:
                 reach = [0] * nr
                 cyc.append("1")
-            rows.append("{" + ", ".join(f"UINT64_C({r})" for r in reach) + "}")
+            rows.append("{" + ", ".join(_words(r, words) for r in reach) + "}")
         self.w(f"#define NRULES {nr}")
-        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}] = {{{', '.join(rows)}}};")
+        self.w(f"#define NRW {words}")
+        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}][NRW] = {{{', '.join(rows)}}};")
         self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
         # guard functions of compound priorities, reading exported data from the state
         for k, (r, _) in enumerate(pr.guards):
@@ -487,24 +545,28 @@ class CGen:
             for side, name in ((1, "lo"), (2, "hi")):
                 terms = []
                 if src.tree is not None:
-                    cid = src.connector.id
+                    pms = {node.connector.id: node_pm(node) for node in nodes(src.tree)}
                     for i, rule in enumerate(pr.rules):
-                        conds = [f"(mask & {pm}) == {pm}" for c, pm in rule[side] if c == cid]
+                        conds = [f"({pms[c]} & {pm}u) == {pm}u" + ("" if pm else f" && {pms[c]}")
+                                 for c, pm in rule[side] if c in pms]
                         if conds:
-                            terms.append(f"((({' || '.join(conds)})) ? UINT64_C({1 << i}) : 0)")
-                self.w(f"static uint64_t {name}{src.index}(uint32_t mask) {{ (void)mask; return "
-                       f"{' | '.join(terms) or '0'}; }}")
+                            terms.append(f"if ({' || '.join(conds)}) o[{i >> 6}] |= UINT64_C({1 << (i & 63)});")
+                self.w(f"static void {name}{src.index}(uint32_t mask, uint64_t *o) {{ (void)mask; (void)o; "
+                       f"{' '.join(terms)} }}")
         for name in ("lo", "hi"):
-            self.w(f"static uint64_t (*const {name.upper()}T[NSRC])(uint32_t) = "
+            self.w(f"static void (*const {name.upper()}T[NSRC])(uint32_t, uint64_t *) = "
                    f"{{{', '.join(f'{name}{s.index}' for s in self.sources)}}};")
-        self.w("#define LO(s, m) LOT[s](m)")
-        self.w("#define HI(s, m) HIT[s](m)")
 
     def gen_blocked(self) -> None:
-        """``blocked<k>(m, pv)``: the guard of interaction ``m`` of a flat connector source is false."""
+        """``blocked<k>(m, pv)``: the guard of interaction ``m`` of a flat connector source is false.
+
+        Also ``maxa<k>(em)``: the largest interaction within the enabled ports ``em`` (defines.max_allowed),
+        a table up to MAX_TABLE ports, computed from the define tree past that.
+        """
         for src in self.sources:
             if src.kind != "flat":
                 continue
+            self.gen_max_allowed(src)
             info = self.infos[src.connector.type.name]
             k = self.type_index[src.connector.type.name]
             cases = " ".join(f"case {m}: return !k{k}_{m}_g(pv);" for m, spec in info.clauses.items()
@@ -512,6 +574,21 @@ class CGen:
             if cases:
                 self.w(f"static int blocked{src.index}(uint32_t m, V pv[][MAXF]) "
                        f"{{ switch (m) {{ {cases} default: return 0; }} }}")
+
+    def gen_max_allowed(self, src) -> None:
+        tree = self.infos[src.connector.type.name].tree
+        n = len(src.leaves)
+        if n <= MAX_TABLE:
+            table = ", ".join(str(defines.max_allowed(tree, em)) for em in range(1 << n))
+            self.w(f"static uint32_t maxa{src.index}(uint32_t em) {{ static const uint32_t T[] = {{{table}}}; "
+                   "return T[em]; }")
+            return
+        lines: list[str] = []
+        top = max_allowed_c(tree, lines)
+        self.w(f"static uint32_t maxa{src.index}(uint32_t em) {{")
+        self.lines.extend(f"    {line}" for line in lines)
+        self.w(f"    return {top};")
+        self.w("}")
 
     # -- enabled ----------------------------------------------------------------------------------
     def gen_enabled(self) -> None:
@@ -528,6 +605,8 @@ class CGen:
             self.gen_atom_enabled(fa)
         for fp in fl.ports:
             w(f"    PEN[{fp.id}] = (uint8_t)e{fp.id};")
+        if self.trees:
+            w(f"    const uint8_t EP[{max(len(fl.ports), 1)}] = {{{', '.join(f'(uint8_t)e{fp.id}' for fp in fl.ports)}}};")
         for src in self.sources:
             self.gen_source_enabled(src)
         if self.prio is not None:
@@ -536,14 +615,24 @@ class CGen:
             w("    if (n) {")
             w(f"        int key = {key};")
             w(f"        if (PCYC[key]) fail({E_CYCLE}, -1);")
-            w("        uint64_t high = 0, blocked = 0;")
-            w("        for (int i = 0; i < n; i++) high |= HI(isrc[i], imask[i]);")
-            w("        if (high) {")
-            w("            for (int r = 0; r < NRULES; r++) if (PREACH[key][r] & high) blocked |= UINT64_C(1) << r;")
-            w("            if (blocked) {")
+            w("        uint64_t high[NRW] = {0}, blocked[NRW] = {0};")
+            w("        int any = 0;")
+            w("        for (int i = 0; i < n; i++) HIT[isrc[i]](imask[i], high);")
+            w("        for (int x = 0; x < NRW; x++) any |= high[x] != 0;")
+            w("        if (any) {")
+            w("            int b = 0;")
+            w("            for (int r = 0; r < NRULES; r++)")
+            w("                for (int x = 0; x < NRW; x++)")
+            w("                    if (PREACH[key][r][x] & high[x]) { blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }")
+            w("            if (b) {")
             w("                int k = 0;")
-            w("                for (int i = 0; i < n; i++) if (!(LO(isrc[i], imask[i]) & blocked)) "
-              "{ isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
+            w("                for (int i = 0; i < n; i++) {")
+            w("                    uint64_t low[NRW] = {0};")
+            w("                    int hit = 0;")
+            w("                    LOT[isrc[i]](imask[i], low);")
+            w("                    for (int x = 0; x < NRW; x++) hit |= (low[x] & blocked[x]) != 0;")
+            w("                    if (!hit) { isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
+            w("                }")
             w("                n = k;")
             w("            }")
             w("        }")
@@ -594,6 +683,9 @@ class CGen:
         if src.kind == "port":
             w(f"    if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
             return
+        if src.kind == "generic":
+            self.trees[src.index].gen_enabled()
+            return
         info = self.infos[src.connector.type.name]
         enabled = [f"e{p}" for p in src.leaves]
         if src.kind == "rendezvous":
@@ -604,9 +696,7 @@ class CGen:
             w(f"    if ({cond}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
             return
         nparams = len(src.leaves)
-        table = [defines.max_allowed(info.tree, em) for em in range(1 << nparams)]
         w("    {")
-        w(f"        static const uint32_t MAXA[{1 << nparams}] = {{{', '.join(map(str, table))}}};")
         w(f"        uint32_t em = {' | '.join(f'((uint32_t){e} << {i})' for i, e in enumerate(enabled))};")
         guarded = {mask: spec for mask, spec in info.clauses.items() if spec.guard is not None}
         if guarded:
@@ -617,14 +707,13 @@ class CGen:
                 fa = fl.atoms[fp.atom]
                 for j, v in enumerate(fp.decl.data):
                     w(f"            pv[{i}][{j}] = a{fa.index}_{v};")
-            w(f"            n = maximal_enabled(MAXA, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
+            w(f"            n = maximal_enabled(maxa{src.index}, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
             w("        }")
         elif defines.is_flat(info.tree):
             w(f"        if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")
         else:
-            w("        uint32_t k = MAXA[em];")
+            w(f"        uint32_t k = maxa{src.index}(em);")
             w(f"        if (k) {{ isrc[n] = {src.index}; imask[n] = k; n++; }}")
-        w("        (void)MAXA;")
         w("    }")
 
     def inline_scope(self, src, info) -> CScope:
@@ -635,6 +724,28 @@ class CGen:
             for f, v, ty in zip(fp.fields, fp.decl.data, fp.field_types):
                 sc.ports[(p.name, f)] = CName(f"a{fa.index}_{v}", c_type(ty, sc.where))
         return sc
+
+
+def _words(value: int, words: int) -> str:
+    """A set of rules as a C initialiser of ``words`` 64-bit words."""
+    return "{" + ", ".join(f"UINT64_C({value >> (64 * k) & ((1 << 64) - 1)})" for k in range(words)) + "}"
+
+
+def max_allowed_c(node, lines: list[str]) -> str:
+    """C statements computing :func:`defines.max_allowed` of ``node`` within ``em``; returns the result's name."""
+    name = f"t{len(lines)}"
+    if node[0] == "p":
+        lines.append(f"uint32_t {name} = em & {node[1]}u;")
+        return name
+    subs = [(max_allowed_c(sub, lines), trig) for sub, trig in node[1]]
+    union = " | ".join(t for t, _ in subs)
+    if any(trig for _, trig in subs):
+        cond = " || ".join(t for t, trig in subs if trig)
+    else:
+        cond = " && ".join(t for t, _ in subs)
+    name = f"t{len(lines)}"
+    lines.append(f"uint32_t {name} = ({cond}) ? ({union}) : 0u;")
+    return name
 
 
 def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = None, monitors=()) -> CModel:

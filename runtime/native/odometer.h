@@ -26,9 +26,9 @@ static int odometer_next(void) {
 #define MAXI (NSRC * 8 + 64)
 
 /* defines.maximal_enabled: maximal interactions within em whose guard holds, starting from the largest */
-static int maximal_enabled(const uint32_t *maxa, uint32_t em, int np, V pv[][MAXF],
+static int maximal_enabled(uint32_t (*maxa)(uint32_t), uint32_t em, int np, V pv[][MAXF],
                            int (*blocked)(uint32_t, V[][MAXF]), int src, uint32_t *isrc, uint32_t *imask, int n) {
-    uint32_t top = maxa[em];
+    uint32_t top = maxa(em);
     (void)np;
     if (!top) return n;
     if (!blocked(top, pv)) { isrc[n] = src; imask[n] = top; return n + 1; }
@@ -42,7 +42,7 @@ static int maximal_enabled(const uint32_t *maxa, uint32_t em, int np, V pv[][MAX
         while (rest) {
             uint32_t low = rest & -rest;
             rest ^= low;
-            uint32_t y = maxa[x & ~low];
+            uint32_t y = maxa(x & ~low);
             if (!y) continue;
             int dup = 0;
             for (int i = 0; i < ns; i++) if (seen[i] == y) { dup = 1; break; }

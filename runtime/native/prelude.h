@@ -1,5 +1,6 @@
 /* Shared by every generated step: value type, error exit, checked arithmetic, the request environment.
    Included by the C text runtime.native.cstep generates, after E, W, NSRC, MAXF, NSLOTS, NSERV are defined. */
+#include <math.h>
 #include <setjmp.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -29,6 +30,35 @@ static inline V SHL(V a, V b) {
     if ((r >> b) != a) fail(E_ARITH, 2);
     return r;
 }
+/* floats: stored as the bits of a double; computed as Python computes them, stopping where Python raises */
+static inline double F(V bits) { double d; memcpy(&d, &bits, sizeof d); return d; }
+static inline V B(double d) { V bits; if (d == 0) d = 0.0; memcpy(&bits, &d, sizeof bits); return bits; }
+static inline double FDIV(double a, double b) { if (b == 0) fail(E_ARITH, 1); return a / b; }
+static inline double FMOD(double a, double b) { if (b == 0 || (isinf(a) && !isnan(b))) fail(E_ARITH, 1); return fmod(a, b); }
+static inline V F2I(double d) {
+    if (!(d >= -9223372036854775808.0 && d < 9223372036854775808.0)) fail(E_ARITH, 3); /* NaN, inf, past 64 bits */
+    return (V)d;
+}
+/* an int compared with a double exactly, as Python compares them (op: == != < <= > >=) */
+static inline int ICMPF(V a, double b, int op) {
+    int c;
+    if (isnan(b)) return op == 1;
+    if (b >= 9223372036854775808.0) c = -1;
+    else if (b < -9223372036854775808.0) c = 1;
+    else {
+        V t = (V)b;
+        double frac = b - (double)t;
+        c = a < t ? -1 : a > t ? 1 : frac > 0 ? -1 : frac < 0 ? 1 : 0;
+    }
+    switch (op) {
+    case 0: return c == 0;
+    case 1: return c != 0;
+    case 2: return c < 0;
+    case 3: return c <= 0;
+    case 4: return c > 0;
+    default: return c >= 0;
+    }
+}
 static inline V SHR(V a, V b) { if (b < 0) fail(E_ARITH, 2); if (b > 63) return a < 0 ? -1 : 0; return a >> b; }
 
 /* the environment's requests: counts per service follow the engine's slots */
@@ -37,3 +67,21 @@ static int TAKEN[NSERV > 0 ? NSERV : 1];
 static int64_t BUDGET = -1;
 static inline int PENDING(int k) { return CUR[E + k] < BUDGET; }
 static inline V TAKE(int k) { TAKEN[k]++; return 0; }
+
+/* an interaction a node of a nested connector offers: its leaf mask and the values of its exported port */
+typedef struct { uint32_t m; V v[MAXF]; } Offer;
+
+/* defines.maximal: the distinct masks of which no other is a strict superset, in increasing order */
+static int maximal_offers(const Offer *g, int n, uint32_t *out) {
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        uint32_t m = g[i].m;
+        int drop = 0;
+        for (int j = 0; j < n && !drop; j++) if (g[j].m != m && (g[j].m & m) == m) drop = 1;
+        for (int j = 0; j < k && !drop; j++) if (out[j] == m) drop = 1;
+        if (!drop) out[k++] = m;
+    }
+    for (int i = 1; i < k; i++)
+        for (int j = i; j > 0 && out[j - 1] > out[j]; j--) { uint32_t t = out[j]; out[j] = out[j - 1]; out[j - 1] = t; }
+    return k;
+}
