@@ -178,7 +178,7 @@ def check_observers(space, flat, package, root: str, kinds: set[str], progress, 
     With the command line's ``args`` the compiled explorer checks them (``--engine``, ``--max-states``,
     ``--por``, ...), else the Python checker.
     """
-    from genom2bip.verify_native import check_property
+    from genom2bip.cli.verify_native import check_property
     from runtime.props import check, read_property_text
 
     tick = tick_us(package)
