@@ -168,7 +168,9 @@ class _Checker:
 
     def _fsm(self, comp: Component, service: Service) -> None:
         what = f"{service.kind} '{service.name}'"
-        if service.kind == ServiceKind.ATTRIBUTE or (service.kind == ServiceKind.FUNCTION and comp.dialect == Dialect.GENOM2):
+        if service.kind == ServiceKind.ATTRIBUTE or (
+            service.kind == ServiceKind.FUNCTION and comp.dialect == Dialect.GENOM2
+        ):
             # genom3 (since 2.99.x) lets an attribute run simple codels; never an automaton
             fsm = [c for c in service.codels if c.triggers or comp.dialect == Dialect.GENOM2]
             if fsm:

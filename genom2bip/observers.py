@@ -89,7 +89,9 @@ class _Reader(rules._Reader):
         if root is None:
             return []
         if not isinstance(root, yaml.MappingNode):
-            self.error(root, "an observer file is a mapping with an 'observers' list", "start the file with 'observers:'")
+            self.error(
+                root, "an observer file is a mapping with an 'observers' list", "start the file with 'observers:'"
+            )
             return []
         body = None
         for k, v in root.value:

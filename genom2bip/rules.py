@@ -344,7 +344,9 @@ def check_rules(rules: list[Rule], description: ir.Description, reporter: Report
     order = {id(r): i for i, r in enumerate(rules)}
     for cycle in sorted(nx.simple_cycles(graph), key=lambda c: sorted(c)):
         # Start the cycle where its earliest rule starts, so that messages do not depend on hashing.
-        first = min(range(len(cycle)), key=lambda i: order[id(graph.edges[cycle[i], cycle[(i + 1) % len(cycle)]]["rule"])])
+        first = min(
+            range(len(cycle)), key=lambda i: order[id(graph.edges[cycle[i], cycle[(i + 1) % len(cycle)]]["rule"])]
+        )
         cycle = cycle[first:] + cycle[:first]
         edges = [graph.edges[a, b]["rule"] for a, b in zip(cycle, cycle[1:] + cycle[:1])]
         at = next((e for e in edges if e.origin == "rules"), edges[0])

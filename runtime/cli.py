@@ -24,7 +24,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("model", help="the .bip file (package P lives in P.bip)")
     run.add_argument("--root", default="System()", help="root instance, e.g. 'System()' or 'Sys(3)'")
     add_run_options(run)
-    run.add_argument("--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions")
+    run.add_argument(
+        "--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions"
+    )
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
     run.add_argument("--real-time", action="store_true",
                      help="timed models: follow the engine's clock (wait for real) instead of simulated time")

@@ -31,7 +31,9 @@ def read_text(path: str | Path, what: str) -> str:
     try:
         data = Path(path).read_bytes()
     except OSError as err:
-        raise DiagnosticError([Diagnostic(Span(file, 0, 0), f"cannot read the {what}: {err.strerror or err}")]) from None
+        raise DiagnosticError(
+            [Diagnostic(Span(file, 0, 0), f"cannot read the {what}: {err.strerror or err}")]
+        ) from None
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as err:

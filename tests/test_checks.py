@@ -129,7 +129,9 @@ def test_unknown_ids_member_in_a_codel_parameter():
 
 
 def test_poster_of_a_module_checked_alone_is_a_warning():
-    text = SDI.replace("exec_task Main { period: 10; };", "exec_task Main { period: 10; poster_client_from: pom::Pos; };")
+    text = SDI.replace(
+        "exec_task Main { period: 10; };", "exec_task Main { period: 10; poster_client_from: pom::Pos; };"
+    )
     errors, reporter = check(parse_text(text, "w.gen"))
     assert errors == []
     [warning] = [d for d in reporter.diagnostics if d.severity == "warning"]
@@ -140,7 +142,9 @@ def test_poster_of_a_module_checked_alone_is_a_warning():
 def test_poster_read_from_a_module_that_lacks_it():
     pom = parse_text("typedef struct S { int a; } S;\nmodule pom { internal_data: S; };\n"
                      "exec_task T { period: 1; };\nposter Pos { data: a::a; exec_task: T; };\n", "pom.gen")
-    text = SDI.replace("exec_task Main { period: 10; };", "exec_task Main { period: 10; poster_client_from: pom::Poz; };")
+    text = SDI.replace(
+        "exec_task Main { period: 10; };", "exec_task Main { period: 10; poster_client_from: pom::Poz; };"
+    )
     rflex = parse_text(text, "r.gen")
     both = Description(pom.components + rflex.components, types={**pom.types, **rflex.types})
     errors, _ = check(both)
@@ -169,7 +173,11 @@ def test_duplicate_hint_names_the_first():
 
 def test_duplicate_ids_members_and_components():
     from genom2bip.ir import BaseType, Member
-    ids = [Member("x", BaseType("double"), span=Span("a.gen", 2, 3)), Member("x", BaseType("long"), span=Span("a.gen", 3, 3))]
+
+    ids = [
+        Member("x", BaseType("double"), span=Span("a.gen", 2, 3)),
+        Member("x", BaseType("long"), span=Span("a.gen", 3, 3)),
+    ]
     description = Description([Component("a", "genom3", ids=ids, span=Span("a.gen", 1, 11)),
                                Component("a", "genom3", span=Span("b.gen", 1, 11))])
     errors, _ = check(description)
@@ -189,8 +197,10 @@ def _activity(codels, **kw):
 
 
 def test_yield_to_undeclared_state():
-    codels = [Codel("s", ["start"], [Yield("main", span=Span("m.gen", 11, 40)), Yield("ether")], span=Span("m.gen", 11, 20)),
-              Codel("m", ["mian"], [Yield("ether")], span=Span("m.gen", 12, 20))]
+    codels = [
+        Codel("s", ["start"], [Yield("main", span=Span("m.gen", 11, 40)), Yield("ether")], span=Span("m.gen", 11, 20)),
+        Codel("m", ["mian"], [Yield("ether")], span=Span("m.gen", 12, 20)),
+    ]
     errors, _ = check(_activity(codels))
     assert [(str(d.span), d.message) for d in errors] == [
         ("m.gen:11:40", "yield to undeclared state 'main' in codel 's' of activity 'A'")]
@@ -206,7 +216,10 @@ def test_an_activity_that_ends_only_through_its_stop_codel_is_accepted():
 
 
 def test_a_codel_reached_neither_from_start_nor_from_stop():
-    codels = [Codel("s", ["start"], [Yield("ether")]), Codel("l", ["lost"], [Yield("ether")], span=Span("m.gen", 12, 5))]
+    codels = [
+        Codel("s", ["start"], [Yield("ether")]),
+        Codel("l", ["lost"], [Yield("ether")], span=Span("m.gen", 12, 5)),
+    ]
     errors, _ = check(_activity(codels))
     assert [(str(d.span), d.message) for d in errors] == [
         ("m.gen:12:5", "codel<lost> 'l' of activity 'A' is never reached")]
@@ -221,7 +234,9 @@ def test_no_path_from_stop_to_ether():
 def test_activity_without_start_codel():
     codels = [Codel("m", ["main"], [Yield("ether")])]
     errors, _ = check(_activity(codels))
-    assert [(str(d.span), d.message) for d in errors] == [("m.gen:10:10", "activity 'A' has no codel for state 'start'")]
+    assert [(str(d.span), d.message) for d in errors] == [
+        ("m.gen:10:10", "activity 'A' has no codel for state 'start'")
+    ]
 
 
 def test_genom2_activity_without_any_codel():
@@ -256,8 +271,12 @@ def test_genom3_function_codels_are_checked_like_an_activity():
 
 
 def test_task_codels_are_checked():
-    task = Task("t", Duration(0.1), codels=[Codel("m", ["main"], [Yield("mian", pause=True, span=Span("m.gen", 3, 30))])],
-                span=Span("m.gen", 2, 8))
+    task = Task(
+        "t",
+        Duration(0.1),
+        codels=[Codel("m", ["main"], [Yield("mian", pause=True, span=Span("m.gen", 3, 30))])],
+        span=Span("m.gen", 2, 8),
+    )
     errors, _ = check(Description([Component("m", "genom3", tasks=[task])]))
     assert [(str(d.span), d.message) for d in errors] == [
         ("m.gen:3:30", "yield to undeclared state 'mian' in codel 'm' of task 't'"),

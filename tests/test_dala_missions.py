@@ -74,7 +74,9 @@ def test_trajectory_png_shows_the_path_from_start_to_goal(corridor, tmp_path):
     png = tmp_path / "corridor.png"
     to_pixel = draw(corridor, png)
     image = imread(png)[:, :, :3]
-    blue = (abs(image[:, :, 0] - 0.12) < 0.05) & (abs(image[:, :, 1] - 0.47) < 0.05) & (abs(image[:, :, 2] - 0.71) < 0.05)
+    blue = (
+        (abs(image[:, :, 0] - 0.12) < 0.05) & (abs(image[:, :, 1] - 0.47) < 0.05) & (abs(image[:, :, 2] - 0.71) < 0.05)
+    )
     assert blue.sum() > 300  # the trajectory's pixels
 
     def near(xy, colour, radius=6):

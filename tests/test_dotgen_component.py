@@ -148,7 +148,12 @@ def test_typed_service_parameters_with_defaults_and_docs():
     assert isinstance(x.default, float)
     assert (n.type, n.default) == (ArrayType(BaseType("long"), [2]), [3, 4])
     assert (s.direction, s.type, s.default) == ("out", StringType(8), None)
-    assert (p.type, p.default, p.doc, p.member_docs) == (NamedType("pose"), {"x": 1.5, "y": 2}, "a pose", {"x": "abscissa"})
+    assert (p.type, p.default, p.doc, p.member_docs) == (
+        NamedType("pose"),
+        {"x": 1.5, "y": 2},
+        "a pose",
+        {"x": "abscissa"},
+    )
     assert (d.default, d.doc) == (None, "doc only")
     assert way.type == NamedType("geo::path")
     assert way.default == {2: {"x": 0}, 0: []}
@@ -208,11 +213,13 @@ def test_codel_parameters():
 
 
 def test_genom_keywords_are_identifiers_where_not_ambiguous():
-    c = comp('''
+    c = comp("""
         ids { double period; long task; long port; long doc; long s; long ms; };
-        task period { codel <start> stop(in period, in task) yield stop, wcet; codel <stop, wcet> yield() yield ether; };
+        task period {
+          codel <start> stop(in period, in task) yield stop, wcet; codel <stop, wcet> yield() yield ether;
+        };
         function task(in double delay) { codel codel(in delay); };
-    ''')
+    """)
     assert [m.name for m in c.ids] == ["period", "task", "port", "doc", "s", "ms"]
     assert c.tasks[0].name == "period"
     assert [(k.name, k.triggers) for k in c.tasks[0].codels] == [("stop", ["start"]), ("yield", ["stop", "wcet"])]

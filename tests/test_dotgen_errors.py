@@ -107,7 +107,9 @@ def test_several_syntax_errors_are_reported_together_in_order():
 
 
 def test_syntax_and_constant_errors_come_together():
-    got = [(d.span.line, d.message) for d in diagnostics("const long a = 1 / 0;\ncomponent c { task t { period ; }; };\n")]
+    got = [
+        (d.span.line, d.message) for d in diagnostics("const long a = 1 / 0;\ncomponent c { task t { period ; }; };\n")
+    ]
     assert got == [(1, "division by zero in constant expression"), (2, "expected a value after 'period', found ';'")]
 
 

@@ -61,7 +61,13 @@ def test_demo_services(demo):
         ("SetSpeed", "attribute"), ("Stop", "function"), ("GoTo", "activity"), ("MoveDistance", "activity")]
     set_speed = c.service("SetSpeed")
     (p,) = set_speed.parameters
-    assert (p.name, p.source, p.member, p.default, p.doc) == ("speed_ref", "ids", "speed_ref", 0.5, "Reference speed (m/s)")
+    assert (p.name, p.source, p.member, p.default, p.doc) == (
+        "speed_ref",
+        "ids",
+        "speed_ref",
+        0.5,
+        "Reference speed (m/s)",
+    )
     assert set_speed.validate.name == "check_speed" and set_speed.validate.wcet == Duration(1e-05, "10 us")
     assert set_speed.validate.params == [CodelParam("speed_ref", "in", "local")]
     assert set_speed.throws == ["demo::too_fast"]
@@ -72,7 +78,11 @@ def test_demo_services(demo):
     goto = c.service("GoTo")
     assert goto.task == "motion" and goto.validate.name == "check_position"
     assert goto.states() == ["start", "drive", "stop"]
-    assert [[str(y) for y in k.yields] for k in goto.codels] == [["drive", "ether"], ["pause::drive", "ether"], ["ether"]]
+    assert [[str(y) for y in k.yields] for k in goto.codels] == [
+        ["drive", "ether"],
+        ["pause::drive", "ether"],
+        ["ether"],
+    ]
     assert [k.wcet and k.wcet.seconds for k in goto.codels] == [0.001, 0.002, None]
     assert goto.interrupts == ["GoTo"] and goto.throws == ["demo::out_of_range", "demo::too_fast"]
     (pos,) = goto.parameters

@@ -141,7 +141,9 @@ def test_strings_optionals_fixed_native_and_forward_declarations():
 
 
 def test_exceptions_with_and_without_members():
-    d = parse_text("module m { exception e_plain, e_detail { double value; string<32> what; }; exception e_empty {}; };")
+    d = parse_text(
+        "module m { exception e_plain, e_detail { double value; string<32> what; }; exception e_empty {}; };"
+    )
     assert set(d.exceptions) == {"m::e_plain", "m::e_detail", "m::e_empty"}
     assert d.exceptions["m::e_plain"].members == []
     assert [(x.name, x.type) for x in d.exceptions["m::e_detail"].members] == [

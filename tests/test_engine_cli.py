@@ -64,7 +64,9 @@ def test_externs_module_path_and_interactive_eof():
 
 
 def test_same_atom_twice_in_a_connector_is_a_message(tmp_path):
-    text = (FIXTURES / "Dining.bip").read_text().replace("eat0(f0.take, p0.eat, f1.take)", "eat0(f0.take, p0.eat, f0.put)")
+    text = (
+        (FIXTURES / "Dining.bip").read_text().replace("eat0(f0.take, p0.eat, f1.take)", "eat0(f0.take, p0.eat, f0.put)")
+    )
     path = tmp_path / "Dining.bip"
     path.write_text(text)
     r = cli(path, "--root", "Table3()")

@@ -73,7 +73,11 @@ def test_nested_connector_max_up_and_down():
         assert labels(e, s) == ["top"]     # inner exports a port: it never fires on its own
         s, values = e.fire_traced(s, e.find(s, "top"))
         assert values == {"a.p": {"x": expected}, "b.p": {"x": expected}, "c.p": {"x": expected}}
-        assert {n: st["data"]["x"] for n, st in e.describe_state(s).items()} == {"a": expected, "b": expected, "c": expected}
+        assert {n: st["data"]["x"] for n, st in e.describe_state(s).items()} == {
+            "a": expected,
+            "b": expected,
+            "c": expected,
+        }
         assert labels(e, s) == []
 
 
@@ -200,7 +204,18 @@ def test_c_arithmetic():
     calls, ext = _ext()
     e = engine("Arith", "System()", ext)
     data = atom(e, e.initial_state(), "c")["data"]
-    assert data == {"q": 3, "r": 1, "q2": -3, "r2": -1, "t": 3, "f": 14, "land": False, "lnot": False, "h": 3.5, "w": 16}
+    assert data == {
+        "q": 3,
+        "r": 1,
+        "q2": -3,
+        "r2": -1,
+        "t": 3,
+        "f": 14,
+        "land": False,
+        "lnot": False,
+        "h": 3.5,
+        "w": 16,
+    }
     e = engine("Arith", "Neg()", ext)
     data = atom(e, e.initial_state(), "c")["data"]
     assert (data["q"], data["r"], data["q2"], data["r2"]) == (-3, 1, 3, -1)

@@ -51,14 +51,19 @@ def test_unknown_field_hint_suggests_the_closest():
 ])
 def test_unknown_field_in_every_block(kind, fields, wrong):
     body = f"{kind} X {{ {fields} {wrong}: 1; }};"
-    text = SDI.replace("module demo { internal_data: DEMO_STR; };", "module demo { internal_data: DEMO_STR; };\n" + body) \
-        if kind != "module" else SDI.replace("module demo {", "module demo { " + wrong + ": 1;")
+    text = (
+        SDI.replace("module demo { internal_data: DEMO_STR; };", "module demo { internal_data: DEMO_STR; };\n" + body)
+        if kind != "module"
+        else SDI.replace("module demo {", "module demo { " + wrong + ": 1;")
+    )
     found, _ = errors(text)
     assert any(f"unknown field '{wrong}' in {kind}" in m and "accepted fields:" in m for _, _, m in found), found
 
 
 def test_same_field_under_both_spellings_is_an_error():
-    line, col, message = only_error(SDI + "request A { type: exec; exec_task: Main;\n codel_main: f; c_exec_func: g; };")
+    line, col, message = only_error(
+        SDI + "request A { type: exec; exec_task: Main;\n codel_main: f; c_exec_func: g; };"
+    )
     assert (line, col) == (6, 17)
     assert "field 'c_exec_func' given twice in request 'A': first (as 'codel_main') at bad.gen:6:2" == message
 

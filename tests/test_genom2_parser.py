@@ -109,8 +109,12 @@ exec_task Main {
 
 
 def test_exec_task_old_spelling_gives_the_same_task():
-    new = component(SDI.replace("exec_task Main { period: 10; };",
-                                "exec_task Main { period: 3; codel_task_start: i; codel_task_main: m; codel_task_end: e; };"))
+    new = component(
+        SDI.replace(
+            "exec_task Main { period: 10; };",
+            "exec_task Main { period: 3; codel_task_start: i; codel_task_main: m; codel_task_end: e; };",
+        )
+    )
     old = component(SDI.replace("exec_task Main { period: 10; };",
                                 "exec_task Main { period: 3; c_init_func: i; c_func: m; c_end_func: e; };"))
     assert new.tasks == old.tasks
@@ -275,7 +279,10 @@ def test_auto_poster_is_an_out_port_with_a_struct_of_its_data():
     assert (port.direction, port.type) == ("out", NamedType("demo_Robot_poster"))
     struct = description.types["demo_Robot_poster"]
     assert isinstance(struct, StructType)
-    assert [(m.name, m.type) for m in struct.members] == [("speed", NamedType("SPEED")), ("odometry", NamedType("SPEED"))]
+    assert [(m.name, m.type) for m in struct.members] == [
+        ("speed", NamedType("SPEED")),
+        ("odometry", NamedType("SPEED")),
+    ]
     assert comp.properties["posters"]["Robot"] == {"update": "auto", "exec_task": "Main"}
 
 

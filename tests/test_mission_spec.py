@@ -37,19 +37,26 @@ def test_a_mission_reads_into_steps(tmp_path):
                                                                                "exception": "e_blocked"}, 30.0)
 
 
-@pytest.mark.parametrize("text, where, message", [
-    ("steps:\n  - send: GoTo\n", "2:11", "send: Module.Service expected, got 'GoTo'"),
-    ("steps:\n  - send: NDD.Stop\n    expect: done\n", "3:13", "expect: unknown status 'done'"),
-    ("steps:\n  - send: NDD.Stop\n    expect: {status: ok, rules: x}\n", "3:26", "expect: unknown key 'rules'"),
-    ("steps:\n  - await: drive\n", "2:12", "await: no earlier step named 'drive'"),
-    ("steps:\n  - wait: soon\n", "2:11", "wait: a number of seconds (0 or more) expected, got 'soon'"),
-    ("steps:\n  - send: NDD.Stop\n    until: done\n", "3:12", "until: one of queued, started, final expected"),
-    ("steps:\n  - send: NDD.Stop\n    wait: 2\n", "2:5", "a step has exactly one of send, wait, await (has send, wait)"),
-    ("steps:\n  - send: NDD.Stop\n    with: 3\n", "3:11", "with: a mapping of the service's inputs expected"),
-    ("steps:\n  - send: NDD.Stop\n    retry: 3\n", "3:5", "send step: unknown key 'retry'"),
-    ("mission: x\n", "1:1", "'steps': a list of send, wait and await steps expected"),
-    ("steps: [\n", "2:1", "not valid YAML"),
-])
+@pytest.mark.parametrize(
+    "text, where, message",
+    [
+        ("steps:\n  - send: GoTo\n", "2:11", "send: Module.Service expected, got 'GoTo'"),
+        ("steps:\n  - send: NDD.Stop\n    expect: done\n", "3:13", "expect: unknown status 'done'"),
+        ("steps:\n  - send: NDD.Stop\n    expect: {status: ok, rules: x}\n", "3:26", "expect: unknown key 'rules'"),
+        ("steps:\n  - await: drive\n", "2:12", "await: no earlier step named 'drive'"),
+        ("steps:\n  - wait: soon\n", "2:11", "wait: a number of seconds (0 or more) expected, got 'soon'"),
+        ("steps:\n  - send: NDD.Stop\n    until: done\n", "3:12", "until: one of queued, started, final expected"),
+        (
+            "steps:\n  - send: NDD.Stop\n    wait: 2\n",
+            "2:5",
+            "a step has exactly one of send, wait, await (has send, wait)",
+        ),
+        ("steps:\n  - send: NDD.Stop\n    with: 3\n", "3:11", "with: a mapping of the service's inputs expected"),
+        ("steps:\n  - send: NDD.Stop\n    retry: 3\n", "3:5", "send step: unknown key 'retry'"),
+        ("mission: x\n", "1:1", "'steps': a list of send, wait and await steps expected"),
+        ("steps: [\n", "2:1", "not valid YAML"),
+    ],
+)
 def test_mistakes_are_named_with_their_position(tmp_path, text, where, message):
     path = tmp_path / "bad.yaml"
     path.write_text(text)

@@ -171,7 +171,10 @@ def test_refusals_name_the_construct_and_where_it_is(change, message):
     text = FLOATS.replace("h = h * 3.0 + 0.5;", change.replace("h = h * 3.0 + 0.5;", "h = 3;")
                           if "|" not in change else change)
     cs, note = native.compile_space(verifykit.text_space(text))
-    assert cs is None and note == f"compiled exploration does not take this model ({message}): exploring with the Python step"
+    assert (
+        cs is None
+        and note == f"compiled exploration does not take this model ({message}): exploring with the Python step"
+    )
 
 
 def test_strings_are_compared_for_equality_only():

@@ -222,7 +222,9 @@ def test_verify_por_reports_the_deadlock_and_what_it_reduced(capsys, tmp_path):
     assert "deadlocks: 1 reachable state without enabled interaction\n" in out
     assert "each with a shortest trace" in full and "shortest trace" not in out.split("note:")[0]
     states = int(next(line for line in out.splitlines() if line.startswith("explored: ")).split()[1].replace(",", ""))
-    full_states = int(next(line for line in full.splitlines() if line.startswith("explored: ")).split()[1].replace(",", ""))
+    full_states = int(
+        next(line for line in full.splitlines() if line.startswith("explored: ")).split()[1].replace(",", "")
+    )
     assert states * 2 < full_states
     reduced = next(line for line in out.splitlines() if line.startswith("note: partial-order reduction: "))
     assert f" of {states:,} states expanded with an ample set" in reduced

@@ -66,7 +66,9 @@ def test_interruption_connector_joins_stop_start_and_goto_abort(package):
     victim = next(c for c in goto.connectors if c.name == "Stop_start")
     assert [str(p) for p in victim.ports] == ["activity.abort", "control.cancel"]
     assert all(d.trigger for d in package.connector_type(victim.type).define.items)  # whichever can
-    assert [(str(e.targets[0]), e.name) for e in goto.ports if e.name == "Stop_start"] == [("Stop_start.ep", "Stop_start")]
+    assert [(str(e.targets[0]), e.name) for e in goto.ports if e.name == "Stop_start"] == [
+        ("Stop_start.ep", "Stop_start")
+    ]
 
 
 def test_goto_constraint_connector_reads_the_three_status_ports(package):

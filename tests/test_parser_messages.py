@@ -14,13 +14,20 @@ def _errors(text: str, name: str = "m.gen"):
     return [(d.span.line, d.span.column, d.message) for d in err.value.diagnostics if d.severity == "error"]
 
 
-@pytest.mark.parametrize("text,where", [
-    ("/* a header cut short\ncomponent c;\n", (1, 1)),
-    ("component c {\n  task t; /* open\n};\n", (2, 11)),
-    ("typedef struct S { double v; } S;\nmodule m { number: 1; internal_data: S; };\n/* cut\nrequest R { type: control; };\n",
-     (3, 1)),
-    ("typedef struct S { double v; } S;\nmodule m { number: 1; /* x\n internal_data: S; };\n", (2, 23)),
-], ids=["genom3 leading", "genom3 inside", "genom2 leading", "genom2 inside"])
+@pytest.mark.parametrize(
+    "text,where",
+    [
+        ("/* a header cut short\ncomponent c;\n", (1, 1)),
+        ("component c {\n  task t; /* open\n};\n", (2, 11)),
+        (
+            "typedef struct S { double v; } S;\nmodule m { number: 1; internal_data: S; };\n"
+            "/* cut\nrequest R { type: control; };\n",
+            (3, 1),
+        ),
+        ("typedef struct S { double v; } S;\nmodule m { number: 1; /* x\n internal_data: S; };\n", (2, 23)),
+    ],
+    ids=["genom3 leading", "genom3 inside", "genom2 leading", "genom2 inside"],
+)
 def test_an_unclosed_comment_is_named(text, where):
     assert _errors(text) == [(*where, "unterminated comment")]
 

@@ -96,7 +96,9 @@ def test_include_not_found_inside_an_included_file_points_into_that_file(tmp_pat
 
 def test_pragmas_are_collected_with_their_original_position(tmp_path):
     (tmp_path / "a.idl").write_text('#pragma requires "eigen3 >= 3.3"\n')
-    pre, rep = run('#include "a.idl"\n\n#pragma provides nav\n#pragma masquerade ros geo::p data\n#pragma once\n', tmp_path)
+    pre, rep = run(
+        '#include "a.idl"\n\n#pragma provides nav\n#pragma masquerade ros geo::p data\n#pragma once\n', tmp_path
+    )
     assert not rep.diagnostics
     assert [(p.name, p.arguments) for p in pre.pragmas] == [
         ("requires", '"eigen3 >= 3.3"'),

@@ -450,8 +450,10 @@ def test_requests_beyond_the_bound_of_waiting_ones_are_refused_with_429(tick):
     with pytest.raises(RequestError) as err:
         c.submit("tick", "Work")
     assert err.value.status == 429
-    assert err.value.message == "2 requests are waiting to be taken: request to tick.Work not accepted, send it again " \
-                                "later"
+    assert (
+        err.value.message == "2 requests are waiting to be taken: request to tick.Work not accepted, send it again "
+        "later"
+    )
     assert sorted(c.requests) == [first.id, second.id]
     c.run(duration=0.1)
     assert first.status == second.status == "ok"

@@ -460,7 +460,10 @@ def write_package(package: Package) -> str:
 
 
 def write_package_file(package: Package, directory) -> Path:
-    """Write ``<directory>/<package name>.bip`` atomically (genom2bip.output.write_file); nothing is written on error."""
+    """Write ``<directory>/<package name>.bip`` atomically (genom2bip.output.write_file).
+
+    Nothing is written on error.
+    """
     text = write_package(package)
     target = Path(directory) / f"{package.name}.bip"
     write_file(target, lambda out: out.write(text))

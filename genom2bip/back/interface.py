@@ -240,10 +240,16 @@ def component_interface(schemas: Schemas, c: ir.Component) -> dict[str, Any]:
         ids_inputs = {(p.member or p.name).split(".")[0] for p in s.parameters
                       if p.source == ir.Origin.IDS and p.direction in (ir.Direction.IN, ir.Direction.INOUT)}
         services[s.name] = {
-            "instance": f"{m}.{ident(s.name)}", "kind": str(s.kind), "task": s.task if s.kind == ir.ServiceKind.ACTIVITY else None,
-            "doc": s.doc, "parameters": params, "locals": locals_,
-            "throws": list(dict.fromkeys(s.throws + c.throws)), "interrupts": list(s.interrupts),
-            "after": list(s.after), "before": list(s.before),
+            "instance": f"{m}.{ident(s.name)}",
+            "kind": str(s.kind),
+            "task": s.task if s.kind == ir.ServiceKind.ACTIVITY else None,
+            "doc": s.doc,
+            "parameters": params,
+            "locals": locals_,
+            "throws": list(dict.fromkeys(s.throws + c.throws)),
+            "interrupts": list(s.interrupts),
+            "after": list(s.after),
+            "before": list(s.before),
             "codels": _codels(m, s.fsm_codels(), local_names, ids_inputs, s.validate),
         }
     exceptions = {}

@@ -236,7 +236,9 @@ class Assembly:
             annotations = list(w.annotations)
             if w.label:
                 annotations.insert(0, Annotation("label", {"name": w.label}))
-            connectors[at].append(ConnectorInstance(ctype.name, name, ports, annotations=annotations, comment=w.comment))
+            connectors[at].append(
+                ConnectorInstance(ctype.name, name, ports, annotations=annotations, comment=w.comment)
+            )
             names[id(w)] = name
             return name
 

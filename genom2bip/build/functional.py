@@ -111,7 +111,9 @@ class FunctionalLevel:
     def build(self) -> Package:
         self._atom_type(library.timer_type(), "Timer of a periodic task: a period starts (trigger), then ends (sleep).")
         self._atom_type(library.scheduler_type(), "Scheduler of a task: opens a period, authorises codels, closes it.")
-        self._atom_type(library.poster_type(), "Poster (GenoM port out): written by the codels that have it as port out.")
+        self._atom_type(
+            library.poster_type(), "Poster (GenoM port out): written by the codels that have it as port out."
+        )
         # const: a guard may call only functions that cannot change their arguments (BIP2).
         self.externs["request_pending"] = ExternFunction("request_pending", "bool", ["string"], param_const=[True])
         self.externs["take_request"] = ExternFunction("take_request", None, ["string"], param_const=[True])
@@ -148,7 +150,9 @@ class FunctionalLevel:
         root: Path = (m,)
         self.asm.group(root, joined(m, "Module"), comment=f"GenoM component {c.name}")
         requests = [(ident(s.name), f"{c.name}.{s.name}") for s in c.services]
-        self.asm.atom(root + ("requests",), self._atom_type(acceptor_type(m, requests), f"Request acceptor of {c.name}."))
+        self.asm.atom(
+            root + ("requests",), self._atom_type(acceptor_type(m, requests), f"Request acceptor of {c.name}.")
+        )
         for port in c.ports:
             if port.direction == ir.Direction.OUT:
                 self.asm.atom(root + (ident(port.name),), "Poster")
@@ -160,7 +164,11 @@ class FunctionalLevel:
         tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK), taken)
 
         for s in c.services:
-            on = tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"]) if s.kind == ir.ServiceKind.ACTIVITY else tasks[CONTROL_TASK + "\0"]
+            on = (
+                tasks.get(s.task or "", tasks[CONTROL_TASK + "\0"])
+                if s.kind == ir.ServiceKind.ACTIVITY
+                else tasks[CONTROL_TASK + "\0"]
+            )
             self._service(m, c, root, s, on)
 
     def _task(self, component: str, root: Path, task: ir.Task, taken: set[str]) -> Path:
@@ -196,7 +204,10 @@ class FunctionalLevel:
             self.externs.setdefault(joined(m, codel.name), codel_extern(m, codel, fsm.throws))
 
     def _exec(self, m: str, label: str, task: Path, activity: Path, state: str, codel: ir.Codel, owner: Path) -> Wire:
-        """``exec_<state>``: the task's scheduler lets the activity run the codel of ``state``; posters it writes join."""
+        """``exec_<state>``: the task's scheduler lets the activity run the codel of ``state``.
+
+        The posters the codel writes join the interaction.
+        """
         ends = [End(task + ("scheduler",), "exec"), End(activity, exec_port(state))]
         for p in codel.params:
             if p.source == ir.Origin.PORT and p.direction in (ir.Direction.OUT, ir.Direction.INOUT):
@@ -218,8 +229,13 @@ class FunctionalLevel:
                           for r in self.rules)
         interruptible = any(r.kind == "interrupts" and (c.name, s.name) in r.others for r in self.rules)
         observed = any(r.kind in GUARD_KINDS and (c.name, s.name) in r.others for r in self.rules)
-        control = self.asm.atom(path + ("control",), self._atom_type(
-            controller_type(m, s, constrained, interruptible, observed), f"Execution task of {c.name}.{s.name}: trigger, validate, start, report."))
+        control = self.asm.atom(
+            path + ("control",),
+            self._atom_type(
+                controller_type(m, s, constrained, interruptible, observed),
+                f"Execution task of {c.name}.{s.name}: trigger, validate, start, report.",
+            ),
+        )
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
             activity_type(m, name, fsm, origin=s.span), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
@@ -341,9 +357,17 @@ class FunctionalLevel:
                 rends = [request, End(parts.control, "refuse")] + [End(self.services[o].control, "status")
                                                                     for o in r.others]
                 rtype = self._guarded(f"{m}_{name}_Refuse_{ident(tag)}", rends, Unary("!", rule_condition(r, 3)))
-                self.asm.wire(Wire(rtype, rends, f"refuse_{ident(tag)}", parts.path, f"{parts.label}:refuse",
-                                   comment=f"rule {r.id}: refuse the request unless {r.describe()}",
-                                   annotations=[Annotation("rule", {"name": r.id})] + source_annotation(parts.service.span)))
+                self.asm.wire(
+                    Wire(
+                        rtype,
+                        rends,
+                        f"refuse_{ident(tag)}",
+                        parts.path,
+                        f"{parts.label}:refuse",
+                        comment=f"rule {r.id}: refuse the request unless {r.describe()}",
+                        annotations=[Annotation("rule", {"name": r.id})] + source_annotation(parts.service.span),
+                    )
+                )
 
     def _guarded(self, name: str, ends: list[End], guard: Expr) -> ConnectorType:
         return self._connector(library.guarded_type(name, self._types(ends), guard))

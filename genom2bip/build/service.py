@@ -139,7 +139,9 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, ori
             ports.append(PortDecl(PORT, port, exported=True))
             transitions.append(Transition(port, [source], [ETHER]))
         ports.append(PortDecl(PORT, "abort", exported=True))
-        running = [place(s) for s in fsm.states if s != "stop"] + [place(s) + "_PAUSED" for s in fsm.paused if s != "stop"]
+        running = [place(s) for s in fsm.states if s != "stop"] + [
+            place(s) + "_PAUSED" for s in fsm.paused if s != "stop"
+        ]
         target = place("stop") if fsm.has_stop else INTERRUPTED
         for p in running:
             transitions.append(Transition("abort", [p], [target], action=[Assign(Var("aborted"), Const(True))]))
@@ -204,7 +206,9 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
     places = ["IDLE", "CHECK", "ACTIVE"]
     data = [DataDecl("int", "verdict")] + [DataDecl("bool", f) for f in STATUS_FIELDS]
     validate = (
-        [Assign(Var("verdict"), Call(joined(module, service.validate.name)))] if service.validate else [Assign(Var("verdict"), Const(0))]
+        [Assign(Var("verdict"), Call(joined(module, service.validate.name)))]
+        if service.validate
+        else [Assign(Var("verdict"), Const(0))]
     )
     ports = [
         PortDecl(PORT, "trigger", exported=True),
@@ -242,7 +246,9 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         data=data,
         ports=ports,
         places=places,
-        initial=InitialTransition(["IDLE"], [Assign(Var(v), Const(0 if v == "verdict" else False)) for v in ("verdict",) + STATUS_FIELDS]),
+        initial=InitialTransition(
+            ["IDLE"], [Assign(Var(v), Const(0 if v == "verdict" else False)) for v in ("verdict",) + STATUS_FIELDS]
+        ),
         transitions=transitions,
         annotations=source_annotation(service.span),
     )

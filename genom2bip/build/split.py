@@ -210,8 +210,13 @@ def _split_rendezvous(ct: ConnectorType, groups: list[list[int]], port_types: di
         params=[ConnectorParam(t, n) for t, n in zip(outer_types, outer_names)],
         define=DefineGroup([DefinePort(n) for n in outer_names]),
         export=ConnectorExport(PORT, "ep", []) if ct.export is not None else None,
-        interactions=[InteractionSpec(list(outer_names), guard=map_port_data(guard, lambda d: table[(d.port, d.name)]) if guard is not None else None,
-                                      down=outer_downs)],
+        interactions=[
+            InteractionSpec(
+                list(outer_names),
+                guard=map_port_data(guard, lambda d: table[(d.port, d.name)]) if guard is not None else None,
+                down=outer_downs,
+            )
+        ],
     )
     for gi, sub in enumerate(subs):
         if sub is not None and not sub.name:

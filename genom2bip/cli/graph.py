@@ -10,7 +10,15 @@ import argparse
 import difflib
 import sys
 
-from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, Failure, add_preprocessor_arguments, add_rules_arguments, error, verb
+from genom2bip.cli.verbs import (
+    EXIT_ERRORS,
+    EXIT_OK,
+    Failure,
+    add_preprocessor_arguments,
+    add_rules_arguments,
+    error,
+    verb,
+)
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
@@ -24,7 +32,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     what.add_argument("--module", metavar="NAME", help="one module as a compound, with its connectors (paper Fig. 7)")
     what.add_argument("--atom", metavar="PATH", help="one atom as an automaton, e.g. NDD.GoTo.activity (Fig. 3)")
     what.add_argument("--list", action="store_true", help="list the modules and atoms that can be drawn")
-    parser.add_argument("-o", "--output", metavar="FILE", help="write FILE (.dot, .svg or .png); default: DOT on stdout")
+    parser.add_argument(
+        "-o", "--output", metavar="FILE", help="write FILE (.dot, .svg or .png); default: DOT on stdout"
+    )
 
 
 def load_structure(args: argparse.Namespace):

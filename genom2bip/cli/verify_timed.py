@@ -156,7 +156,9 @@ def timed_trace(steps, tick: int | None, indent: str = "    ") -> None:
     def flush() -> None:
         nonlocal run
         if run:
-            print(f"{indent}{'':4}  [{show(now - run)} .. {show(now)}] time passes ({run} tick{'s' if run > 1 else ''})")
+            print(
+                f"{indent}{'':4}  [{show(now - run)} .. {show(now)}] time passes ({run} tick{'s' if run > 1 else ''})"
+            )
             run = 0
 
     for step in steps:

@@ -104,7 +104,9 @@ class _Reader:
         fields = {k.value: (k, v) for k, v in node.value}
         kinds = [k for k in ("send", "wait", "await") if k in fields]
         if len(kinds) != 1:
-            self.error(node, "a step has exactly one of send, wait, await" + (f" (has {', '.join(kinds)})" if kinds else ""))
+            self.error(
+                node, "a step has exactly one of send, wait, await" + (f" (has {', '.join(kinds)})" if kinds else "")
+            )
             return None
         kind = kinds[0]
         allowed = {"send": {"send", "with", "as", "until", "expect", "timeout"}, "wait": {"wait"},
@@ -153,7 +155,9 @@ class _Reader:
 
     def mission(self, root: yaml.Node | None) -> Mission | None:
         if not isinstance(root, yaml.MappingNode):
-            self.reporter.error(Span(str(self.path), 1, 1), "a mission file is a mapping with 'steps' (and 'mission', 'world')")
+            self.reporter.error(
+                Span(str(self.path), 1, 1), "a mission file is a mapping with 'steps' (and 'mission', 'world')"
+            )
             return None
         fields = {k.value: (k, v) for k, v in root.value}
         for key, (knode, _) in fields.items():

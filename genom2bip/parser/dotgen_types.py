@@ -148,7 +148,9 @@ class TypeReader(DotgenReader):
                 name, t = self.declarator(decl, base)
                 m = Member(name, t, span=self.span(decl))
                 if name in seen:
-                    self.error(decl, f"duplicate member '{name}' in {owner}", hint=f"first declared at {seen[name].span}")
+                    self.error(
+                        decl, f"duplicate member '{name}' in {owner}", hint=f"first declared at {seen[name].span}"
+                    )
                     continue
                 seen[name] = m
                 out.append(m)
@@ -185,7 +187,9 @@ class TypeReader(DotgenReader):
                     values.append(self.const(label.children[0]))
             mname, t = self.declarator(decl, self.type(type_node))
             if mname in names:
-                self.error(decl, f"duplicate member '{mname}' in union '{name}'", hint=f"first declared at {names[mname]}")
+                self.error(
+                    decl, f"duplicate member '{mname}' in union '{name}'", hint=f"first declared at {names[mname]}"
+                )
             names[mname] = self.span(decl)
             out.append(UnionCase(values, Member(mname, t, span=self.span(decl)), span=self.span(case)))
         self.scope.pop()

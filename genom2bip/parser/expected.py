@@ -326,7 +326,10 @@ _GENOM2_FIRST = ["';'", "'}'", "'{'", "':'", "','", "a name"]
 
 
 def expected_genom2(names: set[str]) -> str:
-    """The expected terminals in words, punctuation that ends things first, operators dropped when other choices exist."""
+    """The expected terminals in words: punctuation that ends things first.
+
+    Operators are dropped when other choices exist.
+    """
     if names & {"SEMICOLON", "COMMA", "RBRACE"}:
         names = names - _GENOM2_OPERATORS
     texts = sorted({_genom2_terminal(n) for n in names})

@@ -60,7 +60,12 @@ POSTER_FIELDS: dict[str, tuple[str, ...]] = {
     "update": (), "data": (), "type": (), "exec_task": (), "address": (),
     "codel_poster_create": ("c_create_func", "create_func"), "doc": (),
 }
-BLOCK_FIELDS = {"module": MODULE_FIELDS, "request": REQUEST_FIELDS, "exec_task": EXEC_TASK_FIELDS, "poster": POSTER_FIELDS}
+BLOCK_FIELDS = {
+    "module": MODULE_FIELDS,
+    "request": REQUEST_FIELDS,
+    "exec_task": EXEC_TASK_FIELDS,
+    "poster": POSTER_FIELDS,
+}
 
 # --------------------------------------------------------------------------- cutting the text
 
@@ -232,7 +237,13 @@ class Genom2Frontend(TypeReader, ComponentReader, RequestReader):
                                     f"write import from MODULE {{ #include {source} }};")
                 return
             for child in decl.children:
-                if isinstance(child, Tree) and child.data in ("typedef", "tag_decl", "var_decl", "named_var_decl", "storage_decl"):
+                if isinstance(child, Tree) and child.data in (
+                    "typedef",
+                    "tag_decl",
+                    "var_decl",
+                    "named_var_decl",
+                    "storage_decl",
+                ):
                     self.c.declare(child)
         else:
             self.c.declare(decl)

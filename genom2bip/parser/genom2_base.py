@@ -71,7 +71,10 @@ class FieldError(Exception):
 
 
 class Genom2Reader:
-    """The state of one GenoM2 file being read, and how a field's value is read (names, numbers, strings, types, codels)."""
+    """The state of one GenoM2 file being read.
+
+    It also says how a field's value is read: names, numbers, strings, types, codels.
+    """
 
     def __init__(self, source: Any, reporter: Reporter, description: Description) -> None:
         self.source = source
@@ -106,7 +109,12 @@ class Genom2Reader:
 
     def _name(self, f: Field, item: Any = None) -> Token:
         node = self._one(f, "name") if item is None else item
-        if isinstance(node, Tree) and node.data == "path" and len(node.children) == 1 and isinstance(node.children[0], Token):
+        if (
+            isinstance(node, Tree)
+            and node.data == "path"
+            and len(node.children) == 1
+            and isinstance(node.children[0], Token)
+        ):
             return node.children[0]
         raise FieldError(self.span_of(node), f"field '{f.name}' expects a name here")
 
@@ -201,7 +209,12 @@ class Genom2Reader:
 
     def _ticks(self, f: Field) -> Duration | None:
         node = self._one(f, "number of ticks")
-        if isinstance(node, Tree) and node.data == "path" and len(node.children) == 1 and str(node.children[0]) == "none":
+        if (
+            isinstance(node, Tree)
+            and node.data == "path"
+            and len(node.children) == 1
+            and str(node.children[0]) == "none"
+        ):
             return None
         value = self._number(f, node)
         if not isinstance(value, int):

@@ -76,7 +76,19 @@ def string_literal(text: str) -> str:
     """Decode one C string literal token (with its quotes)."""
     body = text[1:-1]
     out: list[str] = []
-    escapes = {"n": "\n", "t": "\t", "r": "\r", "0": "\0", "\\": "\\", '"': '"', "'": "'", "a": "\a", "b": "\b", "f": "\f", "v": "\v"}
+    escapes = {
+        "n": "\n",
+        "t": "\t",
+        "r": "\r",
+        "0": "\0",
+        "\\": "\\",
+        '"': '"',
+        "'": "'",
+        "a": "\a",
+        "b": "\b",
+        "f": "\f",
+        "v": "\v",
+    }
     i = 0
     while i < len(body):
         ch = body[i]
@@ -414,7 +426,9 @@ class CDeclarations:
         seen: dict[str, Member] = {}
         for member in (c for c in node.children if isinstance(c, Tree) and c.data == "member"):
             spec = member.children[0]
-            member_hint = f"{name}_{self._first_declarator_name(member.children[1])}" if len(member.children) > 1 else None
+            member_hint = (
+                f"{name}_{self._first_declarator_name(member.children[1])}" if len(member.children) > 1 else None
+            )
             base = self.type_spec(spec, member_hint)
             if len(member.children) < 2:
                 continue  # anonymous member or bare declaration: nothing to name
@@ -423,7 +437,9 @@ class CDeclarations:
                     continue
                 mname = str(name_tok)
                 if mname in seen:
-                    self.reporter.error(self.span_of(name_tok), f"duplicate member '{mname}' in {node.children[0]} {name}")
+                    self.reporter.error(
+                        self.span_of(name_tok), f"duplicate member '{mname}' in {node.children[0]} {name}"
+                    )
                     continue
                 seen[mname] = Member(mname, typ, span=self.span_of(name_tok))
                 members.append(seen[mname])

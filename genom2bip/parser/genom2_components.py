@@ -57,7 +57,11 @@ class ComponentReader(Genom2Reader):
             if isinstance(node, Tree) and node.data == "colon_list":
                 props[canonical] = ":".join(str(self._number(f, c)) for c in node.children)
             else:
-                props[canonical] = self._string(f, node) if isinstance(node, Tree) and node.data == "strings" else str(self._number(f, node))
+                props[canonical] = (
+                    self._string(f, node)
+                    if isinstance(node, Tree) and node.data == "strings"
+                    else str(self._number(f, node))
+                )
         elif canonical in ("codel_files", "requires", "codels_requires"):
             key = {"requires": "require", "codels_requires": "codels-require"}.get(canonical, canonical)
             props[key] = self._packages(f) if key != "codel_files" else self._text(f)
@@ -114,11 +118,15 @@ class ComponentReader(Genom2Reader):
             task.codels.append(self._make_codel(name, ["start"], yields, span, wcet))
         if main:
             name, wcet, span = main
-            task.codels.append(self._make_codel(name, ["main"] if start else ["start", "main"], ["pause::main"], span, wcet))
+            task.codels.append(
+                self._make_codel(name, ["main"] if start else ["start", "main"], ["pause::main"], span, wcet)
+            )
         if main2:
             name, wcet, span = main2
             task.codels.append(self._make_codel(name, ["main2"], ["pause::main2"], span, wcet))
-            self.reporter.warning(span, f"codel_task_main2 '{name}' has no GenoM3 equivalent: kept as state 'main2', never entered")
+            self.reporter.warning(
+                span, f"codel_task_main2 '{name}' has no GenoM3 equivalent: kept as state 'main2', never entered"
+            )
         if end:
             name, wcet, span = end
             task.codels.append(self._make_codel(name, ["stop"], ["ether"], span, wcet))

@@ -125,7 +125,9 @@ class TypeReader(Genom2Reader):
             else:
                 resolved = self.c.resolve(typ)
                 if isinstance(resolved, ArrayType):
-                    typ = resolved.element if len(resolved.dims) == 1 else ArrayType(resolved.element, resolved.dims[1:])
+                    typ = (
+                        resolved.element if len(resolved.dims) == 1 else ArrayType(resolved.element, resolved.dims[1:])
+                    )
                 elif isinstance(resolved, SequenceType):
                     typ = resolved.element
                 else:
@@ -140,4 +142,6 @@ class TypeReader(Genom2Reader):
                 self.component.throws.append(name)
             key = f"{self.component.name}::{name}"
             if key not in self.description.exceptions:
-                self.description.exceptions[key] = ExceptionDecl(name, span=spans.get(f"throws:{name}", self.component.span))
+                self.description.exceptions[key] = ExceptionDecl(
+                    name, span=spans.get(f"throws:{name}", self.component.span)
+                )

@@ -148,9 +148,12 @@ class Binder:
                 return UNDECLARED
             except BaseException as err:  # noqa: BLE001 - the codel's bug (even SystemExit), reported with its name
                 frame = traceback.extract_tb(err.__traceback__)[-1]
-                self.failure = {"codel": spec.codel, "error": "python exception",
-                                "message": f"codel {spec.codel} raised {type(err).__name__}" + (f": {err}" if str(err) else ""),
-                                "where": f"{frame.filename}:{frame.lineno}"}
+                self.failure = {
+                    "codel": spec.codel,
+                    "error": "python exception",
+                    "message": f"codel {spec.codel} raised {type(err).__name__}" + (f": {err}" if str(err) else ""),
+                    "where": f"{frame.filename}:{frame.lineno}",
+                }
                 return UNDECLARED
             finally:
                 self.running = None

@@ -136,8 +136,10 @@ class CGen:
         self.trees = {src.index: TreeGen(self, src) for src in self.sources if src.kind == "generic"}
         for src in self.sources:
             if len(src.leaves) > MAX_PARAMS:
-                raise Unsupported(f"connector {src.connector.path}: {len(src.leaves)} ports, more than the {MAX_PARAMS} "
-                                  "bits of the compiled step's interaction masks")
+                raise Unsupported(
+                    f"connector {src.connector.path}: {len(src.leaves)} ports, more than the {MAX_PARAMS} "
+                    "bits of the compiled step's interaction masks"
+                )
         nsrc = len(self.sources)
         if max((s.full for s in self.sources), default=0) * nsrc + nsrc >= (1 << 32) - 1:
             raise Unsupported(f"{nsrc} sources with up to {max(len(s.leaves) for s in self.sources)} ports: too many "
@@ -364,7 +366,9 @@ class CGen:
         w("}")
 
     def gen_fire_table(self) -> None:
-        self.w(f"static void (*const FIRE[NSRC])(V *, uint32_t) = {{{', '.join(f'f{s.index}' for s in self.sources)}}};")
+        self.w(
+            f"static void (*const FIRE[NSRC])(V *, uint32_t) = {{{', '.join(f'f{s.index}' for s in self.sources)}}};"
+        )
 
     # -- slots: reset of dead variables, domains, packing --------------------------------------------
     def slot_width(self, k: int, s: Slot) -> int:
@@ -428,7 +432,10 @@ class CGen:
                 w("    u = (uint64_t)x;")
             elif s.kind == "value":
                 if self.value_types[s.index] == "float":
-                    w(f"    if (isnan(F(x))) fail({E_ARITH}, 4);  /* the Python explorer never meets a NaN state again */")
+                    w(
+                        f"    if (isnan(F(x))) fail({E_ARITH}, 4);"
+                        "  /* the Python explorer never meets a NaN state again */"
+                    )
                 w("    u = (uint64_t)x;")
             else:
                 w("    u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
@@ -606,7 +613,10 @@ class CGen:
         for fp in fl.ports:
             w(f"    PEN[{fp.id}] = (uint8_t)e{fp.id};")
         if self.trees:
-            w(f"    const uint8_t EP[{max(len(fl.ports), 1)}] = {{{', '.join(f'(uint8_t)e{fp.id}' for fp in fl.ports)}}};")
+            w(
+                f"    const uint8_t EP[{max(len(fl.ports), 1)}] = "
+                f"{{{', '.join(f'(uint8_t)e{fp.id}' for fp in fl.ports)}}};"
+            )
         for src in self.sources:
             self.gen_source_enabled(src)
         if self.prio is not None:
@@ -623,7 +633,10 @@ class CGen:
             w("            int b = 0;")
             w("            for (int r = 0; r < NRULES; r++)")
             w("                for (int x = 0; x < NRW; x++)")
-            w("                    if (PREACH[key][r][x] & high[x]) { blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }")
+            w(
+                "                    if (PREACH[key][r][x] & high[x]) "
+                "{ blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }"
+            )
             w("            if (b) {")
             w("                int k = 0;")
             w("                for (int i = 0; i < n; i++) {")
@@ -707,7 +720,10 @@ class CGen:
                 fa = fl.atoms[fp.atom]
                 for j, v in enumerate(fp.decl.data):
                     w(f"            pv[{i}][{j}] = a{fa.index}_{v};")
-            w(f"            n = maximal_enabled(maxa{src.index}, em, {nparams}, pv, blocked{src.index}, {src.index}, isrc, imask, n);")
+            w(
+                f"            n = maximal_enabled(maxa{src.index}, em, {nparams}, pv, blocked{src.index}, "
+                f"{src.index}, isrc, imask, n);"
+            )
             w("        }")
         elif defines.is_flat(info.tree):
             w(f"        if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")

@@ -190,7 +190,9 @@ class TreeGen:
         for i, alts in enumerate(node.params):
             for j, a in enumerate(alts):
                 if a.node is None:
-                    copy = " ".join(f"pv{n}[{i}][{f}] = L[{slot}];" for f, slot in enumerate(self.flat.ports[a.port].slots))
+                    copy = " ".join(
+                        f"pv{n}[{i}][{f}] = L[{slot}];" for f, slot in enumerate(self.flat.ports[a.port].slots)
+                    )
                 else:
                     c = self.kid(a.node)
                     copy = " ".join(f"pv{n}[{i}][{f}] = lv{c}[{e}];" for f, e in enumerate(a.node.info.export_idx))

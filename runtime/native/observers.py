@@ -17,7 +17,10 @@ MAX_LEAVES = 12
 
 
 def c_pred(p: Pred | None, flat, state: str = "L") -> str:
-    """A state predicate over the C state vector (``1`` for None: ``[R] false`` fails wherever R matches... see caller)."""
+    """A state predicate over the C state vector.
+
+    ``1`` for None: ``[R] false`` fails wherever R matches (see the caller).
+    """
     if p is None:
         return "0"
     if isinstance(p, PConst):
@@ -75,7 +78,10 @@ def gen_observers(w, monitors, sources, flat, base: int) -> None:
         for k in range(len(statics)):
             rows.append("{" + ", ".join(str(mon.delta[k].get(q, q)) for q in range(mon.states)) + "}")
         w(f"static const uint8_t D{m}[{len(statics)}][{mon.states}] = {{{', '.join(rows)}}};")
-        w(f"static const uint8_t A{m}[{mon.states}] = {{{', '.join('1' if q in mon.accepting else '0' for q in range(mon.states))}}};")
+        w(
+            f"static const uint8_t A{m}[{mon.states}] = "
+            f"{{{', '.join('1' if q in mon.accepting else '0' for q in range(mon.states))}}};"
+        )
         w(f"static int P{m}(const V *L) {{ return {c_pred(mon.pred, flat)}; }}")
     w("static int observe(const V *s, V *L, uint32_t via) {")
     w("    int k = KOF(via), bad = 0;")

@@ -12,5 +12,15 @@ from runtime.pictures.render import PictureError, layout_command, render
 from runtime.pictures.sequence import sequence
 from runtime.pictures.structure import Structure, structure
 
-__all__ = ["PictureError", "Structure", "automaton", "functional_level", "layout_command", "module", "outline", "render",
-           "sequence", "structure"]
+__all__ = [
+    "PictureError",
+    "Structure",
+    "automaton",
+    "functional_level",
+    "layout_command",
+    "module",
+    "outline",
+    "render",
+    "sequence",
+    "structure",
+]

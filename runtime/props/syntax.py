@@ -234,8 +234,16 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
         raise DiagnosticError([diag], sources) from None
     deep = too_deep(tree)
     if deep is not None:
-        raise DiagnosticError([Diagnostic(_span(file, deep.meta), f"the formula is nested more than {MAX_DEPTH} operators deep here",
-                                          hint="split it into several properties")], sources)
+        raise DiagnosticError(
+            [
+                Diagnostic(
+                    _span(file, deep.meta),
+                    f"the formula is nested more than {MAX_DEPTH} operators deep here",
+                    hint="split it into several properties",
+                )
+            ],
+            sources,
+        )
     props = _Build(file).transform(tree)
     out = []
     for k, p in enumerate(props, 1):

@@ -58,10 +58,18 @@ class TypeProblem(Exception):
 
 
 def _what(raw: Raw) -> str:
-    return {"label": "a label", "regex": "a regular expression on labels", "optional": "an optional label", "var": f"the variable {raw.args[0]}",
-            "state": "a state predicate", "diamond": "a <...> modality", "box": "a [...] modality",
-            "mu": "a mu fixed point", "nu": "a nu fixed point", "implies": "'implies'"}.get(
-        raw.op, REGULAR_OPS.get(raw.op, raw.op))
+    return {
+        "label": "a label",
+        "regex": "a regular expression on labels",
+        "optional": "an optional label",
+        "var": f"the variable {raw.args[0]}",
+        "state": "a state predicate",
+        "diamond": "a <...> modality",
+        "box": "a [...] modality",
+        "mu": "a mu fixed point",
+        "nu": "a nu fixed point",
+        "implies": "'implies'",
+    }.get(raw.op, REGULAR_OPS.get(raw.op, raw.op))
 
 
 def _quoted(raw: Raw) -> str:

@@ -10,7 +10,8 @@ Routes (docs/runtime.md has the shapes; ``/openapi.json`` describes them):
     GET  /requests                             recent requests (?status=running&limit=100)
     GET  /requests/{id}?wait=SECONDS           a request and its reports; waits for the final one
     GET  /components/{c}/ports/{p}             a poster's last value
-    GET  /events?types=report,poster           server-sent events: reports, poster writes, overruns, codel errors, observers
+    GET  /events?types=report,poster           server-sent events: reports, poster writes, overruns,
+                                               codel errors, observers
     GET  /tasks                                periods, lateness and overruns of every task
     GET  /openapi.json                         OpenAPI 3.1 description
 

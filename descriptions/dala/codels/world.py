@@ -101,7 +101,9 @@ class Session:
         for i, r in enumerate(ranges):
             if r < top - 1e-6:
                 a = p["theta"] + a0 + i * step
-                self.hits.add((round((p["x"] + r * math.cos(a)) / HIT_CELL), round((p["y"] + r * math.sin(a)) / HIT_CELL)))
+                self.hits.add(
+                    (round((p["x"] + r * math.cos(a)) / HIT_CELL), round((p["y"] + r * math.sin(a)) / HIT_CELL))
+                )
         return {"angle_min": a0, "angle_step": step, "range_max": top, "ranges": ranges}
 
     def hit_points(self) -> list[tuple[float, float]]:
