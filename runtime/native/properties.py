@@ -59,5 +59,6 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
         verdict = Verdict(prop, None, note=f"the search stopped at {result.stopped_by} before an answer", method="")
     verdict.states = result.states
     verdict.lossiness = cs.lossiness
+    verdict.result = result  # the search's figures: depth, memory, how it stopped
     verdict.seconds = time.perf_counter() - start
     return verdict
