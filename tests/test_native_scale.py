@@ -188,7 +188,8 @@ def test_ring_verdicts_with_reduction_threads_and_compact_store():
     assert [(n, h) for n, h, _ in full] == [("a", True), ("b", False), ("c", False), ("d", False)]
     assert verdicts(pkg, "Main()", RING_PROPS, workers=2) == full  # shortest counterexamples still
     assert verdicts(pkg, "Main()", RING_PROPS, store="compact") == full
-    for kw in ({"por": True, "workers": 2}, {"por": True, "store": "compact", "workers": 2}):
+    for kw in ({"por": True, "workers": 2}, {"por": True, "store": "compact", "workers": 2},
+               {"por": True, "dfs": True}):
         reduced = verdicts(pkg, "Main()", RING_PROPS, **kw)
         assert [(n, h) for n, h, _ in reduced] == [(n, h) for n, h, _ in full]
         assert all(r >= f for (_, _, r), (_, _, f) in zip(reduced, full))
@@ -196,7 +197,7 @@ def test_ring_verdicts_with_reduction_threads_and_compact_store():
 
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models(atoms_range=(2, 4), connectors_range=(1, 4)))
-def test_random_invariants_agree_reduced_on_two_threads(text):
+def test_random_invariants_agree_reduced_on_two_threads_and_depth_first(text):
     try:
         pkg = parse_text(text, "Random.bip")
         StateSpace(pkg, "Main()")
@@ -209,11 +210,29 @@ def test_random_invariants_agree_reduced_on_two_threads(text):
         full = compiled_check(StateSpace(pkg, "Main()", observed=observed), item)
         if full is None or full.error:
             continue
-        for kw in ({"workers": 2}, {"por": True, "workers": 2, "store": "compact"}):
+        for kw in ({"workers": 2}, {"por": True, "workers": 2, "store": "compact"}, {"por": True, "dfs": True}):
             got = compiled_check(StateSpace(pkg, "Main()", observed=observed), item, **kw)
             assert got.holds == full.holds, (item.name, kw)
             if full.holds is False and not kw.get("por"):
                 assert len(got.trace) == len(full.trace)
+
+
+def test_ndd_property_verdicts_with_the_stack_proviso():
+    from runtime.props import read_property_file
+
+    for path in (str(verifykit.NDD), str(verifykit.NDD_NO_AFTER)):
+        pkg, root = verifykit.ndd_model(path)
+        items, _ = read_property_file(verifykit.FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
+        observed = set().union(*(i.observed for i in items))
+        answered = 0
+        for item in items:
+            full = compiled_check(StateSpace(pkg, root, observed=observed), item)
+            if full is None:
+                continue
+            for kw in ({"por": True, "dfs": True}, {"por": True, "workers": 2, "store": "compact"}):
+                assert compiled_check(StateSpace(pkg, root, observed=observed), item, **kw).holds == full.holds
+            answered += 1
+        assert answered >= 2
 
 
 # -- the command line ----------------------------------------------------------------------------------

@@ -715,6 +715,107 @@ static void dfs(int64_t *init_ids, int64_t ninit, Result *r) {
     free(S);
 }
 
+/* the number of a stored state, or -1 (exact store) */
+static int64_t lookup(const uint64_t *w) {
+    uint64_t mask = TSIZE - 1, h = hash(w) & mask;
+    for (uint32_t v; (v = TABLE[h]); h = (h + 1) & mask)
+        if (same(at(v - 1), w)) return v - 1;
+    return -1;
+}
+
+/* the successors the depth-first search with the stack proviso follows: an ample set's, unless one of its
+   successors is on the search stack (then every successor: SPIN's cycle proviso) */
+static int step_stack(const V *s, const uint8_t *onstack) {
+    if (setjmp(JB)) return -1;
+    int n = expand(s, 1);
+    for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
+    if (!PROPER) return n;
+    for (int i = 0; i < n; i++) {
+        int64_t id = lookup(PK + (size_t)i * NW);
+        if (id >= 0 && onstack[id]) return step_packed(s);
+    }
+    NREDUCED++;
+    return n;
+}
+
+/* depth-first over a path stack, for the reduction with observers: a frame per state on the current path
+   with the successors still to visit; a state is on the stack from its expansion until its frame is done */
+static void dfs_stack(int64_t *init_ids, int64_t ninit, Result *r) {
+    int64_t fcap = 1024, nf = 0, kcap = 4096, nk = 0, mcap = 0, ticks = 0;
+    int64_t *fsid = malloc(fcap * 8), *fdepth = malloc(fcap * 8), *fnext = malloc(fcap * 8), *fend = malloc(fcap * 8);
+    int64_t *kids = malloc(kcap * 8), *targets = malloc(2 * MAXSUCC * sizeof *targets);
+    uint8_t *mark = 0; /* bit 0: expanded, bit 1: on the stack */
+    V *S = malloc(W * sizeof *S);
+    double next = now() + PERIOD_S;
+    for (int64_t i = 0; i < ninit && !STOP; i++) {
+        int64_t push = init_ids[i], depth = 0;
+        for (;;) {
+            if (push >= 0) {  /* expand `push` and open its frame */
+                if (NSTATES > mcap) {
+                    int64_t cap = mcap ? mcap : 1024;
+                    while (cap < NSTATES) cap *= 2;
+                    mark = realloc(mark, cap);
+                    memset(mark + mcap, 0, cap - mcap);
+                    mcap = cap;
+                }
+                if (mark[push] & 1) { push = -1; continue; }
+                mark[push] |= 3;
+                if (depth > r->depth) r->depth = depth;
+                if (nf == fcap) {
+                    fcap *= 2;
+                    fsid = realloc(fsid, fcap * 8); fdepth = realloc(fdepth, fcap * 8);
+                    fnext = realloc(fnext, fcap * 8); fend = realloc(fend, fcap * 8);
+                }
+                fsid[nf] = push; fdepth[nf] = depth; fnext[nf] = fend[nf] = nk; nf++;
+                if (MAX_DEPTH >= 0 && depth >= MAX_DEPTH) r->status = S_MAX_DEPTH;
+                else {
+                    unpack(at(push), S);
+                    int m = step_stack(S, mark);
+                    if (m < 0) { stop_with(ECODE == E_WIDEN ? S_WIDEN : S_ERROR, push); break; }
+                    if (!room(m)) {
+                        if (!grow(RES + m)) { stop_with(S_MAX_MEMORY, -2); break; }
+                        room(m);
+                    }
+                    int d = record(push, m, targets);
+                    if (d < 0) break;
+                    TRANS_ALL += d;
+                    if (VIOL >= 0) { stop_with(S_VIOLATED, VIOL); break; }
+                    if (m == 0) { push_dead(push); if (STOP_AT_DEADLOCK) { stop_with(S_DEADLOCK, -2); break; } }
+                    if (NSTATES > mcap) {
+                        int64_t cap = mcap;
+                        while (cap < NSTATES) cap *= 2;
+                        mark = realloc(mark, cap);
+                        memset(mark + mcap, 0, cap - mcap);
+                        mcap = cap;
+                    }
+                    for (int k = 0; k < d; k++) {
+                        if (mark[targets[2 * k + 1]] & 1) continue;
+                        if (nk == kcap) { kcap *= 2; kids = realloc(kids, kcap * 8); }
+                        kids[nk++] = targets[2 * k + 1];
+                    }
+                    fend[nf - 1] = nk;
+                }
+                EXTRA = fcap * 32 + kcap * 8 + mcap;
+                if (MAX_BYTES >= 0 && memory() > MAX_BYTES) { stop_with(S_MAX_MEMORY, -2); break; }
+                if ((++ticks & 255) == 0 && now() >= next) {
+                    next = now() + PERIOD_S;
+                    if (CB && CB(NSTATES, TRANS_ALL, r->depth, nf, memory())) { stop_with(S_INTERRUPTED, -2); break; }
+                }
+                push = -1;
+            }
+            if (!nf) break;
+            int64_t f = nf - 1;
+            if (fnext[f] < fend[f]) { push = kids[fnext[f]++]; depth = fdepth[f] + 1; continue; }
+            mark[fsid[f]] &= 1;  /* leaves the stack */
+            nk = f ? fend[f - 1] : 0;
+            nf--;
+        }
+    }
+    REDUCED_ALL += NREDUCED;
+    NREDUCED = 0;
+    free(fsid); free(fdepth); free(fnext); free(fend); free(kids); free(targets); free(mark); free(S);
+}
+
 /* the whole search.  store: ST_EXACT, ST_COMPACT or ST_BITSTATE (2^bits bits); workers > 1 needs PARALLEL
    and breadth-first order; lossy stores search breadth-first */
 int c_search(int dfs_order, int64_t max_states, int64_t max_depth, int64_t max_bytes, int stop_at_deadlock,
@@ -766,7 +867,8 @@ int c_search(int dfs_order, int64_t max_states, int64_t max_depth, int64_t max_b
     if (STOP) goto done;
     RES = NSTATES;
     if (dfs_order) {
-        dfs(init_ids, ninit, r);
+        if (POR && NMON) dfs_stack(init_ids, ninit, r);
+        else dfs(init_ids, ninit, r);
         goto done;
     }
     LEVEL_END = NSTATES;
