@@ -279,8 +279,8 @@ def dala_long(seconds: float) -> str:
     rows.append(LongRow("deadlock (SPIN)", "SPIN -DMEMLIM=4000", "complete" if spin[3] else "open (time)",
                         spin[0], rep.depth if rep and rep.depth < DEPTH else 0, rep.memory_mb if rep else 0.0, rep.seconds if rep else 0.0))
     lines = [f"Whole DALA with its rules, {seconds:.0f} s per check at most:", "",
-             "| check | tool | verdict | states | depth (0: not said) | memory MB | seconds (with compiling) | B/state | "
-             "states in 16 GB |",
+             ("| check | tool | verdict | states | depth (0: not said) | memory MB | seconds (with compiling) | "
+              "B/state | states in 16 GB |"),
              "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for x in rows:
         per = x.memory_mb * 2**20 / x.states if x.states else 0.0

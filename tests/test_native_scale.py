@@ -195,46 +195,6 @@ def test_ring_verdicts_with_reduction_threads_and_compact_store():
         assert all(r >= f for (_, _, r), (_, _, f) in zip(reduced, full))
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(models(atoms_range=(2, 4), connectors_range=(1, 4)))
-def test_random_invariants_agree_reduced_on_two_threads_and_depth_first(text):
-    try:
-        pkg = parse_text(text, "Random.bip")
-        StateSpace(pkg, "Main()")
-    except EngineError:
-        return
-    props = "i0: invariant a0 @ P0 or a1 @ P0; i1: invariant a1.x <= 1; i2: invariant not (a0.x == 2 and a1.x == 0)"
-    items, _ = read_properties(props, "p.mcl", flatten(pkg, "Main()"))
-    observed = set().union(*(i.observed for i in items))
-    for item in items:
-        full = compiled_check(StateSpace(pkg, "Main()", observed=observed), item)
-        if full is None or full.error:
-            continue
-        for kw in ({"workers": 2}, {"por": True, "workers": 2, "store": "compact"}, {"por": True, "dfs": True}):
-            got = compiled_check(StateSpace(pkg, "Main()", observed=observed), item, **kw)
-            assert got.holds == full.holds, (item.name, kw)
-            if full.holds is False and not kw.get("por"):
-                assert len(got.trace) == len(full.trace)
-
-
-def test_ndd_property_verdicts_with_the_stack_proviso():
-    from runtime.props import read_property_file
-
-    for path in (str(verifykit.NDD), str(verifykit.NDD_NO_AFTER)):
-        pkg, root = verifykit.ndd_model(path)
-        items, _ = read_property_file(verifykit.FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
-        observed = set().union(*(i.observed for i in items))
-        answered = 0
-        for item in items:
-            full = compiled_check(StateSpace(pkg, root, observed=observed), item)
-            if full is None:
-                continue
-            for kw in ({"por": True, "dfs": True}, {"por": True, "workers": 2, "store": "compact"}):
-                assert compiled_check(StateSpace(pkg, root, observed=observed), item, **kw).holds == full.holds
-            answered += 1
-        assert answered >= 2
-
-
 # -- the command line ----------------------------------------------------------------------------------
 
 def _explored(out: str) -> str:

@@ -653,6 +653,33 @@ out:
     return 0;
 }
 
+/* one thread's depth-first step at sid, m successors (-1: a model error): numbered and recorded; the
+   distinct transitions, or -1 when the search stops (error, limit, violation, deadlock asked for) */
+static int settle(int64_t sid, int m, int64_t *targets) {
+    if (m < 0) { stop_with(ECODE == E_WIDEN ? S_WIDEN : S_ERROR, sid); return -1; }
+    if (!room(m)) {
+        if (!grow(RES + m)) { stop_with(S_MAX_MEMORY, -2); return -1; }
+        room(m);
+    }
+    int d = record(sid, m, targets);
+    if (d < 0) return -1;
+    TRANS_ALL += d;
+    if (VIOL >= 0) { stop_with(S_VIOLATED, VIOL); return -1; }
+    if (m == 0) { push_dead(sid); if (STOP_AT_DEADLOCK) { stop_with(S_DEADLOCK, -2); return -1; } }
+    return d;
+}
+
+/* a byte per numbered state (zeroed as it grows): the depth-first searches' marks */
+static uint8_t *marks_for_all(uint8_t *marks, int64_t *cap) {
+    if (NSTATES <= *cap) return marks;
+    int64_t c = *cap ? *cap : 1024;
+    while (c < NSTATES) c *= 2;
+    marks = realloc(marks, c);
+    memset(marks + *cap, 0, c - *cap);
+    *cap = c;
+    return marks;
+}
+
 /* depth-first over the exact store, one thread: a stack of (state, depth), a mark per expanded state */
 static void dfs(int64_t *init_ids, int64_t ninit, Result *r) {
     int64_t scap = 1024, ns = 0, mcap = 0, ticks = 0;
@@ -664,36 +691,15 @@ static void dfs(int64_t *init_ids, int64_t ninit, Result *r) {
     while (ns && !STOP) {
         ns--;
         int64_t sid = stack[2 * ns], depth = stack[2 * ns + 1];
-        if (NSTATES > mcap) {
-            int64_t cap = mcap ? mcap : 1024;
-            while (cap < NSTATES) cap *= 2;
-            expanded = realloc(expanded, cap);
-            memset(expanded + mcap, 0, cap - mcap);
-            mcap = cap;
-        }
+        expanded = marks_for_all(expanded, &mcap);
         if (expanded[sid]) continue;
         expanded[sid] = 1;
         if (depth > r->depth) r->depth = depth;
         if (MAX_DEPTH >= 0 && depth >= MAX_DEPTH) { r->status = S_MAX_DEPTH; continue; }
         unpack(at(sid), S);
-        int m = step_search(S);
-        if (m < 0) { stop_with(ECODE == E_WIDEN ? S_WIDEN : S_ERROR, sid); break; }
-        if (!room(m)) {
-            if (!grow(RES + m)) { stop_with(S_MAX_MEMORY, -2); break; }
-            room(m);
-        }
-        int d = record(sid, m, targets);
+        int d = settle(sid, step_search(S), targets);
         if (d < 0) break;
-        TRANS_ALL += d;
-        if (VIOL >= 0) { stop_with(S_VIOLATED, VIOL); break; }
-        if (m == 0) { push_dead(sid); if (STOP_AT_DEADLOCK) { stop_with(S_DEADLOCK, -2); break; } }
-        if (NSTATES > mcap) {
-            int64_t cap = mcap;
-            while (cap < NSTATES) cap *= 2;
-            expanded = realloc(expanded, cap);
-            memset(expanded + mcap, 0, cap - mcap);
-            mcap = cap;
-        }
+        expanded = marks_for_all(expanded, &mcap);
         for (int k = d - 1; k >= 0; k--) {
             int64_t t = targets[2 * k + 1];
             if (expanded[t]) continue;
@@ -751,13 +757,7 @@ static void dfs_stack(int64_t *init_ids, int64_t ninit, Result *r) {
         int64_t push = init_ids[i], depth = 0;
         for (;;) {
             if (push >= 0) {  /* expand `push` and open its frame */
-                if (NSTATES > mcap) {
-                    int64_t cap = mcap ? mcap : 1024;
-                    while (cap < NSTATES) cap *= 2;
-                    mark = realloc(mark, cap);
-                    memset(mark + mcap, 0, cap - mcap);
-                    mcap = cap;
-                }
+                mark = marks_for_all(mark, &mcap);
                 if (mark[push] & 1) { push = -1; continue; }
                 mark[push] |= 3;
                 if (depth > r->depth) r->depth = depth;
@@ -770,24 +770,9 @@ static void dfs_stack(int64_t *init_ids, int64_t ninit, Result *r) {
                 if (MAX_DEPTH >= 0 && depth >= MAX_DEPTH) r->status = S_MAX_DEPTH;
                 else {
                     unpack(at(push), S);
-                    int m = step_stack(S, mark);
-                    if (m < 0) { stop_with(ECODE == E_WIDEN ? S_WIDEN : S_ERROR, push); break; }
-                    if (!room(m)) {
-                        if (!grow(RES + m)) { stop_with(S_MAX_MEMORY, -2); break; }
-                        room(m);
-                    }
-                    int d = record(push, m, targets);
+                    int d = settle(push, step_stack(S, mark), targets);
                     if (d < 0) break;
-                    TRANS_ALL += d;
-                    if (VIOL >= 0) { stop_with(S_VIOLATED, VIOL); break; }
-                    if (m == 0) { push_dead(push); if (STOP_AT_DEADLOCK) { stop_with(S_DEADLOCK, -2); break; } }
-                    if (NSTATES > mcap) {
-                        int64_t cap = mcap;
-                        while (cap < NSTATES) cap *= 2;
-                        mark = realloc(mark, cap);
-                        memset(mark + mcap, 0, cap - mcap);
-                        mcap = cap;
-                    }
+                    mark = marks_for_all(mark, &mcap);
                     for (int k = 0; k < d; k++) {
                         if (mark[targets[2 * k + 1]] & 1) continue;
                         if (nk == kcap) { kcap *= 2; kids = realloc(kids, kcap * 8); }
