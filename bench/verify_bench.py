@@ -10,6 +10,10 @@ SPIN are stopped after ``--seconds``, SPIN's memory is capped at 4 GB with
 the Promela translation has our layout and dead-variable reduction, and the
 exhaustive runs find the same number of states (checked here).
 
+The compiled explorer runs on one thread and on two (``--workers 2``:
+breadth-first levels shared by two threads over one lock-free visited
+set); the speed-up of two threads over one is a column of the first table.
+
 A second table gives the compiled explorer with its partial-order reduction
 (``verify --por``) on the deadlock check, beside the full compiled search and
 SPIN (which the SPIN hand-off builds with -DNOREDUCE: no reduction).
@@ -24,6 +28,13 @@ allocates (packed states, parents, the interactions that reached them, the
 hash table) divided by the states; SPIN's is pan's "equivalent memory usage
 for states" (stored x (state vector + overhead)) divided by the states it
 stored, without its hash table and search stack.
+
+``--dala-long S`` adds the run on the whole DALA with its rules: deadlock
+freedom and every property of descriptions/dala/properties, by our
+compiled explorer with POR, the compact store and two threads, each
+bounded by S seconds, and SPIN on the deadlock check for S seconds
+(-DMEMLIM=4000): states, depth, memory side by side, with what the compact
+store's bytes per state would hold in 16 GB.
 """
 from __future__ import annotations
 
@@ -120,6 +131,7 @@ class Row:
     por_rate: float = 0.0
     por_bytes: float = 0.0
     por_complete: bool = False
+    c2_rate: float = 0.0  # the compiled explorer on two threads
 
 
 #: A measurement is repeated until its runs add up to this many seconds.
@@ -136,10 +148,11 @@ def run_ours(package, root: str, max_states: int | None) -> tuple[int, float, fl
     return result.states, result.states * runs / total, result.bytes_per_state, result.complete
 
 
-def run_compiled(package, root: str, seconds: float, por: bool = False) -> tuple[int, float, float, bool]:
+def run_compiled(package, root: str, seconds: float, por: bool = False,
+                 workers: int = 1) -> tuple[int, float, float, bool]:
     """The compiled explorer (library built and cached before timing), capped at ``seconds`` and 4 GB.
 
-    ``por``: with partial-order reduction (states are then the reduced graph's).
+    ``por``: with partial-order reduction (states are then the reduced graph's); ``workers``: threads.
     """
     from runtime.native.compiled import compile_space
 
@@ -147,15 +160,20 @@ def run_compiled(package, root: str, seconds: float, por: bool = False) -> tuple
     if cs is None:
         print(f"compiled explorer: {note}", file=sys.stderr)
         return 0, 0.0, 0.0, False
+    if workers > 1:
+        cs.build(parallel=True)  # compiled before timing
     runs, total = 0, 0.0
     while total < MIN_SECONDS:
-        result = cs.explore(max_seconds=seconds, max_bytes=4 << 30, por=por)
+        result = cs.explore(max_seconds=seconds, max_bytes=4 << 30, por=por, workers=workers)
         runs += 1
         total += result.seconds
     return result.states, result.states * runs / total, result.bytes_per_state, result.complete
 
 
-def run_spin(package, root: str, seconds: float, states_hint: int) -> tuple[int, float, float, bool]:
+def run_spin(package, root: str, seconds: float, states_hint: int, report_out: list | None = None
+             ) -> tuple[int, float, float, bool]:
+    """SPIN's pan on the Promela translation (-DMEMLIM=4000), stopped after ``seconds``; ``report_out`` gets
+    the last PanReport."""
     run = SpinRun(StateSpace(package, root))
     bits = max(16, min(27, (2 * states_hint).bit_length()))
     try:
@@ -175,6 +193,8 @@ def run_spin(package, root: str, seconds: float, states_hint: int) -> tuple[int,
             total += time.perf_counter() - start
             runs += 1
             report = parse_pan(out)
+        if report_out is not None:
+            report_out.append(report)
         equivalent = _equivalent_mb(report.output)
         per_state = equivalent * 1024 * 1024 / report.states if report.states else 0.0
         return report.states, report.states * runs / total, per_state, complete and report.complete
@@ -196,15 +216,18 @@ def _reduction(r: Row) -> str:
 
 
 def table(rows: list[Row]) -> str:
-    head = ("| model | states (Python / compiled / SPIN) | Python states/s | compiled states/s | SPIN states/s | "
+    head = ("| model | states (Python / compiled / SPIN) | Python states/s | compiled states/s | "
+            "compiled 2 threads states/s | 2 threads / 1 | SPIN states/s | "
             "compiled/SPIN speed | B/state Python / compiled / SPIN | compiled/SPIN B/state |")
-    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | --- | ---: |"]
+    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: |"]
     for r in rows:
         mark = "" if r.ours_complete and r.c_complete and r.spin_complete and r.por_complete else " (budget)"
         speed = r.c_rate / r.spin_rate if r.spin_rate else float("nan")
         mem = r.c_bytes / r.spin_bytes if r.spin_bytes else float("nan")
+        scale = r.c2_rate / r.c_rate if r.c_rate else float("nan")
         lines.append(f"| {r.model}{mark} | {r.ours_states:,} / {r.c_states:,} / {r.spin_states:,} | "
-                     f"{r.ours_rate:,.0f} | {r.c_rate:,.0f} | {r.spin_rate:,.0f} | {speed:,.2f}x | "
+                     f"{r.ours_rate:,.0f} | {r.c_rate:,.0f} | {r.c2_rate:,.0f} | {scale:.2f}x | "
+                     f"{r.spin_rate:,.0f} | {speed:,.2f}x | "
                      f"{r.ours_bytes:,.0f} / {r.c_bytes:,.0f} / {r.spin_bytes:,.0f} | {mem:.2f}x |")
     lines += ["", ("| model | states compiled / compiled+POR / SPIN (-DNOREDUCE) | compiled+POR states/s | "
                    "reduction | B/state compiled+POR |"), "| --- | --- | ---: | ---: | ---: |"]
@@ -215,11 +238,66 @@ def table(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
+@dataclass
+class LongRow:
+    check: str
+    tool: str
+    verdict: str
+    states: int
+    depth: int
+    memory_mb: float
+    seconds: float
+
+
+def dala_long(seconds: float) -> str:
+    """Whole DALA with its rules: our compiled explorer (POR, compact store, 2 threads) and SPIN, bounded runs."""
+    from runtime.engine import flatten
+    from runtime.native.properties import compiled_check
+    from runtime.props import read_property_file
+
+    package, root = dala_model()
+    items, _ = read_property_file(ROOT / "descriptions" / "dala" / "properties" / "NDD.mcl", flatten(package, root))
+    observed = set().union(*(i.observed for i in items))
+    rows = []
+    for item in items:
+        space = StateSpace(package, root, observed=observed)
+        start = time.perf_counter()
+        v = compiled_check(space, item, max_bytes=14 << 30, por=True, store="compact", workers=2,
+                           max_seconds=seconds)
+        if v is None:
+            rows.append(LongRow(item.name, "compiled+POR+compact, 2 threads", "not compiled (Python checker)",
+                                0, 0, 0.0, 0.0))
+            continue
+        r = v.result
+        word = {True: "holds", False: f"violated ({len(v.trace)} steps)", None: f"open ({r.stopped_by})"}[v.holds]
+        rows.append(LongRow(item.name, "compiled+POR+compact, 2 threads", word, r.states, r.depth,
+                            r.memory / 2**20, time.perf_counter() - start))
+        print(f"DALA {item.name}: {word}, {r.states:,} states", file=sys.stderr)
+    got: list = []
+    spin = run_spin(package, root, seconds, 1 << 26, got)
+    rep = got[-1] if got else None
+    rows.append(LongRow("deadlock (SPIN)", "SPIN -DMEMLIM=4000", "complete" if spin[3] else "open (time)",
+                        spin[0], rep.depth if rep and rep.depth < DEPTH else 0, rep.memory_mb if rep else 0.0, rep.seconds if rep else 0.0))
+    lines = [f"Whole DALA with its rules, {seconds:.0f} s per check at most:", "",
+             ("| check | tool | verdict | states | depth (0: not said) | memory MB | seconds (with compiling) | "
+              "B/state | states in 16 GB |"),
+             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for x in rows:
+        per = x.memory_mb * 2**20 / x.states if x.states else 0.0
+        fits = f"{16 * 2**30 / per:,.0f}" if per else "n/a"
+        lines.append(f"| {x.check} | {x.tool} | {x.verdict} | {x.states:,} | {x.depth} | {x.memory_mb:,.0f} | "
+                     f"{x.seconds:,.0f} | {per:,.0f} | {fits} |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="SPIN's time budget on models too large to finish")
     ap.add_argument("--max-states", type=int, default=150_000, help="our state budget on models too large to finish")
     ap.add_argument("--only", help="run only the models whose name contains this")
+    ap.add_argument("--dala-long", type=float, metavar="S",
+                    help="also the whole DALA: deadlock and properties with POR + compact store + 2 threads, "
+                         "and SPIN, S seconds each")
     args = ap.parse_args(argv)
     models = [(f"dining N={n}", lambda n=n: (parse_text(dining(n), f"Dining{n}.bip"), "Table()"), None)
               for n in range(10, 13)]
@@ -237,13 +315,18 @@ def main(argv: list[str] | None = None) -> int:
             if ours[3] and got[3] and ours[0] != got[0]:
                 print(f"warning: {name}: Python {ours[0]} states, {who} {got[0]}", file=sys.stderr)
         reduced = run_compiled(package, root, args.seconds, por=True)
-        rows.append(Row(name, *ours, *compiled, *theirs, *reduced))
+        two = run_compiled(package, root, args.seconds, workers=2)
+        rows.append(Row(name, *ours, *compiled, *theirs, *reduced, c2_rate=two[1]))
         print(f"{name}: done", file=sys.stderr)
-    from runtime.native.build import FLAGS, compiler
+    from runtime.native.build import FLAGS, PARALLEL_FLAGS, compiler
 
-    print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}; compiled explorer single core, "
-          f"{compiler()} {' '.join(FLAGS)}; SPIN single core, gcc -O2 -DMEMLIM=4000")
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end, Python {sys.version.split()[0]}; compiled explorer 1 and 2 threads, "
+          f"{compiler()} {' '.join(FLAGS)} (2 threads: {' '.join(PARALLEL_FLAGS)}); SPIN single core, gcc -O2 "
+          "-DMEMLIM=4000")
     print(table(rows))
+    if args.dala_long:
+        print()
+        print(dala_long(args.dala_long))
     return 0
 
 

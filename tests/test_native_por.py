@@ -181,11 +181,17 @@ def test_server_and_ndd_properties_keep_their_verdicts():
         pkg, root = verifykit.ndd_model(path)
         items, _ = read_property_file(verifykit.FIXTURES / "goto_after_setspeed.mcl", flatten(pkg, root))
         observed = set().union(*(i.observed for i in items))
+        answered = 0
         for item in items:
             full = compiled_check(StateSpace(pkg, root, observed=observed), item)
-            red = compiled_check(StateSpace(pkg, root, observed=observed), item, por=True)
-            if full is not None:
-                assert red.holds == full.holds, item.name
+            if full is None:
+                continue
+            answered += 1
+            # breadth-first proviso, depth-first stack proviso, two threads over the compact store
+            for kw in ({"por": True}, {"por": True, "dfs": True}, {"por": True, "workers": 2, "store": "compact"}):
+                red = compiled_check(StateSpace(pkg, root, observed=observed), item, **kw)
+                assert red.holds == full.holds, (item.name, kw)
+        assert answered >= 2
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -201,10 +207,14 @@ def test_random_invariants_keep_their_verdicts(text):
     observed = set().union(*(i.observed for i in items))
     for item in items:
         full = compiled_check(StateSpace(pkg, "Main()", observed=observed), item)
-        red = compiled_check(StateSpace(pkg, "Main()", observed=observed), item, por=True)
         if full is None or full.error:
             continue
-        assert red.holds == full.holds or red.error, item.name
+        for kw in ({"por": True}, {"por": True, "dfs": True}, {"por": True, "workers": 2, "store": "compact"},
+                   {"workers": 2}):
+            got = compiled_check(StateSpace(pkg, "Main()", observed=observed), item, **kw)
+            assert got.holds == full.holds or got.error, (item.name, kw)
+            if full.holds is False and not kw.get("por"):
+                assert len(got.trace) == len(full.trace)  # two threads: still shortest
 
 
 # -- the command line --------------------------------------------------------------------------------

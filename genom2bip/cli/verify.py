@@ -50,6 +50,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     search.add_argument("--por", action="store_true",
                         help="compiled explorer: partial-order reduction (same deadlocks and safety verdicts, "
                              "fewer states; traces not shortest)")
+    from genom2bip.cli.verify_native import add_arguments as add_native_arguments
+    add_native_arguments(search)
     search.add_argument("--progress", action="store_true", help="show progress even when stderr is not a terminal")
     search.add_argument("--quiet", action="store_true", help="no progress line")
     out = parser.add_argument_group("exports")
@@ -130,6 +132,10 @@ def _check_options(args) -> None:
         raise Failure(EXIT_USAGE)
     if args.por and args.engine not in ("compiled", "explore"):
         error("--por belongs to the compiled explorer (--engine compiled); SPIN reduces by itself")
+        raise Failure(EXIT_USAGE)
+    from genom2bip.cli.verify_native import check_arguments as check_native_arguments
+    if (wrong := check_native_arguments(args)) is not None:
+        error(wrong)
         raise Failure(EXIT_USAGE)
     if args.engine == "spin" and (args.dfs or args.max_depth is not None or args.aut or args.dot):
         error("--dfs, --max-depth, --aut and --dot belong to --engine explore")

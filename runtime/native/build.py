@@ -18,6 +18,8 @@ from pathlib import Path
 
 HERE = Path(__file__).parent
 FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w")
+#: Added for the multi-threaded search (search.c's PARALLEL: per-thread scratch, atomic shared counters).
+PARALLEL_FLAGS = ("-DPARALLEL", "-pthread")
 
 
 class BuildError(Exception):
@@ -44,9 +46,10 @@ def _headers() -> str:
     return "".join((HERE / n).read_text() for n in ("prelude.h", "odometer.h", "search.c"))
 
 
-def build(source: str, cc: str) -> Path:
-    """The shared library for ``source``, compiled now or found in the cache."""
-    key = hashlib.sha256("\0".join((source, _headers(), " ".join(FLAGS), cc)).encode()).hexdigest()[:24]
+def build(source: str, cc: str, parallel: bool = False) -> Path:
+    """The shared library for ``source``, compiled now or found in the cache; ``parallel``: the threaded build."""
+    flags = FLAGS + PARALLEL_FLAGS if parallel else FLAGS
+    key = hashlib.sha256("\0".join((source, _headers(), " ".join(flags), cc)).encode()).hexdigest()[:24]
     out_dir = cache_dir()
     lib = out_dir / f"step-{key}.so"
     if lib.exists():
@@ -56,7 +59,7 @@ def build(source: str, cc: str) -> Path:
         c_file = Path(tmp) / "model.c"
         c_file.write_text(source, encoding="utf-8")
         so = Path(tmp) / "model.so"
-        proc = subprocess.run([cc, *FLAGS, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
+        proc = subprocess.run([cc, *flags, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
                               capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{cc} failed on the generated step:\n{proc.stderr[-4000:]}")
@@ -88,7 +91,8 @@ def load(path: Path) -> ctypes.CDLL:
         "c_deadlock": (i64, [i64]), "c_state": (None, [i64, p(i64)]), "c_free": (None, []),
         "c_successors": (i32, [p(i64), p(i64), p(ctypes.c_uint32), i32, i64, p(i32), p(i64)]),
         "c_set_por": (None, [i32]), "c_por_available": (i32, []), "c_reduced": (i64, []),
-        "c_search": (i32, [i32, i64, i64, i64, i32, i64, ctypes.c_double, PROGRESS, p(Result)]),
+        "c_search": (i32, [i32, i64, i64, i64, i32, i64, ctypes.c_double, PROGRESS, p(Result), i32, i32, i32]),
+        "c_table_size": (ctypes.c_uint64, []), "c_bits_per_state": (i32, []), "c_parallel": (i32, []),
     }
     for name, (res, args) in sig.items():
         fn = getattr(lib, name)

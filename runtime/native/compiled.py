@@ -25,6 +25,7 @@ from runtime.native.build import PROGRESS, BuildError, Result, build, compiler, 
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
 from runtime.native.values import from_words, to_words
+from runtime.native.stores import DEFAULT_BITS, STORES, lossiness
 
 STATUS = {0: "", 1: "max-states", 2: "max-depth", 3: "error", 4: "deadlock", 5: "interrupted", 6: "max-memory",
           8: "violated"}
@@ -88,11 +89,18 @@ class CompiledSpace:
         self.budget = -1 if budget is None else budget
         self.bools = [s.index for s in space.slots if s.kind == "bool"]
         self.kinds = {s.index: s.kind for s in space.slots}
+        self.parallel = False  # the loaded library is the threaded build
+        self.lossiness = None
 
-    def build(self) -> None:
-        """Generate, compile (or find in the cache) and load the library for the current field widths."""
+    def build(self, parallel: bool | None = None) -> None:
+        """Generate, compile (or find in the cache) and load the library for the current field widths.
+
+        ``parallel``: the threaded build (search.c's PARALLEL) instead of the single-threaded one.
+        """
+        if parallel is not None:
+            self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors)
-        self.lib = load(build(model.source, self.cc))
+        self.lib = load(build(model.source, self.cc, self.parallel))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
 
@@ -130,8 +138,14 @@ class CompiledSpace:
     # -- the search ------------------------------------------------------------------------------
     def explore(self, max_states: int | None = None, max_depth: int | None = None, dfs: bool = False,
                 progress: Progress | None = None, stop_at_deadlock: bool = False,
-                max_bytes: int | None = None, max_seconds: float | None = None, por: bool = False) -> ExploreResult:
+                max_bytes: int | None = None, max_seconds: float | None = None, por: bool = False,
+                workers: int = 1, store: str = "exact", bits: int = DEFAULT_BITS) -> ExploreResult:
         """Like :func:`runtime.explore.explore`; raises :class:`Diverged` if the Python step must take over.
+
+        ``workers`` > 1 searches breadth-first on that many threads (the threaded build, compiled on first
+        use): same states, deadlocks and verdicts, traces still shortest, state numbers within a level
+        depend on the threads.  ``store`` is ``exact``, ``compact`` or ``bitstate`` (2^``bits`` bits):
+        lossy stores search breadth-first and set ``self.lossiness`` (runtime.native.stores).
 
         ``por`` explores ample sets (runtime.native.por): the same deadlocks and observer verdicts on fewer
         states; ``self.reduced`` is then the number of states expanded with a proper ample set.
@@ -149,6 +163,8 @@ class CompiledSpace:
             return 1 if interrupt.hit or timed.hit else 0
 
         callback = PROGRESS(report)
+        if (workers > 1) != self.parallel:
+            self.build(parallel=workers > 1)
         previous = _catch_interrupt(interrupt)
         start = time.perf_counter()
         try:
@@ -158,7 +174,8 @@ class CompiledSpace:
                 status = self.lib.c_search(int(dfs), -1 if max_states is None else max_states,
                                            -1 if max_depth is None else max_depth,
                                            -1 if max_bytes is None else max_bytes, int(stop_at_deadlock),
-                                           self.budget, PERIOD, callback, ctypes.byref(r))
+                                           self.budget, PERIOD, callback, ctypes.byref(r), workers,
+                                           STORES[store], bits)
                 if status != S_WIDEN:
                     break
                 self._widen(r.earg)
@@ -168,6 +185,7 @@ class CompiledSpace:
         seconds = time.perf_counter() - start
         deadlocks = [self.lib.c_deadlock(i) for i in range(r.deadlocks)]
         self.reduced = self.lib.c_reduced()
+        self.lossiness = lossiness(store, r.states, self.lib.c_table_size())
         error = None
         self.violation = r.error_state if status == S_VIOLATED else -1  # the state an observer rejects
         if status == S_ERROR:

@@ -601,7 +601,7 @@ class CGen:
     def gen_enabled(self) -> None:
         w = self.w
         fl = self.flat
-        w(f"static uint8_t PEN[{max(len(fl.ports), 1)}]; /* ports enabled in their atom: the reduction's view */")
+        w(f"static TL uint8_t PEN[{max(len(fl.ports), 1)}]; /* ports enabled in their atom: the reduction's view */")
         w("static int enabled(const V *s, uint32_t *isrc, uint32_t *imask) {")
         w("    int n = 0;")
         for fa in fl.atoms:

@@ -1,8 +1,8 @@
 /* Codel outcomes as branching: every choice call answers from a script and records its domain; the
    odometer gives the next script (runtime.explore.choices.Oracle, the same order). Needs DOMV, DOMN. */
 #define MAXCALLS 256
-static int NC, SL;
-static int CPOS[MAXCALLS], CDOM[MAXCALLS], SCR[MAXCALLS];
+static TL int NC, SL;
+static TL int CPOS[MAXCALLS], CDOM[MAXCALLS], SCR[MAXCALLS];
 
 static inline V choice(int d) {
     if (NC >= MAXCALLS) fail(E_CHOICES, 0);

@@ -15,10 +15,12 @@ METHOD = "compiled observer search"
 
 
 def compiled_check(space, item, externs=None, progress=None, max_states=None, max_bytes=None,
-                   por: bool = False) -> Verdict | None:
+                   por: bool = False, **search) -> Verdict | None:
     """The verdict of ``item`` by the compiled search, or None if it cannot take the property or the model.
 
     ``por``: with partial-order reduction (the observer's interactions are visible; same verdict).
+    ``search``: ``workers``, ``store``, ``bits`` of :meth:`CompiledSpace.explore`; a lossy store's
+    omission figures are the verdict's ``lossiness`` (None for the exact store).
     """
     from runtime.export.interactions import all_interactions
     from runtime.export.monitors import build_monitor, spin_shape
@@ -41,7 +43,7 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
     start = time.perf_counter()
     try:
         result = cs.explore(max_states, progress=progress, stop_at_deadlock=shape == "deadlock", max_bytes=max_bytes,
-                            por=por)
+                            por=por, **search)
     except Diverged:
         return None
     prop = item.property
@@ -56,5 +58,7 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
     else:
         verdict = Verdict(prop, None, note=f"the search stopped at {result.stopped_by} before an answer", method="")
     verdict.states = result.states
+    verdict.lossiness = cs.lossiness
+    verdict.result = result  # the search's figures: depth, memory, how it stopped
     verdict.seconds = time.perf_counter() - start
     return verdict
