@@ -218,6 +218,9 @@ VALIDATION = [
     ("on a b provided (a.v > 0)", "on a b provided (f(a.v) > 0)",
      "connector type C, on a b: the guard calls 'f', whose parameters are not all const", "f(a.v)"),
     ("provided (a1.y > 0)", "provided (f(a1.y) > 0)", "priority pr of compound type K: the guard calls 'f'", "f(a1.y)"),
+    # Verimag: priorityContradictMaximalProgress
+    ("    priority pr r:* <", "    priority big c:a1.q, a2.q < c:a2.q\n    priority pr r:* <",
+     "priority big of compound type K contradicts maximal progress: c:a1.q, a2.q contains c:a2.q", "big c:"),
     # Verimag: connectorDoesNotBindTheSameComponentMoreThanOnce
     ("  compound type K()\n    component A a1(1), a2(2)\n",
      "  compound type L()\n    component A b1(1), b2(2)\n    export port b1.p as p1\n    export port b2.p as p2\n  end\n"

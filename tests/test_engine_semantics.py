@@ -118,18 +118,16 @@ def test_atom_priorities_guarded_and_transitive():
 
 # -- compound priorities ---------------------------------------------------------------------------
 
-def test_compound_priority_low_side_containment_and_guard_each_step():
+def test_compound_priority_low_side_names_an_interaction_and_those_inside_it_guard_each_step():
     e = engine("Priorities", "Low()")
     s = e.initial_state()
-    assert labels(e, s) == ["tk"]                    # t = 0 even: bc (contains S.snd, R1.rcv) waits
-    s = walk(e, "tk", state=s)
-    assert labels(e, s) == ["bc", "tk"]              # t = 1: rule off
-    s = walk(e, "bc", state=s)
-    assert labels(e, s) == ["bc[S.snd]", "tk", "R1.work", "R2.work"]
-    s = walk(e, "R2.work", "tk", state=s)            # t = 2: rule on, but bc[S.snd,R2.rcv] lacks R1.rcv
-    assert labels(e, s) == ["bc[S.snd,R2.rcv]", "tk", "R1.work"]
-    s = walk(e, "R1.work", state=s)                  # full bc contains S.snd, R1.rcv: blocked
-    assert labels(e, s) == ["tk"]
+    assert labels(e, s) == ["bc", "tk"]              # t = 0 even, but the full bc is not inside S.snd, R1.rcv
+    s = walk(e, "tk", "bc", state=s)
+    assert labels(e, s) == ["bc[S.snd]", "tk", "R1.work", "R2.work"]   # t = 1: rule off
+    s1 = walk(e, "R1.work", "tk", state=s)           # t = 2: rule on, bc[S.snd,R1.rcv] is the low side itself
+    assert labels(e, s1) == ["tk", "R2.work"]
+    s2 = walk(e, "R2.work", "tk", state=s)           # t = 2: bc[S.snd,R2.rcv] is not inside the low side
+    assert labels(e, s2) == ["bc[S.snd,R2.rcv]", "tk", "R1.work"]
 
 
 def test_compound_priority_high_side_containment():
@@ -150,8 +148,8 @@ def test_compound_priority_star_and_nested_compound():
     assert labels(e, s) == ["tk"]
     e = engine("Priorities", "Nested()")
     s = e.initial_state()
-    assert labels(e, s) == ["low.tk"]
-    assert labels(e, walk(e, "low.tk")) == ["low.bc", "low.tk"]
+    assert labels(e, s) == ["low.bc", "low.tk"]
+    assert labels(e, walk(e, "low.tk", "low.bc", "low.R1.work", "low.tk")) == ["low.tk", "low.R2.work"]
 
 
 # -- internal transitions --------------------------------------------------------------------------

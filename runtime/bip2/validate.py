@@ -438,6 +438,11 @@ class _Checker:
                 self._pattern(k, pr, pattern, where)
             if pr.low.connector == "*" and pr.high.connector == "*":
                 self.error(self.loc.at(pr), f"priority {pr.name} of {where} has '*:*' on both sides")
+            elif (pr.low.connector == pr.high.connector and pr.low.ports is not None and pr.high.ports is not None
+                  and set(map(str, pr.high.ports)) < set(map(str, pr.low.ports))):
+                self.error(self.loc.at(pr), f"priority {pr.name} of {where} contradicts maximal progress: "
+                                            f"{pr.low} contains {pr.high}, so it already has priority over it",
+                           hint="drop the rule, or swap its sides if the smaller interaction must win")
             if pr.guard is not None:
                 self.exprs.guard(pr.guard, Scope(f"priority {pr.name} of {where}", variables, set(), port_data),
                                 self.loc.at(pr))

@@ -489,7 +489,8 @@ class CGen:
                 if src.tree is not None:
                     cid = src.connector.id
                     for i, rule in enumerate(pr.rules):
-                        conds = [f"(mask & {pm}) == {pm}" for c, pm in rule[side] if c == cid]
+                        conds = [(f"(mask & {pm}) == {pm}" if side == 2 or pm == 0 else f"(mask & ~UINT32_C({pm})) == 0")
+                                 for c, pm in rule[side] if c == cid]
                         if conds:
                             terms.append(f"((({' || '.join(conds)})) ? UINT64_C({1 << i}) : 0)")
                 self.w(f"static uint64_t {name}{src.index}(uint32_t mask) {{ (void)mask; return "
