@@ -22,6 +22,8 @@ def _parser() -> argparse.ArgumentParser:
     add_run_options(run)
     run.add_argument("--externs", metavar="MODULE", help="Python module (dotted name or .py path) binding extern functions")
     run.add_argument("--show-source", action="store_true", help="print the generated step code and exit")
+    run.add_argument("--no-maximal-progress", action="store_true",
+                     help="offer every enabled interaction of a connector, not only the maximal ones")
     return ap
 
 
@@ -33,7 +35,7 @@ def run_command(args, out=None, err=None) -> int:
     err = err or sys.stderr
     try:
         package = parse_file(args.model)
-        engine = Engine(package, args.root, externs=args.externs)
+        engine = Engine(package, args.root, externs=args.externs, maximal_progress=not args.no_maximal_progress)
     except DiagnosticError as e:
         print(e.render(), file=err)
         return 1

@@ -1,7 +1,7 @@
 """The engine's step on hand-checked models: one test per construct and semantic rule."""
 from enginekit import atom, engine, labels, walk
 
-from runtime.engine import first
+from runtime.engine import Engine, first
 
 
 # -- rendezvous -----------------------------------------------------------------------------------
@@ -356,3 +356,14 @@ def test_a_guard_reading_data_carried_up_by_sub_connectors_reads_the_ports_thems
     assert sorted(i.label for i in e.enabled(s)) == ["flip", "go"]
     (go,) = [i for i in e.enabled(s) if i.label == "go"]
     assert go.ports == ("g.h.f", "g.s.p", "c.p")
+
+
+# -- maximal progress off (the Verimag engine's --disable-maximal-progress) --------------------------
+
+def test_without_maximal_progress_every_enabled_interaction_is_offered():
+    from enginekit import package
+    e = Engine(package("Broadcast"), "System()", maximal_progress=False)
+    got = labels(e, e.initial_state())
+    assert len(got) == 8 and got[0] == "bc[snd.snd]" and got[-1] == "bc"   # every subset with the trigger
+    e = Engine(package("Priorities"), "High()", maximal_progress=False)
+    assert labels(e, e.initial_state()) == ["bc[S.snd]", "bc[S.snd,R1.rcv]", "bc[S.snd,R2.rcv]", "bc"]  # tk still waits

@@ -86,6 +86,8 @@ def generic_enabled(source: Source, s: tuple, enabled: Sequence[bool], slots: Se
     """
     count = [0]
     offers = _offers(source.tree, s, enabled, slots, count)
+    if not source.maximal:
+        return sorted({m for m, _ in offers})
     return defines.maximal(m for m, _ in offers)
 
 
