@@ -367,3 +367,17 @@ def test_without_maximal_progress_every_enabled_interaction_is_offered():
     assert len(got) == 8 and got[0] == "bc[snd.snd]" and got[-1] == "bc"   # every subset with the trigger
     e = Engine(package("Priorities"), "High()", maximal_progress=False)
     assert labels(e, e.initial_state()) == ["bc[S.snd]", "bc[S.snd,R1.rcv]", "bc[S.snd,R2.rcv]", "bc"]  # tk still waits
+
+
+# -- merged atom port export (export port T p(), q() as e) ---------------------------------------
+
+def test_merged_atom_ports_offer_each_enabled_port_with_its_own_data():
+    from runtime.bip2 import parse_file
+    from enginekit import FIXTURES
+    e = Engine(parse_file(FIXTURES.parent / "bip" / "roundtrip" / "rt_merged.bip"), "Top()")
+    s = e.initial_state()
+    got = e.enabled(s)
+    assert [i.ports for i in got] == [("src.p", "snk.in")]   # r's guard is false, q < p
+    new, values = e.fire_traced(s, got[0])
+    assert values["snk.in"] == {"d": 1}                       # x, carried by p
+    assert e.describe_state(new)["src"]["places"] == ["Done"]

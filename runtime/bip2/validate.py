@@ -200,6 +200,7 @@ class _Checker:
         self.unique(a.ports, "port", where)
         for p in a.ports:
             self._atom_port(a, p, where, variables)
+        self._merged_exports(a, where)
         if not a.places:
             self.error(a.span, f"{where} declares no place")
         for i, place in enumerate(a.places):
@@ -234,6 +235,21 @@ class _Checker:
                 self.error(self.loc.at(pr), f"priority {pr.name} of {where} has '*' on both sides")
             if pr.guard is not None:
                 self.exprs.guard(pr.guard, Scope(where, variables), self.loc.at(pr))
+
+    def _merged_exports(self, a: AtomType, where: str) -> None:
+        """``export port T p(), q() as e``: needs ``export``; ``e`` names no other port of the atom."""
+        for p in a.ports:
+            if p.export_as is None:
+                continue
+            if p is not next(q for q in a.ports if q.export_as == p.export_as):
+                continue  # one message per group
+            at = self.loc.at(p, "export_as")
+            if not p.exported:
+                self.error(at, f"port '{p.name}' of {where} is merged as '{p.export_as}' but not exported",
+                           hint=f"write export port {p.type} {p.name}(...) as {p.export_as}")
+            other = next((q for q in a.ports if q.export_as != p.export_as and q.interface_name == p.export_as), None)
+            if other is not None:
+                self.error(at, f"exported port '{p.export_as}' of {where} has the name of port '{other.name}'")
 
     def _atom_port(self, a: AtomType, p, where: str, variables: dict[str, str]) -> None:
         decls = {d.name: d.type for d in a.params + a.data}
