@@ -381,3 +381,8 @@ def test_merged_atom_ports_offer_each_enabled_port_with_its_own_data():
     new, values = e.fire_traced(s, got[0])
     assert values["snk.in"] == {"d": 1}                       # x, carried by p
     assert e.describe_state(new)["src"]["places"] == ["Done"]
+
+
+def test_a_compound_offers_only_the_maximal_interactions_of_an_exported_connector_port():
+    e = engine("ExportedProgress", "Top()")
+    assert labels(e, e.initial_state()) == ["in.high[a.p,d.p]", "in.high[b.p,d.p]"]   # no single[in.a.p]

@@ -102,7 +102,13 @@ def _offers(node: TreeNode, s, enabled, slots, count) -> list[tuple[int, tuple]]
                 if enabled[a.port]:
                     row.append((a.mask, [s[k] for k in slots[a.port]]))
             else:
-                row.extend(_offers(a.node, s, enabled, slots, count))
+                sub = _offers(a.node, s, enabled, slots, count)
+                if a.node.connector.scope != node.connector.scope:
+                    # the port leaves its compound: as in the Verimag engine, the compound offers only the
+                    # sub-connector's maximal interactions, before the outer guard is known
+                    keep = set(defines.maximal(m for m, _ in sub))
+                    sub = [o for o in sub if o[0] in keep]
+                row.extend(sub)
         options.append(row)
         if row:
             available |= 1 << i
