@@ -39,6 +39,8 @@ def _parser() -> argparse.ArgumentParser:
     explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")
     explore.add_argument("--max-states", type=int, default=1_000_000, help="stop after this many states")
     explore.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions")
+    run.add_argument("--no-maximal-progress", action="store_true",
+                     help="offer every enabled interaction of a connector, not only the maximal ones")
     return ap
 
 
@@ -52,7 +54,7 @@ def run_command(args, out=None, err=None) -> int:
         package = parse_file(args.model)
         if is_timed(package) and not args.show_source:
             return run_timed_command(package, args, out, err)
-        engine = Engine(package, args.root, externs=args.externs)
+        engine = Engine(package, args.root, externs=args.externs, maximal_progress=not args.no_maximal_progress)
     except DiagnosticError as e:
         print(e.render(), file=err)
         return 1

@@ -77,7 +77,7 @@ def test_base_is_valid():
 SYNTAX = [
     # (old, new, message, needle in the new text)
     ("    place S, T\n    initial to S\n", "    initial to S\n    place S, T\n",
-     "expected ',', '@', 'clock', 'data', 'export', 'place' or 'port', found 'initial'", "initial to S"),
+     "expected ',', '@', 'as', 'clock', 'data', 'export', 'place' or 'port', found 'initial'", "initial to S"),
     ("    on q from T to S\n", "    on q from T to S\n    data int z\n",
      "expected ", "data int z"),
     ("port type Port()", "port type Port", "expected '(', found 'port'", "port type IntPort"),
@@ -218,6 +218,13 @@ VALIDATION = [
     ("on a b provided (a.v > 0)", "on a b provided (f(a.v) > 0)",
      "connector type C, on a b: the guard calls 'f', whose parameters are not all const", "f(a.v)"),
     ("provided (a1.y > 0)", "provided (f(a1.y) > 0)", "priority pr of compound type K: the guard calls 'f'", "f(a1.y)"),
+    ("    export port Port p()\n", "    export port Port p()\n    port Port p3(), p4() as pp\n",
+     "port 'p3' of atom type A is merged as 'pp' but not exported", "pp\n"),
+    ("    export port Port p()\n", "    export port Port p()\n    export port Port p3(), p4() as p\n",
+     "exported port 'p' of atom type A has the name of port 'p'", "as |p"),
+    # Verimag: priorityContradictMaximalProgress
+    ("    priority pr r:* <", "    priority big c:a1.q, a2.q < c:a2.q\n    priority pr r:* <",
+     "priority big of compound type K contradicts maximal progress: c:a1.q, a2.q contains c:a2.q", "big c:"),
     # Verimag: connectorDoesNotBindTheSameComponentMoreThanOnce
     ("  compound type K()\n    component A a1(1), a2(2)\n",
      "  compound type L()\n    component A b1(1), b2(2)\n    export port b1.p as p1\n    export port b2.p as p2\n  end\n"
@@ -232,6 +239,12 @@ def test_validation_errors(case):
     assert old in BASE, old
     text = BASE.replace(old, new, 1)
     assert_one(text, message, needle, nth[0] if nth else 1)
+
+
+def test_a_merged_atom_port_is_seen_by_its_merged_name_only():
+    text = BASE.replace("    export port Port p()\n", "    export port Port p(), p2() as pp\n")
+    text = text.replace("connector R r(a1.p, a2.p)", "connector R r(a1.pp, a2.p2)")
+    assert_one(text, "port 'p2' of component 'a2' (atom type A) is exported as 'pp'", "a2.p2")
 
 
 def test_several_errors_are_reported_together_in_source_order():

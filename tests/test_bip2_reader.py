@@ -232,3 +232,11 @@ def test_used_packages_and_qualified_names():
     with pytest.raises(DiagnosticError) as err:
         parse_text(text.replace("use Q use R.S ", ""))
     assert err.value.diagnostics[0].hint == "a qualified name needs: use Q"
+
+
+def test_merged_atom_port_export():
+    pkg = read("rt_merged")
+    src = pkg.atom_types[0]
+    assert [(p.name, p.data, p.exported, p.export_as) for p in src.ports] == [
+        ("p", ["x"], True, "out"), ("q", ["y"], True, "out"), ("r", ["z"], True, "out")]
+    assert [p.name for p in src.exported_ports("out")] == ["p", "q", "r"] and src.exported_ports("p") == []

@@ -79,3 +79,11 @@ def test_show_source():
     r = subprocess.run([sys.executable, "-m", "runtime", "run", str(FIXTURES / "Chain.bip"), "--show-source"],
                        capture_output=True, text=True, cwd=ROOT, timeout=60)
     assert r.returncode == 0 and "def _in0(L):" in r.stdout and "Eager internal transitions of atom ch" in r.stdout
+
+
+def test_no_maximal_progress_option():
+    r = cli(FIXTURES / "Broadcast.bip", "--policy", "first", "--limit", "1", "--no-maximal-progress")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[0].split()[2] == "bc[snd.snd]"   # the smallest interaction, first in order
+    r = cli(FIXTURES / "Broadcast.bip", "--policy", "first", "--limit", "1")
+    assert r.stdout.splitlines()[0].split()[2] == "bc"

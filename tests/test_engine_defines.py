@@ -120,8 +120,8 @@ def test_searches_agree_with_the_definition(shape, data):
 
 # -- the generic (enumerating) path computes what the inlined fast path computes ------------------------
 
-def _generic_plan(flat):
-    infos, sources = real_plan(flat)
+def _generic_plan(flat, maximal_progress=True):
+    infos, sources = real_plan(flat, maximal_progress)
     for s in sources:
         if s.kind in ("rendezvous", "flat"):
             s.kind = "generic"

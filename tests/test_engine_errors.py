@@ -76,6 +76,18 @@ def test_compound_priority_cycles():
         e.enabled(s)
 
 
+def test_rules_on_one_connector_that_cannot_meet_are_no_cycle():
+    e = engine("Priorities", "OneConnector()")
+    s = e.initial_state()
+    assert labels(e, s) == ["bc"]
+    s = walk(e, "bc", "R1.work", state=s)           # R2 busy: bc[S.snd,R1.rcv] and bc[S.snd]; r1 keeps the larger
+    assert labels(e, s) == ["bc[S.snd,R1.rcv]", "R2.work"]
+    s = walk(e, "R2.work", "bc", "R2.work", state=s)  # R1 busy: bc[S.snd,R2.rcv] and bc[S.snd]
+    assert labels(e, s) == ["bc[S.snd,R2.rcv]", "R1.work"]
+    e = engine("Priorities", "StarBeside()")
+    assert labels(e, e.initial_state()) == ["bc"]
+
+
 def test_missing_extern_bindings_before_the_first_step():
     with pytest.raises(ExternError) as info:
         engine("Arith", "System()")

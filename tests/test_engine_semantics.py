@@ -1,7 +1,7 @@
 """The engine's step on hand-checked models: one test per construct and semantic rule."""
 from enginekit import atom, engine, labels, walk
 
-from runtime.engine import first
+from runtime.engine import Engine, first
 
 
 # -- rendezvous -----------------------------------------------------------------------------------
@@ -122,18 +122,16 @@ def test_atom_priorities_guarded_and_transitive():
 
 # -- compound priorities ---------------------------------------------------------------------------
 
-def test_compound_priority_low_side_containment_and_guard_each_step():
+def test_compound_priority_low_side_names_an_interaction_and_those_inside_it_guard_each_step():
     e = engine("Priorities", "Low()")
     s = e.initial_state()
-    assert labels(e, s) == ["tk"]                    # t = 0 even: bc (contains S.snd, R1.rcv) waits
-    s = walk(e, "tk", state=s)
-    assert labels(e, s) == ["bc", "tk"]              # t = 1: rule off
-    s = walk(e, "bc", state=s)
-    assert labels(e, s) == ["bc[S.snd]", "tk", "R1.work", "R2.work"]
-    s = walk(e, "R2.work", "tk", state=s)            # t = 2: rule on, but bc[S.snd,R2.rcv] lacks R1.rcv
-    assert labels(e, s) == ["bc[S.snd,R2.rcv]", "tk", "R1.work"]
-    s = walk(e, "R1.work", state=s)                  # full bc contains S.snd, R1.rcv: blocked
-    assert labels(e, s) == ["tk"]
+    assert labels(e, s) == ["bc", "tk"]              # t = 0 even, but the full bc is not inside S.snd, R1.rcv
+    s = walk(e, "tk", "bc", state=s)
+    assert labels(e, s) == ["bc[S.snd]", "tk", "R1.work", "R2.work"]   # t = 1: rule off
+    s1 = walk(e, "R1.work", "tk", state=s)           # t = 2: rule on, bc[S.snd,R1.rcv] is the low side itself
+    assert labels(e, s1) == ["tk", "R2.work"]
+    s2 = walk(e, "R2.work", "tk", state=s)           # t = 2: bc[S.snd,R2.rcv] is not inside the low side
+    assert labels(e, s2) == ["bc[S.snd,R2.rcv]", "tk", "R1.work"]
 
 
 def test_compound_priority_high_side_containment():
@@ -154,8 +152,8 @@ def test_compound_priority_star_and_nested_compound():
     assert labels(e, s) == ["tk"]
     e = engine("Priorities", "Nested()")
     s = e.initial_state()
-    assert labels(e, s) == ["low.tk"]
-    assert labels(e, walk(e, "low.tk")) == ["low.bc", "low.tk"]
+    assert labels(e, s) == ["low.bc", "low.tk"]
+    assert labels(e, walk(e, "low.tk", "low.bc", "low.R1.work", "low.tk")) == ["low.tk", "low.R2.work"]
 
 
 # -- internal transitions --------------------------------------------------------------------------
@@ -373,3 +371,33 @@ def test_a_guard_reading_data_carried_up_by_sub_connectors_reads_the_ports_thems
     assert sorted(i.label for i in e.enabled(s)) == ["flip", "go"]
     (go,) = [i for i in e.enabled(s) if i.label == "go"]
     assert go.ports == ("g.h.f", "g.s.p", "c.p")
+
+
+# -- maximal progress off (the Verimag engine's --disable-maximal-progress) --------------------------
+
+def test_without_maximal_progress_every_enabled_interaction_is_offered():
+    from enginekit import package
+    e = Engine(package("Broadcast"), "System()", maximal_progress=False)
+    got = labels(e, e.initial_state())
+    assert len(got) == 8 and got[0] == "bc[snd.snd]" and got[-1] == "bc"   # every subset with the trigger
+    e = Engine(package("Priorities"), "High()", maximal_progress=False)
+    assert labels(e, e.initial_state()) == ["bc[S.snd]", "bc[S.snd,R1.rcv]", "bc[S.snd,R2.rcv]", "bc"]  # tk still waits
+
+
+# -- merged atom port export (export port T p(), q() as e) ---------------------------------------
+
+def test_merged_atom_ports_offer_each_enabled_port_with_its_own_data():
+    from runtime.bip2 import parse_file
+    from enginekit import FIXTURES
+    e = Engine(parse_file(FIXTURES.parent / "bip" / "roundtrip" / "rt_merged.bip"), "Top()")
+    s = e.initial_state()
+    got = e.enabled(s)
+    assert [i.ports for i in got] == [("src.p", "snk.in")]   # r's guard is false, q < p
+    new, values = e.fire_traced(s, got[0])
+    assert values["snk.in"] == {"d": 1}                       # x, carried by p
+    assert e.describe_state(new)["src"]["places"] == ["Done"]
+
+
+def test_a_compound_offers_only_the_maximal_interactions_of_an_exported_connector_port():
+    e = engine("ExportedProgress", "Top()")
+    assert labels(e, e.initial_state()) == ["in.high[a.p,d.p]", "in.high[b.p,d.p]"]   # no single[in.a.p]

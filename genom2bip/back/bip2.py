@@ -418,6 +418,20 @@ def _pattern(p) -> str:
     return f"{p.connector}:" + ("*" if p.ports is None else ", ".join(map(str, p.ports)))
 
 
+def _port_decls(ports) -> list[tuple[object, str]]:
+    """Atom ports as declaration lines: one per port, one per group merged with ``as`` (consecutive ports)."""
+    out: list[tuple[object, str]] = []
+    for p in ports:
+        binding = f"{p.name}({', '.join(p.data)})"
+        if p.export_as is not None and out and out[-1][0].export_as == p.export_as and out[-1][0].type == p.type:
+            first, text = out[-1]
+            out[-1] = (first, text[:-len(f" as {p.export_as}")] + f", {binding} as {p.export_as}")
+            continue
+        head = ("export " if p.exported else "") + f"port {p.type} {binding}"
+        out.append((p, head + (f" as {p.export_as}" if p.export_as is not None else "")))
+    return out
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("genom2bip", "templates/bip2"),
@@ -428,6 +442,7 @@ def _environment() -> jinja2.Environment:
         "expr": print_expr, "action": print_action, "annotations": _annotations, "comment": _comment,
         "define": _define, "transition": _transition, "interaction": _interaction, "pattern": _pattern,
         "resume": lambda r: "".join(f" {kw}" if body is None else f" {kw} {body}" for kw, body in resume_clause(r)),
+        "port_decls": _port_decls,
     })
     return env
 

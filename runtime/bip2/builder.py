@@ -226,11 +226,14 @@ class Builder(TimedBuilder, Transformer):
         return out
 
     def port_decl(self, children):
-        annotations, export, type_, *bindings = children
+        annotations, export, type_, *bindings, merged = children
         out = []
         for tok, data in bindings:
             p = PortDecl(type_.text, tok.value, [], exported=export is not None,
-                         annotations=list(annotations), span=self.span(tok))
+                         annotations=list(annotations), span=self.span(tok),
+                         export_as=merged.value if merged is not None else None)
+            if merged is not None:
+                self.locator.note(p, self.span(merged), "export_as")
             p.data = self._note_names(p, "data", data)
             self.locator.note(p, type_.span, "type")
             out.append(p)

@@ -28,13 +28,17 @@ def port_offer(pkg: Package, compound: CompoundType, ref: PortRef) -> Offer:
         if typ is None:
             return Offer(None)  # unknown component type: reported where the component is declared
         if isinstance(typ, AtomType):
+            merged = typ.exported_ports(ref.port)
+            if merged:
+                return Offer(merged[0].type)
             port = typ.port(ref.port)
             if port is None:
                 return Offer(None, f"component '{inst.name}' (atom type {typ.name}) has no port '{ref.port}'")
-            if not port.exported:
-                return Offer(None, f"port '{ref.port}' of component '{inst.name}' (atom type {typ.name}) is not "
-                                   f"exported; declare it 'export port'")
-            return Offer(port.type)
+            if port.exported:
+                return Offer(None, f"port '{ref.port}' of component '{inst.name}' (atom type {typ.name}) is "
+                                   f"exported as '{port.export_as}'")
+            return Offer(None, f"port '{ref.port}' of component '{inst.name}' (atom type {typ.name}) is not "
+                               f"exported; declare it 'export port'")
         export = next((p for p in typ.ports if p.name == ref.port), None)
         if export is None:
             return Offer(None, f"component '{inst.name}' (compound type {typ.name}) exports no port '{ref.port}'")

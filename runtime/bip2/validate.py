@@ -203,6 +203,7 @@ class _Checker:
         self.unique(a.ports, "port", where)
         for p in a.ports:
             self._atom_port(a, p, where, variables)
+        self._merged_exports(a, where)
         if not a.places:
             self.error(a.span, f"{where} declares no place")
         for i, place in enumerate(a.places):
@@ -238,6 +239,21 @@ class _Checker:
             if pr.guard is not None:
                 self.exprs.guard(pr.guard, Scope(where, variables), self.loc.at(pr))
         check_atom_timing(self, a, where, scope)
+
+    def _merged_exports(self, a: AtomType, where: str) -> None:
+        """``export port T p(), q() as e``: needs ``export``; ``e`` names no other port of the atom."""
+        for p in a.ports:
+            if p.export_as is None:
+                continue
+            if p is not next(q for q in a.ports if q.export_as == p.export_as):
+                continue  # one message per group
+            at = self.loc.at(p, "export_as")
+            if not p.exported:
+                self.error(at, f"port '{p.name}' of {where} is merged as '{p.export_as}' but not exported",
+                           hint=f"write export port {p.type} {p.name}(...) as {p.export_as}")
+            other = next((q for q in a.ports if q.export_as != p.export_as and q.interface_name == p.export_as), None)
+            if other is not None:
+                self.error(at, f"exported port '{p.export_as}' of {where} has the name of port '{other.name}'")
 
     def _atom_port(self, a: AtomType, p, where: str, variables: dict[str, str]) -> None:
         decls = {d.name: d.type for d in a.params + a.data}
@@ -442,6 +458,11 @@ class _Checker:
                 self._pattern(k, pr, pattern, where)
             if pr.low.connector == "*" and pr.high.connector == "*":
                 self.error(self.loc.at(pr), f"priority {pr.name} of {where} has '*:*' on both sides")
+            elif (pr.low.connector == pr.high.connector and pr.low.ports is not None and pr.high.ports is not None
+                  and set(map(str, pr.high.ports)) < set(map(str, pr.low.ports))):
+                self.error(self.loc.at(pr), f"priority {pr.name} of {where} contradicts maximal progress: "
+                                            f"{pr.low} contains {pr.high}, so it already has priority over it",
+                           hint="drop the rule, or swap its sides if the smaller interaction must win")
             if pr.guard is not None:
                 self.exprs.guard(pr.guard, Scope(f"priority {pr.name} of {where}", variables, set(), port_data),
                                 self.loc.at(pr))

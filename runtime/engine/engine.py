@@ -79,14 +79,17 @@ class Engine:
 
     ``externs`` binds the ``extern function`` names the model calls: a dict of
     callables, a module, or a module's dotted name or ``.py`` path.  Unbound
-    names raise :class:`ExternError` here, before any step.
+    names raise :class:`ExternError` here, before any step.  ``maximal_progress=False`` offers every
+    enabled interaction of a connector, not only the maximal ones (the Verimag engine's
+    ``--disable-maximal-progress``).
     """
 
-    def __init__(self, package: Package, root: str = "System()", externs: Any = None) -> None:
+    def __init__(self, package: Package, root: str = "System()", externs: Any = None,
+                 maximal_progress: bool = True) -> None:
         self.package = package
         self.root = root
         self.flat = flatten(package, root)
-        self.infos, self.sources = plan(self.flat)
+        self.infos, self.sources = plan(self.flat, maximal_progress)
         gen = generate(self.flat, self.infos, self.sources)
         self.source: str = gen.source
         bound = bind_externs(package, externs, gen.called)

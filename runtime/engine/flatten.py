@@ -276,7 +276,7 @@ class _Builder:
             self.ports.append(fp)
             fa.ports[decl.name] = fp.id
             if decl.exported:
-                iface.ports[decl.name] = (decl.type, [Leaf(fp.id)])
+                iface.ports.setdefault(decl.interface_name, (decl.type, []))[1].append(Leaf(fp.id))
         return iface
 
     def compound(self, path: str, t: CompoundType, env: Constants) -> _Interface:

@@ -69,6 +69,7 @@ class Source:
     leaves: list[int] = field(default_factory=list)
     tree: TreeNode | None = None
     alternatives: bool = False
+    maximal: bool = True  # keep only the maximal enabled interactions (maximal progress)
 
     @property
     def full(self) -> int:
@@ -107,8 +108,12 @@ def connector_info(ct: ConnectorType, constants) -> ConnectorInfo:
     return ConnectorInfo(ct, index, tree, clauses, defaults, export_idx)
 
 
-def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
-    """Compile the connector types in use and list the sources in a fixed order (connectors, then lone ports)."""
+def plan(flat: FlatSystem, maximal_progress: bool = True) -> tuple[dict[str, ConnectorInfo], list[Source]]:
+    """Compile the connector types in use and list the sources in a fixed order (connectors, then lone ports).
+
+    Without ``maximal_progress`` every connector that has more than one interaction is enumerated
+    exhaustively (the generic path), and all its enabled interactions are offered.
+    """
     infos: dict[str, ConnectorInfo] = {}
     for fc in flat.connectors:
         if fc.type.name not in infos:
@@ -158,7 +163,9 @@ def plan(flat: FlatSystem) -> tuple[dict[str, ConnectorInfo], list[Source]]:
             kind = "rendezvous" if infos[fc.type.name].rendezvous else "flat"
         else:
             kind = "generic"
-        sources.append(Source(len(sources), kind, fc, None, leaves, tree, alts_seen[0]))
+        if not maximal_progress and kind == "flat":
+            kind = "generic"
+        sources.append(Source(len(sources), kind, fc, None, leaves, tree, alts_seen[0], maximal_progress))
     for fp in flat.ports:
         if not fp.decl.exported:
             sources.append(Source(len(sources), "port", None, fp, [fp.id]))

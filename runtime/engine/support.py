@@ -86,6 +86,8 @@ def generic_enabled(source: Source, s: tuple, enabled: Sequence[bool], slots: Se
     """
     count = [0]
     offers = _offers(source.tree, s, enabled, slots, count)
+    if not source.maximal:
+        return sorted({m for m, _ in offers})
     return defines.maximal(m for m, _ in offers)
 
 
@@ -100,7 +102,13 @@ def _offers(node: TreeNode, s, enabled, slots, count) -> list[tuple[int, tuple]]
                 if enabled[a.port]:
                     row.append((a.mask, [s[k] for k in slots[a.port]]))
             else:
-                row.extend(_offers(a.node, s, enabled, slots, count))
+                sub = _offers(a.node, s, enabled, slots, count)
+                if a.node.connector.scope != node.connector.scope:
+                    # the port leaves its compound: as in the Verimag engine, the compound offers only the
+                    # sub-connector's maximal interactions, before the outer guard is known
+                    keep = set(defines.maximal(m for m, _ in sub))
+                    sub = [o for o in sub if o[0] in keep]
+                row.extend(sub)
         options.append(row)
         if row:
             available |= 1 << i
@@ -226,7 +234,7 @@ class Priorities:
         if lm is None:
             lm = hm = 0
             for i, (_, low, high, _) in enumerate(self.rules):
-                if _matches(inter.parts, low):
+                if matches_low(inter.parts, low):
                     lm |= 1 << i
                 if _matches(inter.parts, high):
                     hm |= 1 << i
@@ -252,9 +260,20 @@ class Priorities:
 
 
 def _matches(parts, entries) -> bool:
+    """The high side ``C:I`` applies to the interactions of C that contain I (all of C's for ``C:*``)."""
     for cid, pm in entries:
         for c, m in parts:
             if c == cid and m & pm == pm:
+                return True
+    return False
+
+
+def matches_low(parts, entries) -> bool:
+    """The low side ``C:I`` applies to I and to the interactions of C inside I (maximal progress would drop them
+    beside I anyway), as the Verimag engine reads a rule; ``C:*`` to all of C's."""
+    for cid, pm in entries:
+        for c, m in parts:
+            if c == cid and (pm == 0 or m & ~pm == 0):
                 return True
     return False
 
@@ -289,9 +308,13 @@ def rule_edges(rules: list[tuple[tuple, tuple]], tops: dict[int, set[int]]) -> l
 
 
 def _overlap(high, low, tops: dict[int, set[int]]) -> bool:
-    """Can one interaction match both sides? Yes when they name the same connector or share a top connector."""
-    for c1, _ in high:
-        for c2, _ in low:
-            if c1 == c2 or tops.get(c1, set()) & tops.get(c2, set()):
+    """Can one interaction match both sides? On one connector when the high side's ports lie inside the low
+    side's (``C:p < C:p,q`` chains, ``C:p,q < C:p,r`` does not); across connectors when they share a top."""
+    for c1, m1 in high:
+        for c2, m2 in low:
+            if c1 == c2:
+                if m2 == 0 or m1 & ~m2 == 0:
+                    return True
+            elif tops.get(c1, set()) & tops.get(c2, set()):
                 return True
     return False

@@ -71,7 +71,7 @@ def all_interactions(engine) -> list[Static]:
             ps = tuple(parts(src.tree, mask)) if src.tree is not None else ()
             st = Static(src, mask, inter.label, mask * nsrc + src.index, ps)
             for r, pr in enumerate(rules):
-                if _matches(ps, pr.low.entries):
+                if support.matches_low(ps, pr.low.entries):
                     st.low |= 1 << r
                 if _matches(ps, pr.high.entries):
                     st.high |= 1 << r

@@ -29,6 +29,13 @@ class PortDecl:
     exported: bool = False
     annotations: list[Annotation] = field(default_factory=list)
     span: Span = _span()
+    #: ``export port T p(), q() as e``: the atom offers p and q merged as one port e (either may take part)
+    export_as: str | None = None
+
+    @property
+    def interface_name(self) -> str:
+        """The name the atom's compound sees this port by."""
+        return self.export_as or self.name
 
 
 @dataclass
@@ -97,6 +104,10 @@ class AtomType:
 
     def port(self, name: str) -> PortDecl | None:
         return next((p for p in self.ports if p.name == name), None)
+
+    def exported_ports(self, name: str) -> list[PortDecl]:
+        """The ports behind the exported port ``name``: one, several when merged with ``as``, or none."""
+        return [p for p in self.ports if p.exported and p.interface_name == name]
 
     def variable(self, name: str) -> DataDecl | None:
         return next((d for d in self.data if d.name == name), None)

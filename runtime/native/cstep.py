@@ -554,7 +554,8 @@ class CGen:
                 if src.tree is not None:
                     pms = {node.connector.id: node_pm(node) for node in nodes(src.tree)}
                     for i, rule in enumerate(pr.rules):
-                        conds = [f"({pms[c]} & {pm}u) == {pm}u" + ("" if pm else f" && {pms[c]}")
+                        conds = [(f"({pms[c]} & {pm}u) == {pm}u" + ("" if pm else f" && {pms[c]}")
+                                  if side == 2 or pm == 0 else f"({pms[c]} & ~{pm}u) == 0u && {pms[c]}")
                                  for c, pm in rule[side] if c in pms]
                         if conds:
                             terms.append(f"if ({' || '.join(conds)}) o[{i >> 6}] |= UINT64_C({1 << (i & 63)});")
