@@ -276,8 +276,17 @@ def dala_long(seconds: float) -> str:
     got: list = []
     spin = run_spin(package, root, seconds, 1 << 26, got)
     rep = got[-1] if got else None
-    rows.append(LongRow("deadlock (SPIN)", "SPIN -DMEMLIM=4000", "complete" if spin[3] else "open (time)",
-                        spin[0], rep.depth if rep and rep.depth < DEPTH else 0, rep.memory_mb if rep else 0.0, rep.seconds if rep else 0.0))
+    rows.append(
+        LongRow(
+            "deadlock (SPIN)",
+            "SPIN -DMEMLIM=4000",
+            "complete" if spin[3] else "open (time)",
+            spin[0],
+            rep.depth if rep and rep.depth < DEPTH else 0,
+            rep.memory_mb if rep else 0.0,
+            rep.seconds if rep else 0.0,
+        )
+    )
     lines = [f"Whole DALA with its rules, {seconds:.0f} s per check at most:", "",
              ("| check | tool | verdict | states | depth (0: not said) | memory MB | seconds (with compiling) | "
               "B/state | states in 16 GB |"),
@@ -320,7 +329,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name}: done", file=sys.stderr)
     from runtime.native.build import FLAGS, PARALLEL_FLAGS, compiler
 
-    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end, Python {sys.version.split()[0]}; compiled explorer 1 and 2 threads, "
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end, "
+          f"Python {sys.version.split()[0]}; compiled explorer 1 and 2 threads, "
           f"{compiler()} {' '.join(FLAGS)} (2 threads: {' '.join(PARALLEL_FLAGS)}); SPIN single core, gcc -O2 "
           "-DMEMLIM=4000")
     print(table(rows))

@@ -77,7 +77,7 @@ request B { type: control; input: x::; };
 request C { type: control };
 """
     found, err = errors(text)
-    assert [(l, c) for l, c, _ in found] == [(7, 3), (9, 38), (10, 27)]
+    assert [(line, c) for line, c, _ in found] == [(7, 3), (9, 38), (10, 27)]
     assert found[0][2] == "syntax error: unexpected name 'exec_task'; expected ';', ',', '::' or 'wcet'"
     assert err.diagnostics[0].hint == "is a ';' missing before it?"
     rendered = err.render()
@@ -161,7 +161,7 @@ poster S { data: r::ref; type: SPEED; };
 def test_module_problems():
     found, _ = errors("typedef struct S { int a; } S;\nmodule m { internal_data: T; };\nmodule n { };\n")
     assert (2, 27, "internal_data 'T' is not a known struct type") in found
-    assert any(l == 3 and m.startswith("second module 'n' in one file") for l, _, m in found)
+    assert any(line == 3 and m.startswith("second module 'n' in one file") for line, _, m in found)
 
 
 def test_request_outside_a_module():
@@ -194,7 +194,7 @@ def test_init_requests_are_made_incompatible_with_all_requests():
 def test_c_declaration_errors():
     found, _ = errors("typedef struct S { int a; int a; } S;\ntypedef float int X;\ntypedef char B[-1];\n"
                       "typedef struct S { double a; } S;\nmodule m { internal_data: S; };\n")
-    messages = {(l, m.split(" (")[0]) for l, _, m in found}
+    messages = {(line, m.split(" (")[0]) for line, _, m in found}
     assert (1, "duplicate member 'a' in struct S") in messages
     assert (2, "invalid C type 'float int'") in messages
     assert (3, "array size must be a positive integer, not -1") in messages

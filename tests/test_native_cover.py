@@ -228,7 +228,7 @@ def wide(n: int, guarded: bool) -> str:
     """A broadcast of n receivers in pairs (a nested define), each receiver toggling; optionally guarded."""
     receivers = [f"r{i}" for i in range(n)]
     pairs = " ".join(f"({receivers[i]} {receivers[i + 1]})" if i + 1 < n else receivers[i] for i in range(0, n, 2))
-    clause = f"    on s r0 r1 provided (s.v + r0.v + r1.v < 2)\n" if guarded else ""
+    clause = "    on s r0 r1 provided (s.v + r0.v + r1.v < 2)\n" if guarded else ""
     comps = ", ".join(f"u{i}()" for i in range(n))
     args = ", ".join(f"u{i}.p" for i in range(n))
     return f"""package Wide

@@ -1,4 +1,6 @@
-"""Which explorer ``genom2bip verify`` runs: the compiled one (default) or the Python one, and a note when it falls back.
+"""Which explorer ``genom2bip verify`` runs: the compiled one (default) or the Python one.
+
+A note says when it falls back.
 
 The compiled search answers deadlocks, model errors, deadlock freedom and
 safety properties (through observers); LTS exports and the other properties

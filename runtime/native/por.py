@@ -128,7 +128,8 @@ def gen_por(w, sources, flat, prio, monitors, enabled: bool) -> None:
         nes.append(e)
     w(f"static const uint64_t DEP[NSRC][SW] = {{{', '.join(_row(d, words) for d in dep)}}};")
     w(f"static const uint64_t NESALL[NSRC][SW] = {{{', '.join(_row(e, words) for e in nes)}}};")
-    w(f"static const uint64_t WRITERS[NATOMS][SW] = {{{', '.join(_row(x, words) for x in writers) or _row(0, words)}}};")
+    rows = ', '.join(_row(x, words) for x in writers) or _row(0, words)
+    w(f"static const uint64_t WRITERS[NATOMS][SW] = {{{rows}}};")
     off, ports, atoms = [0], [], []
     for s in sources:
         if s.kind == "port":
