@@ -57,6 +57,22 @@ def test_check_the_dala_directory(capsys):
         assert f"component {name} (genom3)" in out
     assert "after SetParams, SetSpeed, SetDataSource" in out
     assert "motion: period 100 ms" in out
+    rules = sum(1 for line in (DALA / "rules.yaml").read_text().splitlines() if line.startswith("  - id:"))
+    assert f"rules: {rules} from {DALA / 'rules.yaml'}, " in out
+
+
+def test_check_reads_the_rule_file_of_a_directory_and_locates_its_errors(tmp_path, capsys):
+    for name in ("NDD.gen", "POM.gen", "dala.idl"):
+        (tmp_path / name).write_text((DALA / name).read_text())
+    rules = tmp_path / "rules.yaml"
+    rules.write_text("rules:\n  - id: r\n    service: NDD.GoTo\n    requires: [POM.Fly]\n")
+    code, out, err = run(capsys, "check", tmp_path)
+    assert code == 1 and out == ""
+    assert err.startswith(f"{rules}:4:16: error: "), err
+    assert "POM.Fly" in err
+    code, out, err = run(capsys, "check", tmp_path, "--no-rules")
+    assert code == 0, err
+    assert "rules:" not in out
 
 
 def test_check_json_is_the_ir(capsys):
