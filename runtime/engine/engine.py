@@ -43,6 +43,15 @@ class RunSummary:
         return f"{self.steps} step{'s' if self.steps != 1 else ''}, {what}"
 
 
+def refuse_extern_ports(flat) -> None:
+    """An extern port fires on events pushed from outside the model, which this engine does not take."""
+    for fa in flat.atoms:
+        for p in fa.type.ports:
+            if p.extern:
+                raise EngineError(f"port {fa.name}.{p.name} is an extern port: events pushed from outside the "
+                                  "model are not run by this engine")
+
+
 def _raisers(errors: list[ErrorSite]) -> dict[str, Callable]:
     """The error functions the generated code calls with the index of a static :class:`ErrorSite`."""
     def nondet(k, flags):
@@ -92,6 +101,7 @@ class Engine:
         self.package = package
         self.root = root
         self.flat = flatten(package, root)
+        refuse_extern_ports(self.flat)
         self.infos, self.sources = plan(self.flat, maximal_progress)
         gen = generate(self.flat, self.infos, self.sources)
         self.source: str = gen.source
