@@ -169,3 +169,12 @@ def test_timed_invariants_use_the_same_at_and_from(tmp_path):
                        capture_output=True, text=True, cwd=ROOT, timeout=60)
     assert r.returncode == 0, r.stderr
     assert "  [0] a.go [ 4s, 5s ]" in r.stdout.splitlines()
+
+
+def test_spin_refuses_a_model_with_invariants(capsys, tmp_path):
+    code = main(["verify", str(MODEL), "--root", "Unsafe()", "--engine", "spin", "--spin-dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert err == ("genom2bip: error: the Promela translation does not check atom invariants: verify with "
+                   "--engine compiled or python\n")
+    assert list(tmp_path.iterdir()) == []
