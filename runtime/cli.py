@@ -2,7 +2,8 @@
 
 Every failure (unreadable or malformed file, bad root, missing extern
 binding, model error at a step) is a message on stderr and a non-zero exit
-status, never a traceback: 1 for bad input, 2 for a model error during the run.
+status, never a traceback: 1 for bad input, 2 for a model error during the run,
+5 when an atom invariant fails (the Verimag engine's status).
 A run that ends in a deadlock or at the step limit exits with 0.
 A timed model (clocks, invariants: runtime/timed_cli.py) exits as the Verimag
 engine does: 0 also on a time-lock, 5 when an invariant fails, 7 when a
@@ -89,6 +90,9 @@ def execute(engine, args, name: str, out, err) -> int:
     if summary.outcome == "error":
         print(f"{name}: model error: {summary.message}", file=err)
         return 2
+    if summary.outcome == "invariant":
+        print(f"{name}: ERROR: {summary.message}", file=err)
+        return 5
     return 0
 
 

@@ -8,8 +8,9 @@ from runtime.model import Package
 
 
 def is_timed(package: Package) -> bool:
-    """True when some atom declares a clock or an invariant: the model needs the timed run loop."""
-    return any(a.timed for a in package.atom_types)
+    """True when some atom declares a clock: the model needs the timed run loop.  Invariants on data alone are
+    checked by the untimed engine (runtime/engine/invariants.py)."""
+    return any(a.clocks for a in package.atom_types)
 
 
 def run_timed_command(package: Package, args, out, err) -> int:

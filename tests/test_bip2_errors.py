@@ -77,7 +77,7 @@ def test_base_is_valid():
 SYNTAX = [
     # (old, new, message, needle in the new text)
     ("    place S, T\n    initial to S\n", "    initial to S\n    place S, T\n",
-     "expected ',', '@', 'as', 'clock', 'data', 'export', 'place' or 'port', found 'initial'", "initial to S"),
+     "expected ',', '@', 'as', 'clock', 'data', 'export', 'extern', 'place' or 'port', found 'initial'", "initial to S"),
     ("    on q from T to S\n", "    on q from T to S\n    data int z\n",
      "expected ", "data int z"),
     ("port type Port()", "port type Port", "expected '(', found 'port'", "port type IntPort"),
@@ -129,6 +129,8 @@ def test_syntax_error_hints():
     assert "no ';' after 'fi'" in errors(text)[0].hint
     text = BASE.replace("data int x = 0", "data int place = 0")
     assert "'place' is a reserved word of BIP2" in errors(text)[0].hint
+    text = BASE.replace("data int x = 0", "data int x = 0, error")  # an extern port's event policy
+    assert "'error' is a reserved word of BIP2" in errors(text)[0].hint
     text = BASE.replace("priority pr r:* < c:a1.q, a2.q provided (a1.y > 0)", "priority pr provided (a1.y > 0) r:* < c:*")
     assert "provided (...) comes after the rule" in errors(text)[0].hint
 
@@ -209,7 +211,6 @@ VALIDATION = [
     ("  compound type K()\n", "  compound type L() component K k() end\n  compound type K()\n    component L l()\n",
      "compound type L contains itself (L -> K -> L)", "L l()"),
     ("data int x = 0", "data int x = 0, minute", "'minute' is a reserved word of BIP2", "minute"),
-    ("data int x = 0", "data int x = 0, error", "'error' is a reserved word of BIP2", "error"),
     ("export port c.e as e", "export port Port e is c.e",
      "exported port 'e' of compound type K is Port, but c.e is IntPort", "c.e\n"),
     # Verimag: noSideEffectInGuards

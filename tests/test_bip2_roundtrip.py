@@ -47,6 +47,7 @@ def test_fixture_set_covers_every_construct():
     conns = [c for m in models for c in m.connector_types]
     comps = [k for m in models for k in m.compound_types]
     assert any(t.internal for a in atoms for t in a.transitions)
+    assert {p.policy for a in atoms for p in a.ports if p.extern} == {"remember", "ignore", "error", None}
     assert any(len(t.sources) > 1 for a in atoms for t in a.transitions)
     assert any(len(a.initial.targets) > 1 for a in atoms)
     assert any(p.guard is not None and "*" in (p.low, p.high) for a in atoms for p in a.priorities)

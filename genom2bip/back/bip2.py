@@ -15,6 +15,7 @@ import jinja2
 
 from genom2bip.back.bip2_timed import resume_clause, timed_atom_problems
 from genom2bip.output import write_file
+from runtime.bip2.literals import format_literal
 from runtime.bip2.printer import action as print_action
 from runtime.bip2.printer import expr as print_expr
 from runtime.bip2.reserved import IDENTIFIER, RESERVED, is_identifier
@@ -426,6 +427,11 @@ def _port_decls(ports) -> list[tuple[object, str]]:
         if p.export_as is not None and out and out[-1][0].export_as == p.export_as and out[-1][0].type == p.type:
             first, text = out[-1]
             out[-1] = (first, text[:-len(f" as {p.export_as}")] + f", {binding} as {p.export_as}")
+            continue
+        if p.extern:
+            tail = (f" as {format_literal(p.backend)}" if p.backend is not None else "") + \
+                (f" {p.policy}" if p.policy is not None else "")
+            out.append((p, f"extern port {p.type} {binding}{tail}"))
             continue
         head = ("export " if p.exported else "") + f"port {p.type} {binding}"
         out.append((p, head + (f" as {p.export_as}" if p.export_as is not None else "")))

@@ -239,6 +239,17 @@ class Builder(TimedBuilder, Transformer):
             out.append(p)
         return out
 
+    def extern_port_decl(self, children):
+        annotations, type_, *bindings, backend, policy = children
+        out = self.port_decl([annotations, None, type_, *bindings, None])
+        for p in out:
+            p.extern = True
+            p.backend = decode_string(backend.value) if backend is not None else None
+            if policy is not None:
+                p.policy = policy.value
+                self.locator.note(p, self.span(policy), "policy")
+        return out
+
     def port_binding(self, children):
         name, *data = children
         return name, self._present(data)

@@ -37,6 +37,9 @@ def port_offer(pkg: Package, compound: CompoundType, ref: PortRef) -> Offer:
             if port.exported:
                 return Offer(None, f"port '{ref.port}' of component '{inst.name}' (atom type {typ.name}) is "
                                    f"exported as '{port.export_as}'")
+            if port.extern:
+                return Offer(None, f"port '{ref.port}' of component '{inst.name}' (atom type {typ.name}) is an "
+                                   "extern port: events from outside the model fire it, no connector")
             return Offer(None, f"port '{ref.port}' of component '{inst.name}' (atom type {typ.name}) is not "
                                f"exported; declare it 'export port'")
         export = next((p for p in typ.ports if p.name == ref.port), None)

@@ -17,12 +17,14 @@ KEYWORDS = frozenset({
     # timed BIP2
     "clock", "unit", "nanosecond", "microsecond", "millisecond", "second", "lazy", "delayable", "eager",
     "resume", "invariant", "at",
+    # extern ports' event policies
+    "remember", "ignore", "error",
 })
 
-#: Words the Verimag grammars reserve for constructs we do not read (extern ports, operators,
-#: type refinement, longer time units).
+#: Words the Verimag grammars reserve for constructs we do not read (operators, type refinement, longer
+#: time units).
 UNUSED_KEYWORDS = frozenset({
-    "refine", "operator", "remember", "ignore", "error", "minute", "hour", "day", "sync", "async",
+    "refine", "operator", "minute", "hour", "day", "sync", "async",
 })
 
 RESERVED = KEYWORDS | UNUSED_KEYWORDS

@@ -23,8 +23,15 @@ class TimedBuilder:
         _keyword, name, places, guard = children
         inv = Invariant(name.value, [], guard, span=self.span(name))
         if places is not None:
-            inv.places = self._note_names(inv, "places", places.tokens)
+            inv.exact, tokens = places
+            inv.places = self._note_names(inv, "places", tokens)
         return inv
+
+    def invariant_at(self, children):
+        return True, children[0].tokens
+
+    def invariant_from(self, children):
+        return False, children[0].tokens
 
     def rate_assign(self, children):
         clock, _quote, value = children

@@ -16,6 +16,7 @@ from runtime.engine.errors import EngineError, ModelError
 from runtime.engine.externs import bind_externs, guarded_call
 from runtime.engine.flatten import flatten
 from runtime.engine.interaction import Interaction, interaction_label
+from runtime.engine.invariants import InvariantViolation, Invariants
 from runtime.engine.plan import Source, TreeNode, parts, plan
 from runtime.engine.source import compile_generated
 from runtime.model import Package
@@ -26,7 +27,8 @@ Policy = Callable[[State, list[Interaction]], "Interaction | None"]
 
 @dataclass
 class RunSummary:
-    """How a run ended: ``outcome`` is ``deadlock``, ``limit``, ``error`` or ``stopped`` (the policy gave up)."""
+    """How a run ended: ``outcome`` is ``deadlock``, ``limit``, ``error``, ``invariant`` (an atom invariant
+    failed) or ``stopped`` (the policy gave up)."""
 
     steps: int
     outcome: str
@@ -36,8 +38,18 @@ class RunSummary:
 
     def line(self) -> str:
         what = {"deadlock": "deadlock (no enabled interaction)", "limit": "step limit reached",
-                "stopped": "stopped", "error": f"model error: {self.message}"}[self.outcome]
+                "stopped": "stopped", "error": f"model error: {self.message}",
+                "invariant": f"invariant violated: {self.message}"}[self.outcome]
         return f"{self.steps} step{'s' if self.steps != 1 else ''}, {what}"
+
+
+def refuse_extern_ports(flat) -> None:
+    """An extern port fires on events pushed from outside the model, which this engine does not take."""
+    for fa in flat.atoms:
+        for p in fa.type.ports:
+            if p.extern:
+                raise EngineError(f"port {fa.name}.{p.name} is an extern port: events pushed from outside the "
+                                  "model are not run by this engine")
 
 
 def _raisers(errors: list[ErrorSite]) -> dict[str, Callable]:
@@ -89,6 +101,7 @@ class Engine:
         self.package = package
         self.root = root
         self.flat = flatten(package, root)
+        refuse_extern_ports(self.flat)
         self.infos, self.sources = plan(self.flat, maximal_progress)
         gen = generate(self.flat, self.infos, self.sources)
         self.source: str = gen.source
@@ -128,6 +141,12 @@ class Engine:
         self._initial = ns["initial"]
         self._enabled = ns["enabled"]
         self._fire = ns["FIRE"]
+        self.invariants = Invariants(self.flat, ns)
+        if self.invariants:
+            initial, check = self._initial, self.invariants.check
+            self._initial = lambda: check(initial())
+            self._fire = [self.invariants.guard_fire(f, lambda mask, k=k: self._make(k, mask).label)
+                          for k, f in enumerate(self._fire)]
         self.step = CompiledStep(self._enabled, tuple(self._fire), self._make)
 
     def _attach(self, node: TreeNode, type_index: dict[str, int], ns) -> None:
@@ -303,6 +322,8 @@ class Engine:
                     new = self.fire(state, chosen)
                     steps += 1
                 state = new
+        except InvariantViolation as err:
+            summary = RunSummary(steps, "invariant", str(err), state=state)
         except ModelError as err:
             summary = RunSummary(steps, "error", str(err), state=state)
         if tracer is not None:

@@ -18,12 +18,12 @@ from fractions import Fraction
 from typing import Any, Callable
 
 from runtime.bip2.printer import expr as print_expr
-from runtime.engine.cexpr import Name, Scope, expr as compile_expr
 from runtime.engine.engine import Engine
 from runtime.engine.errors import ModelError
 from runtime.engine.interaction import Interaction
+from runtime.engine.invariants import compile_state_expr
 from runtime.model import Assign, AtomType, Binary, Const, DataDecl, If, Package, Rate, Unary, Var
-from runtime.model.timing import URGENCIES
+from runtime.model.timing import URGENCIES, Invariant
 
 SECOND = 10**9
 _COMPARISONS = ("==", "<", "<=", ">", ">=")
@@ -126,9 +126,11 @@ def rate_name(atom: AtomType, clock: str) -> str:
 
 
 def untimed_view(package: Package) -> Package:
-    """The package the untimed engine runs: clocks become ``int`` data, rates hidden ``float`` data (1.0)."""
+    """The package the untimed engine runs: clocks become ``int`` data, rates hidden ``float`` data (1.0), and
+    invariants are left to the timed engine."""
     view = copy.deepcopy(package)
     for atom in view.atom_types:
+        atom.invariants = []  # checked here, on clocks as well as data
         if not atom.clocks:
             continue
         rates = {c.name: rate_name(atom, c.name) for c in atom.clocks}
@@ -208,7 +210,7 @@ class _AtomTiming:
     offset: int
     clocks: list[tuple[int, int, int]]  # (slot, rate slot, nanoseconds per unit)
     transitions: list[_TimedTransition] = field(default_factory=list)
-    invariants: list[tuple[str, _Constraint]] = field(default_factory=list)
+    invariants: list[tuple[Invariant, _Constraint]] = field(default_factory=list)
     initial_resume: _Constraint | None = None
 
 
@@ -237,9 +239,9 @@ class TimedEngine:
                 resume = self._constraint(fa, 0, t.resume.guard, clocks) if t.resume is not None else None
                 timing.transitions.append(_TimedTransition(t.port, fa.place_mask(t.sources),
                                                            URGENCIES.index(t.urgency or "lazy"), guard, resume))
-            for inv in a.invariants:
+            for inv in self._source_atom(a).invariants:  # the untimed view has none
                 mask = fa.place_mask(inv.places) if inv.places else 0
-                timing.invariants.append((inv.name, self._constraint(fa, mask, inv.guard, clocks)))
+                timing.invariants.append((inv, self._constraint(fa, mask, inv.guard, clocks)))
             if a.initial is not None and a.initial.resume is not None:
                 timing.initial_resume = self._constraint(fa, 0, a.initial.resume.guard, clocks)
             self.atoms.append(timing)
@@ -249,12 +251,7 @@ class TimedEngine:
         return next(a for a in self.package.atom_types if a.name == atom.name)
 
     def _compile(self, fa, e) -> Callable[[tuple], Any]:
-        scope = Scope(where=f"atom {fa.name} ({fa.type.name})", constants=fa.constants,
-                      externs={f.name: f.return_type for f in self.engine.flat.package.extern_functions})
-        for d in fa.variables:
-            scope.variables[d.name] = Name(f"s[{fa.slot(d.name)}]", d.type)
-        src, _ = compile_expr(e, scope)
-        return eval(f"lambda s: {src}", self.engine.namespace)  # noqa: S307 - our own compiled guard
+        return compile_state_expr(self.engine.flat, self.engine.namespace, fa, e)
 
     def _constraint(self, fa, mask: int, e, clocks: set[str]) -> _Constraint:
         if e is None:
@@ -297,7 +294,7 @@ class TimedEngine:
                 continue
             marking = state[a.offset]
             out += [(a.index, t.guard) for t in a.transitions if marking & t.sources == t.sources and t.guard.diffs]
-            out += [(a.index, c) for _, c in a.invariants if marking & c.mask == c.mask and c.diffs]
+            out += [(a.index, c) for inv, c in a.invariants if inv.in_force(marking, c.mask) and c.diffs]
         return out
 
     @staticmethod
@@ -349,9 +346,9 @@ class TimedEngine:
         for a in self.timed_atoms:
             if a.index in skip:
                 continue
-            for name, c in a.invariants:
-                if state[a.offset] & c.mask == c.mask and not c.holds(state):
-                    out.append(f"{a.name}.{name}")
+            for inv, c in a.invariants:
+                if inv.in_force(state[a.offset], c.mask) and not c.holds(state):
+                    out.append(f"{a.name}.{inv.name}")
         return out
 
     def schedule(self, state: tuple, resuming: frozenset[int] = frozenset()) -> "Schedule":
@@ -362,7 +359,7 @@ class TimedEngine:
         """
         samples = self.samples(self.critical_delays(state, self.relevant(state, resuming)))
         invariants = [c for a in self.timed_atoms if a.index not in resuming
-                      for _, c in a.invariants if state[a.offset] & c.mask == c.mask]
+                      for inv, c in a.invariants if inv.in_force(state[a.offset], c.mask)]
         flags: dict[Interaction, list[bool]] = {}
         held: list[list[bool]] = [[] for _ in invariants]
         urgency: dict[Interaction, int] = {}

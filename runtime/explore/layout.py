@@ -7,8 +7,8 @@ dead variables have the same future (same interactions, same labels), so
 merging them is exact for deadlocks, properties and traces, and it removes
 the copies of a codel's last ``outcome`` or a validate's ``verdict`` that
 otherwise multiply the state space.  The analysis is per atom, over places
-(docs/verification.md has the rules); anything a connector, a priority or a
-property can observe is always live.
+(docs/verification.md has the rules); anything a connector, a priority, an
+atom invariant or a property can observe is always live.
 """
 from __future__ import annotations
 
@@ -180,6 +180,8 @@ def layout(flat: FlatSystem, reduce: bool = True, observed: Iterable[tuple[str, 
                   or fa.slot(d.name) in by_priorities or (fa.name, d.name) in observed}
         for pr in fa.type.priorities:
             always |= _reads(pr.guard)
+        for inv in fa.type.invariants:  # checked in every state where it is in force
+            always |= _reads(inv.guard)
         masks = live_places(fa, always) if reduce else {}
         for d in fa.variables:
             kind = d.type if d.type in ("bool", "int") else "value"

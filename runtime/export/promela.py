@@ -217,4 +217,7 @@ def write_promela(space: StateSpace, monitors: list[Monitor] | None = None, hidd
     ``hidden=False`` declares temporaries as ordinary variables reset after
     each step (SPIN's multi-core mode does not accept hidden ones).
     """
+    if space.engine.invariants:
+        raise PromelaError("the Promela translation does not check atom invariants: verify with --engine compiled "
+                           "or python")
     return PromelaWriter(space, monitors, hidden).write()

@@ -31,6 +31,12 @@ class PortDecl:
     span: Span = _span()
     #: ``export port T p(), q() as e``: the atom offers p and q merged as one port e (either may take part)
     export_as: str | None = None
+    #: ``extern port T p(x) as "Name" policy``: events pushed from outside the model fire p, carrying x;
+    #: ``backend`` names the code behind it, ``policy`` (remember, ignore, error) says what an event that
+    #: no transition can take becomes (None: not written)
+    extern: bool = False
+    backend: str | None = None
+    policy: str | None = None
 
     @property
     def interface_name(self) -> str:

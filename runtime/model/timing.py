@@ -52,10 +52,17 @@ class Resume:
 
 @dataclass
 class Invariant:
-    """``invariant n [at p, q] provided (g)``: g holds while one of the places is marked (always, with none).
-    On clocks it bounds time; on data only, a violation is a model error."""
+    """``invariant n [at p, q | from p, q] provided (g)``: g holds whenever the invariant is in force: always
+    (no places), when the marking is exactly ``p, q`` (``at``, ``exact``) or when ``p`` and ``q`` are marked
+    among others (``from``), as the Verimag engine checks it.  On clocks it bounds time; on data only, a
+    violation is a model error."""
 
     name: str
     places: list[str] = field(default_factory=list)
     guard: Expr | None = None
     span: Span = _span()
+    exact: bool = True
+
+    def in_force(self, marking: int, mask: int) -> bool:
+        """Whether the invariant applies at ``marking``, ``mask`` being the bits of its places."""
+        return marking == mask if self.exact and mask else marking & mask == mask

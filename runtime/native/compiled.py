@@ -57,6 +57,8 @@ def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
 
     ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction.
     """
+    if space.engine.invariants:
+        return None, "the compiled explorer does not check atom invariants: exploring with the Python step"
     cc = compiler()
     if cc is None:
         return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
