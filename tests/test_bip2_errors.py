@@ -77,7 +77,8 @@ def test_base_is_valid():
 SYNTAX = [
     # (old, new, message, needle in the new text)
     ("    place S, T\n    initial to S\n", "    initial to S\n    place S, T\n",
-     "expected ',', '@', 'as', 'clock', 'data', 'export', 'extern', 'place' or 'port', found 'initial'", "initial to S"),
+     "expected ',', '@', 'as', 'clock', 'data', 'export', 'extern', 'place' or 'port', found 'initial'",
+     "initial to S"),
     ("    on q from T to S\n", "    on q from T to S\n    data int z\n",
      "expected ", "data int z"),
     ("port type Port()", "port type Port", "expected '(', found 'port'", "port type IntPort"),
@@ -131,7 +132,8 @@ def test_syntax_error_hints():
     assert "'place' is a reserved word of BIP2" in errors(text)[0].hint
     text = BASE.replace("data int x = 0", "data int x = 0, error")  # an extern port's event policy
     assert "'error' is a reserved word of BIP2" in errors(text)[0].hint
-    text = BASE.replace("priority pr r:* < c:a1.q, a2.q provided (a1.y > 0)", "priority pr provided (a1.y > 0) r:* < c:*")
+    text = BASE.replace("priority pr r:* < c:a1.q, a2.q provided (a1.y > 0)",
+                        "priority pr provided (a1.y > 0) r:* < c:*")
     assert "provided (...) comes after the rule" in errors(text)[0].hint
 
 
@@ -228,7 +230,8 @@ VALIDATION = [
      "priority big of compound type K contradicts maximal progress: c:a1.q, a2.q contains c:a2.q", "big c:"),
     # Verimag: connectorDoesNotBindTheSameComponentMoreThanOnce
     ("  compound type K()\n    component A a1(1), a2(2)\n",
-     "  compound type L()\n    component A b1(1), b2(2)\n    export port b1.p as p1\n    export port b2.p as p2\n  end\n"
+     "  compound type L()\n    component A b1(1), b2(2)\n"
+     "    export port b1.p as p1\n    export port b2.p as p2\n  end\n"
      "  compound type K()\n    component A a1(1), a2(2)\n    component L l()\n    connector R twice(l.p1, l.p2)\n",
      "connector 'twice' in compound type K binds component 'l' more than once", "twice("),
 ]

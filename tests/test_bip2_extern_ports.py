@@ -29,7 +29,9 @@ def test_extern_ports_are_read_with_their_backend_and_policy():
 def test_several_extern_ports_in_one_declaration_share_backend_and_policy():
     text = FIXTURE.read_text().replace('    extern port Port wake()\n',
                                        '    extern port Port wake(), rest() as "Bell" ignore\n')
-    text = text.replace("    on wake from WAIT to DONE\n", "    on wake from WAIT to DONE\n    on rest from DONE to WAIT\n")
+    text = text.replace(
+        "    on wake from WAIT to DONE\n", "    on wake from WAIT to DONE\n    on rest from DONE to WAIT\n"
+    )
     model = parse_text(text, "rt_extern_ports.bip")
     ports = {p.name: (p.backend, p.policy) for p in model.atom_types[0].ports if p.extern}
     assert ports["wake"] == ports["rest"] == ("Bell", "ignore")

@@ -99,7 +99,9 @@ def test_externs_constants_and_annotations():
     assert consts["BELOW"] == Const(-3)
     assert consts["GREETING"] == Const('hello "BIP"\n\tbye \\ é')
     assert consts["VERBOSE"] == Const(False)
-    assert pkg.constants[5].annotations == [Annotation("doc", {"text": 'a greeting with "quotes", a tab\tand a newline\n'})]
+    assert pkg.constants[5].annotations == [
+        Annotation("doc", {"text": 'a greeting with "quotes", a tab\tand a newline\n'})
+    ]
     assert pkg.extern_types == ["Pose", "Map"]
     assert pkg.extern_type_annotations == {"Pose": [Annotation("cpp", {"include": "pose.hpp"})]}
     log = [f for f in pkg.extern_functions if f.name == "log"]
@@ -196,7 +198,9 @@ def test_older_export_form_with_type_is_read():
 
 
 def test_spans_point_at_names():
-    pkg = parse_text("package P\n  port type T()\n  atom type A()\n    place S\n    initial to S\n  end\nend\n", "m.bip")
+    pkg = parse_text(
+        "package P\n  port type T()\n  atom type A()\n    place S\n    initial to S\n  end\nend\n", "m.bip"
+    )
     atom = pkg.atom_types[0]
     assert (atom.span.file, atom.span.line, atom.span.column) == ("m.bip", 3, 13)
     assert (pkg.port_types[0].span.line, pkg.port_types[0].span.column) == (2, 13)

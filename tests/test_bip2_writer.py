@@ -57,7 +57,10 @@ def order_problems(text: str) -> list[str]:
         if not keyword or braces:
             continue
         if value == "type" and i > 0 and toks[i - 1].value in ("atom", "connector", "compound"):
-            block, rank = {"atom": ATOM_ORDER, "connector": CONNECTOR_ORDER, "compound": COMPOUND_ORDER}[toks[i - 1].value], 0
+            block, rank = (
+                {"atom": ATOM_ORDER, "connector": CONNECTOR_ORDER, "compound": COMPOUND_ORDER}[toks[i - 1].value],
+                0,
+            )
             continue
         if value == "type" and toks[i - 1].value == "port" and toks[i + 2].type != "LPAR":
             problems.append(f"port type {toks[i + 1]} without parentheses")

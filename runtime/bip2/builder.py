@@ -11,10 +11,43 @@ from runtime.bip2.reserved import UNUSED_KEYWORDS
 from runtime.bip2.timed_builder import TimedBuilder
 from runtime.diagnostics import Reporter, Span
 from runtime.model import (
-    Annotation, Assign, AtomPriority, AtomType, Binary, Call, ComponentInstance, CompoundType, ConnectorExport,
-    ConnectorInstance, ConnectorParam, ConnectorType, Const, Constant, DataDecl, DataParam, DefineGroup, DefinePort,
-    ClockDecl, Do, ExportData, ExportPort, ExternFunction, If, InitialTransition, InteractionPattern, InteractionSpec, Package,
-    Invariant, PortData, PortDecl, PortRef, PortType, Priority, Transition, Unary, Var,
+    Annotation,
+    Assign,
+    AtomPriority,
+    AtomType,
+    Binary,
+    Call,
+    ComponentInstance,
+    CompoundType,
+    ConnectorExport,
+    ConnectorInstance,
+    ConnectorParam,
+    ConnectorType,
+    Const,
+    Constant,
+    DataDecl,
+    DataParam,
+    DefineGroup,
+    DefinePort,
+    ClockDecl,
+    Do,
+    ExportData,
+    ExportPort,
+    ExternFunction,
+    If,
+    InitialTransition,
+    InteractionPattern,
+    InteractionSpec,
+    Package,
+    Invariant,
+    PortData,
+    PortDecl,
+    PortRef,
+    PortType,
+    Priority,
+    Transition,
+    Unary,
+    Var,
 )
 
 
@@ -67,8 +100,11 @@ class Builder(TimedBuilder, Transformer):
 
     def ID(self, tok: Token) -> Token:
         if tok.value in UNUSED_KEYWORDS:
-            self.reporter.error(self.span(tok), f"'{tok.value}' is a reserved word of BIP2 and cannot be used as a name",
-                                hint="rename it: the Verimag compilers reserve it (timed or extended BIP2)")
+            self.reporter.error(
+                self.span(tok),
+                f"'{tok.value}' is a reserved word of BIP2 and cannot be used as a name",
+                hint="rename it: the Verimag compilers reserve it (timed or extended BIP2)",
+            )
         return tok
 
     def _note_names(self, obj, key: str, tokens: list[Token]) -> list[str]:
@@ -504,7 +540,9 @@ class Builder(TimedBuilder, Transformer):
             node = Var(name.text)
         else:
             if len(name.parts) > 2:
-                self.reporter.error(name.span, f"'{name.text}': a data reference has at most one dot (port.data or component.data)")
+                self.reporter.error(
+                    name.span, f"'{name.text}': a data reference has at most one dot (port.data or component.data)"
+                )
             node = PortData(name.parts[0].value, name.parts[-1].value)
         self.locator.note(node, name.span)
         return node

@@ -8,7 +8,20 @@ engine may use it to show a guard or an action in a message.
 from __future__ import annotations
 
 from runtime.bip2.literals import format_literal
-from runtime.model.expressions import BINARY_PRECEDENCE, Assign, Binary, Call, Const, Do, Expr, If, PortData, Stmt, Unary, Var
+from runtime.model.expressions import (
+    BINARY_PRECEDENCE,
+    Assign,
+    Binary,
+    Call,
+    Const,
+    Do,
+    Expr,
+    If,
+    PortData,
+    Stmt,
+    Unary,
+    Var,
+)
 from runtime.model.timing import Rate
 
 _ATOM = 100          # names, calls, non-negative literals, parenthesised expressions

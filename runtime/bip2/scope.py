@@ -81,7 +81,9 @@ class ExpressionChecker:
                 counts = " or ".join(sorted({str(len(p.param_types)) for p in prototypes}))
                 self.rep.error(span, f"extern function '{c.function}' takes {counts} argument(s), {len(c.args)} given")
             elif value_needed and all(p.return_type is None for p in matching):
-                self.rep.error(span, f"extern function '{c.function}' returns nothing and cannot be used in an expression")
+                self.rep.error(
+                    span, f"extern function '{c.function}' returns nothing and cannot be used in an expression"
+                )
             elif scope.guard and c.args and not any(all(p.param_const) for p in matching):
                 # Verimag's rule noSideEffectInGuards: a guard must not hand data to a parameter that may change it.
                 proto = matching[0]

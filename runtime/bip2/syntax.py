@@ -108,7 +108,9 @@ def syntax_diagnostic(err: UnexpectedInput, text: str, filename: str) -> Diagnos
         span = Span(filename, err.line, err.column, err.line, err.column + 1)
         rest = text[err.pos_in_stream:]
         if rest.startswith('"'):
-            return Diagnostic(span, "unterminated string", hint='close it with "; write \\" for a quote inside a string')
+            return Diagnostic(
+                span, "unterminated string", hint='close it with "; write \\" for a quote inside a string'
+            )
         if rest.startswith("/*"):
             return Diagnostic(span, "unterminated comment: '/*' without '*/'")
         return Diagnostic(span, f"unexpected character '{err.char}'")

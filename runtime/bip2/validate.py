@@ -102,9 +102,9 @@ class _Checker:
     # ------------------------------------------------------------------ package
     def run(self) -> None:
         pkg = self.pkg
-        type_decls = ([(n, ("extern_type", n, i)) for n in set(pkg.extern_types)
-                       for i in range(pkg.extern_types.count(n))]
-                      + [(d.name, d) for d in pkg.port_types + pkg.atom_types + pkg.connector_types + pkg.compound_types])
+        type_decls = [
+            (n, ("extern_type", n, i)) for n in set(pkg.extern_types) for i in range(pkg.extern_types.count(n))
+        ] + [(d.name, d) for d in pkg.port_types + pkg.atom_types + pkg.connector_types + pkg.compound_types]
         self._unique_types(type_decls)
         self.unique(pkg.constants, "constant", f"package {pkg.name}")
         self._constants()
@@ -221,7 +221,9 @@ class _Checker:
         for t in a.transitions:
             at = self.loc.at(t)
             if t.port is not None and t.port not in ports:
-                self.error(self.loc.at(t, "port"), f"unknown port '{t.port}' in {where}", hint=suggestion(t.port, ports))
+                self.error(
+                    self.loc.at(t, "port"), f"unknown port '{t.port}' in {where}", hint=suggestion(t.port, ports)
+                )
             self._places(a, t, "sources", t.sources)
             self._places(a, t, "targets", t.targets)
             if t.guard is not None:
@@ -259,8 +261,11 @@ class _Checker:
         decls = {d.name: d.type for d in a.params + a.data}
         for i, name in enumerate(p.data):
             if name not in decls:
-                self.error(self.loc.at(p, ("data", i)), f"unknown variable '{name}' bound to port '{p.name}' in {where}",
-                           hint=suggestion(name, decls))
+                self.error(
+                    self.loc.at(p, ("data", i)),
+                    f"unknown variable '{name}' bound to port '{p.name}' in {where}",
+                    hint=suggestion(name, decls),
+                )
         ptype = self.typed(p, "port type", p.type)
         if ptype is None:
             return
@@ -307,8 +312,11 @@ class _Checker:
         data = {d.name: d.type for d in c.data}
         for i, name in enumerate(e.data):
             if name not in data:
-                self.error(self.loc.at(e, ("data", i)), f"exported port '{e.name}' of {where} binds unknown data '{name}'",
-                           hint=suggestion(name, data))
+                self.error(
+                    self.loc.at(e, ("data", i)),
+                    f"exported port '{e.name}' of {where} binds unknown data '{name}'",
+                    hint=suggestion(name, data),
+                )
         ptype = self.typed(e, "port type", e.port_type, "port_type")
         if ptype is not None and len(ptype.params) != len(e.data):
             self.error(self.loc.at(e), f"exported port '{e.name}' of {where}: port type {ptype.name} carries "
@@ -400,7 +408,9 @@ class _Checker:
         for i, ref in enumerate(conn.ports):
             key = (ref.component, ref.port)
             if key in seen:
-                self.error(self.loc.at(ref, default=self.loc.at(conn)), f"{ref} is given twice to connector '{conn.name}'")
+                self.error(
+                    self.loc.at(ref, default=self.loc.at(conn)), f"{ref} is given twice to connector '{conn.name}'"
+                )
             seen.add(key)
             actual = self._port_type(k, ref, self.loc.at(conn))
             if ctype is None or i >= len(ctype.params) or actual is None:
@@ -425,7 +435,9 @@ class _Checker:
             ctype = self.pkg.connector_type(conn.type)
             if ctype is None or ctype.export is not None:
                 continue
-            if len({(r.component, r.port) for r in conn.ports}) < len(conn.ports) or len(ctype.params) != len(conn.ports):
+            if len({(r.component, r.port) for r in conn.ports}) < len(conn.ports) or len(ctype.params) != len(
+                conn.ports
+            ):
                 continue  # reported as a port given twice, or as a wrong port count
             seen: set[str] = set()
             twice: list[str] = []
@@ -471,7 +483,9 @@ class _Checker:
         span = self.loc.at(pattern, default=self.loc.at(pr))
         if pattern.connector == "*":
             if pattern.ports is not None:
-                self.error(span, f"priority {pr.name} of {where}: '*' stands for every connector and takes no port list")
+                self.error(
+                    span, f"priority {pr.name} of {where}: '*' stands for every connector and takes no port list"
+                )
             return
         conn = k.connector(pattern.connector)
         if conn is None:

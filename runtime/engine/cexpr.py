@@ -116,7 +116,15 @@ def expr(e: Expr, scope: Scope) -> tuple[str, str | None]:
     """Python source for an expression and its static type (None when unknown)."""
     if isinstance(e, Const):
         v = e.value
-        t = "bool" if isinstance(v, bool) else "int" if isinstance(v, int) else "float" if isinstance(v, float) else "string"
+        t = (
+            "bool"
+            if isinstance(v, bool)
+            else "int"
+            if isinstance(v, int)
+            else "float"
+            if isinstance(v, float)
+            else "string"
+        )
         return literal(v), t
     if isinstance(e, Var):
         if e.name in scope.variables:

@@ -269,7 +269,9 @@ class _Builder:
             slots = []
             for v in decl.data:
                 if not any(d.name == v for d in variables):
-                    raise FlattenError(f"{_at(decl.span)}{t.name}: port {decl.name} binds '{v}', not a variable of the atom")
+                    raise FlattenError(
+                        f"{_at(decl.span)}{t.name}: port {decl.name} binds '{v}', not a variable of the atom"
+                    )
                 slots.append(fa.slot(v))
             fp = FlatPort(len(self.ports), fa.index, decl.name, _join(name, decl.name), decl,
                           [p.name for p in ptype.params], [p.type for p in ptype.params], tuple(slots))
@@ -405,9 +407,13 @@ class _Builder:
             return FlatPattern(_join(path, str(pat)), ((fc.id, 0),))
         mask = 0
         for ref in pat.ports:
-            idx = next((i for i, r in enumerate(fc.instance.ports) if (r.component, r.port) == (ref.component, ref.port)), None)
+            idx = next(
+                (i for i, r in enumerate(fc.instance.ports) if (r.component, r.port) == (ref.component, ref.port)), None
+            )
             if idx is None:
-                raise FlattenError(f"{_at(span)}{t.name}: priority names {ref}, not a port of connector {pat.connector}")
+                raise FlattenError(
+                    f"{_at(span)}{t.name}: priority names {ref}, not a port of connector {pat.connector}"
+                )
             mask |= 1 << idx
         return FlatPattern(_join(path, str(pat)), ((fc.id, mask),))
 

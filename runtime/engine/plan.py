@@ -241,11 +241,16 @@ def _collapsed(fc: FlatConnector, tree: TreeNode, leaves: list[FlatPort],
     top = substitute(tree, tree.info.tree)
     define = item(top, False)
     spec = tree.info.clauses.get(tree.info.all_params)
-    ct = ConnectorType(name=f"{fc.type.name}~{fc.id}",
-                       params=[ConnectorParam(port.decl.type, n) for port, n in zip(leaves, names)],
-                       define=define if isinstance(define, DefineGroup) else DefineGroup([define]),
-                       interactions=[InteractionSpec(list(names), guard=map_port_data(spec.guard, lambda d: data(tree, d.port, d.name)))]
-                       if spec is not None and spec.guard is not None else [])
+    ct = ConnectorType(
+        name=f"{fc.type.name}~{fc.id}",
+        params=[ConnectorParam(port.decl.type, n) for port, n in zip(leaves, names)],
+        define=define if isinstance(define, DefineGroup) else DefineGroup([define]),
+        interactions=[
+            InteractionSpec(list(names), guard=map_port_data(spec.guard, lambda d: data(tree, d.port, d.name)))
+        ]
+        if spec is not None and spec.guard is not None
+        else [],
+    )
     infos[ct.name] = connector_info(ct, flat.constants)
     return FlatConnector(fc.id, fc.path, fc.scope, fc.label, fc.instance, ct, [[Leaf(p.id)] for p in leaves],
                          list(fc.parents), fc.named)
