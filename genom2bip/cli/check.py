@@ -33,8 +33,6 @@ def verb_check(args: argparse.Namespace) -> int:
         print(description_summary(description))
         path = rules_file(args)
         if path is not None and description.components:
-            from genom2bip.rules import description_rules
-
-            own = len(description_rules(description))
-            print(f"\nrules: {len(rules) - own} from {path}, {own} from the descriptions' own constraints")
+            from_file = sum(1 for r in rules if r.origin == "rules")
+            print(f"\nrules: {from_file} from {path}, {len(rules) - from_file} from the descriptions' own constraints")
     return EXIT_OK
