@@ -8,7 +8,9 @@ a fresh temporary directory first and swapped in at the end, so an error at
 any point leaves the output directory as it was; only a directory that
 genom2bip wrote itself (its ``.genom2bip`` marker says so) is ever replaced,
 and files it did not write are kept (genom2bip.output).  The output is
-deterministic: same descriptions, same bytes.
+deterministic: same descriptions, same bytes.  Back ends only turn the model
+into text; this module is the one that writes it (``generate``,
+``write_bip_file``).
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from genom2bip.back.interface import interface_data, literal
 from genom2bip.back.pysource import constructor
 from genom2bip.build.functional import FunctionalLevel
 from genom2bip.build.names import ident
-from genom2bip.output import OutputError, write_tree
+from genom2bip.output import OutputError, write_file, write_tree
 from genom2bip.rules import Rule
 from genom2bip.summary import no_component
 from runtime.bip2 import validate
@@ -176,6 +178,14 @@ def _classes(obj) -> set[str]:
             out |= _classes(v)
     out.discard("Span")
     return out
+
+
+def write_bip_file(package: Package, directory: Path | str) -> Path:
+    """Write ``<directory>/<package name>.bip`` atomically; nothing is written when the writer refuses the model."""
+    text = write_package(package)
+    target = Path(directory) / f"{package.name}.bip"
+    write_file(target, lambda out: out.write(text))
+    return target
 
 
 def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,

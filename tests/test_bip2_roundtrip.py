@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from genom2bip.back.bip2 import BINARY_OPERATORS, UNARY_OPERATORS, write_package, write_package_file
+from genom2bip.back.bip2 import BINARY_OPERATORS, UNARY_OPERATORS, write_package
+from genom2bip.generate import write_bip_file
 from runtime.bip2 import parse_file, parse_text
 from runtime.model import (
     Annotation, Assign, AtomPriority, AtomType, Binary, Call, ComponentInstance, CompoundType, ConnectorExport,
@@ -35,7 +36,7 @@ def test_fixture_roundtrip(path):
 @pytest.mark.parametrize("path", FIXTURES, ids=lambda p: p.stem)
 def test_written_file_reads_back(path, tmp_path):
     model = parse_file(path)
-    written = write_package_file(model, tmp_path)
+    written = write_bip_file(model, tmp_path)
     assert written == tmp_path / f"{model.name}.bip"
     assert parse_file(written) == model
     assert [p.name for p in tmp_path.iterdir()] == [written.name]  # no temp file left

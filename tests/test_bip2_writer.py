@@ -4,7 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from genom2bip.back.bip2 import RESERVED, BipWriteError, bip_identifier, write_package, write_package_file
+from genom2bip.back.bip2 import RESERVED, BipWriteError, bip_identifier, write_package
+from genom2bip.generate import write_bip_file
 from runtime.bip2 import parse_file, parse_text
 from runtime.bip2.syntax import parser
 from runtime.model import (
@@ -208,19 +209,29 @@ def test_every_problem_is_listed_at_once():
 def test_refused_model_writes_nothing(tmp_path):
     bad = package(atom(data=[DataDecl("int", "error")]))
     with pytest.raises(BipWriteError):
-        write_package_file(bad, tmp_path)
+        write_bip_file(bad, tmp_path)
     assert list(tmp_path.iterdir()) == []
     good = package(atom())
-    path = write_package_file(good, tmp_path)
+    path = write_bip_file(good, tmp_path)
     before = path.read_text()
     with pytest.raises(BipWriteError):
-        write_package_file(bad, tmp_path)
+        write_bip_file(bad, tmp_path)
     assert path.read_text() == before and [p.name for p in tmp_path.iterdir()] == ["P.bip"]
 
 
+def test_a_refused_model_names_its_problem_and_keeps_the_previous_file(tmp_path):
+    (tmp_path / "P.bip").write_text("previous\n")
+    bad = package(atom(data=[DataDecl("int", "error")]))
+    with pytest.raises(BipWriteError) as err:
+        write_bip_file(bad, tmp_path)
+    assert str(err.value) == "cannot write package P as BIP2 (1 problem(s)):\n  - atom type A, data error: data " \
+        "'error' uses the reserved word 'error'; rename it consistently (bip_identifier gives 'error_')"
+    assert (tmp_path / "P.bip").read_text() == "previous\n" and [p.name for p in tmp_path.iterdir()] == ["P.bip"]
+
+
 def test_writing_again_replaces_the_file(tmp_path):
-    path = write_package_file(package(atom()), tmp_path)
-    path2 = write_package_file(package(atom(name="B")), tmp_path)
+    path = write_bip_file(package(atom()), tmp_path)
+    path2 = write_bip_file(package(atom(name="B")), tmp_path)
     assert path == path2 and "atom type B()" in path.read_text()
     assert [p.name for p in tmp_path.iterdir()] == ["P.bip"]
 
@@ -237,7 +248,7 @@ def test_a_new_file_gets_the_permissions_the_umask_gives(tmp_path):
 
     umask = os.umask(0o022)
     try:
-        path = write_package_file(package(atom()), tmp_path)
+        path = write_bip_file(package(atom()), tmp_path)
     finally:
         os.umask(umask)
     assert path.stat().st_mode & 0o777 == 0o644

@@ -56,3 +56,19 @@ def test_the_controller_never_imports_the_compositional_analysis():
             if bad:
                 offenders.append(f"{path.relative_to(ROOT)}: {sorted(bad)}")
     assert offenders == []
+
+
+def test_back_ends_return_text_and_only_generate_writes_files():
+    # a back end is model -> text; writing (atomically, nothing on error) is genom2bip/generate.py's alone
+    writes = {"open", "write_text", "write_bytes", "replace", "mkstemp", "write_file", "write_tree"}
+    offenders = []
+    for path in sorted((ROOT / "genom2bip" / "back").rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        if "genom2bip.output" in _imported_modules(path):
+            offenders.append(f"{path.relative_to(ROOT)}: imports genom2bip.output")
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call):
+                name = getattr(node.func, "attr", None) or getattr(node.func, "id", None)
+                if name in writes:
+                    offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}: calls {name}")
+    assert offenders == []

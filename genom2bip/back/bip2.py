@@ -9,12 +9,10 @@ text back into an equal model.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import jinja2
 
 from genom2bip.back.bip2_timed import resume_clause, timed_atom_problems
-from genom2bip.output import write_file
 from runtime.bip2.literals import format_literal
 from runtime.bip2.printer import action as print_action
 from runtime.bip2.printer import expr as print_expr
@@ -26,7 +24,7 @@ from runtime.model import (
 )
 from runtime.model.expressions import BINARY_PRECEDENCE
 
-__all__ = ["RESERVED", "BipWriteError", "bip_identifier", "write_package", "write_package_file"]
+__all__ = ["RESERVED", "BipWriteError", "bip_identifier", "write_package"]
 
 #: Operators of runtime.model that the Verimag BIP2 grammar has (it has no shifts and no unary '+').
 UNARY_OPERATORS = ("-", "!", "~")
@@ -479,13 +477,3 @@ def write_package(package: Package) -> str:
         _ENV = _environment()
     return _tidy(_ENV.get_template("package.bip.j2").render(package=package))
 
-
-def write_package_file(package: Package, directory) -> Path:
-    """Write ``<directory>/<package name>.bip`` atomically (genom2bip.output.write_file).
-
-    Nothing is written on error.
-    """
-    text = write_package(package)
-    target = Path(directory) / f"{package.name}.bip"
-    write_file(target, lambda out: out.write(text))
-    return target
