@@ -114,3 +114,35 @@ def test_a_refused_connector_of_a_generated_model_names_its_codel_line(monkeypat
     found = re.search(r"^  (\S+NDD\.gen:\d+:\d+): component 'GoTo' .* exports no port 'no_such_port'$", message, re.M)
     assert found, message
     assert "codel <plan> nddPlan(" in _line(found.group(1))
+
+
+def test_every_element_of_generated_dala_built_from_the_description_names_its_line():
+    """Atoms, transitions and connectors (split sub-connectors too) carry ``@source``; the library's do not."""
+    from genom2bip.generate import model_of
+    from genom2bip.parser import parse_paths
+
+    package, _, _ = model_of(parse_paths([str(ROOT / "descriptions" / "dala")]), "dala")
+    library = {"Timer", "Scheduler", "Poster"}  # one type for every task or poster: no description line of its own
+    unlocated = {("atom", a.name) for a in package.atom_types if source_of(a.annotations) is None}
+    unlocated |= {("transition", a.name) for a in package.atom_types for t in a.transitions
+                  if source_of(t.annotations) is None}
+    unlocated |= {("connector", f"{ct.name}.{c.name}") for ct in package.compound_types for c in ct.connectors
+                  if source_of(c.annotations) is None}
+    assert unlocated == {(kind, name) for name in library for kind in ("atom", "transition")}
+    for a in package.atom_types:
+        for where in [source_of(a.annotations)] + [source_of(t.annotations) for t in a.transitions]:
+            assert a.name in library or Path(where.rsplit(":", 2)[0]).name.endswith(".gen")
+    # a connector split so that it binds each component once: its sub-connectors name the same line as the whole
+    connectors = {f"{ct.name}.{c.name}": c for ct in package.compound_types for c in ct.connectors}
+    sub = connectors["NDD_motion_Task.period"]
+    assert "task motion" in _line(source_of(sub.annotations))
+    assert sub.type.startswith("TriggeredX") and not any(a.name == "label" for a in sub.annotations)
+    whole = next(c for c in connectors.values() if {"name": "NDD.motion:period"} in
+                 [a.arguments for a in c.annotations if a.name == "label"])
+    assert source_of(whole.annotations) == source_of(sub.annotations)
+    # GenoM's own control task and the request acceptor are the component's; each acceptance is its service's
+    control = next(c for c in connectors.values() if {"name": "NDD.control:period"} in
+                   [a.arguments for a in c.annotations if a.name == "label"])
+    assert "component NDD" in _line(source_of(control.annotations))
+    take = next(t for t in package.atom_type("NDD_Requests").transitions if t.port == "GoTo")
+    assert "activity GoTo(" in _line(source_of(take.annotations))

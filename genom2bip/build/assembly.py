@@ -29,6 +29,7 @@ from runtime.model import (
     PortRef,
     PortType,
     Priority,
+    SOURCE,
 )
 from runtime.model.expressions import Expr
 
@@ -208,7 +209,8 @@ class Assembly:
                 sub = self.register(sub)
                 name = sub_name(w, low)
                 inner_type, inner = join(w, sub, [ends[i] for i in g], low)
-                connectors[low].append(ConnectorInstance(inner_type.name, name, inner))
+                at_source = [a for a in w.annotations if a.name == SOURCE]  # the description line of the whole
+                connectors[low].append(ConnectorInstance(inner_type.name, name, inner, annotations=at_source))
                 exported, target = name, PortRef(name, sub.export.name)
                 for k in range(len(low), len(at), -1):
                     holder = low[:k]

@@ -150,9 +150,8 @@ class FunctionalLevel:
         root: Path = (m,)
         self.asm.group(root, joined(m, "Module"), comment=f"GenoM component {c.name}")
         requests = [(ident(s.name), f"{c.name}.{s.name}") for s in c.services]
-        self.asm.atom(
-            root + ("requests",), self._atom_type(acceptor_type(m, requests), f"Request acceptor of {c.name}.")
-        )
+        acceptor = acceptor_type(m, requests, c.span, {ident(s.name): s.span for s in c.services})
+        self.asm.atom(root + ("requests",), self._atom_type(acceptor, f"Request acceptor of {c.name}."))
         for port in c.ports:
             if port.direction == ir.Direction.OUT:
                 self.asm.atom(root + (ident(port.name),), "Poster")
@@ -161,7 +160,7 @@ class FunctionalLevel:
         taken = {ident(s.name) for s in c.services}
         for task in c.tasks:
             tasks[task.name] = self._task(c.name, root, task, taken)
-        tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK), taken)
+        tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK, span=c.span), taken)  # GenoM's own
 
         for s in c.services:
             on = (
