@@ -136,6 +136,12 @@ def Aspect_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('Aspect.SetParams'),)),
                 action=[Do(Call('take_request', args=(Const('Aspect.SetParams'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'Run',
@@ -143,6 +149,12 @@ def Aspect_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('Aspect.Run'),)),
                 action=[Do(Call('take_request', args=(Const('Aspect.Run'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'Stop',
@@ -150,6 +162,18 @@ def Aspect_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('Aspect.Stop'),)),
                 action=[Do(Call('take_request', args=(Const('Aspect.Stop'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '6', 'column': '11'},
             ),
         ],
     )
@@ -205,8 +229,25 @@ def Aspect_SetParams_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -216,18 +257,36 @@ def Aspect_SetParams_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -262,10 +321,46 @@ def Aspect_SetParams_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -318,7 +413,18 @@ def Aspect_Run_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -328,27 +434,81 @@ def Aspect_Run_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -398,7 +558,18 @@ def Aspect_Run_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -632,25 +803,120 @@ def Aspect_Run_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['FUSE_PAUSED'], ['FUSE']),
-            Transition('wake', ['WAIT_PAUSED'], ['WAIT']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['FUSE'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['WAIT'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['FUSE_PAUSED'],
+                ['FUSE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'wake',
+                ['WAIT_PAUSED'],
+                ['WAIT'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['FUSE'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['WAIT'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['FUSE_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['WAIT_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -702,7 +968,18 @@ def Aspect_Stop_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -712,18 +989,36 @@ def Aspect_Stop_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -758,10 +1053,46 @@ def Aspect_Stop_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -791,6 +1122,12 @@ def LaserRF_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('LaserRF.SetConfig'),)),
                 action=[Do(Call('take_request', args=(Const('LaserRF.SetConfig'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'Init',
@@ -798,6 +1135,12 @@ def LaserRF_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('LaserRF.Init'),)),
                 action=[Do(Call('take_request', args=(Const('LaserRF.Init'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'Start',
@@ -805,6 +1148,12 @@ def LaserRF_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('LaserRF.Start'),)),
                 action=[Do(Call('take_request', args=(Const('LaserRF.Start'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'Stop',
@@ -812,6 +1161,18 @@ def LaserRF_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('LaserRF.Stop'),)),
                 action=[Do(Call('take_request', args=(Const('LaserRF.Stop'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '6', 'column': '11'},
             ),
         ],
     )
@@ -931,8 +1292,25 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -942,18 +1320,36 @@ def LaserRF_SetConfig_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -988,10 +1384,46 @@ def LaserRF_SetConfig_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -1043,7 +1475,18 @@ def LaserRF_Init_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1053,22 +1496,70 @@ def LaserRF_Init_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -1108,7 +1599,18 @@ def LaserRF_Init_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -1206,20 +1708,62 @@ def LaserRF_Init_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['CONFIGURE'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1274,8 +1818,29 @@ def LaserRF_Start_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('refuse', ['IDLE'], ['IDLE']),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'refuse',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1285,27 +1850,81 @@ def LaserRF_Start_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1351,7 +1970,18 @@ def LaserRF_Start_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -1517,17 +2147,85 @@ def LaserRF_Start_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['ACQUIRE_PAUSED'], ['ACQUIRE']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['ACQUIRE'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['ACQUIRE_PAUSED'],
+                ['ACQUIRE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['ACQUIRE'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['ACQUIRE_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1579,7 +2277,18 @@ def LaserRF_Stop_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1589,18 +2298,36 @@ def LaserRF_Stop_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1635,10 +2362,46 @@ def LaserRF_Stop_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -1669,6 +2432,12 @@ def NDD_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('NDD.SetParams'),)),
                 action=[Do(Call('take_request', args=(Const('NDD.SetParams'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'SetSpeed',
@@ -1676,6 +2445,12 @@ def NDD_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('NDD.SetSpeed'),)),
                 action=[Do(Call('take_request', args=(Const('NDD.SetSpeed'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'SetDataSource',
@@ -1683,6 +2458,12 @@ def NDD_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('NDD.SetDataSource'),)),
                 action=[Do(Call('take_request', args=(Const('NDD.SetDataSource'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'GoTo',
@@ -1690,6 +2471,12 @@ def NDD_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('NDD.GoTo'),)),
                 action=[Do(Call('take_request', args=(Const('NDD.GoTo'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'Stop',
@@ -1697,6 +2484,18 @@ def NDD_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('NDD.Stop'),)),
                 action=[Do(Call('take_request', args=(Const('NDD.Stop'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '13', 'column': '11'},
             ),
         ],
     )
@@ -1802,7 +2601,17 @@ def NDD_motion_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['PUBLISH_PAUSED'], ['PUBLISH']),
+            Transition(
+                'wake',
+                ['PUBLISH_PAUSED'],
+                ['PUBLISH'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -1864,8 +2673,25 @@ def NDD_SetParams_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1875,22 +2701,70 @@ def NDD_SetParams_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -1924,10 +2798,46 @@ def NDD_SetParams_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -1989,8 +2899,25 @@ def NDD_SetSpeed_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2000,22 +2927,70 @@ def NDD_SetSpeed_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -2049,10 +3024,46 @@ def NDD_SetSpeed_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -2104,7 +3115,18 @@ def NDD_SetDataSource_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2114,22 +3136,70 @@ def NDD_SetDataSource_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -2159,7 +3229,18 @@ def NDD_SetDataSource_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -2215,14 +3296,50 @@ def NDD_SetDataSource_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -2281,15 +3398,42 @@ def NDD_GoTo_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('refuse', ['IDLE'], ['IDLE']),
+            Transition(
+                'refuse',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'reject',
                 ['CHECK'],
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2299,27 +3443,81 @@ def NDD_GoTo_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -2368,7 +3566,18 @@ def NDD_GoTo_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -2576,18 +3785,97 @@ def NDD_GoTo_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['PLAN_PAUSED'], ['PLAN']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['PLAN'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['ARRIVED'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['PLAN_PAUSED'],
+                ['PLAN'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['PLAN'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['ARRIVED'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['PLAN_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -2639,7 +3927,18 @@ def NDD_Stop_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2649,18 +3948,36 @@ def NDD_Stop_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -2691,7 +4008,18 @@ def NDD_Stop_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -2747,14 +4075,50 @@ def NDD_Stop_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -2780,6 +4144,12 @@ def POM_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('POM.Run'),)),
                 action=[Do(Call('take_request', args=(Const('POM.Run'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'Reset',
@@ -2787,6 +4157,18 @@ def POM_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('POM.Reset'),)),
                 action=[Do(Call('take_request', args=(Const('POM.Reset'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '7', 'column': '11'},
             ),
         ],
     )
@@ -2892,7 +4274,17 @@ def POM_fusion_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['UPDATE_PAUSED'], ['UPDATE']),
+            Transition(
+                'wake',
+                ['UPDATE_PAUSED'],
+                ['UPDATE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -2945,7 +4337,18 @@ def POM_Run_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -2955,27 +4358,81 @@ def POM_Run_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3018,7 +4475,18 @@ def POM_Run_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -3129,27 +4597,85 @@ def POM_Run_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['START_PAUSED'], ['START']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'wake',
+                ['START_PAUSED'],
+                ['START'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['FIX'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['START_PAUSED'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3201,7 +4727,18 @@ def POM_Reset_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -3211,18 +4748,36 @@ def POM_Reset_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3253,7 +4808,18 @@ def POM_Reset_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -3309,14 +4875,50 @@ def POM_Reset_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3347,6 +4949,12 @@ def RFLEX_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('RFLEX.Init'),)),
                 action=[Do(Call('take_request', args=(Const('RFLEX.Init'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'SetAcceleration',
@@ -3354,6 +4962,12 @@ def RFLEX_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('RFLEX.SetAcceleration'),)),
                 action=[Do(Call('take_request', args=(Const('RFLEX.SetAcceleration'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'TrackSpeed',
@@ -3361,6 +4975,12 @@ def RFLEX_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('RFLEX.TrackSpeed'),)),
                 action=[Do(Call('take_request', args=(Const('RFLEX.TrackSpeed'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'Stop',
@@ -3368,6 +4988,18 @@ def RFLEX_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('RFLEX.Stop'),)),
                 action=[Do(Call('take_request', args=(Const('RFLEX.Stop'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '7', 'column': '11'},
             ),
         ],
     )
@@ -3473,7 +5105,17 @@ def RFLEX_servo_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['ODOMETRY_PAUSED'], ['ODOMETRY']),
+            Transition(
+                'wake',
+                ['ODOMETRY_PAUSED'],
+                ['ODOMETRY'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -3525,7 +5167,18 @@ def RFLEX_Init_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -3535,22 +5188,70 @@ def RFLEX_Init_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -3580,7 +5281,18 @@ def RFLEX_Init_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -3636,14 +5348,50 @@ def RFLEX_Init_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3695,7 +5443,18 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -3705,18 +5464,36 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3751,10 +5528,46 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -3808,8 +5621,29 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('refuse', ['IDLE'], ['IDLE']),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'refuse',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -3819,27 +5653,81 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -3885,7 +5773,18 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -4051,17 +5950,85 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['TRACK_PAUSED'], ['TRACK']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['TRACK'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['TRACK_PAUSED'],
+                ['TRACK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['TRACK'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['TRACK_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -4113,7 +6080,18 @@ def RFLEX_Stop_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -4123,18 +6101,36 @@ def RFLEX_Stop_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -4165,7 +6161,18 @@ def RFLEX_Stop_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -4221,14 +6228,50 @@ def RFLEX_Stop_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -4722,6 +6765,12 @@ def Aspect_Run_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -4873,6 +6922,12 @@ def Aspect_Stop_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -4928,13 +6983,25 @@ def Aspect_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '6', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'sleep',
                 ports=[PortRef('scheduler', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'Aspect.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '6', 'column': '11'},
+                    ),
+                ],
             ),
         ],
     )
@@ -4953,11 +7020,23 @@ def Aspect_map_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'period',
                 ports=[PortRef('timer', 'trigger'), PortRef('scheduler', 'period')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -5127,6 +7206,12 @@ def LaserRF_Start_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5207,6 +7292,12 @@ def LaserRF_Stop_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5266,16 +7357,34 @@ def LaserRF_acquisition_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'period',
                 ports=[PortRef('timer', 'trigger'), PortRef('scheduler', 'period')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -5297,13 +7406,25 @@ def LaserRF_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '6', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'sleep',
                 ports=[PortRef('scheduler', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'LaserRF.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '6', 'column': '11'},
+                    ),
+                ],
             ),
         ],
     )
@@ -5322,16 +7443,34 @@ def NDD_GoTo_Service() -> CompoundType:
                 'BroadcastX_2',
                 'LaserRF_Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'BroadcastX_2',
                 'RFLEX_Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -5650,6 +7789,12 @@ def NDD_Stop_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5706,7 +7851,13 @@ def NDD_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '13', 'column': '11'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -5730,16 +7881,34 @@ def NDD_motion_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_publish',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_publish')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_2_1',
@@ -5748,6 +7917,12 @@ def NDD_motion_Task() -> CompoundType:
                     PortRef('timer', 'trigger'),
                     PortRef('scheduler', 'period'),
                     PortRef('permanent', 'wake'),
+                ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                    ),
                 ],
             ),
         ],
@@ -5774,6 +7949,12 @@ def POM_Reset_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5833,6 +8014,12 @@ def POM_Run_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Reset_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -5904,7 +8091,13 @@ def POM_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'POM.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '7', 'column': '11'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -5928,11 +8121,23 @@ def POM_fusion_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_update',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_update')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_2_1',
@@ -5942,11 +8147,23 @@ def POM_fusion_Task() -> CompoundType:
                     PortRef('scheduler', 'period'),
                     PortRef('permanent', 'wake'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -6100,6 +8317,12 @@ def RFLEX_Stop_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -6159,6 +8382,12 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -6232,7 +8461,13 @@ def RFLEX_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '7', 'column': '11'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -6256,16 +8491,34 @@ def RFLEX_servo_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_odometry',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_odometry')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_2_1',
@@ -6274,6 +8527,12 @@ def RFLEX_servo_Task() -> CompoundType:
                     PortRef('timer', 'trigger'),
                     PortRef('scheduler', 'period'),
                     PortRef('permanent', 'wake'),
+                ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                    ),
                 ],
             ),
         ],
@@ -6509,6 +8768,12 @@ def LaserRF_Module() -> CompoundType:
                 'RendezvousX_PP',
                 'Init_exec_start',
                 ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
@@ -6517,11 +8782,23 @@ def LaserRF_Module() -> CompoundType:
                     PortRef('acquisition', 'scheduler_exec'),
                     PortRef('Init', 'activity_exec_configure'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'Start_exec_start',
                 ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Start', 'activity_exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PPP',
@@ -6531,16 +8808,34 @@ def LaserRF_Module() -> CompoundType:
                     PortRef('Start', 'activity_exec_acquire'),
                     PortRef('Scan', 'write'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'Start_exec_stop',
                 ports=[PortRef('acquisition', 'scheduler_exec'), PortRef('Start', 'activity_exec_stop')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('Start', 'Stop_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Triggered_1_1',
@@ -6673,16 +8968,34 @@ def NDD_Module() -> CompoundType:
                 'RendezvousX_PP',
                 'motion_exec_start',
                 ports=[PortRef('motion', 'exec_start'), PortRef('Speed', 'write')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'motion_exec_publish',
                 ports=[PortRef('motion', 'exec_publish'), PortRef('Speed', 'write')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'GoTo_exec_start',
                 ports=[PortRef('motion', 'scheduler_exec'), PortRef('GoTo', 'activity_exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PPP',
@@ -6691,6 +9004,12 @@ def NDD_Module() -> CompoundType:
                     PortRef('motion', 'scheduler_exec'),
                     PortRef('GoTo', 'activity_exec_plan'),
                     PortRef('Speed', 'write'),
+                ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                    ),
                 ],
             ),
             ConnectorInstance(
@@ -6701,6 +9020,12 @@ def NDD_Module() -> CompoundType:
                     PortRef('GoTo', 'activity_exec_arrived'),
                     PortRef('Speed', 'write'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PPP',
@@ -6710,11 +9035,23 @@ def NDD_Module() -> CompoundType:
                     PortRef('GoTo', 'activity_exec_stop'),
                     PortRef('Speed', 'write'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('GoTo', 'Stop_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'NDD_GoTo_Trigger_000001234_1',
@@ -6726,16 +9063,34 @@ def NDD_Module() -> CompoundType:
                     PortRef('SetSpeed', 'control_status'),
                     PortRef('SetDataSource', 'control_status'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'GoTo_refuse_goto_after_pom_run',
                 ports=[PortRef('requests', 'GoTo'), PortRef('GoTo', 'control_refuse')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'GoTo_refuse_goto_needs_laser_and_map',
                 ports=[PortRef('requests', 'GoTo'), PortRef('GoTo', 'control_refuse')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -6787,7 +9142,13 @@ def NDD_Module() -> CompoundType:
                 'Rendezvous_P',
                 'control_sleep',
                 ports=[PortRef('control', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'NDD.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '13', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -6928,6 +9289,12 @@ def POM_Module() -> CompoundType:
                 'RendezvousX_PP',
                 'Reset_trigger',
                 ports=[PortRef('requests', 'Reset'), PortRef('Reset', 'control_trigger')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -7040,7 +9407,13 @@ def POM_Module() -> CompoundType:
                 'Rendezvous_P',
                 'control_sleep',
                 ports=[PortRef('control', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'POM.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'POM.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '7', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -7125,36 +9498,78 @@ def RFLEX_Module() -> CompoundType:
                 'RendezvousX_PP',
                 'servo_exec_start',
                 ports=[PortRef('servo', 'exec_start'), PortRef('Odo', 'write')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'servo_exec_odometry',
                 ports=[PortRef('servo', 'exec_odometry'), PortRef('Odo', 'write')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'Init_exec_start',
                 ports=[PortRef('servo', 'scheduler_exec'), PortRef('Init', 'activity_exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'TrackSpeed_exec_start',
                 ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'TrackSpeed_exec_track',
                 ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_track')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'TrackSpeed_exec_stop',
                 ports=[PortRef('servo', 'scheduler_exec'), PortRef('TrackSpeed', 'activity_exec_stop')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('TrackSpeed', 'Stop_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -7186,7 +9601,13 @@ def RFLEX_Module() -> CompoundType:
                 'Rendezvous_P',
                 'control_sleep',
                 ports=[PortRef('control', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'RFLEX.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '7', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',

@@ -121,6 +121,12 @@ def counter_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('counter.GetTicks'),)),
                 action=[Do(Call('take_request', args=(Const('counter.GetTicks'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'SetRunning',
@@ -128,6 +134,18 @@ def counter_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('counter.SetRunning'),)),
                 action=[Do(Call('take_request', args=(Const('counter.SetRunning'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '2', 'column': '11'},
             ),
         ],
     )
@@ -370,8 +388,28 @@ def counter_clock__Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['COUNT_PAUSED'], ['COUNT']),
-            Transition('wake', ['IDLE_PAUSED'], ['IDLE']),
+            Transition(
+                'wake',
+                ['COUNT_PAUSED'],
+                ['COUNT'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '11', 'column': '8'},
+                    ),
+                ],
+            ),
+            Transition(
+                'wake',
+                ['IDLE_PAUSED'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '11', 'column': '8'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -422,7 +460,18 @@ def counter_GetTicks_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -432,18 +481,36 @@ def counter_GetTicks_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -478,10 +545,46 @@ def counter_GetTicks_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '21', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -532,7 +635,18 @@ def counter_SetRunning_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -542,18 +656,36 @@ def counter_SetRunning_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -588,10 +720,46 @@ def counter_SetRunning_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -796,26 +964,56 @@ def counter_clock__Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '25'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_count',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_count')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_idle',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_idle')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_stop',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '11', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Triggered_2_1',
@@ -855,13 +1053,25 @@ def counter_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'counter.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '2', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'sleep',
                 ports=[PortRef('scheduler', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'counter.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'counter.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '2', 'column': '11'},
+                    ),
+                ],
             ),
         ],
     )

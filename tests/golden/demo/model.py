@@ -129,6 +129,12 @@ def demo_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('demo.SetSpeed'),)),
                 action=[Do(Call('take_request', args=(Const('demo.SetSpeed'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'Stop',
@@ -136,6 +142,12 @@ def demo_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('demo.Stop'),)),
                 action=[Do(Call('take_request', args=(Const('demo.Stop'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'GoTo',
@@ -143,6 +155,12 @@ def demo_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('demo.GoTo'),)),
                 action=[Do(Call('take_request', args=(Const('demo.GoTo'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'MoveDistance',
@@ -150,6 +168,18 @@ def demo_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('demo.MoveDistance'),)),
                 action=[Do(Call('take_request', args=(Const('demo.MoveDistance'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '18', 'column': '11'},
             ),
         ],
     )
@@ -311,7 +341,17 @@ def demo_motion_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
+            Transition(
+                'wake',
+                ['MAIN_PAUSED'],
+                ['MAIN'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '42', 'column': '8'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -373,8 +413,25 @@ def demo_SetSpeed_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -384,22 +441,70 @@ def demo_SetSpeed_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('status', ['IDLE'], ['IDLE']),
-            Transition('status', ['CHECK'], ['CHECK']),
-            Transition('status', ['ACTIVE'], ['ACTIVE']),
+            Transition(
+                'status',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['CHECK'],
+                ['CHECK'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -433,10 +538,46 @@ def demo_SetSpeed_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '53', 'column': '13'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -487,7 +628,18 @@ def demo_Stop_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -497,18 +649,36 @@ def demo_Stop_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -539,7 +709,18 @@ def demo_Stop_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -595,14 +776,50 @@ def demo_Stop_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -665,8 +882,25 @@ def demo_GoTo_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -676,24 +910,48 @@ def demo_GoTo_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -739,7 +997,18 @@ def demo_GoTo_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -931,17 +1200,85 @@ def demo_GoTo_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['DRIVE_PAUSED'], ['DRIVE']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['DRIVE'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['DRIVE_PAUSED'],
+                ['DRIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['DRIVE'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['DRIVE_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -995,8 +1332,29 @@ def demo_MoveDistance_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('refuse', ['IDLE'], ['IDLE']),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'refuse',
+                ['IDLE'],
+                ['IDLE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1006,24 +1364,48 @@ def demo_MoveDistance_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1066,7 +1448,18 @@ def demo_MoveDistance_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -1177,27 +1570,85 @@ def demo_MoveDistance_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'wake',
+                ['MAIN_PAUSED'],
+                ['MAIN'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['MAIN'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['MAIN_PAUSED'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '77', 'column': '12'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1366,6 +1817,12 @@ def demo_GoTo_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -1453,6 +1910,12 @@ def demo_MoveDistance_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -1605,6 +2068,12 @@ def demo_Stop_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '59', 'column': '12'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -1661,7 +2130,13 @@ def demo_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'demo.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '18', 'column': '11'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1685,16 +2160,34 @@ def demo_motion_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '19'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_main',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_main')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_stop',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_stop')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '18'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_2_1',
@@ -1704,11 +2197,23 @@ def demo_motion_Task() -> CompoundType:
                     PortRef('scheduler', 'period'),
                     PortRef('permanent', 'wake'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '42', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '42', 'column': '8'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1911,7 +2416,13 @@ def demo_Module() -> CompoundType:
                 'Rendezvous_P',
                 'control_sleep',
                 ports=[PortRef('control', 'scheduler_sleep')],
-                annotations=[Annotation('label', arguments={'name': 'demo.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '18', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',

@@ -128,6 +128,12 @@ def rflex_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('rflex.Init'),)),
                 action=[Do(Call('take_request', args=(Const('rflex.Init'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'SetSpeed',
@@ -135,6 +141,12 @@ def rflex_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('rflex.SetSpeed'),)),
                 action=[Do(Call('take_request', args=(Const('rflex.SetSpeed'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'GetOdo',
@@ -142,6 +154,12 @@ def rflex_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('rflex.GetOdo'),)),
                 action=[Do(Call('take_request', args=(Const('rflex.GetOdo'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'TrackSpeed',
@@ -149,6 +167,12 @@ def rflex_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('rflex.TrackSpeed'),)),
                 action=[Do(Call('take_request', args=(Const('rflex.TrackSpeed'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'Stop',
@@ -156,6 +180,18 @@ def rflex_Requests() -> AtomType:
                 ['READY'],
                 guard=Call('request_pending', args=(Const('rflex.Stop'),)),
                 action=[Do(Call('take_request', args=(Const('rflex.Stop'),)))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
+        ],
+        annotations=[
+            Annotation(
+                'source',
+                arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '16', 'column': '8'},
             ),
         ],
     )
@@ -261,7 +297,17 @@ def rflex_MotorsTask_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
+            Transition(
+                'wake',
+                ['MAIN_PAUSED'],
+                ['MAIN'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '91', 'column': '11'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -386,8 +432,25 @@ def rflex_Init_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -397,18 +460,36 @@ def rflex_Init_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -439,7 +520,18 @@ def rflex_Init_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -495,14 +587,50 @@ def rflex_Init_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['START'],
                 ['INTERRUPTED'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -564,8 +692,25 @@ def rflex_SetSpeed_Control() -> AtomType:
                 ['IDLE'],
                 guard=Binary('!=', Var('verdict'), Const(0)),
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -575,18 +720,36 @@ def rflex_SetSpeed_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -621,10 +784,46 @@ def rflex_SetSpeed_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '37', 'column': '9'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -675,7 +874,18 @@ def rflex_GetOdo_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -685,18 +895,36 @@ def rflex_GetOdo_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -731,10 +959,46 @@ def rflex_GetOdo_Activity() -> AtomType:
                 ['ETHER'],
                 ['FINISHED'],
                 action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
             ),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '46', 'column': '9'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -786,7 +1050,18 @@ def rflex_TrackSpeed_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -796,24 +1071,48 @@ def rflex_TrackSpeed_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -863,7 +1162,18 @@ def rflex_TrackSpeed_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -1136,25 +1446,120 @@ def rflex_TrackSpeed_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
-            Transition('wake', ['END_PAUSED'], ['END']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['EXEC'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['END'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['EXEC_PAUSED'],
+                ['EXEC'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'wake',
+                ['END_PAUSED'],
+                ['END'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['EXEC'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['END'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['EXEC_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'abort',
                 ['END_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1207,7 +1612,18 @@ def rflex_Stop_Control() -> AtomType:
                     ),
                 ],
             ),
-            Transition('start', ['CHECK'], ['ACTIVE'], guard=Binary('==', Var('verdict'), Const(0))),
+            Transition(
+                'start',
+                ['CHECK'],
+                ['ACTIVE'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'finish',
                 ['ACTIVE'],
@@ -1217,24 +1633,48 @@ def rflex_Stop_Control() -> AtomType:
                     Assign(Var('done'), Const(True)),
                     Assign(Var('ok'), Const(True)),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'fail',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'interrupted',
                 ['ACTIVE'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             Transition(
                 'cancel',
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1280,7 +1720,18 @@ def rflex_Stop_Activity() -> AtomType:
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
         ),
         transitions=[
-            Transition('start', ['ETHER'], ['START'], action=[Assign(Var('aborted'), Const(False))]),
+            Transition(
+                'start',
+                ['ETHER'],
+                ['START'],
+                action=[Assign(Var('aborted'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'exec_start',
                 ['START'],
@@ -1472,17 +1923,85 @@ def rflex_Stop_Activity() -> AtomType:
                     ),
                 ],
             ),
-            Transition('wake', ['EXEC_PAUSED'], ['EXEC']),
-            Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition('abort', ['START'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
-            Transition('abort', ['EXEC'], ['STOP'], action=[Assign(Var('aborted'), Const(True))]),
+            Transition(
+                'wake',
+                ['EXEC_PAUSED'],
+                ['EXEC'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['FINISHED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['FAILED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['INTERRUPTED'],
+                ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['EXEC'],
+                ['STOP'],
+                action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
+            ),
             Transition(
                 'abort',
                 ['EXEC_PAUSED'],
                 ['STOP'],
                 action=[Assign(Var('aborted'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
         ],
         annotations=[
@@ -1713,6 +2232,12 @@ def rflex_Init_Service() -> CompoundType:
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
@@ -1786,11 +2311,23 @@ def rflex_MotorsTask_Task() -> CompoundType:
                 'RendezvousX_PP',
                 'exec_start',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '95', 'column': '21'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'exec_main',
                 ports=[PortRef('scheduler', 'exec'), PortRef('permanent', 'exec_main')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '96', 'column': '21'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'TriggeredX_2_1',
@@ -1800,11 +2337,23 @@ def rflex_MotorsTask_Task() -> CompoundType:
                     PortRef('scheduler', 'period'),
                     PortRef('permanent', 'wake'),
                 ],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '91', 'column': '11'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'sleep',
                 ports=[PortRef('timer', 'sleep'), PortRef('scheduler', 'sleep')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '91', 'column': '11'},
+                    ),
+                ],
             ),
         ],
         ports=[
@@ -1964,16 +2513,34 @@ def rflex_Stop_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Init_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'BroadcastX_2',
                 'TrackSpeed_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -2038,16 +2605,34 @@ def rflex_TrackSpeed_Service() -> CompoundType:
                 'BroadcastX_2',
                 'Init_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '64', 'column': '9'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -2110,13 +2695,25 @@ def rflex_control_Task() -> CompoundType:
                 'Rendezvous_P',
                 'period',
                 ports=[PortRef('scheduler', 'period')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.control:period'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.control:period'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '16', 'column': '8'},
+                    ),
+                ],
             ),
             ConnectorInstance(
                 'Rendezvous_P',
                 'sleep',
                 ports=[PortRef('scheduler', 'sleep')],
-                annotations=[Annotation('label', arguments={'name': 'rflex.control:sleep'})],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.control:sleep'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '16', 'column': '8'},
+                    ),
+                ],
             ),
         ],
     )
