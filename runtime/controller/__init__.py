@@ -4,7 +4,8 @@
 of its own (``start``/``stop``) and takes requests from any thread
 (``submit``, ``wait``); docs/runtime.md describes the semantics.
 """
-from runtime.controller.controller import Controller, StepInfo
+from runtime.controller.controller import Controller
+from runtime.controller.meaning import StepInfo
 from runtime.controller.requests import FINAL, Request, RequestError
 from runtime.controller.timing import MonotonicClock, VirtualClock
 

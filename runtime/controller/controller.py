@@ -12,69 +12,27 @@ from __future__ import annotations
 
 import ctypes
 import gc
-import random
 import sys
 import threading
-from collections import deque
-from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from runtime.codels import codel_specs
-from runtime.controller.binding import Binder, CodelInterrupted, Scope
+from runtime.controller.binding import Binder, CodelInterrupted
+from runtime.controller.choice import Choice
 from runtime.controller.codels import load_codels
-from runtime.controller.data import Data, PosterValue, clone, get_path, path_steps, set_path
+from runtime.controller.data import Data, PosterValue
+from runtime.controller.intake import checked_inputs, request_locals
+from runtime.controller.meaning import Meanings, StepInfo
 from runtime.controller.monitor import Monitor
-from runtime.controller.requests import FINAL, Request, RequestError, Service
-from runtime.controller.schema import completed, problems, zero
-from runtime.controller.timing import MonotonicClock, Timer, Timers
+from runtime.controller.reports import Listener, Reports
+from runtime.controller.requests import Request, RequestError, Service
+from runtime.controller.timing import MonotonicClock, Timers
 from runtime.engine import Engine, Interaction, ModelError
 from runtime.model import Package
-
-Listener = Callable[[dict[str, Any]], None]
 
 #: The interpreter's switch interval while the engine thread runs (s): a thread woken for a period gets the
 #: interpreter back within about this long, even while the services interface is busy (docs/runtime.md).
 SWITCH_INTERVAL = 0.001
-
-
-@dataclass
-class StepInfo:
-    """What an interaction means at run time, worked out once per interaction from its ports."""
-
-    # the service port it fires: trigger, refuse, reject, start, exec_<state>, finish, fail, interrupted
-    kind: str | None = None
-    service: Service | None = None
-    scope: Scope | None = None  # a task whose permanent activity runs a codel
-    victims: list[Service] = field(default_factory=list)  # services whose activity it aborts
-    cancelled: list[Service] = field(default_factory=list)  # services whose accepted request it cancels
-    reads: list[Service] = field(default_factory=list)  # services whose status it reads (rules)
-    rule: dict[str, str] | None = None  # the connector's @rule annotation
-    opens: Timer | None = None
-    closes: Timer | None = None
-    lazy_exec: str | None = None  # an untimed period: the exec port of its scheduler
-
-
-def _unstorable(root: dict[str, Any], member: str) -> str | None:
-    """Why a value cannot be stored at the ids path ``member`` (None when it can)."""
-    steps = path_steps(member)
-    if not steps:
-        return f"{member!r} is not a member path"
-    target: Any = root
-    where = ""
-    for i, step in enumerate(steps):
-        if isinstance(step, int):
-            if not isinstance(target, list):
-                return f"{where or 'the ids'} is not an array"
-            if step >= len(target):
-                return f"{where}[{step}] is out of range (length {len(target)})"
-        elif not isinstance(target, dict):
-            return f"{where or 'the ids'} is not a struct"
-        elif step not in target and i < len(steps) - 1:
-            return f"no member {step!r} in {where or 'the ids'}"
-        where += f"[{step}]" if isinstance(step, int) else (f".{step}" if where else step)
-        if i < len(steps) - 1:
-            target = target[step]
-    return None
 
 
 class Controller:
@@ -108,25 +66,14 @@ class Controller:
         self.services: dict[str, Service] = {
             label: Service(scope, comps[scope.component]["services"][scope.name])
             for label, scope in self.binder.services.items()}
-        self._roles = self._port_roles()
-        self._interrupters = self._who_interrupts()
-        self._info: dict[int, StepInfo] = {}
-        self._connectors = {fc.path: fc for fc in self.engine.flat.connectors}
-        self._waits = self._wait_rules()
+        self.meanings = Meanings(self.engine.flat, interface, self.binder, self.services, self.timers)
+        self.choice = Choice(self.engine, self.meanings, seed)
         self._lock = threading.RLock()
         self._wake = threading.Condition(self._lock)
-        self._done = threading.Condition(self._lock)
         self._epoch = 0
         self._stopping = False
-        self._rng = random.Random(seed) if seed is not None else None
-        self._last: dict[int, int] = {}  # interaction index -> step when it last fired (fair choice)
-        self._work: dict[tuple, bool] = {}  # (untimed period, state) -> a codel would run in it
-        self.keep = keep
+        self.reports = Reports(self.services, self._lock, keep, self._stamp)
         self.max_queued = max_queued
-        self.requests: dict[int, Request] = {}
-        self._ended: deque[int] = deque()
-        self._next_id = 1
-        self.listeners: list[Listener] = []
         self.state: tuple | None = None
         self.steps = 0
         self.status = "ready"  # ready, running, stopped, error
@@ -136,84 +83,27 @@ class Controller:
         self._firing: Request | None = None  # the request whose step is under way (to say what a stop cut short)
         self._finished = False
 
-    # -- the model's structure ---------------------------------------------------------------------------
-    def _port_roles(self) -> dict[str, tuple[Any, str, str]]:
-        """Atom port path -> (service or task scope, "control"/"activity"/"task", port name)."""
-        by_instance = {svc.spec["instance"]: svc for svc in self.services.values()}
-        tasks = {}
-        for c, spec in self.interface["components"].items():
-            for t, task in spec["tasks"].items():
-                tasks[task["instance"]] = self.binder.tasks[f"{c}.{t}"]
-        roles: dict[str, tuple[Any, str, str]] = {}
-        for fa in self.engine.flat.atoms:
-            base, _, part = fa.name.rpartition(".")
-            if part in ("control", "activity") and base in by_instance:
-                owner, role = by_instance[base], part
-            elif part == "permanent" and base in tasks:
-                owner, role = tasks[base], "task"
-            else:
-                continue
-            for port in fa.ports:
-                roles[f"{fa.name}.{port}"] = (owner, role, port)
-            if part == "control" and all(v in (d.name for d in fa.variables) for v in ("done", "ok", "running")):
-                owner.status_slots = (fa.slot("done"), fa.slot("ok"), fa.slot("running"))
-        return roles
+    @property
+    def requests(self) -> dict[int, Request]:
+        """Requests by id: every one not ended yet and the last ``keep`` ended ones."""
+        return self.reports.requests
 
-    def _leaves(self, fc) -> list[str]:
-        """Atom ports under a connector, through its sub-connectors."""
-        flat = self.engine.flat
-        return [flat.ports[p].path for p in flat.leaves(fc)]
+    @property
+    def keep(self) -> int:
+        return self.reports.keep
 
-    def _who_interrupts(self) -> dict[str, list[str]]:
-        """Service label -> the services whose start aborts it (the description's and the rules' interruptions)."""
-        leaves = self._leaves
-        found: dict[str, list[str]] = {}
-        for fc in self.engine.flat.connectors:
-            if not fc.top:
-                continue
-            roles = [self._roles.get(p) for p in leaves(fc)]
-            starts = [r[0].label for r in roles if r is not None and r[1] == "control" and r[2] == "start"]
-            for r in roles:
-                if r is not None and r[2] == "abort" and starts and r[0].label not in starts:
-                    found.setdefault(r[0].label, []).extend(x for x in starts if x not in found.get(r[0].label, []))
-        return found
+    @property
+    def listeners(self) -> list[Listener]:
+        return self.reports.listeners
 
     def info(self, inter: Interaction) -> StepInfo:
         """The run-time meaning of ``inter`` (cached by its index)."""
-        got = self._info.get(inter.index)
-        if got is not None:
-            return got
-        info = StepInfo()
-        t = self.timers
-        for p in inter.ports:
-            if p in t.by_trigger:
-                info.opens = t.by_trigger[p]
-            elif p in t.by_sleep:
-                info.closes = t.by_sleep[p]
-            elif p in t.lazy:
-                info.lazy_exec = t.lazy[p]
-            role = self._roles.get(p)
-            if role is None:
-                continue
-            owner, kind, port = role
-            if kind == "task":
-                info.scope = owner
-            elif port == "abort":
-                info.victims.append(owner)
-            elif port == "cancel":
-                info.cancelled.append(owner)
-            elif port == "status":
-                info.reads.append(owner)
-            else:
-                info.service, info.kind = owner, port
-        if info.service is not None and inter.connector in self._connectors:
-            for a in self._connectors[inter.connector].instance.annotations:
-                if a.name == "rule":
-                    info.rule = dict(a.arguments)
-        if info.service is not None:
-            info.victims = [v for v in info.victims if v is not info.service]
-        self._info[inter.index] = info
-        return info
+        return self.meanings.info(inter)
+
+    def _stamp(self) -> tuple[int, float]:
+        """The step and the time since the run started, for a report."""
+        now = self.clock.now()
+        return self.steps, round(now - self.started_at, 6) if self.started_at is not None else 0.0
 
     # -- requests (any thread) -------------------------------------------------------------------------
     def service(self, component: str, service: str) -> Service:
@@ -229,10 +119,8 @@ class Controller:
     def submit(self, component: str, service: str, inputs: dict[str, Any] | None = None) -> Request:
         """Queue a request; raises :class:`RequestError` (404 unknown, 422 bad parameters, 409 busy, 503 stopped)."""
         svc = self.service(component, service)
-        values = self._inputs(svc, {} if inputs is None else inputs)
-        local = {n: clone(spec["initial"]) for n, spec in svc.spec["locals"].items()}
-        for p in svc.spec["parameters"]:
-            local[p["name"]] = clone(values[p["name"]]) if p["name"] in values else zero(p["schema"], self.types)
+        values = checked_inputs(svc, {} if inputs is None else inputs, self.types, self.data.ids[svc.scope.component])
+        local = request_locals(svc, values, self.types)
         with self._lock:
             if self.status in ("stopped", "error") or self._stopping:
                 state = f"has stopped on an error ({self.error})" if self.error else \
@@ -241,7 +129,7 @@ class Controller:
             if not svc.reentrant:
                 busy = svc.busy_with()
                 if busy is not None:
-                    others = self._interrupters.get(svc.label, [])
+                    others = self.meanings.interrupters.get(svc.label, [])
                     hint = f" or interrupt it ({', '.join(others)})" if others else ""
                     raise RequestError(409, f"{svc.label} is busy with request {busy.id} ({busy.status}): an activity "
                                             f"takes one request at a time; wait for its report{hint}")
@@ -249,50 +137,15 @@ class Controller:
             if waiting >= self.max_queued:
                 raise RequestError(429, f"{waiting} requests are waiting to be taken: request to {svc.label} "
                                         "not accepted, send it again later")
-            req = Request(self._next_id, component, service, values, local)
-            self._next_id += 1
-            self.requests[req.id] = req
-            self._report(req, "queued")
+            req = self.reports.new(component, service, values, local)
             svc.queue.append(req)
             self._epoch += 1
             self._wake.notify()
         return req
 
-    def _inputs(self, svc: Service, inputs: Any) -> dict[str, Any]:
-        if not isinstance(inputs, dict):
-            raise RequestError(422, f"the parameters of {svc.label} must be a JSON object, not {type(inputs).__name__}")
-        params = [p for p in svc.spec["parameters"] if p["direction"] in ("in", "inout")]
-        names = [p["name"] for p in params]
-        errors = [f"unknown parameter {k!r} (parameters of {svc.label}: {', '.join(names) or 'none'})"
-                  for k in inputs if k not in names]
-        values: dict[str, Any] = {}
-        for p in params:
-            name = p["name"]
-            if name in inputs:
-                value = completed(inputs[name], p.get("default"))
-                errors += problems(value, p["schema"], self.types, name)
-                values[name] = value
-            elif "default" in p:
-                values[name] = clone(p["default"])
-            else:
-                errors.append(f"missing parameter {name!r}" + (f" ({p['doc']})" if p.get("doc") else ""))
-        ids = self.data.ids[svc.scope.component]
-        for p in params:
-            if p["source"] == "ids" and p["name"] in values:
-                problem = _unstorable(ids, p.get("member") or p["name"])
-                if problem:
-                    errors.append(f"parameter {p['name']!r} cannot be stored in ids member "
-                                  f"{p.get('member') or p['name']}: {problem}")
-        if errors:
-            raise RequestError(422, f"bad request to {svc.label}: " + "; ".join(errors))
-        return values
-
     def get(self, request_id: int) -> Request:
-        req = self.requests.get(request_id)
-        if req is None:
-            known = f"requests 1 to {self._next_id - 1}" if self._next_id > 1 else "no request yet"
-            raise RequestError(404, f"no request {request_id} ({known}; the last {self.keep} ended ones are kept)")
-        return req
+        """The request ``request_id``; :class:`RequestError` 404 when it is unknown or forgotten."""
+        return self.reports.get(request_id)
 
     def snapshot(self, request_id: int) -> dict[str, Any]:
         """The request as JSON data, consistent even while the engine thread reports on it."""
@@ -304,7 +157,7 @@ class Controller:
         """Block until the request has its final report (or ``timeout`` seconds); returns it either way."""
         req = self.get(request_id)
         with self._lock:
-            self._done.wait_for(lambda: req.final is not None, timeout)
+            self.reports.done.wait_for(lambda: req.final is not None, timeout)
         return req
 
     def poster(self, component: str, port: str) -> PosterValue:
@@ -320,11 +173,7 @@ class Controller:
 
     def subscribe(self, listener: Listener) -> Callable[[], None]:
         """Call ``listener(event)`` for every report, poster write, overrun and codel error; returns the unsubscribe."""
-        self.listeners = self.listeners + [listener]
-
-        def unsubscribe() -> None:
-            self.listeners = [x for x in self.listeners if x is not listener]
-        return unsubscribe
+        return self.reports.subscribe(listener)
 
     # -- the model's externs (engine thread) ----------------------------------------------------------
     def _pending(self, name: str) -> bool:
@@ -338,8 +187,8 @@ class Controller:
                 svc.current = svc.queue.popleft()
 
     def _poster_written(self, component: str, port: str, value: PosterValue) -> None:
-        if self.listeners:
-            self._emit({"event": "poster", **value.as_json()})
+        if self.reports.listeners:
+            self.reports.emit({"event": "poster", **value.as_json()})
 
     # -- running ------------------------------------------------------------------------------------------
     def start(self, limit: int | None = None, duration: float | None = None,
@@ -426,8 +275,8 @@ class Controller:
                 return
             self._finished = True
         self.status = "error" if self.error else "stopped"
-        self._end_pending()
-        self._emit({"event": "controller", "status": self.status, "steps": self.steps, "error": self.error})
+        self.reports.end_pending(f"the controller stopped ({self.error})" if self.error else "the controller stopped")
+        self.reports.emit({"event": "controller", "status": self.status, "steps": self.steps, "error": self.error})
 
     # -- a stop that the step under way does not let happen ----------------------------------------------
     def busy(self) -> str | None:
@@ -467,83 +316,14 @@ class Controller:
         self._finish()
 
     def _choose(self, now: float) -> tuple[Interaction | None, StepInfo | None, float | None]:
-        """A due period first (earliest deadline), else an untimed interaction, else a period with work to do."""
-        due: tuple[float, Interaction, StepInfo] | None = None
-        ready: list[tuple[Interaction, StepInfo]] = []
-        lazy: list[tuple[Interaction, StepInfo]] = []
-        wake_at = None
-        answerable: set[str] = set()  # services whose queued request can be accepted or refused now
-        for inter in self.engine.enabled(self.state):
-            info = self._info.get(inter.index) or self.info(inter)
-            if info.service is not None and info.kind in ("trigger", "refuse"):
-                answerable.add(info.service.label)
-            if info.opens is not None:
-                d = info.opens.deadline
-                if d <= now:
-                    if due is None or d < due[0]:
-                        due = (d, inter, info)
-                elif wake_at is None or d < wake_at:
-                    wake_at = d
-            elif info.lazy_exec is not None:
-                lazy.append((inter, info))
-            else:
-                ready.append((inter, info))
-        if self._waits:
-            self._report_held(answerable)
-        if due is not None:
-            return due[1], due[2], wake_at
-        if ready:
-            if self._rng is not None:
-                inter, info = ready[self._rng.randrange(len(ready))]
-            else:  # the least recently fired: a module stuck in a loop of codels cannot starve the others
-                last = self._last
-                inter, info = min(ready, key=lambda r: last.get(r[0].index, -1))
-            self._last[inter.index] = self.steps
-            return inter, info, wake_at
-        for inter, info in lazy:
-            if self._has_work(inter, info):
-                return inter, info, wake_at
-        return None, None, wake_at
-
-    def _wait_rules(self) -> dict[str, tuple[list[str], list[Service]]]:
-        """Service label -> (the rules that hold its requests, the services they read): ``@wait`` on its trigger."""
-        out = {}
-        for fc in self.engine.flat.connectors:
-            if not fc.label.endswith(":trigger"):
-                continue
-            for a in fc.instance.annotations:
-                if a.name == "wait" and a.arguments.get("rules"):
-                    label = fc.label.rsplit(":", 1)[0]
-                    ports = set(self._leaves(fc))
-                    reads = [svc for svc in self.services.values() if f"{svc.label}.control.status" in ports]
-                    out[label] = (a.arguments["rules"].split(","), reads)
-        return out
-
-    def _report_held(self, answerable: set[str]) -> None:
-        """A queued request that only a wait rule keeps from starting gets one intermediate ``held`` report."""
-        for label, (rules, reads) in self._waits.items():
-            svc = self.services.get(label)
-            if svc is None or not svc.queue or svc.current is not None or label in answerable:
-                continue
-            head = svc.queue[0]
-            if head.held:
-                continue
-            head.held = True
-            self._report(head, "held", reason="rule", rules=rules, status_of=self._status_of(reads),
-                         message=f"{label} held by rule {', '.join(rules)} until it allows the request")
-
-    def _has_work(self, inter: Interaction, info: StepInfo) -> bool:
-        """Would opening this untimed period let one of its task's codels run?  (Memoised by state.)"""
-        key = (inter.index, self.state)
-        got = self._work.get(key)
-        if got is None:
-            after = self.engine.fire(self.state, inter)
-            got = self._work[key] = any(info.lazy_exec in j.ports for j in self.engine.enabled(after))
-            if len(self._work) > 50_000:
-                self._work.clear()
-        return got
+        """What fires next and when the next period is due (:class:`~runtime.controller.choice.Choice`)."""
+        inter, info, wake_at, answerable = self.choice.choose(self.state, now, self.steps)
+        if self.meanings.waits:
+            self.reports.held(self.meanings.waits, answerable, self.state)
+        return inter, info, wake_at
 
     def _fire(self, inter: Interaction, info: StepInfo) -> None:
+        """Fire ``inter`` with its service's or task's codels bound, then report what it did."""
         b = self.binder
         b.failure = None
         svc = info.service
@@ -559,144 +339,20 @@ class Controller:
         self.state = self.engine.fire(self.state, inter)
         self._firing = None
         self.steps += 1
-        self._observe(info, req, now)
-        if self.monitor is not None:
-            for event in self.monitor.step(inter.ports, inter.label, now, self.clock.now()):
-                self._emit(event)
-
-    def _observe(self, info: StepInfo, req: Request | None, now: float) -> None:
-        """Timers (``now``: when the step began) and reports after a step."""
         if info.opens is not None:
             info.opens.open(now)
         if info.closes is not None:
             overrun = info.closes.close(now)
             if overrun is not None:
-                self._emit({"event": "overrun", **overrun})
-        failure = self.binder.failure
-        svc = info.service
-        if svc is None:
-            if info.scope is not None and failure is not None:
-                self._emit({"event": "codel_error", "task": info.scope.label, **failure})
-            return
-        if req is None:
-            return
-        kind = info.kind or ""
-        if failure is not None and (kind == "trigger" or kind.startswith("exec_")):
-            req.failure = failure
-        if kind == "refuse":
-            rule = (info.rule or {}).get("name", "a rule")
-            self._report(req, "rejected", reason="rule", rule=rule, status_of=self._status_of(info.reads),
-                         message=f"{req.label} refused by rule {rule}")
-        elif kind == "reject":
-            f = req.failure or {}
-            self._report(req, "rejected", reason="validate", **self._failure_fields(f),
-                         message=f.get("message", f"{req.label} rejected by its validate codel"))
-        elif kind == "start":
-            self._apply_inputs(svc, req)
-            self._report(req, "started")
-            for victim in info.victims:
-                if victim.current is not None:
-                    victim.current.interrupted_by = (svc.label, req.id)
-            for victim in info.cancelled:  # accepted, not started: it ends here
-                if victim.current is not None:
-                    self._report(victim.current, "interrupted", by=svc.label, by_request=req.id,
-                                 message=f"{victim.label} interrupted by {svc.label} before it started")
-        elif kind == "finish":
-            self._report(req, "ok", outputs=self._outputs(svc, req))
-        elif kind == "fail":
-            f = req.failure or {}
-            self._report(req, "failed", **self._failure_fields(f),
-                         message=f.get("message", f"{req.label} failed"))
-        elif kind == "interrupted":
-            by, by_request = req.interrupted_by or (None, None)
-            self._report(req, "interrupted", by=by, by_request=by_request,
-                         message=f"{req.label} interrupted by {by}" if by else f"{req.label} interrupted")
-
-    @staticmethod
-    def _failure_fields(f: dict[str, Any]) -> dict[str, Any]:
-        return {k: f[k] for k in ("exception", "detail", "codel", "error", "where") if k in f}
-
-    def _status_of(self, services: list[Service]) -> dict[str, dict[str, bool]]:
-        out = {}
-        for s in services:
-            if s.status_slots is not None:
-                out[s.label] = {k: bool(self.state[i]) for k, i in zip(("done", "ok", "running"), s.status_slots)}
-        return out
-
-    def _apply_inputs(self, svc: Service, req: Request) -> None:
-        """Parameters bound to ids members are written to the ids once the request is accepted (GenoM attributes).
-
-        :meth:`submit` refuses an input that has nowhere to go; should the ids
-        have changed shape since, the input is not lost without a word: the
-        request's failure and a ``codel_error`` event name it.
-        """
-        ids = self.data.ids[svc.scope.component]
-        for p in svc.spec["parameters"]:
-            if p["source"] == "ids" and p["direction"] in ("in", "inout") and p["name"] in req.locals:
-                member = p.get("member") or p["name"]
-                problem = _unstorable(ids, member)
-                if problem is None:
-                    set_path(ids, path_steps(member), clone(req.locals[p["name"]]))
-                    continue
-                message = f"{req.label} request {req.id}: parameter {p['name']!r} not stored in ids member {member}: " \
-                          f"{problem}"
-                req.failure = {"error": "bad input", "input": p["name"], "message": message}
-                self._emit({"event": "codel_error", "request": req.id, "task": None, **req.failure})
-
-    def _outputs(self, svc: Service, req: Request) -> dict[str, Any]:
-        ids = self.data.ids[svc.scope.component]
-        out = {}
-        for p in svc.spec["parameters"]:
-            if p["direction"] in ("out", "inout"):
-                if p["source"] == "ids":
-                    out[p["name"]] = clone(get_path(ids, path_steps(p.get("member") or p["name"])))
-                else:
-                    out[p["name"]] = clone(req.locals.get(p["name"]))
-        return out
-
-    # -- reports --------------------------------------------------------------------------------------------
-    def _report(self, req: Request, status: str, **fields: Any) -> None:
-        now = self.clock.now()
-        report = {"request": req.id, "component": req.component, "service": req.service, "status": status,
-                  "final": status in FINAL, "step": self.steps,
-                  "time": round(now - self.started_at, 6) if self.started_at is not None else 0.0, **fields}
-        with self._lock:
-            req.reports.append(report)
-            if status in FINAL:
-                req.status, req.final = status, report
-                svc = self.services[req.label]
-                if svc.current is req:
-                    svc.current = None
-                self._ended.append(req.id)
-                while len(self._ended) > self.keep:
-                    self.requests.pop(self._ended.popleft(), None)
-                self._done.notify_all()
-            elif status == "started":
-                req.status = "running"
-            self._emit({"event": "report", **report})
-
-    def _end_pending(self) -> None:
-        """Every request still queued or running gets its final report when the controller stops."""
-        why = f"the controller stopped ({self.error})" if self.error else "the controller stopped"
-        for svc in self.services.values():
-            with self._lock:
-                pending = ([svc.current] if svc.current is not None else []) + list(svc.queue)
-                svc.queue.clear()
-            for req in pending:
-                if req.final is None:
-                    cut = f"; {req.failure['message']}" if req.failure else ""  # e.g. its codel, interrupted
-                    self._report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}{cut}",
-                                 **self._failure_fields(req.failure or {}))
-
-    def _emit(self, event: dict[str, Any]) -> None:
-        for listener in self.listeners:
-            try:
-                listener(event)
-            except Exception as err:  # noqa: BLE001 - a listener's bug must not stop the controller
-                print(f"warning: event listener failed: {type(err).__name__}: {err}", file=sys.stderr)
+                self.reports.emit({"event": "overrun", **overrun})
+        self.reports.after_step(info, req, b.failure, self.state, self.data)
+        if self.monitor is not None:
+            for event in self.monitor.step(inter.ports, inter.label, now, self.clock.now()):
+                self.reports.emit(event)
 
     # -- what the server shows ------------------------------------------------------------------------------
     def summary(self) -> dict[str, Any]:
+        """The controller at a glance: status, steps, uptime, requests by status, where its codels come from."""
         counts: dict[str, int] = {}
         with self._lock:
             for req in self.requests.values():
