@@ -146,3 +146,31 @@ def test_every_element_of_generated_dala_built_from_the_description_names_its_li
     assert "component NDD" in _line(source_of(control.annotations))
     take = next(t for t in package.atom_type("NDD_Requests").transitions if t.port == "GoTo")
     assert "activity GoTo(" in _line(source_of(take.annotations))
+
+
+def test_a_refused_split_sub_connector_names_the_line_of_the_connector_it_was_split_from(monkeypatch):
+    import genom2bip.generate as generate
+    from genom2bip.parser import parse_paths
+    from runtime.model import PortRef
+
+    build = generate.FunctionalLevel.build
+
+    def broken(self):
+        package = build(self)
+        task = next(ct for ct in package.compound_types if ct.name == "NDD_motion_Task")
+        sub = next(c for c in task.connectors if c.name == "period")  # unlabelled: a part of NDD.motion:period
+        assert not any(a.name == "label" for a in sub.annotations)
+        sub.ports[0] = PortRef(sub.ports[0].component, "no_such_port")
+        return package
+
+    monkeypatch.setattr(generate.FunctionalLevel, "build", broken)
+    try:
+        generate.model_of(parse_paths([str(NDD)]), "NDD")
+    except generate.GenerateError as exc:
+        message = str(exc)
+    else:
+        raise AssertionError("the broken model was accepted")
+    found = re.search(r"^  (\S+NDD\.gen:\d+:\d+): component 'timer' \(atom type Timer\) has no port 'no_such_port'$",
+                      message, re.M)
+    assert found, message
+    assert "task motion" in _line(found.group(1))
