@@ -12,7 +12,7 @@ source ``k``.  Comments name atoms, ports and connectors.
 """
 from __future__ import annotations
 
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,7 +23,7 @@ from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom, FlatSystem
 from runtime.engine.plan import ConnectorInfo, Source
 from runtime.engine.stepgen import MAX_INTERNAL, StepEmitter, describe
-from runtime.model import AtomType, Transition
+from runtime.model import Transition
 
 __all__ = ["MAX_INTERNAL", "CodeGen", "ErrorSite", "Generated", "describe", "generate"]
 
@@ -118,6 +118,17 @@ class CodeGen(StepEmitter):
 
     def flag(self, name: str, value: str, comment: str) -> None:
         self.w(f"{name} = {value}  # {comment}")
+
+    def any_of(self, flags: list[str]) -> str:
+        return " or ".join(flags)
+
+    def port_cases(self, pid: int):
+        return nullcontext()
+
+    def fail_nondet_port(self, fa: FlatAtom, port: str, pid: int, ts: list[Transition], flags: list[str]) -> str:
+        site = self.error_site(ErrorSite("non-determinism: two transitions enabled on the same port",
+                                         fa.name, port, [describe(tr) for tr in ts]))
+        return f"_nondet({site}, ({''.join(f'{c}, ' for c in flags)}))"
 
     def port_function(self, fp, fa: FlatAtom):
         return self.function(f"_ap{fp.id}(L, vals, rec)",
@@ -299,30 +310,9 @@ class CodeGen(StepEmitter):
                 self.gen_source_enabled(src)
             w("return _prio(out, s)" if fl.priorities else "return out")
 
-    def gen_atom_enabled(self, fa: FlatAtom) -> None:
-        """``e<p>`` for each port of atom ``fa``: a transition on it is enabled (and no higher port's is)."""
-        w = self.w
-        t: AtomType = fa.type
-        sc = self.atom_scope(fa, in_enabled=True)
+    def atom_heading(self, fa: FlatAtom) -> None:
         places = ", ".join(f"{p}={1 << i}" for i, p in enumerate(fa.places))
-        w(f"# atom {fa.name} ({t.name}): {places}")
-        for name, pid in fa.ports.items():
-            ts = [tr for tr in t.transitions if tr.port == name]
-            if not ts:
-                w(f"e{pid} = False  # {name}: no transition")
-            elif len(ts) == 1:
-                w(f"e{pid} = {self.enabled_expr(fa, ts[0], f'm{fa.index}', sc)}  # {describe(ts[0])}")
-            else:
-                with w.names():
-                    flags = [w.fresh("t") for _ in ts]
-                    for c, tr in zip(flags, ts):
-                        self.flag(c, self.enabled_expr(fa, tr, f"m{fa.index}", sc), describe(tr))
-                site = self.error_site(ErrorSite("non-determinism: two transitions enabled on the same port",
-                                                 fa.name, name, [describe(tr) for tr in ts]))
-                w.if_then(f"{' + '.join(flags)} > 1", f"_nondet({site}, ({''.join(f'{c}, ' for c in flags)}))")
-                w(f"e{pid} = {' or '.join(flags)}")
-        if t.priorities:
-            self.gen_atom_priorities(fa, sc)
+        self.w(f"# atom {fa.name} ({fa.type.name}): {places}")
 
     def gen_atom_priorities(self, fa: FlatAtom, sc: Scope) -> None:
         """The atom's ports filtered by its priorities (``_aprio<i>``, memoised in support.AtomPriorities)."""

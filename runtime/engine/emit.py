@@ -82,11 +82,11 @@ class PythonWriter(Writer):
 
 
 class CWriter(Writer):
-    """C syntax: ``head {`` ... ``}``, statements end with ``;``."""
+    """C syntax: ``head {`` ... ``}`` (a bare ``{`` without a head), statements end with ``;``."""
 
     @contextmanager
     def block(self, head: str, comment: str | None = None) -> Iterator[None]:
-        self(f"{head} {{" + (f"  /* {comment} */" if comment else ""))
+        self((f"{head} {{" if head else "{") + (f"  /* {comment} */" if comment else ""))
         with self.indent():
             yield
         self("}")

@@ -43,8 +43,8 @@ def describe(t: Transition) -> str:
 class StepEmitter:
     """The language-independent half of a step generator, writing to ``self.w``."""
 
-    #: The language's condition that always holds (what ``condition(None)`` gives).
-    TRUE = "True"
+    #: The language's conditions that always and never hold (``condition(None)`` gives the first).
+    TRUE, FALSE = "True", "False"
     #: Condition that the caller passed port values to an atom port's firing function.
     HAVE_VALUES = "vals is not None"
 
@@ -99,6 +99,24 @@ class StepEmitter:
 
     def flag(self, name: str, value: str, comment: str) -> None:
         """A local truth value."""
+        raise NotImplementedError
+
+    def atom_heading(self, fa: FlatAtom) -> None:
+        """What the language writes before an atom's part of ``enabled`` (a comment, or nothing)."""
+
+    def gen_atom_priorities(self, fa: FlatAtom, sc) -> None:
+        """The atom's enabled ports filtered by its priorities."""
+        raise NotImplementedError
+
+    def any_of(self, flags: list[str]) -> str:
+        raise NotImplementedError
+
+    def port_cases(self, pid: int) -> AbstractContextManager:
+        """Where the transitions of port ``pid`` are tested one by one before ``e<pid>`` is set."""
+        raise NotImplementedError
+
+    def fail_nondet_port(self, fa: FlatAtom, port: str, pid: int, ts: list[Transition], flags: list[str]) -> str:
+        """The statement that stops the step when two transitions on one port are enabled at once."""
         raise NotImplementedError
 
     def port_function(self, fp, fa: FlatAtom) -> AbstractContextManager:
@@ -252,3 +270,28 @@ class StepEmitter:
             self.store(fa)
             if any(t.internal for t in fa.type.transitions):
                 w.stmt(self.call_internal(fa))
+
+    def gen_atom_enabled(self, fa: FlatAtom) -> None:
+        """``e<p>`` for each port of atom ``fa``: a transition on it is enabled (and no higher port's is)."""
+        sc = self.atom_scope(fa, in_enabled=True)
+        self.atom_heading(fa)
+        for name, pid in fa.ports.items():
+            self.gen_port_enabled(fa, name, pid, sc)
+        if fa.type.priorities:
+            self.gen_atom_priorities(fa, sc)
+
+    def gen_port_enabled(self, fa: FlatAtom, port: str, pid: int, sc) -> None:
+        """``e<pid>``: a transition on the port is enabled in ``enabled``'s state (two at once stop the step)."""
+        w = self.w
+        ts = [tr for tr in fa.type.transitions if tr.port == port]
+        if not ts:
+            self.flag(f"e{pid}", self.FALSE, f"{port}: no transition")
+        elif len(ts) == 1:
+            self.flag(f"e{pid}", self.enabled_expr(fa, ts[0], f"m{fa.index}", sc), describe(ts[0]))
+        else:
+            with self.port_cases(pid), w.names():
+                flags = [w.fresh("t") for _ in ts]
+                for c, tr in zip(flags, ts):
+                    self.flag(c, self.enabled_expr(fa, tr, f"m{fa.index}", sc), describe(tr))
+                w.if_then(f"{' + '.join(flags)} > 1", self.fail_nondet_port(fa, port, pid, ts, flags))
+                w.stmt(f"e{pid} = {self.any_of(flags)}")
