@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from runtime.engine import defines
-from runtime.engine.cexpr import Name, Scope, condition, default_value, literal, statements
+from runtime.engine.cexpr import Name, Scope, condition, literal, statements
 from runtime.engine.emit import PythonWriter
 from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom, FlatSystem
@@ -149,6 +149,27 @@ class CodeGen(StepEmitter):
     def note(self, t: Transition) -> str:
         return describe(t)
 
+    def value(self, value: Any, sc: Scope) -> str:
+        return literal(value)
+
+    @contextmanager
+    def initial_function(self):
+        with self.function("initial()", "The initial state: initial transitions, then eager internal transitions, "
+                           "atom by atom."):
+            self.w(f"L = [None] * {self.flat.state_size}")
+            yield
+            self.w("return tuple(L)")
+
+    def initial_atom(self, fa: FlatAtom):
+        self.w(f"# atom {fa.name} ({fa.type.name})")
+        return nullcontext()
+
+    def initial_marking(self, mask: int, targets: list[str]) -> None:
+        self.w(f"m = {mask}  # {', '.join(targets)}")
+
+    def conjunction(self, terms: list[str]) -> str:
+        return " and ".join(terms)
+
     def error_site(self, site: ErrorSite) -> int:
         self.errors.append(site)
         return len(self.errors) - 1
@@ -181,34 +202,6 @@ class CodeGen(StepEmitter):
         return Generated(w.source(), self.errors, self.atom_priorities, self.called, self.type_index)
 
     # -- atoms -------------------------------------------------------------------------------
-    def gen_initial(self) -> None:
-        w = self.w
-        with self.function("initial()", "The initial state: initial transitions, then eager internal transitions, "
-                           "atom by atom."):
-            w(f"L = [None] * {self.flat.state_size}")
-            for fa in self.flat.atoms:
-                t = fa.type
-                sc = self.atom_scope(fa, in_enabled=False)
-                w(f"# atom {fa.name} ({t.name})")
-                for d in fa.variables:
-                    w(f"v_{d.name} = {literal(default_value(d.type))}")
-                for d in fa.variables:
-                    if d.init is not None:
-                        w.extend(self.statements([_assign(d.name, d.init)], sc))
-                targets = t.initial.targets
-                for p in targets:
-                    if p not in fa.places:
-                        raise ModelError(f"initial transition names unknown place '{p}'", atom=fa.name)
-                if len(set(targets)) != len(targets):
-                    raise ModelError("1-safety violated: the initial transition marks a place twice", atom=fa.name,
-                                     places=tuple(targets))
-                w(f"m = {fa.place_mask(targets)}  # {', '.join(targets)}")
-                w.extend(self.statements(t.initial.action, sc))
-                self.store(fa)
-                if any(tr.internal for tr in t.transitions):
-                    w(self.call_internal(fa))
-            w("return tuple(L)")
-
     # -- connectors --------------------------------------------------------------------------
     def gen_clauses(self, name: str, info: ConnectorInfo) -> None:
         """Guard, up and down of each ``on`` clause of a connector type, on port values ``pv`` and locals ``lv``."""
@@ -368,14 +361,10 @@ class CodeGen(StepEmitter):
             return
         info = self.infos[fc.type.name]
         k = self.type_index[fc.type.name]
-        enabled = [f"e{p}" for p in src.leaves]
         if src.kind == "rendezvous":
-            spec = info.clauses.get(info.all_params)
-            cond = " and ".join(enabled)
-            if spec is not None and spec.guard is not None:
-                cond += f" and {condition(spec.guard, self.inline_scope(src, info))}"
-            w.if_then(cond, f"out.append(_I{src.index}_{src.full})")
+            w.if_then(self.rendezvous_enabled(src, info), f"out.append(_I{src.index}_{src.full})")
             return
+        enabled = [f"e{p}" for p in src.leaves]
         w(f"em = {' | '.join(f'{e} << {i}' if i else e for i, e in enumerate(enabled))}")
         if any(spec.guard is not None for spec in info.clauses.values()):
             vals = ", ".join(self.inline_values(fl.ports[p]) for p in src.leaves)
@@ -392,11 +381,6 @@ class CodeGen(StepEmitter):
     def inline_values(self, fp) -> str:
         fa = self.flat.atoms[fp.atom]
         return "[" + ", ".join(f"a{fa.index}_{v}" for v in fp.decl.data) + "]"
-
-
-def _assign(name: str, value):
-    from runtime.model.expressions import Assign, Var
-    return Assign(Var(name), value)
 
 
 def generate(flat: FlatSystem, infos: dict[str, ConnectorInfo], sources: list[Source]) -> Generated:

@@ -14,10 +14,12 @@ from __future__ import annotations
 from contextlib import AbstractContextManager
 from typing import Any, Callable
 
+from runtime.engine.cexpr import default_value
 from runtime.engine.emit import Writer
 from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom, FlatSystem
 from runtime.model import Transition, source_of
+from runtime.model.expressions import Assign, Var
 
 #: Internal transitions fired in a row by one atom before the engine calls it a livelock.
 MAX_INTERNAL = 10_000
@@ -136,6 +138,31 @@ class StepEmitter:
         """The comment on the case of a transition, if the language writes one."""
         return None
 
+    def value(self, value: Any, sc) -> str:
+        """A constant as the step stores it."""
+        raise NotImplementedError
+
+    def initial_function(self) -> AbstractContextManager:
+        raise NotImplementedError
+
+    def initial_atom(self, fa: FlatAtom) -> AbstractContextManager:
+        """Where one atom's part of the initial state is written."""
+        raise NotImplementedError
+
+    def initial_marking(self, mask: int, targets: list[str]) -> None:
+        raise NotImplementedError
+
+    def in_data(self, sc, d):
+        """The scope ``sc`` as seen from the initialiser of data ``d``."""
+        return sc
+
+    def in_initial(self, sc):
+        """The scope ``sc`` as seen from the initial transition's action."""
+        return sc
+
+    def conjunction(self, terms: list[str]) -> str:
+        raise NotImplementedError
+
     def connector_where(self, info, mask: int) -> str:
         """How a connector's clause is named in a refusal or an error."""
         return f"connector type {info.type.name}"
@@ -188,6 +215,14 @@ class StepEmitter:
             sc.ports[(comp, name)] = self.name(f"{state}[{slot}]", ty, sc.where)
         return sc
 
+    def rendezvous_enabled(self, src, info) -> str:
+        """A rendezvous source is enabled: its ports are, and the guard of its one clause holds."""
+        cond = self.conjunction([f"e{p}" for p in src.leaves])
+        spec = info.clauses.get(info.all_params)
+        if spec is not None and spec.guard is not None:
+            cond = self.conjunction([cond, self.condition(spec.guard, self.inline_scope(src, info))])
+        return cond
+
     # -- atoms ---------------------------------------------------------------------------------
     def load(self, fa: FlatAtom) -> None:
         """The atom's marking into ``m`` and its variables into ``v_<x>``."""
@@ -223,6 +258,32 @@ class StepEmitter:
             self.w.if_then(f"m & {tgt}", unsafe)
             self.w.stmt(f"m |= {tgt}")
         self.w.extend(self.statements(t.action, self.in_transition(sc, t)))
+
+    def gen_initial(self) -> None:
+        """The initial state: atom by atom, defaults, data initialisers, the initial transition, internal runs."""
+        w = self.w
+        with self.initial_function():
+            for fa in self.flat.atoms:
+                t = fa.type
+                sc = self.atom_scope(fa, in_enabled=False)
+                with self.initial_atom(fa):
+                    for d in fa.variables:
+                        w.stmt(self.declare(f"v_{d.name}", self.value(default_value(d.type), sc)))
+                    for d in fa.variables:
+                        if d.init is not None:
+                            w.extend(self.statements([Assign(Var(d.name), d.init)], self.in_data(sc, d)))
+                    targets = t.initial.targets
+                    for p in targets:
+                        if p not in fa.places:
+                            raise ModelError(f"initial transition names unknown place '{p}'", atom=fa.name)
+                    if len(set(targets)) != len(targets):
+                        raise ModelError("1-safety violated: the initial transition marks a place twice",
+                                         atom=fa.name, places=tuple(targets))
+                    self.initial_marking(fa.place_mask(targets), targets)
+                    w.extend(self.statements(t.initial.action, self.in_initial(sc)))
+                    self.store(fa)
+                    if any(tr.internal for tr in t.transitions):
+                        w.stmt(self.call_internal(fa))
 
     def gen_internal(self, fa: FlatAtom) -> None:
         """The atom's eager internal transitions, fired until none is enabled (one enabled at a time)."""

@@ -18,7 +18,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from runtime.engine import defines
-from runtime.engine.cexpr import default_value
 from runtime.engine.emit import CWriter
 from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom
@@ -163,6 +162,27 @@ class CGen(StepEmitter):
     def call_internal(self, fa: FlatAtom) -> str:
         return f"in{fa.index}(L)"
 
+    def value(self, value, sc: CScope) -> str:
+        return stored(value, sc.where, self.externs.strings)
+
+    def initial_function(self):
+        return self.w.block("static void initial(V *L)")
+
+    def initial_atom(self, fa: FlatAtom):
+        return self.w.block("")
+
+    def initial_marking(self, mask: int, targets: list[str]) -> None:
+        self.w.stmt(self.declare("m", str(mask)))
+
+    def in_data(self, sc: CScope, d) -> CScope:
+        return at(sc, f"data {d.name}" + (f" ({d.span})" if d.span.line > 0 else ""))
+
+    def in_initial(self, sc: CScope) -> CScope:
+        return at(sc, "initial transition")
+
+    def conjunction(self, terms: list[str]) -> str:
+        return " && ".join(terms)
+
     def connector_where(self, info, mask: int) -> str:
         where = f"connector type {info.type.name}"
         spec = info.clauses.get(mask)
@@ -256,32 +276,6 @@ class CGen(StepEmitter):
         self.w('#include "odometer.h"')
 
     # -- atoms ----------------------------------------------------------------------------------
-    def gen_initial(self) -> None:
-        """``initial(L)``: each atom's defaults, data initialisers, initial transition and internal run."""
-        from runtime.model.expressions import Assign, Var
-
-        w = self.w
-        with w.block("static void initial(V *L)"):
-            for fa in self.flat.atoms:
-                t = fa.type
-                sc = self.atom_scope(fa, in_enabled=False)
-                with w.block(""):
-                    for d in fa.variables:
-                        w.stmt(self.declare(f"v_{d.name}", stored(default_value(d.type), sc.where,
-                                                                   self.externs.strings)))
-                    for d in fa.variables:
-                        if d.init is not None:
-                            where = at(sc, f"data {d.name}" + (f" ({d.span})" if d.span.line > 0 else ""))
-                            w.extend(self.statements([Assign(Var(d.name), d.init)], where))
-                    targets = t.initial.targets
-                    if any(p not in fa.places for p in targets) or len(set(targets)) != len(targets):
-                        raise Unsupported(f"atom {fa.name}: its initial transition is refused by the engine")
-                    w.stmt(self.declare("m", str(fa.place_mask(targets))))
-                    w.extend(self.statements(t.initial.action, at(sc, "initial transition")))
-                    self.store(fa)
-                    if any(tr.internal for tr in t.transitions):
-                        w.stmt(self.call_internal(fa))
-
     # -- connectors -----------------------------------------------------------------------------
     def gen_clauses(self, name: str, info) -> None:
         """``k<T>_<mask>_g/u/d``: guard, up and down of each ``on`` clause of connector type T."""
@@ -649,14 +643,10 @@ class CGen(StepEmitter):
             self.trees[src.index].gen_enabled()
             return
         info = self.infos[src.connector.type.name]
-        enabled = [f"e{p}" for p in src.leaves]
         if src.kind == "rendezvous":
-            cond = " && ".join(enabled)
-            spec = info.clauses.get(info.all_params)
-            if spec is not None and spec.guard is not None:
-                cond += f" && {condition(spec.guard, self.inline_scope(src, info))}"
-            w(f"if ({cond}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
+            w(f"if ({self.rendezvous_enabled(src, info)}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
             return
+        enabled = [f"e{p}" for p in src.leaves]
         nparams = len(src.leaves)
         with w.block(""):
             w(f"uint32_t em = {' | '.join(f'((uint32_t){e} << {i})' for i, e in enumerate(enabled))};")
