@@ -16,6 +16,7 @@ from runtime.bip2 import parse_text
 from runtime.engine import Engine, ModelError
 from runtime.engine.source import DUMP_ENV
 from runtime.explore import StateSpace, explore
+from tests import test_explore
 from tests.nativekit import compiled, needs_cc
 
 DIV = """package Div
@@ -69,25 +70,7 @@ def test_exploration_reports_the_model_error_with_the_generated_line(monkeypatch
     assert "integer division by zero" in result.error.message and "x = _idiv" in result.error.message
 
 
-COUNTER = """package C
-  port type Port()
-  atom type Count()
-    @domain(range="0..30")
-    data int n
-    export port Port inc()
-    place RUN
-    initial to RUN do { n = 0; }
-    on inc from RUN to RUN provided (n < 40) do { n = n + 3; }
-  end
-  connector type One(Port p)
-    define p
-  end
-  compound type Main()
-    component Count c()
-    connector One inc(c.inc)
-  end
-end
-"""
+COUNTER = test_explore.COUNTER.replace("    data int n", '    @domain(range="0..30")\n    data int n')
 
 
 def _successors_failure(text: str) -> str:
