@@ -8,7 +8,10 @@ the helpers of :mod:`runtime.engine.support`.  Names in the generated text:
 ``m<i>`` marking and ``a<i>_<x>`` variables of atom ``i`` in ``enabled``,
 ``e<p>`` enabledness of atom port ``p``, ``_ap<p>`` firing of atom port ``p``,
 ``_in<i>`` eager internal transitions of atom ``i``, ``_f<k>`` firing of
-source ``k``.  Comments name atoms, ports and connectors.
+source ``k``.  Comments name atoms, ports and connectors.  What the C step
+writes the same way (scopes, atoms' slots, moves, internal transitions, port
+firing and enabledness, the initial state) is :mod:`runtime.engine.stepgen`'s;
+this module is its Python half.
 """
 from __future__ import annotations
 

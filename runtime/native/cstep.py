@@ -1,6 +1,7 @@
 """C source for one model's step and search, generated from the same flat system as the Python step.
 
-The generated functions mirror :mod:`runtime.engine.codegen` one to one:
+The generated functions mirror :mod:`runtime.engine.codegen` one to one, and
+what both write the same way is :mod:`runtime.engine.stepgen`'s (this is its C half):
 ``in<i>`` eager internal transitions of atom ``i``, ``ap<p>`` firing of
 atom port ``p``, ``f<k>`` firing of source ``k``, ``enabled`` (atom ports,
 atom priorities, connectors, lone ports, then compound priorities) and the
