@@ -94,13 +94,8 @@ class CodeGen(StepEmitter):
                                          fa.name, t.port, [describe(t)], list(fa.places)))
         return f"_unsafe({site}, m & {tgt})"
 
-    @contextmanager
     def function(self, head: str, doc: str):
-        """``def head:`` with its docstring, a blank line after."""
-        with self.w.block(f"def {head}"):
-            self.w(f'"""{doc}"""')
-            yield
-        self.w()
+        return self.w.function(head, doc)
 
     def internal_function(self, fa: FlatAtom):
         return self.function(f"_in{fa.index}(L)",
