@@ -175,7 +175,9 @@ def test_the_library_is_cached_by_model(tmp_path, monkeypatch):
     compiled(verifykit.space("Dining", "Table2()"))
     compiled(verifykit.space("Dining", "Table2()"))
     compiled(verifykit.space("Dining", "Table3()"))
-    assert len(os.listdir(tmp_path)) == 2
+    libraries = sorted(p for p in os.listdir(tmp_path) if p.endswith(".so"))
+    assert len(libraries) == 2
+    assert sorted(os.listdir(tmp_path)) == sorted(libraries + [p[:-3] + ".c" for p in libraries])
 
 
 # -- random models ---------------------------------------------------------------------------------

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable
 
 from runtime.engine import Engine, Interaction
+from runtime.engine.emit import PythonWriter
 from runtime.engine.errors import ExternError, ModelError
 from runtime.engine.source import compile_generated
 from runtime.explore.choices import (
@@ -117,38 +118,33 @@ class StateSpace:
         is one call of the engine's compiled ``enabled`` and of its firing
         function, and one ``pack``; codel calls divert to the odometer.
         """
-        w = self.width
-        env = bool(self.services)
-        lines = ["def expand(p):", "    s = _unpack(p)"]
-        if env:
-            lines += [f"    base = s[:{w}]", f"    counts = s[{w}:]", "    _env.current = counts"]
-        else:
-            lines += ["    base = s"]
-        lines += [
-            "    _oracle.in_guard = True",
-            "    try:",
-            "        en = _enabled(base)",
-            "    finally:",
-            "        _oracle.in_guard = False",
-            "    if _oracle.guard_call is not None:",
-            "        _guard()",
-            "    out = []",
-            "    for I in en:",
-            "        _calls.clear()",
-            "        _script.clear()",
-        ]
-        if env:
-            lines.append("        _env.taken.clear()")
-        lines += [
-            "        t = _FIRE[I.source](base, I.mask, None)",
-            "        if _calls:",
-            "            _branches(base, I, out)",
-            "        else:",
-            "            out.append((I, _pack(t + _env.after(counts))))" if env else
-            "            out.append((I, _pack(t)))",
-            "    return out",
-        ]
-        self.expand_source = "\n".join(lines) + "\n"
+        width, env = self.width, bool(self.services)
+        w = PythonWriter()
+        with w.block("def expand(p)"):
+            w("s = _unpack(p)")
+            if env:
+                w(f"base = s[:{width}]")
+                w(f"counts = s[{width}:]")
+                w("_env.current = counts")
+            else:
+                w("base = s")
+            w("_oracle.in_guard = True")
+            with w.block("try"):
+                w("en = _enabled(base)")
+            with w.block("finally"):
+                w("_oracle.in_guard = False")
+            w.if_then("_oracle.guard_call is not None", "_guard()")
+            w("out = []")
+            with w.block("for I in en"):
+                w("_calls.clear()")
+                w("_script.clear()")
+                if env:
+                    w("_env.taken.clear()")
+                w("t = _FIRE[I.source](base, I.mask, None)")
+                w.if_then("_calls", "_branches(base, I, out)")
+                w.else_then("out.append((I, _pack(t + _env.after(counts))))" if env else "out.append((I, _pack(t)))")
+            w("return out")
+        self.expand_source = w.source()
         ns = {"_unpack": self.codec.unpack, "_pack": self.codec.pack, "_env": self.environment,
               "_oracle": self.oracle, "_enabled": self.engine.step.enabled,
               "_FIRE": self.engine.step.fire, "_calls": self.oracle.calls, "_script": self.oracle.script,

@@ -2,7 +2,8 @@
 
 The cache is ``$XDG_CACHE_HOME/genom2bip/native`` (``~/.cache/...`` by
 default; ``GENOM2BIP_CACHE`` overrides it): the file name is the hash of
-the C text and the compiler flags, so a model compiles once per change.
+the C text and the compiler flags, so a model compiles once per change; the
+C text is kept beside its library.
 :func:`compiler` finds ``$CC`` or ``gcc``/``cc`` on PATH; without one the
 caller explores in Python.
 """
@@ -16,10 +17,14 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from runtime.engine.source import dumped
+
 HERE = Path(__file__).parent
 FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w")
 #: Added for the multi-threaded search (search.c's PARALLEL: per-thread scratch, atomic shared counters).
 PARALLEL_FLAGS = ("-DPARALLEL", "-pthread")
+#: Added when the C text is dumped (GENOM2BIP_DUMP): line tables for gdb and perf; the code is the same.
+DEBUG_FLAGS = ("-g",)
 
 
 class BuildError(Exception):
@@ -46,27 +51,44 @@ def _headers() -> str:
     return "".join((HERE / n).read_text() for n in ("prelude.h", "odometer.h", "search.c"))
 
 
-def build(source: str, cc: str, parallel: bool = False) -> Path:
-    """The shared library for ``source``, compiled now or found in the cache; ``parallel``: the threaded build."""
+def build(source: str, cc: str, parallel: bool = False, what: str = "compiled step") -> Path:
+    """The shared library for ``source``, compiled now or found in the cache; ``parallel``: the threaded build.
+
+    The C text is kept next to the library (``step-<key>.c``) and compiled from there, so a profiler or a
+    debugger finds the lines it was built from.  With ``GENOM2BIP_DUMP=DIR`` it is written to DIR instead
+    (named after ``what``) and compiled from that file with ``-g``: gdb and perf then show its lines.
+    """
     flags = FLAGS + PARALLEL_FLAGS if parallel else FLAGS
-    key = hashlib.sha256("\0".join((source, _headers(), " ".join(flags), cc)).encode()).hexdigest()[:24]
+    dump = dumped(source, what, ".c")
+    if dump is not None:
+        flags += DEBUG_FLAGS
+    parts = (source, _headers(), " ".join(flags), cc) + ((str(dump),) if dump is not None else ())
+    key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
     out_dir = cache_dir()
-    lib = out_dir / f"step-{key}.so"
-    if lib.exists():
+    lib = out_dir / f"step-{key[:24]}.so"
+    c_file = dump or lib.with_suffix(".c")
+    if lib.exists() and c_file.exists():
         return lib
     out_dir.mkdir(parents=True, exist_ok=True)
+    if dump is None:
+        _write(c_file, source.encode("utf-8"))
+    if lib.exists():
+        return lib
     with tempfile.TemporaryDirectory(prefix="genom2bip-c-") as tmp:
-        c_file = Path(tmp) / "model.c"
-        c_file.write_text(source, encoding="utf-8")
         so = Path(tmp) / "model.so"
         proc = subprocess.run([cc, *flags, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
                               capture_output=True, text=True)
         if proc.returncode != 0:
-            raise BuildError(f"{cc} failed on the generated step:\n{proc.stderr[-4000:]}")
-        partial = out_dir / f".{lib.name}.{os.getpid()}"
-        shutil.copyfile(so, partial)
-        os.replace(partial, lib)  # atomic: concurrent builds of the same model do not see half a file
+            raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{proc.stderr[-4000:]}")
+        _write(lib, so.read_bytes())
     return lib
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Write atomically: concurrent builds of the same model never see half a file."""
+    partial = path.with_name(f".{path.name}.{os.getpid()}")
+    partial.write_bytes(data)
+    os.replace(partial, path)
 
 
 class Result(ctypes.Structure):

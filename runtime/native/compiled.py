@@ -102,7 +102,8 @@ class CompiledSpace:
         if parallel is not None:
             self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors)
-        self.lib = load(build(model.source, self.cc, self.parallel))
+        flat = self.engine.flat
+        self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}"))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
 

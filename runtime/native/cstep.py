@@ -1,6 +1,7 @@
 """C source for one model's step and search, generated from the same flat system as the Python step.
 
-The generated functions mirror :mod:`runtime.engine.codegen` one to one:
+The generated functions mirror :mod:`runtime.engine.codegen` one to one, and
+what both write the same way is :mod:`runtime.engine.stepgen`'s (this is its C half):
 ``in<i>`` eager internal transitions of atom ``i``, ``ap<p>`` firing of
 atom port ``p``, ``f<k>`` firing of source ``k``, ``enabled`` (atom ports,
 atom priorities, connectors, lone ports, then compound priorities) and the
@@ -13,13 +14,15 @@ after the model.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from runtime.engine import defines
-from runtime.engine.codegen import MAX_INTERNAL, describe
+from runtime.engine.emit import CWriter
 from runtime.engine.errors import ModelError
 from runtime.engine.flatten import FlatAtom
+from runtime.engine.stepgen import MAX_INTERNAL, StepEmitter, describe
 from runtime.explore.choices import Choice
 from runtime.explore.layout import Slot
 from runtime.native.cexpr import (
@@ -38,6 +41,7 @@ from runtime.native.ctree import TreeGen, node_pm, nodes
 from runtime.native.ctree import width as offer_width
 from runtime.native.observers import gen_observers
 from runtime.native.por import gen_por
+
 
 def at(sc: CScope, what: str) -> CScope:
     """The same scope, its place in the model made precise (for refusals)."""
@@ -71,17 +75,21 @@ class CModel:
     strings: dict[int, list[str]] = field(default_factory=dict)  # state slot -> its strings by number
 
 
-class CGen:
+class CGen(StepEmitter):
+    """Builds the C text of one state space's step; ``generate()`` returns a :class:`CModel`."""
+
+    TRUE, FALSE = "1", "0"
+    HAVE_VALUES = "vals"
+
     def __init__(self, space, choices: dict[str, Choice], widths: dict[int, int], monitors=()) -> None:
+        super().__init__(space.engine.flat, CWriter())
         self.space = space
         self.widths = widths
         self.monitors = list(monitors)
         self.engine = space.engine
-        self.flat = space.engine.flat
         self.sources = space.engine.sources
         self.infos = space.engine.infos
         self.slots: list[Slot] = space.slots
-        self.lines: list[str] = []
         self.choices = list(choices.values())
         budget = space.environment.budget
         self.externs = Externs({name: k for k, name in enumerate(choices)},
@@ -90,38 +98,101 @@ class CGen:
         self.maxf = max([len(fp.fields) for fp in self.flat.ports] + [1]
                         + [offer_width(s.tree) for s in self.sources if s.kind == "generic"])
 
-    def w(self, line: str = "") -> None:
-        self.lines.append(line)
+    # -- the language: C ----------------------------------------------------------------------
+    def name(self, src: str, type_name: str | None, where: str, assignable: bool = False) -> CName:
+        return CName(src, c_type(type_name, where), assignable=assignable)
 
-    # -- scopes ---------------------------------------------------------------------------------
-    def atom_scope(self, fa: FlatAtom, in_enabled: bool) -> CScope:
-        sc = CScope(f"atom {fa.name} ({fa.type.name})", self.externs, constants=fa.constants, in_guard=in_enabled)
-        for d in fa.variables:
-            t = c_type(d.type, f"{sc.where}, {d.name}")
-            src = f"a{fa.index}_{d.name}" if in_enabled else f"v_{d.name}"
-            sc.variables[d.name] = CName(src, t, assignable=not in_enabled)
-        return sc
+    def scope(self, where: str, constants: dict, in_guard: bool) -> CScope:
+        return CScope(where, self.externs, constants=constants, in_guard=in_guard)
 
-    def connector_scope(self, info, mask: int, ports_rw: bool, with_locals: bool) -> CScope:
-        ct = info.type
-        where = f"connector type {ct.name}"
+    def condition(self, guard, sc: CScope) -> str:
+        return condition(guard, sc)
+
+    def statements(self, body, sc: CScope) -> list[str]:
+        return statements(body, sc, "")
+
+    def declare(self, name: str, value: str) -> str:
+        return f"V {name} = {value}"
+
+    def both(self, a: str, b: str) -> str:
+        return f"({a} && {b})"
+
+    def mask_test(self, var: str, mask: int) -> str:
+        return f"(({var} & {mask}) == {mask})"
+
+    def complement(self, mask: int) -> str:
+        return f"~(V){mask}"
+
+    def fail_unsafe(self, fa: FlatAtom, t, tgt: int) -> str:
+        return f"fail({E_UNSAFE}, {fa.index})"
+
+    def internal_function(self, fa: FlatAtom):
+        return self.w.block(f"static void in{fa.index}(V *L)", f"eager internal transitions of {fa.name}")
+
+    def internal_failures(self, fa: FlatAtom, ts):
+        return (lambda flags: f"fail({E_NONDET}, {fa.index})"), f"fail({E_STUCK}, {fa.index})"
+
+    @contextmanager
+    def bounded(self, stuck: str):
+        self.w("int n;")
+        with self.w.block("for (n = 0; n < MAXINT; n++)"):
+            yield
+        self.w.if_then("n == MAXINT", stuck)
+
+    def flag(self, name: str, value: str, comment: str) -> None:
+        self.w(f"int {name} = {value};")
+
+    def any_of(self, flags: list[str]) -> str:
+        return " || ".join(flags)
+
+    @contextmanager
+    def port_cases(self, pid: int):
+        self.w(f"int e{pid};")
+        with self.w.block(""):
+            yield
+
+    def fail_nondet_port(self, fa: FlatAtom, port: str, pid: int, ts, flags: list[str]) -> str:
+        return f"fail({E_NONDET}, {pid})"
+
+    def port_function(self, fp, fa: FlatAtom):
+        return self.w.block(f"static void ap{fp.id}(V *L, const V *vals)", f"port {fp.path}")
+
+    def not_enabled(self, fa: FlatAtom, fp, ts) -> str:
+        return f"fail({E_NOTENABLED}, {fp.id})"
+
+    def call_internal(self, fa: FlatAtom) -> str:
+        return f"in{fa.index}(L)"
+
+    def value(self, value, sc: CScope) -> str:
+        return stored(value, sc.where, self.externs.strings)
+
+    def initial_function(self):
+        return self.w.block("static void initial(V *L)")
+
+    def initial_atom(self, fa: FlatAtom):
+        return self.w.block("")
+
+    def initial_marking(self, mask: int, targets: list[str]) -> None:
+        self.w.stmt(self.declare("m", str(mask)))
+
+    def in_data(self, sc: CScope, d) -> CScope:
+        return at(sc, f"data {d.name}" + (f" ({d.span})" if d.span.line > 0 else ""))
+
+    def in_initial(self, sc: CScope) -> CScope:
+        return at(sc, "initial transition")
+
+    def conjunction(self, terms: list[str]) -> str:
+        return " && ".join(terms)
+
+    def connector_where(self, info, mask: int) -> str:
+        where = f"connector type {info.type.name}"
         spec = info.clauses.get(mask)
         if spec is not None:
             where += f", on {' '.join(spec.ports)}" + (f" ({spec.span})" if spec.span.line > 0 else "")
-        sc = CScope(where, self.externs, constants=dict(self.flat.constants), in_guard=not with_locals)
-        for k, d in enumerate(ct.data):
-            t = c_type(d.type, f"{sc.where}, {d.name}")
-            if with_locals:
-                sc.variables[d.name] = CName(f"lv[{k}]", t, assignable=True)
-            else:
-                sc.constants[d.name] = (info.local_defaults[k], d.type)
-        for i, p in enumerate(ct.params):
-            if not mask >> i & 1:
-                continue
-            pt = self.flat.package.port_type(p.port_type)
-            for j, f in enumerate(pt.params if pt else []):
-                sc.ports[(p.name, f.name)] = CName(f"pv[{i}][{j}]", c_type(f.type, sc.where), assignable=ports_rw)
-        return sc
+        return where
+
+    def in_transition(self, sc: CScope, t) -> CScope:
+        return at(sc, f"transition {describe(t)}")
 
     # -- the whole file -------------------------------------------------------------------------
     def generate(self) -> CModel:
@@ -187,7 +258,7 @@ class CGen:
         model.floats = [i for i, t in self.value_types.items() if t == "float"]
         model.strings = {i: names for i, t in self.value_types.items() if t == "string"}
         w('#include "search.c"')
-        model.source = "\n".join(self.lines) + "\n"
+        model.source = w.source()
         return model
 
     def gen_choices(self) -> None:
@@ -206,112 +277,9 @@ class CGen:
         self.w('#include "odometer.h"')
 
     # -- atoms ----------------------------------------------------------------------------------
-    def load(self, fa: FlatAtom, indent: str) -> None:
-        self.w(f"{indent}V m = L[{fa.offset}];")
-        for d in fa.variables:
-            self.w(f"{indent}V v_{d.name} = L[{fa.slot(d.name)}];")
-
-    def store(self, fa: FlatAtom, indent: str) -> None:
-        self.w(f"{indent}L[{fa.offset}] = m;")
-        for d in fa.variables:
-            self.w(f"{indent}L[{fa.slot(d.name)}] = v_{d.name};")
-
-    def marked(self, fa: FlatAtom, t, var: str) -> str:
-        for p in t.sources + t.targets:
-            if p not in fa.places:
-                raise ModelError(f"transition {describe(t)} names unknown place '{p}'", atom=fa.name)
-        src = fa.place_mask(t.sources)
-        return f"(({var} & {src}) == {src})" if src else "1"
-
-    def enabled_expr(self, fa: FlatAtom, t, var: str, sc: CScope) -> str:
-        guard = condition(t.guard, at(sc, f"transition {describe(t)}"))
-        mk = self.marked(fa, t, var)
-        return mk if guard == "1" else f"({mk} && {guard})"
-
-    def move(self, fa: FlatAtom, t, indent: str, sc: CScope) -> None:
-        src, tgt = fa.place_mask(t.sources), fa.place_mask(t.targets)
-        if src:
-            self.w(f"{indent}m &= ~(V){src};")
-        if tgt:
-            self.w(f"{indent}if (m & {tgt}) fail({E_UNSAFE}, {fa.index});")
-            self.w(f"{indent}m |= {tgt};")
-        self.lines.extend(statements(t.action, at(sc, f"transition {describe(t)}"), indent))
-
-    def gen_internal(self, fa: FlatAtom) -> None:
-        ts = [t for t in fa.type.transitions if t.internal]
-        if not ts:
-            return
-        w = self.w
-        sc = self.atom_scope(fa, in_enabled=False)
-        w(f"static void in{fa.index}(V *L) {{  /* eager internal transitions of {fa.name} */")
-        self.load(fa, "    ")
-        w("    int n;")
-        w("    for (n = 0; n < MAXINT; n++) {")
-        for k, t in enumerate(ts):
-            w(f"        int c{k} = {self.enabled_expr(fa, t, 'm', sc)};")
-        if len(ts) > 1:
-            w(f"        if ({' + '.join(f'c{k}' for k in range(len(ts)))} > 1) fail({E_NONDET}, {fa.index});")
-        for k, t in enumerate(ts):
-            w(f"        {'if' if k == 0 else 'else if'} (c{k}) {{")
-            self.move(fa, t, "            ", sc)
-            w("        }")
-        w("        else break;")
-        w("    }")
-        w(f"    if (n == MAXINT) fail({E_STUCK}, {fa.index});")
-        self.store(fa, "    ")
-        w("}")
-
-    def gen_port(self, fp) -> None:
-        w = self.w
-        fa = self.flat.atoms[fp.atom]
-        ts = [t for t in fa.type.transitions if t.port == fp.name]
-        sc = self.atom_scope(fa, in_enabled=False)
-        w(f"static void ap{fp.id}(V *L, const V *vals) {{  /* port {fp.path} */")
-        self.load(fa, "    ")
-        for k, t in enumerate(ts):
-            w(f"    {'if' if k == 0 else 'else if'} ({self.enabled_expr(fa, t, 'm', sc)}) {{")
-            if fp.decl.data:
-                w("        if (vals) {")
-                for j, v in enumerate(fp.decl.data):
-                    w(f"            v_{v} = vals[{j}];")
-                w("        }")
-            self.move(fa, t, "        ", sc)
-            w("    }")
-        w(f"    {'else ' if ts else ''}fail({E_NOTENABLED}, {fp.id});")
-        self.store(fa, "    ")
-        if any(t.internal for t in fa.type.transitions):
-            w(f"    in{fa.index}(L);")
-        w("}")
-
-    def gen_initial(self) -> None:
-        from runtime.engine.cexpr import default_value
-        from runtime.model.expressions import Assign, Var
-
-        w = self.w
-        w("static void initial(V *L) {")
-        for fa in self.flat.atoms:
-            t = fa.type
-            sc = self.atom_scope(fa, in_enabled=False)
-            w("    {")
-            for d in fa.variables:
-                w(f"        V v_{d.name} = {stored(default_value(d.type), sc.where, self.externs.strings)};")
-            for d in fa.variables:
-                if d.init is not None:
-                    where = at(sc, f"data {d.name}" + (f" ({d.span})" if d.span.line > 0 else ""))
-                    self.lines.extend(statements([Assign(Var(d.name), d.init)], where, "        "))
-            targets = t.initial.targets
-            if any(p not in fa.places for p in targets) or len(set(targets)) != len(targets):
-                raise Unsupported(f"atom {fa.name}: its initial transition is refused by the engine")
-            w(f"        V m = {fa.place_mask(targets)};")
-            self.lines.extend(statements(t.initial.action, at(sc, "initial transition"), "        "))
-            self.store(fa, "        ")
-            if any(tr.internal for tr in t.transitions):
-                w(f"        in{fa.index}(L);")
-            w("    }")
-        w("}")
-
     # -- connectors -----------------------------------------------------------------------------
     def gen_clauses(self, name: str, info) -> None:
+        """``k<T>_<mask>_g/u/d``: guard, up and down of each ``on`` clause of connector type T."""
         w = self.w
         k = self.type_index[name]
         for mask, spec in info.clauses.items():
@@ -321,49 +289,48 @@ class CGen:
             for part, body, rw in (("u", spec.up, False), ("d", spec.down, True)):
                 if body:
                     sc = self.connector_scope(info, mask, rw, True)
-                    w(f"static void k{k}_{mask}_{part}(V pv[][MAXF], V *lv) {{")
-                    self.lines.extend(statements(body, sc, "    "))
-                    w("}")
+                    with w.block(f"static void k{k}_{mask}_{part}(V pv[][MAXF], V *lv)"):
+                        w.extend(self.statements(body, sc))
 
     def locals_init(self, info) -> str:
         vals = [stored(v, f"connector type {info.type.name}", self.externs.strings) for v in info.local_defaults]
         return f"V lv[{max(len(vals), 1)}] = {{{', '.join(vals) or '0'}}};"
 
     def gen_fire(self, src) -> None:
+        """``f<k>(L, mask)``: fire interaction ``mask`` of source ``k`` on the state ``L``."""
         w = self.w
         fl = self.flat
         if src.kind == "generic":
             self.trees[src.index].gen_fire()
             return
-        w(f"static void f{src.index}(V *L, uint32_t mask) {{")
-        if src.kind == "port":
-            w(f"    (void)mask; ap{src.port.id}(L, 0);")
-            w("}")
-            return
-        info = self.infos[src.connector.type.name]
-        k = self.type_index[src.connector.type.name]
-        w(f"    V pv[{len(src.leaves)}][MAXF];")
-        for i, p in enumerate(src.leaves):
-            for j, slot in enumerate(fl.ports[p].slots):
-                w(f"    pv[{i}][{j}] = L[{slot}];")
-        if info.clauses:
-            w(f"    {self.locals_init(info)}")
-            w("    (void)lv;")
-            key = str(info.all_params) if src.kind == "rendezvous" else "mask"
-            w(f"    switch ({key}) {{")
-            for mask, spec in info.clauses.items():
-                calls = [f"k{k}_{mask}_{part}(pv, lv);" for part, body in (("u", spec.up), ("d", spec.down)) if body]
-                if calls:
-                    w(f"    case {mask}: {' '.join(calls)} break;")
-            w("    default: break;")
-            w("    }")
-        for i, p in enumerate(src.leaves):
-            if src.kind == "rendezvous":
-                w(f"    ap{p}(L, pv[{i}]);")
-            else:
-                w(f"    if (mask & {1 << i}) ap{p}(L, pv[{i}]);")
-        w("    (void)mask;")
-        w("}")
+        with w.block(f"static void f{src.index}(V *L, uint32_t mask)"):
+            if src.kind == "port":
+                w(f"(void)mask; ap{src.port.id}(L, 0);")
+                return
+            info = self.infos[src.connector.type.name]
+            k = self.type_index[src.connector.type.name]
+            w(f"V pv[{len(src.leaves)}][MAXF];")
+            for i, p in enumerate(src.leaves):
+                for j, slot in enumerate(fl.ports[p].slots):
+                    w(f"pv[{i}][{j}] = L[{slot}];")
+            if info.clauses:
+                w(self.locals_init(info))
+                w("(void)lv;")
+                key = str(info.all_params) if src.kind == "rendezvous" else "mask"
+                w(f"switch ({key}) {{")
+                for mask, spec in info.clauses.items():
+                    calls = [f"k{k}_{mask}_{part}(pv, lv);" for part, body in (("u", spec.up), ("d", spec.down))
+                             if body]
+                    if calls:
+                        w(f"case {mask}: {' '.join(calls)} break;")
+                w("default: break;")
+                w("}")
+            for i, p in enumerate(src.leaves):
+                if src.kind == "rendezvous":
+                    w(f"ap{p}(L, pv[{i}]);")
+                else:
+                    w.if_then(f"mask & {1 << i}", f"ap{p}(L, pv[{i}])")
+            w("(void)mask;")
 
     def gen_fire_table(self) -> None:
         self.w(
@@ -414,57 +381,61 @@ class CGen:
         words = max((bit + 63) // 64, 1)
         w(f"#define NW {words}")
         w(f"static const int WIDTHS[NSLOTS > 0 ? NSLOTS : 1] = {{{', '.join(str(f[2]) for f in fields) or '0'}}};")
-        w("static void pack(const V *L, uint64_t *o) {")
-        w("    uint64_t u; V x;")
-        for i in range(words):
-            w(f"    o[{i}] = 0;")
-        for k, s, width, off in fields:
-            if not width:
-                continue
-            w(f"    x = L[{s.index}];")
-            if s.domain is not None:
-                w(f"    if (x < {s.domain[0]} || x > {s.domain[1]}) fail({E_DOMAIN}, {k});")
-            if s.live is not None:
-                w(f"    if (!(L[{s.marking}] & {s.live})) x = {self.default(s)};")
-            if s.domain is not None:
-                w(f"    u = (uint64_t)(x - ({s.domain[0]}));")
-            elif s.kind in ("marking", "bool"):
-                w("    u = (uint64_t)x;")
-            elif s.kind == "value":
-                if self.value_types[s.index] == "float":
-                    w(
-                        f"    if (isnan(F(x))) fail({E_ARITH}, 4);"
-                        "  /* the Python explorer never meets a NaN state again */"
-                    )
-                w("    u = (uint64_t)x;")
-            else:
-                w("    u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
-                if width < 64:
-                    w(f"    if (u >> {width}) fail({E_WIDEN}, {k});")
-            word, sh = divmod(off, 64)
-            w(f"    o[{word}] |= u << {sh};" if sh else f"    o[{word}] |= u;")
-            if sh and sh + width > 64:
-                w(f"    o[{word + 1}] |= u >> {64 - sh};")
-        w("}")
-        w("static void unpack(const uint64_t *o, V *L) {")
-        w("    uint64_t u;")
-        for k, s, width, off in fields:
-            if not width:
-                w(f"    L[{s.index}] = {self.default(s)};")
-                continue
-            word, sh = divmod(off, 64)
-            expr = f"(o[{word}] >> {sh})" if sh else f"o[{word}]"
-            if sh and sh + width > 64:
-                expr = f"({expr} | (o[{word + 1}] << {64 - sh}))"
-            mask = f" & UINT64_C({(1 << width) - 1})" if width < 64 else ""
-            w(f"    u = {expr}{mask};")
-            if s.domain is not None:
-                w(f"    L[{s.index}] = (V)u + ({s.domain[0]});")
-            elif s.kind in ("marking", "bool", "value"):
-                w(f"    L[{s.index}] = (V)u;")
-            else:
-                w(f"    L[{s.index}] = (V)(u >> 1) ^ -(V)(u & 1);")
-        w("}")
+        with w.block("static void pack(const V *L, uint64_t *o)"):
+            w("uint64_t u; V x;")
+            for i in range(words):
+                w(f"o[{i}] = 0;")
+            for k, s, width, off in fields:
+                if width:
+                    self.pack_slot(k, s, width, off)
+        with w.block("static void unpack(const uint64_t *o, V *L)"):
+            w("uint64_t u;")
+            for k, s, width, off in fields:
+                self.unpack_slot(s, width, off)
+
+    def pack_slot(self, k: int, s: Slot, width: int, off: int) -> None:
+        """Slot ``s`` (the ``k``-th) checked, reset if dead, coded and or-ed into its field at bit ``off``."""
+        w = self.w
+        w(f"x = L[{s.index}];")
+        if s.domain is not None:
+            w.if_then(f"x < {s.domain[0]} || x > {s.domain[1]}", f"fail({E_DOMAIN}, {k})")
+        if s.live is not None:
+            w.if_then(f"!(L[{s.marking}] & {s.live})", f"x = {self.default(s)}")
+        if s.domain is not None:
+            w(f"u = (uint64_t)(x - ({s.domain[0]}));")
+        elif s.kind in ("marking", "bool"):
+            w("u = (uint64_t)x;")
+        elif s.kind == "value":
+            if self.value_types[s.index] == "float":
+                w(f"if (isnan(F(x))) fail({E_ARITH}, 4);  /* the Python explorer never meets a NaN state again */")
+            w("u = (uint64_t)x;")
+        else:
+            w("u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
+            if width < 64:
+                w.if_then(f"u >> {width}", f"fail({E_WIDEN}, {k})")
+        word, sh = divmod(off, 64)
+        w(f"o[{word}] |= u << {sh};" if sh else f"o[{word}] |= u;")
+        if sh and sh + width > 64:
+            w(f"o[{word + 1}] |= u >> {64 - sh};")
+
+    def unpack_slot(self, s: Slot, width: int, off: int) -> None:
+        """Slot ``s`` decoded from its field at bit ``off`` (its default when it has no bits)."""
+        w = self.w
+        if not width:
+            w(f"L[{s.index}] = {self.default(s)};")
+            return
+        word, sh = divmod(off, 64)
+        expr = f"(o[{word}] >> {sh})" if sh else f"o[{word}]"
+        if sh and sh + width > 64:
+            expr = f"({expr} | (o[{word + 1}] << {64 - sh}))"
+        mask = f" & UINT64_C({(1 << width) - 1})" if width < 64 else ""
+        w(f"u = {expr}{mask};")
+        if s.domain is not None:
+            w(f"L[{s.index}] = (V)u + ({s.domain[0]});")
+        elif s.kind in ("marking", "bool", "value"):
+            w(f"L[{s.index}] = (V)u;")
+        else:
+            w(f"L[{s.index}] = (V)(u >> 1) ^ -(V)(u & 1);")
 
     # -- labels -----------------------------------------------------------------------------------
     def gen_labels(self, model: CModel) -> None:
@@ -543,10 +514,7 @@ class CGen:
         # guard functions of compound priorities, reading exported data from the state
         for k, (r, _) in enumerate(pr.guards):
             fp = self.flat.priorities[r]
-            sc = CScope(f"priority {fp.name}", self.externs, constants=fp.constants, in_guard=True)
-            for (comp, name), (slot, ty) in fp.data.items():
-                sc.ports[(comp, name)] = CName(f"s[{slot}]", c_type(ty, sc.where))
-            self.w(f"static int pg{k}(const V *s) {{ return {condition(fp.guard, sc)}; }}")
+            self.w(f"static int pg{k}(const V *s) {{ return {condition(fp.guard, self.priority_scope(fp))}; }}")
         # low/high rule masks of each source's interactions: parts are [(connector id, mask)]
         for src in self.sources:
             for side, name in ((1, "lo"), (2, "hi")):
@@ -591,156 +559,114 @@ class CGen:
             self.w(f"static uint32_t maxa{src.index}(uint32_t em) {{ static const uint32_t T[] = {{{table}}}; "
                    "return T[em]; }")
             return
-        lines: list[str] = []
-        top = max_allowed_c(tree, lines)
-        self.w(f"static uint32_t maxa{src.index}(uint32_t em) {{")
-        self.lines.extend(f"    {line}" for line in lines)
-        self.w(f"    return {top};")
-        self.w("}")
+        with self.w.block(f"static uint32_t maxa{src.index}(uint32_t em)"), self.w.names():
+            self.w(f"return {max_allowed_c(tree, self.w)};")
 
     # -- enabled ----------------------------------------------------------------------------------
     def gen_enabled(self) -> None:
+        """``enabled(s, isrc, imask)``: atom ports, then each source's maximal interactions, then priorities."""
         w = self.w
         fl = self.flat
         w(f"static TL uint8_t PEN[{max(len(fl.ports), 1)}]; /* ports enabled in their atom: the reduction's view */")
-        w("static int enabled(const V *s, uint32_t *isrc, uint32_t *imask) {")
-        w("    int n = 0;")
-        for fa in fl.atoms:
-            w(f"    const V m{fa.index} = s[{fa.offset}]; (void)m{fa.index};")
-            for d in fa.variables:
-                w(f"    const V a{fa.index}_{d.name} = s[{fa.slot(d.name)}]; (void)a{fa.index}_{d.name};")
-        for fa in fl.atoms:
-            self.gen_atom_enabled(fa)
-        for fp in fl.ports:
-            w(f"    PEN[{fp.id}] = (uint8_t)e{fp.id};")
-        if self.trees:
-            w(
-                f"    const uint8_t EP[{max(len(fl.ports), 1)}] = "
-                f"{{{', '.join(f'(uint8_t)e{fp.id}' for fp in fl.ports)}}};"
-            )
-        for src in self.sources:
-            self.gen_source_enabled(src)
-        if self.prio is not None:
-            pr = self.prio
-            key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(pr.guards))) or "0"
-            w("    if (n) {")
-            w(f"        int key = {key};")
-            w(f"        if (PCYC[key]) fail({E_CYCLE}, -1);")
-            w("        uint64_t high[NRW] = {0}, blocked[NRW] = {0};")
-            w("        int any = 0;")
-            w("        for (int i = 0; i < n; i++) HIT[isrc[i]](imask[i], high);")
-            w("        for (int x = 0; x < NRW; x++) any |= high[x] != 0;")
-            w("        if (any) {")
-            w("            int b = 0;")
-            w("            for (int r = 0; r < NRULES; r++)")
-            w("                for (int x = 0; x < NRW; x++)")
-            w(
-                "                    if (PREACH[key][r][x] & high[x]) "
-                "{ blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }"
-            )
-            w("            if (b) {")
-            w("                int k = 0;")
-            w("                for (int i = 0; i < n; i++) {")
-            w("                    uint64_t low[NRW] = {0};")
-            w("                    int hit = 0;")
-            w("                    LOT[isrc[i]](imask[i], low);")
-            w("                    for (int x = 0; x < NRW; x++) hit |= (low[x] & blocked[x]) != 0;")
-            w("                    if (!hit) { isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
-            w("                }")
-            w("                n = k;")
-            w("            }")
-            w("        }")
-            w("    }")
-        w("    return n;")
-        w("}")
+        with w.block("static int enabled(const V *s, uint32_t *isrc, uint32_t *imask)"):
+            w("int n = 0;")
+            for fa in fl.atoms:
+                w(f"const V m{fa.index} = s[{fa.offset}]; (void)m{fa.index};")
+                for d in fa.variables:
+                    w(f"const V a{fa.index}_{d.name} = s[{fa.slot(d.name)}]; (void)a{fa.index}_{d.name};")
+            for fa in fl.atoms:
+                self.gen_atom_enabled(fa)
+            for fp in fl.ports:
+                w(f"PEN[{fp.id}] = (uint8_t)e{fp.id};")
+            if self.trees:
+                w(f"const uint8_t EP[{max(len(fl.ports), 1)}] = "
+                  f"{{{', '.join(f'(uint8_t)e{fp.id}' for fp in fl.ports)}}};")
+            for src in self.sources:
+                self.gen_source_enabled(src)
+            if self.prio is not None:
+                with w.block("if (n)"):
+                    self.gen_compound_priorities()
+            w("return n;")
 
-    def gen_atom_enabled(self, fa: FlatAtom) -> None:
+    def gen_compound_priorities(self) -> None:
+        """Drop the interactions low in a compound priority whose high side (reached through the rules) is enabled."""
+        w = self.w
+        key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(self.prio.guards))) or "0"
+        w(f"int key = {key};")
+        w.if_then("PCYC[key]", f"fail({E_CYCLE}, -1)")
+        w("uint64_t high[NRW] = {0}, blocked[NRW] = {0};")
+        w("int any = 0;")
+        w("for (int i = 0; i < n; i++) HIT[isrc[i]](imask[i], high);")
+        w("for (int x = 0; x < NRW; x++) any |= high[x] != 0;")
+        with w.block("if (any)"):
+            w("int b = 0;")
+            w("for (int r = 0; r < NRULES; r++)")
+            w("    for (int x = 0; x < NRW; x++)")
+            w("        if (PREACH[key][r][x] & high[x]) { blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }")
+            with w.block("if (b)"):
+                w("int k = 0;")
+                with w.block("for (int i = 0; i < n; i++)"):
+                    w("uint64_t low[NRW] = {0};")
+                    w("int hit = 0;")
+                    w("LOT[isrc[i]](imask[i], low);")
+                    w("for (int x = 0; x < NRW; x++) hit |= (low[x] & blocked[x]) != 0;")
+                    w("if (!hit) { isrc[k] = isrc[i]; imask[k] = imask[i]; k++; }")
+                w("n = k;")
+
+    def gen_atom_priorities(self, fa: FlatAtom, sc: CScope) -> None:
+        """The atom's ports filtered by its priorities: the table of the guards' combination (APH, APX)."""
         w = self.w
         t = fa.type
-        sc = self.atom_scope(fa, in_enabled=True)
-        for name, pid in fa.ports.items():
-            ts = [tr for tr in t.transitions if tr.port == name]
-            if not ts:
-                w(f"    int e{pid} = 0;")
-            elif len(ts) == 1:
-                w(f"    int e{pid} = {self.enabled_expr(fa, ts[0], f'm{fa.index}', sc)};")
-            else:
-                w(f"    int e{pid};")
-                w("    {")
-                for k, tr in enumerate(ts):
-                    w(f"        int t{k} = {self.enabled_expr(fa, tr, f'm{fa.index}', sc)};")
-                w(f"        if ({' + '.join(f't{k}' for k in range(len(ts)))} > 1) fail({E_NONDET}, {pid});")
-                w(f"        e{pid} = {' || '.join(f't{k}' for k in range(len(ts)))};")
-                w("    }")
-        if t.priorities:
-            ap = self.engine.namespace[f"_aprio{fa.index}"]
-            order = ap.ports
-            guarded = sorted(ap.guard_bit, key=lambda r: ap.guard_bit[r])
-            guards = [condition(t.priorities[r].guard, sc) for r in guarded]
-            raw = " | ".join(f"((uint32_t)e{fa.ports[p]} << {i})" for i, p in enumerate(order))
-            act = " | ".join(f"(({g}) ? {1 << k} : 0)" for k, g in enumerate(guards)) or "0"
-            w("    {")
-            w(f"        uint32_t r = {raw};")
-            w("        if (r) {")
-            w(f"            int act = {act};")
-            w(f"            if (APX{fa.index}[act]) fail({E_CYCLE}, {fa.index});")
-            w("            uint32_t out = r;")
-            w(f"            for (int p = 0; p < {len(order)}; p++) if (r & APH{fa.index}[act][p]) out &= ~(1u << p);")
-            for i, p in enumerate(order):
-                w(f"            e{fa.ports[p]} = (out >> {i}) & 1;")
-            w("        }")
-            w("    }")
+        ap = self.engine.namespace[f"_aprio{fa.index}"]
+        order = ap.ports
+        guarded = sorted(ap.guard_bit, key=lambda r: ap.guard_bit[r])
+        guards = [condition(t.priorities[r].guard, sc) for r in guarded]
+        raw = " | ".join(f"((uint32_t)e{fa.ports[p]} << {i})" for i, p in enumerate(order))
+        act = " | ".join(f"(({g}) ? {1 << k} : 0)" for k, g in enumerate(guards)) or "0"
+        with w.block(""):
+            w(f"uint32_t r = {raw};")
+            with w.block("if (r)"):
+                w(f"int act = {act};")
+                w.if_then(f"APX{fa.index}[act]", f"fail({E_CYCLE}, {fa.index})")
+                w("uint32_t out = r;")
+                w(f"for (int p = 0; p < {len(order)}; p++) if (r & APH{fa.index}[act][p]) out &= ~(1u << p);")
+                for i, p in enumerate(order):
+                    w(f"e{fa.ports[p]} = (out >> {i}) & 1;")
 
     def gen_source_enabled(self, src) -> None:
+        """The part of ``enabled`` that adds the maximal enabled interactions of one source."""
         w = self.w
         fl = self.flat
         if src.kind == "port":
-            w(f"    if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
+            w(f"if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
             return
         if src.kind == "generic":
             self.trees[src.index].gen_enabled()
             return
         info = self.infos[src.connector.type.name]
-        enabled = [f"e{p}" for p in src.leaves]
         if src.kind == "rendezvous":
-            cond = " && ".join(enabled)
-            spec = info.clauses.get(info.all_params)
-            if spec is not None and spec.guard is not None:
-                cond += f" && {condition(spec.guard, self.inline_scope(src, info))}"
-            w(f"    if ({cond}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
+            w(f"if ({self.rendezvous_enabled(src, info)}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
             return
+        enabled = [f"e{p}" for p in src.leaves]
         nparams = len(src.leaves)
-        w("    {")
-        w(f"        uint32_t em = {' | '.join(f'((uint32_t){e} << {i})' for i, e in enumerate(enabled))};")
-        guarded = {mask: spec for mask, spec in info.clauses.items() if spec.guard is not None}
-        if guarded:
-            w("        if (em) {")
-            w(f"            V pv[{nparams}][MAXF];")
-            for i, p in enumerate(src.leaves):
-                fp = fl.ports[p]
-                fa = fl.atoms[fp.atom]
-                for j, v in enumerate(fp.decl.data):
-                    w(f"            pv[{i}][{j}] = a{fa.index}_{v};")
-            w(
-                f"            n = maximal_enabled(maxa{src.index}, em, {nparams}, pv, blocked{src.index}, "
-                f"{src.index}, isrc, imask, n);"
-            )
-            w("        }")
-        elif defines.is_flat(info.tree):
-            w(f"        if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")
-        else:
-            w(f"        uint32_t k = maxa{src.index}(em);")
-            w(f"        if (k) {{ isrc[n] = {src.index}; imask[n] = k; n++; }}")
-        w("    }")
-
-    def inline_scope(self, src, info) -> CScope:
-        sc = self.connector_scope(info, info.all_params, False, False)
-        for i, p in enumerate(info.type.params):
-            fp = self.flat.ports[src.leaves[i]]
-            fa = self.flat.atoms[fp.atom]
-            for f, v, ty in zip(fp.fields, fp.decl.data, fp.field_types):
-                sc.ports[(p.name, f)] = CName(f"a{fa.index}_{v}", c_type(ty, sc.where))
-        return sc
+        with w.block(""):
+            w(f"uint32_t em = {' | '.join(f'((uint32_t){e} << {i})' for i, e in enumerate(enabled))};")
+            guarded = {mask: spec for mask, spec in info.clauses.items() if spec.guard is not None}
+            if guarded:
+                with w.block("if (em)"):
+                    w(f"V pv[{nparams}][MAXF];")
+                    for i, p in enumerate(src.leaves):
+                        fp = fl.ports[p]
+                        fa = fl.atoms[fp.atom]
+                        for j, v in enumerate(fp.decl.data):
+                            w(f"pv[{i}][{j}] = a{fa.index}_{v};")
+                    w(f"n = maximal_enabled(maxa{src.index}, em, {nparams}, pv, blocked{src.index}, "
+                      f"{src.index}, isrc, imask, n);")
+            elif defines.is_flat(info.tree):
+                w(f"if (em & {defines.triggers(info.tree)}) {{ isrc[n] = {src.index}; imask[n] = em; n++; }}")
+            else:
+                w(f"uint32_t k = maxa{src.index}(em);")
+                w(f"if (k) {{ isrc[n] = {src.index}; imask[n] = k; n++; }}")
 
 
 def _words(value: int, words: int) -> str:
@@ -748,20 +674,20 @@ def _words(value: int, words: int) -> str:
     return "{" + ", ".join(f"UINT64_C({value >> (64 * k) & ((1 << 64) - 1)})" for k in range(words)) + "}"
 
 
-def max_allowed_c(node, lines: list[str]) -> str:
+def max_allowed_c(node, w: CWriter) -> str:
     """C statements computing :func:`defines.max_allowed` of ``node`` within ``em``; returns the result's name."""
-    name = f"t{len(lines)}"
     if node[0] == "p":
-        lines.append(f"uint32_t {name} = em & {node[1]}u;")
+        name = w.fresh("t")
+        w(f"uint32_t {name} = em & {node[1]}u;")
         return name
-    subs = [(max_allowed_c(sub, lines), trig) for sub, trig in node[1]]
+    subs = [(max_allowed_c(sub, w), trig) for sub, trig in node[1]]
     union = " | ".join(t for t, _ in subs)
     if any(trig for _, trig in subs):
         cond = " || ".join(t for t, trig in subs if trig)
     else:
         cond = " && ".join(t for t, _ in subs)
-    name = f"t{len(lines)}"
-    lines.append(f"uint32_t {name} = ({cond}) ? ({union}) : 0u;")
+    name = w.fresh("t")
+    w(f"uint32_t {name} = ({cond}) ? ({union}) : 0u;")
     return name
 
 

@@ -8,6 +8,7 @@ the first violation met ends a shortest counterexample.
 """
 from __future__ import annotations
 
+from runtime.engine.emit import CWriter
 from runtime.native.cexpr import Unsupported
 from runtime.props.formulas import PAnd, PAt, PCmp, PConst, PNot, POr, Pred
 from runtime.props.predicates import split_path
@@ -45,7 +46,7 @@ def c_pred(p: Pred | None, flat, state: str = "L") -> str:
     raise Unsupported(f"predicate {p!r}")
 
 
-def gen_observers(w, monitors, sources, flat, base: int) -> None:
+def gen_observers(w: CWriter, monitors, sources, flat, base: int) -> None:
     """``observe(s, L, via)`` and ``observe_initial(L)``: advance every observer, 1 when one is violated.
 
     ``monitors`` are ``(Monitor, statics)`` pairs; observer ``m`` lives in slot ``base + m``.
@@ -58,21 +59,20 @@ def gen_observers(w, monitors, sources, flat, base: int) -> None:
     statics = monitors[0][1]
     by_index = {st.index: k for k, st in enumerate(statics)}
     nsrc = len(sources)
-    w("static int KOF(uint32_t via) {")
-    w(f"    uint32_t src = via % {nsrc}, mask = via / {nsrc};")
-    w("    switch (src) {")
-    for src in sources:
-        masks = sorted(st.mask for st in statics if st.source.index == src.index)
-        if len(masks) == 1:
-            w(f"    case {src.index}: return {by_index[masks[0] * nsrc + src.index]};")
-            continue
-        if len(src.leaves) > MAX_LEAVES:
-            raise Unsupported(f"connector {src.connector.path}: too many interactions for an observer table")
-        table = [by_index.get(m * nsrc + src.index, 0) for m in range(1 << len(src.leaves))]
-        w(f"    case {src.index}: {{ static const int T[] = {{{', '.join(map(str, table))}}}; return T[mask]; }}")
-    w("    }")
-    w("    return 0;")
-    w("}")
+    with w.block("static int KOF(uint32_t via)"):
+        w(f"uint32_t src = via % {nsrc}, mask = via / {nsrc};")
+        w("switch (src) {")
+        for src in sources:
+            masks = sorted(st.mask for st in statics if st.source.index == src.index)
+            if len(masks) == 1:
+                w(f"case {src.index}: return {by_index[masks[0] * nsrc + src.index]};")
+                continue
+            if len(src.leaves) > MAX_LEAVES:
+                raise Unsupported(f"connector {src.connector.path}: too many interactions for an observer table")
+            table = [by_index.get(m * nsrc + src.index, 0) for m in range(1 << len(src.leaves))]
+            w(f"case {src.index}: {{ static const int T[] = {{{', '.join(map(str, table))}}}; return T[mask]; }}")
+        w("}")
+        w("return 0;")
     for m, (mon, _) in enumerate(monitors):
         rows = []
         for k in range(len(statics)):
@@ -83,16 +83,14 @@ def gen_observers(w, monitors, sources, flat, base: int) -> None:
             f"{{{', '.join('1' if q in mon.accepting else '0' for q in range(mon.states))}}};"
         )
         w(f"static int P{m}(const V *L) {{ return {c_pred(mon.pred, flat)}; }}")
-    w("static int observe(const V *s, V *L, uint32_t via) {")
-    w("    int k = KOF(via), bad = 0;")
-    for m in range(len(monitors)):
-        w(f"    L[{base + m}] = D{m}[k][s[{base + m}]];")
-        w(f"    if (A{m}[L[{base + m}]] && !P{m}(L)) bad = 1;")
-    w("    return bad;")
-    w("}")
-    w("static int observe_initial(const V *L) {")
-    w("    int bad = 0;")
-    for m in range(len(monitors)):
-        w(f"    if (A{m}[L[{base + m}]] && !P{m}(L)) bad = 1;")
-    w("    return bad;")
-    w("}")
+    with w.block("static int observe(const V *s, V *L, uint32_t via)"):
+        w("int k = KOF(via), bad = 0;")
+        for m in range(len(monitors)):
+            w(f"L[{base + m}] = D{m}[k][s[{base + m}]];")
+            w.if_then(f"A{m}[L[{base + m}]] && !P{m}(L)", "bad = 1")
+        w("return bad;")
+    with w.block("static int observe_initial(const V *L)"):
+        w("int bad = 0;")
+        for m in range(len(monitors)):
+            w.if_then(f"A{m}[L[{base + m}]] && !P{m}(L)", "bad = 1")
+        w("return bad;")
