@@ -58,6 +58,8 @@ static int POR;             /* reduce: expand an ample set where one is proper *
 static TL int PROPER;       /* the last expansion was of a proper ample set */
 static TL int64_t NREDUCED; /* states expanded with a proper ample set, by this thread */
 static int64_t REDUCED_ALL, TRANS_ALL;
+static int64_t LEVEL_END;  /* breadth-first: the first number past the current level */
+static TL int SEED;         /* the source whose closure the last proper ample set is */
 
 #ifdef PARALLEL
 static pthread_mutex_t LOCKM = PTHREAD_MUTEX_INITIALIZER;
@@ -323,9 +325,25 @@ static inline void join(uint64_t *T, const uint64_t *B, int *work, int *nw) {
     }
 }
 
+/* a necessary enabling set of the disabled source t: the writers of the atom of one of its ports that is not
+   enabled (the one adding the fewest sources to T), or the writers of everything it reads */
+static const uint64_t *enabling(int t, const uint64_t *T) {
+    const uint64_t *best = NESALL[t];
+    int fewest = NSRC + 1;
+    for (int k = RZOFF[t]; k < RZOFF[t + 1]; k++) {
+        if (PEN[RZPORT[k]]) continue;
+        const uint64_t *w = WRITERS[RZATOM[k]];
+        int c = 0;
+        for (int j = 0; j < SW; j++) c += __builtin_popcountll(w[j] & ~T[j]);
+        if (c < fewest) { fewest = c; best = w; if (!c) break; }
+    }
+    return best;
+}
+
 /* the enabled interactions of the smallest invisible strong stubborn set seeded by one enabled source;
-   n unchanged when none is smaller than the whole (PROPER says which) */
-static int ample(int n, uint32_t *isrc, uint32_t *imask) {
+   n unchanged when none is smaller than the whole (PROPER says which).  Seeds in `skip` are not tried (their
+   sets broke the cycle proviso); SEED is the chosen one */
+static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *skip) {
     static TL uint64_t en[SW], T[SW], best[SW];
     static TL int work[NSRC + 1];
     PROPER = 0;
@@ -336,7 +354,7 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask) {
     int bestn = nen;
     for (int i = 0; i < n && bestn > 1; i++) {
         int e = (int)isrc[i];
-        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i])) continue;
+        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i]) || (skip && has(skip, e))) continue;
         memset(T, 0, sizeof T);
         T[e >> 6] |= UINT64_C(1) << (e & 63);
         int nw = 0, cnt = 0, ok = 1;
@@ -347,12 +365,10 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask) {
                 if (VISIBLE[t] || ++cnt >= bestn) { ok = 0; break; }
                 join(T, DEP[t], work, &nw);
             } else {
-                int k = RZOFF[t], found = 0;
-                for (; k < RZOFF[t + 1]; k++) if (!PEN[RZPORT[k]]) { found = 1; break; }
-                join(T, found ? WRITERS[RZATOM[k]] : NESALL[t], work, &nw);
+                join(T, enabling(t, T), work, &nw);
             }
         }
-        if (ok) { bestn = cnt; memcpy(best, T, sizeof T); }
+        if (ok) { bestn = cnt; memcpy(best, T, sizeof T); SEED = e; }
     }
     if (bestn == nen) return n;
     int k = 0;
@@ -361,19 +377,29 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask) {
     return k;
 }
 
-/* no successor of the last expansion is stored yet: the cycle proviso's test (see step_search) */
-static int all_new(int n) {
-    for (int i = 0; i < n; i++) if (held(PK + (size_t)i * NW)) return 0;
+/* every successor of the last expansion is new or already in the next breadth-first level: the cycle
+   proviso's test (see step_search) */
+static int forward(int n) {
+    int64_t next = ALOAD(&LEVEL_END);
+    for (int i = 0; i < n; i++) {
+        const uint64_t *w = PK + (size_t)i * NW;
+        if (KIND != ST_EXACT) { if (held(w)) return 0; continue; }
+        uint64_t mask = TSIZE - 1, h = hash(w) & mask;
+        for (uint32_t v; (v = ALOAD(&TABLE[h])); h = (h + 1) & mask) {
+            if (v == BUSY) return 0;
+            if (same(at(v - 1), w)) { if ((int64_t)v - 1 < next) return 0; break; }
+        }
+    }
     return 1;
 }
 
 /* every successor of s (engine slots, then request counts): interactions, then the odometer over outcomes */
-static int expand(const V *s, int reduce) {
+static int expand(const V *s, int reduce, const uint64_t *skip) {
     uint32_t isrc[MAXI], imask[MAXI];
     CUR = s;
     int ni = enabled(s, isrc, imask);
     PROPER = 0;
-    if (reduce && POR_ON) ni = ample(ni, isrc, imask);
+    if (reduce && POR_ON) ni = ample(ni, isrc, imask, skip);
     int cnt = 0;
     for (int i = 0; i < ni; i++) {
         SL = 0;
@@ -415,24 +441,29 @@ static int initials(void) {
 /* successors of s packed into PK (or initial states when s is NULL); -1 on a model error (ECODE, EARG) */
 static int step_packed(const V *s) {
     if (setjmp(JB)) return -1;
-    int n = s ? expand(s, 0) : initials();
+    int n = s ? expand(s, 0, 0) : initials();
     for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
     return n;
 }
 
 /* the successors the search follows: an ample set's when it is proper, else all of them.  With observers,
-   only when every ample successor is also new (so a reduced state only leads to states numbered after it,
-   breadth-first to the next level even with several threads, and every cycle of the reduced graph has a
-   fully expanded state: the cycle proviso safety needs);
-   deadlocks need no proviso (stubborn sets preserve every reachable deadlock) */
+   only when every ample successor is new or already in the next level (lossy stores: new), so a reduced
+   state only leads one level down, even with several threads, and every cycle of the reduced graph has a
+   fully expanded state: the cycle proviso safety needs.  An ample set that fails it gives way to the next
+   smallest one of another seed before the state is fully expanded.
+   Deadlocks need no proviso (stubborn sets preserve every reachable deadlock) */
 static int step_search(const V *s) {
     if (!POR) return step_packed(s);
     if (setjmp(JB)) return -1;
-    int n = expand(s, 1);
-    for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
-    if (!PROPER) return n;
-    if (!NMON || all_new(n)) { NREDUCED++; return n; }
-    return step_packed(s);
+    static TL uint64_t skip[SW];
+    memset(skip, 0, sizeof skip);
+    for (;;) {
+        int n = expand(s, 1, skip);
+        for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
+        if (!PROPER) return n;
+        if (!NMON || forward(n)) { NREDUCED++; return n; }
+        skip[SEED >> 6] |= UINT64_C(1) << (SEED & 63);
+    }
 }
 
 static int label_of(uint32_t via) {
@@ -513,7 +544,7 @@ static int64_t MAX_STATES, MAX_DEPTH, MAX_BYTES;
 static int STOP_AT_DEADLOCK;
 static Result *RES_OUT;
 static int STOP, DONE, SYNC, MID;   /* stop asked; threads leave; threads meet at the barrier; one mid-step */
-static int64_t NEXT, LEVEL_END, DEPTH, GROWTO;
+static int64_t NEXT, DEPTH, GROWTO;
 static double PERIOD_S;
 static progress_fn CB;
 
@@ -730,18 +761,24 @@ static int64_t lookup(const uint64_t *w) {
 }
 
 /* the successors the depth-first search with the stack proviso follows: an ample set's, unless one of its
-   successors is on the search stack (then every successor: SPIN's cycle proviso) */
+   successors is on the search stack (SPIN's cycle proviso): then the ample set of another seed, and every
+   successor when none is left */
 static int step_stack(const V *s, const uint8_t *onstack) {
+    static TL uint64_t skip[SW];
     if (setjmp(JB)) return -1;
-    int n = expand(s, 1);
-    for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
-    if (!PROPER) return n;
-    for (int i = 0; i < n; i++) {
-        int64_t id = lookup(PK + (size_t)i * NW);
-        if (id >= 0 && onstack[id]) return step_packed(s);
+    memset(skip, 0, sizeof skip);
+    for (;;) {
+        int n = expand(s, 1, skip);
+        for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
+        if (!PROPER) return n;
+        int closes = 0;
+        for (int i = 0; i < n && !closes; i++) {
+            int64_t id = lookup(PK + (size_t)i * NW);
+            closes = id >= 0 && onstack[id];
+        }
+        if (!closes) { NREDUCED++; return n; }
+        skip[SEED >> 6] |= UINT64_C(1) << (SEED & 63);
     }
-    NREDUCED++;
-    return n;
 }
 
 /* depth-first over a path stack, for the reduction with observers: a frame per state on the current path
