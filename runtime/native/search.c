@@ -59,7 +59,7 @@ static TL int PROPER;       /* the last expansion was of a proper ample set */
 static TL int64_t NREDUCED; /* states expanded with a proper ample set, by this thread */
 static int64_t REDUCED_ALL, TRANS_ALL;
 static int64_t LEVEL_END;  /* breadth-first: the first number past the current level */
-static TL int SEED;         /* the source whose closure the last proper ample set is */
+static TL uint64_t AMPLE[SW]; /* the sources of the last proper ample set */
 
 #ifdef PARALLEL
 static pthread_mutex_t LOCKM = PTHREAD_MUTEX_INITIALIZER;
@@ -341,10 +341,11 @@ static const uint64_t *enabling(int t, const uint64_t *T) {
 }
 
 /* the enabled interactions of the smallest invisible strong stubborn set seeded by one enabled source;
-   n unchanged when none is smaller than the whole (PROPER says which).  Seeds in `skip` are not tried (their
-   sets broke the cycle proviso); SEED is the chosen one */
-static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *skip) {
-    static TL uint64_t en[SW], T[SW], best[SW];
+   n unchanged when none is smaller than the whole (PROPER says which, AMPLE holds its sources).  Sources in
+   `bad` (some successor of theirs breaks the cycle proviso) may not be in it, as visible ones may not */
+static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *bad) {
+    static TL uint64_t en[SW], T[SW];
+    uint64_t *best = AMPLE;
     static TL int work[NSRC + 1];
     PROPER = 0;
     memset(en, 0, sizeof en);
@@ -354,7 +355,7 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *skip) {
     int bestn = nen;
     for (int i = 0; i < n && bestn > 1; i++) {
         int e = (int)isrc[i];
-        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i]) || (skip && has(skip, e))) continue;
+        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i]) || (bad && has(bad, e))) continue;
         memset(T, 0, sizeof T);
         T[e >> 6] |= UINT64_C(1) << (e & 63);
         int nw = 0, cnt = 0, ok = 1;
@@ -362,13 +363,13 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *skip) {
         while (nw && ok) {
             int t = work[--nw];
             if (has(en, t)) {
-                if (VISIBLE[t] || ++cnt >= bestn) { ok = 0; break; }
+                if (VISIBLE[t] || (bad && has(bad, t)) || ++cnt >= bestn) { ok = 0; break; }
                 join(T, DEP[t], work, &nw);
             } else {
                 join(T, enabling(t, T), work, &nw);
             }
         }
-        if (ok) { bestn = cnt; memcpy(best, T, sizeof T); SEED = e; }
+        if (ok) { bestn = cnt; memcpy(best, T, sizeof T); }
     }
     if (bestn == nen) return n;
     int k = 0;
@@ -377,29 +378,13 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *skip) {
     return k;
 }
 
-/* every successor of the last expansion is new or already in the next breadth-first level: the cycle
-   proviso's test (see step_search) */
-static int forward(int n) {
-    int64_t next = ALOAD(&LEVEL_END);
-    for (int i = 0; i < n; i++) {
-        const uint64_t *w = PK + (size_t)i * NW;
-        if (KIND != ST_EXACT) { if (held(w)) return 0; continue; }
-        uint64_t mask = TSIZE - 1, h = hash(w) & mask;
-        for (uint32_t v; (v = ALOAD(&TABLE[h])); h = (h + 1) & mask) {
-            if (v == BUSY) return 0;
-            if (same(at(v - 1), w)) { if ((int64_t)v - 1 < next) return 0; break; }
-        }
-    }
-    return 1;
-}
-
 /* every successor of s (engine slots, then request counts): interactions, then the odometer over outcomes */
-static int expand(const V *s, int reduce, const uint64_t *skip) {
+static int expand(const V *s, int reduce) {
     uint32_t isrc[MAXI], imask[MAXI];
     CUR = s;
     int ni = enabled(s, isrc, imask);
     PROPER = 0;
-    if (reduce && POR_ON) ni = ample(ni, isrc, imask, skip);
+    if (reduce && POR_ON) ni = ample(ni, isrc, imask, 0);
     int cnt = 0;
     for (int i = 0; i < ni; i++) {
         SL = 0;
@@ -441,9 +426,52 @@ static int initials(void) {
 /* successors of s packed into PK (or initial states when s is NULL); -1 on a model error (ECODE, EARG) */
 static int step_packed(const V *s) {
     if (setjmp(JB)) return -1;
-    int n = s ? expand(s, 0, 0) : initials();
+    int n = s ? expand(s, 0) : initials();
     for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
     return n;
+}
+
+/* a successor breaks the breadth-first cycle proviso: stored, and not in the next level (lossy stores: stored) */
+static int backward(const uint64_t *w) {
+    if (KIND != ST_EXACT) return held(w);
+    int64_t next = ALOAD(&LEVEL_END);
+    uint64_t mask = TSIZE - 1, h = hash(w) & mask;
+    for (uint32_t v; (v = ALOAD(&TABLE[h])); h = (h + 1) & mask) {
+        if (v == BUSY) return 1;
+        if (same(at(v - 1), w)) return (int64_t)v - 1 < next;
+    }
+    return 0;
+}
+
+/* every successor of s, then only those of the smallest ample set none of whose successors `closes` says
+   breaks the cycle proviso (every successor when there is none) */
+static int step_proviso(const V *s, int (*closes)(const uint64_t *w)) {
+    static TL uint64_t bad[SW];
+    static TL uint32_t isrc[MAXSUCC], imask[MAXSUCC];
+    int n = step_packed(s);
+    if (n <= 1) return n;
+    memset(bad, 0, sizeof bad);
+    for (int i = 0; i < n; i++) {
+        int src = (int)(SVIA[i] % NSRC);
+        isrc[i] = (uint32_t)src;
+        imask[i] = 0;
+        if (!has(bad, src) && closes(PK + (size_t)i * NW)) bad[src >> 6] |= UINT64_C(1) << (src & 63);
+    }
+    ample(n, isrc, imask, bad);
+    if (!PROPER) return n;
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        if (!has(AMPLE, (int)(SVIA[i] % NSRC))) continue;
+        if (k != i) {
+            memcpy(SUCC + (size_t)k * W, SUCC + (size_t)i * W, W * sizeof *SUCC);
+            memcpy(PK + (size_t)k * NW, PK + (size_t)i * NW, NW * sizeof *PK);
+            SVIA[k] = SVIA[i];
+            SBAD[k] = SBAD[i];
+        }
+        k++;
+    }
+    NREDUCED++;
+    return k;
 }
 
 /* the successors the search follows: an ample set's when it is proper, else all of them.  With observers,
@@ -454,16 +482,14 @@ static int step_packed(const V *s) {
    Deadlocks need no proviso (stubborn sets preserve every reachable deadlock) */
 static int step_search(const V *s) {
     if (!POR) return step_packed(s);
-    if (setjmp(JB)) return -1;
-    static TL uint64_t skip[SW];
-    memset(skip, 0, sizeof skip);
-    for (;;) {
-        int n = expand(s, 1, skip);
+    if (!NMON) {
+        if (setjmp(JB)) return -1;
+        int n = expand(s, 1);
         for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
-        if (!PROPER) return n;
-        if (!NMON || forward(n)) { NREDUCED++; return n; }
-        skip[SEED >> 6] |= UINT64_C(1) << (SEED & 63);
+        NREDUCED += PROPER;
+        return n;
     }
+    return step_proviso(s, backward);
 }
 
 static int label_of(uint32_t via) {
@@ -763,22 +789,16 @@ static int64_t lookup(const uint64_t *w) {
 /* the successors the depth-first search with the stack proviso follows: an ample set's, unless one of its
    successors is on the search stack (SPIN's cycle proviso): then the ample set of another seed, and every
    successor when none is left */
+static TL const uint8_t *ONSTACK;
+
+static int on_stack(const uint64_t *w) {
+    int64_t id = lookup(w);
+    return id >= 0 && (ONSTACK[id] & 2);
+}
+
 static int step_stack(const V *s, const uint8_t *onstack) {
-    static TL uint64_t skip[SW];
-    if (setjmp(JB)) return -1;
-    memset(skip, 0, sizeof skip);
-    for (;;) {
-        int n = expand(s, 1, skip);
-        for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
-        if (!PROPER) return n;
-        int closes = 0;
-        for (int i = 0; i < n && !closes; i++) {
-            int64_t id = lookup(PK + (size_t)i * NW);
-            closes = id >= 0 && onstack[id];
-        }
-        if (!closes) { NREDUCED++; return n; }
-        skip[SEED >> 6] |= UINT64_C(1) << (SEED & 63);
-    }
+    ONSTACK = onstack;
+    return step_proviso(s, on_stack);
 }
 
 /* depth-first over a path stack, for the reduction with observers: a frame per state on the current path
