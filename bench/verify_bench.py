@@ -29,12 +29,12 @@ hash table) divided by the states; SPIN's is pan's "equivalent memory usage
 for states" (stored x (state vector + overhead)) divided by the states it
 stored, without its hash table and search stack.
 
-``--dala-long S`` adds the run on the whole DALA with its rules: deadlock
-freedom and every property of descriptions/dala/properties, by our
-compiled explorer with POR, the compact store and two threads, each
-bounded by S seconds, and SPIN on the deadlock check for S seconds
-(-DMEMLIM=4000): states, depth, memory side by side, with what the compact
-store's bytes per state would hold in 16 GB.
+``--dala-long S`` adds the run on the whole DALA with its rules
+(bench/dala_long.py): deadlock freedom and every property of
+descriptions/dala/properties by our compiled explorer with POR, each bounded
+by S seconds, and SPIN on the deadlock check for S seconds at the same time
+(``--spin-memlim``, 8000 MB by default): states, depth, memory, states/s
+and whether each finished, then the estimate of the full state space.
 """
 from __future__ import annotations
 
@@ -238,75 +238,19 @@ def table(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
-@dataclass
-class LongRow:
-    check: str
-    tool: str
-    verdict: str
-    states: int
-    depth: int
-    memory_mb: float
-    seconds: float
-
-
-def dala_long(seconds: float) -> str:
-    """Whole DALA with its rules: our compiled explorer (POR, compact store, 2 threads) and SPIN, bounded runs."""
-    from runtime.engine import flatten
-    from runtime.native.properties import compiled_check
-    from runtime.props import read_property_file
-
-    package, root = dala_model()
-    items, _ = read_property_file(ROOT / "descriptions" / "dala" / "properties" / "NDD.mcl", flatten(package, root))
-    observed = set().union(*(i.observed for i in items))
-    rows = []
-    for item in items:
-        space = StateSpace(package, root, observed=observed)
-        start = time.perf_counter()
-        v = compiled_check(space, item, max_bytes=14 << 30, por=True, store="compact", workers=2,
-                           max_seconds=seconds)
-        if v is None:
-            rows.append(LongRow(item.name, "compiled+POR+compact, 2 threads", "not compiled (Python checker)",
-                                0, 0, 0.0, 0.0))
-            continue
-        r = v.result
-        word = {True: "holds", False: f"violated ({len(v.trace)} steps)", None: f"open ({r.stopped_by})"}[v.holds]
-        rows.append(LongRow(item.name, "compiled+POR+compact, 2 threads", word, r.states, r.depth,
-                            r.memory / 2**20, time.perf_counter() - start))
-        print(f"DALA {item.name}: {word}, {r.states:,} states", file=sys.stderr)
-    got: list = []
-    spin = run_spin(package, root, seconds, 1 << 26, got)
-    rep = got[-1] if got else None
-    rows.append(
-        LongRow(
-            "deadlock (SPIN)",
-            "SPIN -DMEMLIM=4000",
-            "complete" if spin[3] else "open (time)",
-            spin[0],
-            rep.depth if rep and rep.depth < DEPTH else 0,
-            rep.memory_mb if rep else 0.0,
-            rep.seconds if rep else 0.0,
-        )
-    )
-    lines = [f"Whole DALA with its rules, {seconds:.0f} s per check at most:", "",
-             ("| check | tool | verdict | states | depth (0: not said) | memory MB | seconds (with compiling) | "
-              "B/state | states in 16 GB |"),
-             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
-    for x in rows:
-        per = x.memory_mb * 2**20 / x.states if x.states else 0.0
-        fits = f"{16 * 2**30 / per:,.0f}" if per else "n/a"
-        lines.append(f"| {x.check} | {x.tool} | {x.verdict} | {x.states:,} | {x.depth} | {x.memory_mb:,.0f} | "
-                     f"{x.seconds:,.0f} | {per:,.0f} | {fits} |")
-    return "\n".join(lines)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="SPIN's time budget on models too large to finish")
     ap.add_argument("--max-states", type=int, default=150_000, help="our state budget on models too large to finish")
     ap.add_argument("--only", help="run only the models whose name contains this")
     ap.add_argument("--dala-long", type=float, metavar="S",
-                    help="also the whole DALA: deadlock and properties with POR + compact store + 2 threads, "
-                         "and SPIN, S seconds each")
+                    help="also the whole DALA: deadlock and properties with POR, and SPIN, S seconds each "
+                         "(bench/dala_long.py), with the estimate of the full state space")
+    ap.add_argument("--dala-checks", help="--dala-long: only these checks (comma-separated property names)")
+    ap.add_argument("--dala-store", default="compact", help="--dala-long: our visited set (default compact)")
+    ap.add_argument("--dala-workers", type=int, default=1, help="--dala-long: our threads (default 1)")
+    ap.add_argument("--spin-memlim", type=int, default=8000, help="--dala-long: SPIN's -DMEMLIM in MB (default 8000)")
+    ap.add_argument("--skip-table", action="store_true", help="only the --dala-long run")
     args = ap.parse_args(argv)
     models = [(f"dining N={n}", lambda n=n: (parse_text(dining(n), f"Dining{n}.bip"), "Table()"), None)
               for n in range(10, 13)]
@@ -314,7 +258,7 @@ def main(argv: list[str] | None = None) -> int:
     models.append(("DALA (5 modules, rules)", dala_model, args.max_states))
     rows = []
     for name, build, budget in models:
-        if args.only and args.only not in name:
+        if args.skip_table or (args.only and args.only not in name):
             continue
         package, root = build()
         ours = run_ours(package, root, budget)
@@ -333,10 +277,15 @@ def main(argv: list[str] | None = None) -> int:
           f"Python {sys.version.split()[0]}; compiled explorer 1 and 2 threads, "
           f"{compiler()} {' '.join(FLAGS)} (2 threads: {' '.join(PARALLEL_FLAGS)}); SPIN single core, gcc -O2 "
           "-DMEMLIM=4000")
-    print(table(rows))
+    if rows:
+        print(table(rows))
     if args.dala_long:
+        from dala_long import dala_long
+
+        checks = args.dala_checks.split(",") if args.dala_checks else None
         print()
-        print(dala_long(args.dala_long))
+        print(dala_long(args.dala_long, checks, args.dala_store, args.dala_workers, args.spin_memlim))
+        print(f"load average at the end: {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0
 
 

@@ -91,12 +91,31 @@ def test_depth_first_finds_the_same_states():
     assert (dfs.states, dfs.transitions, len(dfs.deadlocks)) == (bfs.states, bfs.transitions, 1)
 
 
-def test_progress_line_when_forced():
-    err = io.StringIO()
-    progress = Progress(stream=err, force=True, delay=0.0)
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_line_rewritten_in_place_on_a_terminal():
+    err = _Terminal()
+    progress = Progress(stream=err, delay=0.0)
     explore(space("Dining", "Table3()"), progress=progress)
     text = err.getvalue()
     assert text.startswith("\r") and "states/s" in text and "frontier" in text and "memory" in text
+    assert "\n" not in text and text.endswith("\r")  # cleared for the results
+
+
+def test_progress_forced_into_a_file_writes_one_line_per_report():
+    err = io.StringIO()
+    progress = Progress(stream=err, force=True, delay=0.0)
+    for n in (10, 20):
+        progress.tick(n, 2 * n, 1, lambda: 2048, depth=3)
+        progress.next = 0  # due again
+    progress.done()
+    lines = err.getvalue().split("\n")
+    assert "\r" not in err.getvalue() and lines[-1] == ""
+    assert [line.split()[1] for line in lines[:-1]] == ["10", "20"]
+    assert all("states/s" in line and "depth 3" in line and "memory 2.0 KB" in line for line in lines[:-1])
 
 
 def test_progress_silent_without_a_terminal():

@@ -1,7 +1,8 @@
-"""A one-line progress display on stderr for long explorations, rewritten in place.
+"""A one-line progress display on stderr for long explorations, rewritten in place on a terminal.
 
 Shown only once a run has lasted a second, and only on a terminal unless
-forced (tests force it; a log file does not want carriage returns).
+forced (``--progress``): a stream that is not a terminal (a log file) gets
+one line per report, ended by a newline, about once a second.
 """
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from typing import Callable, TextIO
 #: Seconds before the first line appears, and between updates.
 DELAY = 1.0
 PERIOD = 0.25
+#: Seconds between lines when the stream is not a terminal.
+LOG_PERIOD = 1.0
 
 
 def human_bytes(n: float) -> str:
@@ -30,6 +33,7 @@ class Progress:
         self.stream = stream or sys.stderr
         isatty = getattr(self.stream, "isatty", lambda: False)()
         self.on = enabled and (force or isatty)
+        self.tty = isatty
         self.delay = delay
         self.start = time.monotonic()
         self.next = self.start + delay
@@ -43,11 +47,15 @@ class Progress:
         now = time.monotonic()
         if now < self.next:
             return
-        self.next = now + PERIOD
+        self.next = now + (PERIOD if self.tty else LOG_PERIOD)
         rate = states / max(now - self.start, 1e-9)
         line = (f"states {states:,}  transitions {transitions:,}  {rate:,.0f} states/s  "
                 + (f"depth {depth:,}  " if depth is not None else "")
                 + f"frontier {frontier:,}  memory {human_bytes(memory())}")
+        if not self.tty:
+            self.stream.write(line + "\n")
+            self.stream.flush()
+            return
         pad = " " * max(0, self.width - len(line))
         self.stream.write("\r" + line + pad)
         self.stream.flush()

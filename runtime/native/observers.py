@@ -8,7 +8,10 @@ the first violation met ends a shortest counterexample.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 from runtime.engine.emit import CWriter
+from runtime.export.promela_base import Monitor
 from runtime.native.cexpr import Unsupported
 from runtime.props.formulas import PAnd, PAt, PCmp, PConst, PNot, POr, Pred
 from runtime.props.predicates import split_path
@@ -44,6 +47,42 @@ def c_pred(p: Pred | None, flat, state: str = "L") -> str:
     if isinstance(p, POr):
         return f"({c_pred(p.left, flat, state)} || {c_pred(p.right, flat, state)})"
     raise Unsupported(f"predicate {p!r}")
+
+
+def minimal(mon: Monitor) -> Monitor:
+    """The same observer with language-equivalent states merged (Moore's refinement), reachable ones only.
+
+    The subset construction keeps states that differ as sets but not in what they accept (the start set and
+    the set after one ``true*`` step): merged, an interaction the property does not name leaves the state
+    alone, which is what makes it invisible to the partial-order reduction and saves observer states.  For
+    ``[R] false`` (no predicate) reaching an accepting state is the violation, which ends the search: its
+    way out is never taken, so accepting states become one sink first.
+    """
+    n, ks = mon.states, range(len(mon.delta))
+    if mon.pred is None:
+        mon = replace(mon, delta=[{q: q if q in mon.accepting else t for q, t in d.items()} for d in mon.delta])
+    block = [1 if q in mon.accepting else 0 for q in range(n)]
+    while True:
+        sig = [(block[q], *(block[mon.delta[k].get(q, q)] for k in ks)) for q in range(n)]
+        ids: dict[tuple, int] = {}
+        new = [ids.setdefault(s, len(ids)) for s in sig]
+        if len(ids) == len(set(block)):
+            break
+        block = new
+    order = {block[mon.initial]: 0}
+    stack = [mon.initial]
+    rep = {block[mon.initial]: mon.initial}
+    while stack:
+        q = stack.pop()
+        for k in ks:
+            t = mon.delta[k].get(q, q)
+            if block[t] not in order:
+                order[block[t]] = len(order)
+                rep[block[t]] = t
+                stack.append(t)
+    delta = [{order[b]: order[block[mon.delta[k].get(q, q)]] for b, q in rep.items()} for k in ks]
+    accepting = {order[b] for b, q in rep.items() if q in mon.accepting}
+    return replace(mon, states=len(order), delta=delta, accepting=accepting, initial=0)
 
 
 def gen_observers(w: CWriter, monitors, sources, flat, base: int) -> None:

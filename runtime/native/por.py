@@ -26,6 +26,39 @@ def source_atoms(src, flat) -> set[int]:
     return {flat.ports[p].atom for p in src.leaves}
 
 
+def _reads_only(fp, flat) -> bool:
+    """Whether firing atom port ``fp`` leaves its atom as it was: every transition on it is a self-loop with
+    no action (a control atom's status port, which the rules' guards read)."""
+    trs = [t for t in flat.atoms[fp.atom].type.transitions if t.port == fp.name]
+    return bool(trs) and all(set(t.sources) == set(t.targets) and not t.action and t.resume is None
+                             and t.urgency is None for t in trs)
+
+
+def _down_names(src) -> set[str] | None:
+    """The port parameters a connector's down actions mention (None: any of them, for nested connectors)."""
+    con = src.connector
+    if any(len(param) != 1 or not hasattr(param[0], "port") for param in con.params):
+        return None
+    text = " ".join(repr(st) for spec in con.type.interactions for st in spec.down)
+    return {p.name for p in con.type.params if f"port='{p.name}'" in text}
+
+
+def written_atoms(src, flat) -> set[int]:
+    """Atoms a source may change: those of its ports, less the ports it only reads.
+
+    A port only reads when its transitions are action-less self-loops and the connector's down actions
+    do not write its data (an eager internal transition cannot follow: the atom's state is unchanged).
+    """
+    if src.kind == "port":
+        return set() if _reads_only(src.port, flat) else {src.port.atom}
+    down = _down_names(src)
+    if down is None:
+        return source_atoms(src, flat)
+    names = {param[0].port: p.name for param, p in zip(src.connector.params, src.connector.type.params)}
+    return {flat.ports[q].atom for q in src.leaves
+            if not _reads_only(flat.ports[q], flat) or names.get(q) in down or q not in names}
+
+
 def _pred_atoms(p: Pred | None, flat) -> set[int]:
     if isinstance(p, PAt):
         return {a.index for a in flat.atoms if a.name == p.atom}
@@ -48,7 +81,7 @@ def visible_sources(sources, flat, monitors) -> list[bool]:
             if any(q2 != q for q, q2 in mon.delta[k].items()):
                 out[st.source.index] = True
         for src in sources:
-            if source_atoms(src, flat) & watched:
+            if written_atoms(src, flat) & watched:
                 out[src.index] = True
     return out
 
@@ -105,8 +138,8 @@ def gen_por(w, sources, flat, prio, monitors, enabled: bool) -> None:
     w(f"#define POR_ON {1 if enabled else 0}")
     w(f"#define SW {words}")
     w(f"#define NATOMS {max(na, 1)}")
-    writes = [_bits(na, source_atoms(s, flat)) for s in sources]
-    reads = [writes[s.index] | _priority_reads(s, sources, writes, flat, prio) for s in sources]
+    writes = [_bits(na, written_atoms(s, flat)) for s in sources]
+    reads = [_bits(na, source_atoms(s, flat)) | _priority_reads(s, sources, writes, flat, prio) for s in sources]
     writers = [0] * na
     readers = [0] * na
     for s in sources:

@@ -25,6 +25,7 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
     from runtime.export.interactions import all_interactions
     from runtime.export.monitors import build_monitor, spin_shape
     from runtime.native.compiled import Diverged, compile_space
+    from runtime.native.observers import minimal
 
     shape = spin_shape(item)
     if not shape:
@@ -36,7 +37,7 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
             monitor, _ = build_monitor(item, statics, "p")
         except PromelaError:
             return None
-        monitors.append((monitor, statics))
+        monitors.append((minimal(monitor), statics))
     cs, _ = compile_space(space, externs, monitors)
     if cs is None:
         return None

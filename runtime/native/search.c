@@ -58,6 +58,8 @@ static int POR;             /* reduce: expand an ample set where one is proper *
 static TL int PROPER;       /* the last expansion was of a proper ample set */
 static TL int64_t NREDUCED; /* states expanded with a proper ample set, by this thread */
 static int64_t REDUCED_ALL, TRANS_ALL;
+static int64_t LEVEL_END;  /* breadth-first: the first number past the current level */
+static TL uint64_t AMPLE[SW]; /* the sources of the last proper ample set */
 
 #ifdef PARALLEL
 static pthread_mutex_t LOCKM = PTHREAD_MUTEX_INITIALIZER;
@@ -323,10 +325,27 @@ static inline void join(uint64_t *T, const uint64_t *B, int *work, int *nw) {
     }
 }
 
+/* a necessary enabling set of the disabled source t: the writers of the atom of one of its ports that is not
+   enabled (the one adding the fewest sources to T), or the writers of everything it reads */
+static const uint64_t *enabling(int t, const uint64_t *T) {
+    const uint64_t *best = NESALL[t];
+    int fewest = NSRC + 1;
+    for (int k = RZOFF[t]; k < RZOFF[t + 1]; k++) {
+        if (PEN[RZPORT[k]]) continue;
+        const uint64_t *w = WRITERS[RZATOM[k]];
+        int c = 0;
+        for (int j = 0; j < SW; j++) c += __builtin_popcountll(w[j] & ~T[j]);
+        if (c < fewest) { fewest = c; best = w; if (!c) break; }
+    }
+    return best;
+}
+
 /* the enabled interactions of the smallest invisible strong stubborn set seeded by one enabled source;
-   n unchanged when none is smaller than the whole (PROPER says which) */
-static int ample(int n, uint32_t *isrc, uint32_t *imask) {
-    static TL uint64_t en[SW], T[SW], best[SW];
+   n unchanged when none is smaller than the whole (PROPER says which, AMPLE holds its sources).  Sources in
+   `bad` (some successor of theirs breaks the cycle proviso) may not be in it, as visible ones may not */
+static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *bad) {
+    static TL uint64_t en[SW], T[SW];
+    uint64_t *best = AMPLE;
     static TL int work[NSRC + 1];
     PROPER = 0;
     memset(en, 0, sizeof en);
@@ -336,7 +355,7 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask) {
     int bestn = nen;
     for (int i = 0; i < n && bestn > 1; i++) {
         int e = (int)isrc[i];
-        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i])) continue;
+        if (VISIBLE[e] || (i && isrc[i - 1] == isrc[i]) || (bad && has(bad, e))) continue;
         memset(T, 0, sizeof T);
         T[e >> 6] |= UINT64_C(1) << (e & 63);
         int nw = 0, cnt = 0, ok = 1;
@@ -344,12 +363,10 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask) {
         while (nw && ok) {
             int t = work[--nw];
             if (has(en, t)) {
-                if (VISIBLE[t] || ++cnt >= bestn) { ok = 0; break; }
+                if (VISIBLE[t] || (bad && has(bad, t)) || ++cnt >= bestn) { ok = 0; break; }
                 join(T, DEP[t], work, &nw);
             } else {
-                int k = RZOFF[t], found = 0;
-                for (; k < RZOFF[t + 1]; k++) if (!PEN[RZPORT[k]]) { found = 1; break; }
-                join(T, found ? WRITERS[RZATOM[k]] : NESALL[t], work, &nw);
+                join(T, enabling(t, T), work, &nw);
             }
         }
         if (ok) { bestn = cnt; memcpy(best, T, sizeof T); }
@@ -361,19 +378,13 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask) {
     return k;
 }
 
-/* no successor of the last expansion is stored yet: the cycle proviso's test (see step_search) */
-static int all_new(int n) {
-    for (int i = 0; i < n; i++) if (held(PK + (size_t)i * NW)) return 0;
-    return 1;
-}
-
 /* every successor of s (engine slots, then request counts): interactions, then the odometer over outcomes */
 static int expand(const V *s, int reduce) {
     uint32_t isrc[MAXI], imask[MAXI];
     CUR = s;
     int ni = enabled(s, isrc, imask);
     PROPER = 0;
-    if (reduce && POR_ON) ni = ample(ni, isrc, imask);
+    if (reduce && POR_ON) ni = ample(ni, isrc, imask, 0);
     int cnt = 0;
     for (int i = 0; i < ni; i++) {
         SL = 0;
@@ -420,19 +431,65 @@ static int step_packed(const V *s) {
     return n;
 }
 
+/* a successor breaks the breadth-first cycle proviso: stored, and not in the next level (lossy stores: stored) */
+static int backward(const uint64_t *w) {
+    if (KIND != ST_EXACT) return held(w);
+    int64_t next = ALOAD(&LEVEL_END);
+    uint64_t mask = TSIZE - 1, h = hash(w) & mask;
+    for (uint32_t v; (v = ALOAD(&TABLE[h])); h = (h + 1) & mask) {
+        if (v == BUSY) return 1;
+        if (same(at(v - 1), w)) return (int64_t)v - 1 < next;
+    }
+    return 0;
+}
+
+/* every successor of s, then only those of the smallest ample set none of whose successors `closes` says
+   breaks the cycle proviso (every successor when there is none) */
+static int step_proviso(const V *s, int (*closes)(const uint64_t *w)) {
+    static TL uint64_t bad[SW];
+    static TL uint32_t isrc[MAXSUCC], imask[MAXSUCC];
+    int n = step_packed(s);
+    if (n <= 1) return n;
+    memset(bad, 0, sizeof bad);
+    for (int i = 0; i < n; i++) {
+        int src = (int)(SVIA[i] % NSRC);
+        isrc[i] = (uint32_t)src;
+        imask[i] = 0;
+        if (!has(bad, src) && closes(PK + (size_t)i * NW)) bad[src >> 6] |= UINT64_C(1) << (src & 63);
+    }
+    ample(n, isrc, imask, bad);
+    if (!PROPER) return n;
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        if (!has(AMPLE, (int)(SVIA[i] % NSRC))) continue;
+        if (k != i) {
+            memcpy(SUCC + (size_t)k * W, SUCC + (size_t)i * W, W * sizeof *SUCC);
+            memcpy(PK + (size_t)k * NW, PK + (size_t)i * NW, NW * sizeof *PK);
+            SVIA[k] = SVIA[i];
+            SBAD[k] = SBAD[i];
+        }
+        k++;
+    }
+    NREDUCED++;
+    return k;
+}
+
 /* the successors the search follows: an ample set's when it is proper, else all of them.  With observers,
-   only when every ample successor is also new (so a reduced state only leads to states numbered after it,
-   breadth-first to the next level even with several threads, and every cycle of the reduced graph has a
-   fully expanded state: the cycle proviso safety needs);
-   deadlocks need no proviso (stubborn sets preserve every reachable deadlock) */
+   only when every ample successor is new or already in the next level (lossy stores: new), so a reduced
+   state only leads one level down, even with several threads, and every cycle of the reduced graph has a
+   fully expanded state: the cycle proviso safety needs.  An ample set that fails it gives way to the next
+   smallest one of another seed before the state is fully expanded.
+   Deadlocks need no proviso (stubborn sets preserve every reachable deadlock) */
 static int step_search(const V *s) {
     if (!POR) return step_packed(s);
-    if (setjmp(JB)) return -1;
-    int n = expand(s, 1);
-    for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
-    if (!PROPER) return n;
-    if (!NMON || all_new(n)) { NREDUCED++; return n; }
-    return step_packed(s);
+    if (!NMON) {
+        if (setjmp(JB)) return -1;
+        int n = expand(s, 1);
+        for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
+        NREDUCED += PROPER;
+        return n;
+    }
+    return step_proviso(s, backward);
 }
 
 static int label_of(uint32_t via) {
@@ -513,7 +570,7 @@ static int64_t MAX_STATES, MAX_DEPTH, MAX_BYTES;
 static int STOP_AT_DEADLOCK;
 static Result *RES_OUT;
 static int STOP, DONE, SYNC, MID;   /* stop asked; threads leave; threads meet at the barrier; one mid-step */
-static int64_t NEXT, LEVEL_END, DEPTH, GROWTO;
+static int64_t NEXT, DEPTH, GROWTO;
 static double PERIOD_S;
 static progress_fn CB;
 
@@ -730,18 +787,18 @@ static int64_t lookup(const uint64_t *w) {
 }
 
 /* the successors the depth-first search with the stack proviso follows: an ample set's, unless one of its
-   successors is on the search stack (then every successor: SPIN's cycle proviso) */
+   successors is on the search stack (SPIN's cycle proviso): then the ample set of another seed, and every
+   successor when none is left */
+static TL const uint8_t *ONSTACK;
+
+static int on_stack(const uint64_t *w) {
+    int64_t id = lookup(w);
+    return id >= 0 && (ONSTACK[id] & 2);
+}
+
 static int step_stack(const V *s, const uint8_t *onstack) {
-    if (setjmp(JB)) return -1;
-    int n = expand(s, 1);
-    for (int i = 0; i < n; i++) pack(SUCC + (size_t)i * W, PK + (size_t)i * NW);
-    if (!PROPER) return n;
-    for (int i = 0; i < n; i++) {
-        int64_t id = lookup(PK + (size_t)i * NW);
-        if (id >= 0 && onstack[id]) return step_packed(s);
-    }
-    NREDUCED++;
-    return n;
+    ONSTACK = onstack;
+    return step_proviso(s, on_stack);
 }
 
 /* depth-first over a path stack, for the reduction with observers: a frame per state on the current path
