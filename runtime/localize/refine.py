@@ -108,12 +108,18 @@ def visible_labels(item: Checkable, labels: list[str]) -> set[str]:
         monitor, _ = build_monitor(item, statics, "p")
     except PromelaError as exc:
         raise NotLocalizable(str(exc)) from None
-    if monitor.pred is None:  # [R] false: the first match ends the search, so what follows it does not count
-        for row in monitor.delta:
-            row.update({q: q for q in monitor.accepting})
     block = _minimal(monitor, len(statics))
-    moves = [any(block[monitor.delta[k].get(q, q)] != block[q] for q in range(monitor.states))
-             for k in range(len(statics))]
+    n = len(statics)
+
+    def step(q: int, k: int) -> int:
+        return monitor.delta[k].get(q, q)
+
+    # an interaction k may be dropped when it never makes R match where it did not already, and what follows it
+    # leads where it would have led without it
+    moves = [any((step(q, k) in monitor.accepting and q not in monitor.accepting)
+                 or any(block[step(step(q, k), j)] != block[step(q, j)] for j in range(n))
+                 for q in range(monitor.states))
+             for k in range(n)]
     if moves[-1]:
         raise NotLocalizable("the property counts interactions it does not name (its observer moves on any "
                              "interaction): dropping interactions would change its verdict")
@@ -141,7 +147,34 @@ def initial_kept(flat: FlatSystem, item: Checkable, visible: set[str]) -> set[in
     kept |= {fp.atom for fp in flat.ports if not fp.decl.exported and fp.path in visible}
     names = {a.name: a.index for a in flat.atoms}
     kept |= {names[atom] for atom, _ in item.observed if atom in names}
+    kept |= {names[atom] for atom in _pred_atoms(flat, item.property.formula) if atom in names}
     return kept
+
+
+def _pred_atoms(flat: FlatSystem, formula) -> set[str]:
+    """The atoms the state predicates of a formula read (places and variables)."""
+    from runtime.props.check import _preds
+    from runtime.props.formulas import PAnd, PAt, PCmp, PNot, POr
+    from runtime.props.predicates import split_path
+
+    out: set[str] = set()
+
+    def walk(p) -> None:
+        if isinstance(p, PAt):
+            out.add(p.atom)
+        elif isinstance(p, PCmp):
+            got = split_path(flat, p.path)
+            if got is not None:
+                out.add(got[0].name)
+        elif isinstance(p, PNot):
+            walk(p.operand)
+        elif isinstance(p, (PAnd, POr)):
+            walk(p.left)
+            walk(p.right)
+
+    for p in _preds(formula):
+        walk(p)
+    return out
 
 
 def _read_only(flat: FlatSystem, port: int) -> bool:
@@ -261,55 +294,59 @@ def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstrac
                budget: int) -> tuple[list[Step] | None, int]:
     """A path of the model that takes the abstract trace's kept interactions in order and dropped ones in between.
 
-    Breadth-first over (state, position in the trace), so the path found is a
-    shortest one among those; it ends where the property's observer has
-    matched and its predicate fails.  None when no such path exists within
-    ``budget`` states (the abstract trace is then treated as spurious).
+    Segment by segment: from where the previous kept interaction led, a
+    breadth-first search over dropped interactions to the nearest state where
+    the next kept one fires (so the dropped atoms catch up with the shortest
+    detour).  The path must end where the property's observer has matched
+    and its predicate fails.  None when a segment finds nothing within
+    ``budget`` states: the abstract trace then counts as spurious (a real
+    counterexample is found again after refinement; soundness never depends
+    on this search).
     """
     flat = space.engine.flat
     wanted = [s.label for s in trace if not _chaos_label(s.label)]
     free = a.free_labels if a is not None else frozenset()
     accept, pred = _acceptor(item, flat)
-    start = [(sid, 0) for sid in space.initial_ids]
-    parent: dict[tuple[int, int], tuple[tuple[int, int], int] | None] = {n: None for n in start}
-    queue = list(start)
+    visited = 0
+    for start in space.initial_ids:
+        states, labels = [start], []
+        for label in wanted:
+            got, seen = _segment(space, states[-1], label, free, budget)
+            visited += seen
+            if got is None:
+                break
+            states += got[0]
+            labels += got[1]
+        else:
+            if accept(labels) and not pred(space.engine_state(states[-1])):
+                return space.steps_along(states, labels), visited
+    return None, visited
+
+
+def _segment(space: StateSpace, sid: int, label: str, free, budget: int):
+    """(states after sid, their labels) of a shortest path of dropped interactions then ``label``; None if none."""
+    parent: dict[int, tuple[int, int] | None] = {sid: None}
+    queue = [sid]
     head = 0
     while head < len(queue) and len(parent) < budget:
         node = queue[head]
         head += 1
-        sid, i = node
-        if i == len(wanted):
-            path = _path(parent, node)
-            labels = [space.labels[lab] for _, lab in path[1:]]
-            if accept(labels) and not pred(space.engine_state(sid)):
-                states = [s for (s, _), _ in path]
-                return space.steps_along(states, labels), len(parent)
-        succ = space.successors(sid)
+        succ = space.successors(node)
         for k in range(0, len(succ), 2):
-            lab, target = succ[k], succ[k + 1]
-            name = space.labels[lab]
-            if i < len(wanted) and name == wanted[i]:
-                nxt = (target, i + 1)
-            elif name in free:
-                nxt = (target, i)
-            else:
-                continue
-            if nxt not in parent:
-                parent[nxt] = (node, lab)
-                queue.append(nxt)
+            name = space.labels[succ[k]]
+            if name == label:
+                states, labels = [succ[k + 1]], [name]
+                cur = node
+                while parent[cur] is not None:
+                    prev, lab = parent[cur]
+                    states.append(cur)
+                    labels.append(space.labels[lab])
+                    cur = prev
+                return (states[::-1], labels[::-1]), len(parent)
+            if name in free and succ[k + 1] not in parent:
+                parent[succ[k + 1]] = (node, succ[k])
+                queue.append(succ[k + 1])
     return None, len(parent)
-
-
-def _path(parent, node) -> list[tuple[tuple[int, int], int]]:
-    """``[(node, label into it)]`` from the start (label -1) to ``node``."""
-    out = []
-    cur = node
-    while parent[cur] is not None:
-        prev, lab = parent[cur]
-        out.append((cur, lab))
-        cur = prev
-    out.append((cur, -1))
-    return out[::-1]
 
 
 def _acceptor(item: Checkable, flat: FlatSystem):
