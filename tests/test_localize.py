@@ -162,3 +162,52 @@ def test_the_dala_rules_file_reads_on_the_whole_model():
 def package_of_dala():
     from runtime.bip2 import parse_file
     return parse_file(str(ROOT / "gen" / "dala" / "dala.bip"))
+
+
+# --------------------------------------------------------------------------- the command line
+
+DALA = str(ROOT / "descriptions" / "dala")
+
+
+def run(capsys, *argv):
+    from genom2bip.cli import main
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_a_false_property_of_whole_dala_gets_a_counterexample_that_replays(capsys, tmp_path):
+    wrong = tmp_path / "wrong.mcl"
+    wrong.write_text('-- POM runs whether or not NDD set its speed\nwrong: "NDD.SetSpeed:finish" precedes '
+                     '"POM.Run:trigger";\n')
+    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(wrong))
+    assert code == 4, err
+    assert "deadlock-free (compositional, " in out
+    assert "  round 1: 4 of 65 atoms kept" in out and ": violated, concrete search " in out
+    assert "  violated (localization, 1 round, 4 of 65 atoms kept" in out
+    assert "  counterexample on the model (1 step):" in out
+    assert "POM.Run:trigger" in out.split("counterexample on the model")[1]
+    pkg = package_of_dala()
+    (item,) = props(pkg, "DALA()", wrong.read_text())
+    got = check_localized(pkg, "DALA()", item).verdict
+    assert replays(pkg, "DALA()", got.trace) == ["POM.Run:trigger"]
+
+
+def test_a_property_it_cannot_take_is_refused_before_anything_runs(capsys, tmp_path):
+    bad = tmp_path / "live.mcl"
+    bad.write_text('ok: never "NDD.GoTo:fail";\nlive: [true*] <true* . "NDD.GoTo:finish"> true;\n')
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(bad))
+    assert code == 1
+    assert f"{bad}:2:1: property live: not checked by --method compositional: neither a safety property" in err
+    assert "property ok" not in err
+    assert out == ""  # nothing ran: not even the deadlock analysis
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_deadlock_freedom_in_a_property_file_is_the_invariants_verdict(capsys, tmp_path):
+    f = tmp_path / "d.mcl"
+    f.write_text("d: deadlock free;\n")
+    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(f))
+    assert code == 0, err
+    assert "property d: deadlock free\n  means: [true*] <true> true\n  holds (compositional invariants, above)" in out
