@@ -26,7 +26,7 @@ from runtime.engine.flatten import FlatSystem, flatten
 from runtime.explore.space import StateSpace, Step
 from runtime.export.monitors import build_monitor, spin_shape
 from runtime.export.promela_base import PromelaError
-from runtime.localize.abstraction import CHAOS, Abstraction, abstract, close
+from runtime.localize.abstraction import CHAOS, Abstraction, abstract, close, optional_leaves
 from runtime.props.check import Checkable, Verdict, check, model_labels
 from runtime.props.formulas import Property, Regular, RSeq, RStar, SBox, SConst, SDia, SFix, SOr, SVar
 from runtime.props.normal import normalize, positive
@@ -143,7 +143,8 @@ def initial_kept(flat: FlatSystem, item: Checkable, visible: set[str]) -> set[in
     kept = set()
     for fc in flat.connectors:
         if fc.top and fc.label in visible:
-            kept |= {flat.ports[p].atom for p in flat.leaves(fc) if not _read_only(flat, p)}
+            optional = optional_leaves(flat, fc)  # e.g. the victims of an interruption: refinement adds them
+            kept |= {flat.ports[p].atom for p in flat.leaves(fc) if not _read_only(flat, p) and p not in optional}
     kept |= {fp.atom for fp in flat.ports if not fp.decl.exported and fp.path in visible}
     names = {a.name: a.index for a in flat.atoms}
     kept |= {names[atom] for atom, _ in item.observed if atom in names}
