@@ -21,9 +21,10 @@ traces run on it unchanged.  Every step only adds behaviour (docs/verification.m
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field, fields, is_dataclass
+from dataclasses import dataclass, field
 
 from runtime.engine.flatten import FlatConnector, FlatSystem, Leaf, parse_root
+from runtime.explore.layout import _port_data  # every p.x read under an expression or statement
 from runtime.model import (
     AtomType,
     CompoundType,
@@ -72,19 +73,6 @@ def tree(flat: FlatSystem, fc: FlatConnector) -> list[FlatConnector]:
 
 def connector_atoms(flat: FlatSystem, fc: FlatConnector) -> frozenset[int]:
     return frozenset(flat.ports[p].atom for p in flat.leaves(fc))
-
-
-def _port_data(node, out: set[tuple[str, str]]) -> None:
-    """Every ``p.x`` read anywhere under an expression or statement."""
-    if isinstance(node, PortData):
-        out.add((node.port, node.name))
-    elif isinstance(node, (list, tuple)):
-        for x in node:
-            _port_data(x, out)
-    elif is_dataclass(node) and not isinstance(node, type):
-        for f in fields(node):
-            if f.name != "span":
-                _port_data(getattr(node, f.name), out)
 
 
 def data_read(flat: FlatSystem, fc: FlatConnector) -> dict[int, set[str]]:
