@@ -232,7 +232,7 @@ def check_localized(package, root: str, item: Checkable, externs=None, *, max_st
         used = _used(space, verdict.trace, kept, flat)
         if concrete is None:
             concrete = StateSpace(package, root, externs, None, True, item.observed)
-        steps, visited = concretize(concrete, item, verdict.trace, a, concrete_budget)
+        steps, visited = concretize(concrete, item, verdict.trace, a, concrete_budget, space)
         rnd.concrete_states = visited
         rnd.seconds = time.perf_counter() - t0
         if steps is not None:
@@ -292,13 +292,14 @@ def _used(space: StateSpace, trace: list[Step], kept: set[int], flat: FlatSystem
 
 
 def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstraction | None,
-               budget: int) -> tuple[list[Step] | None, int]:
+               budget: int, abstract_space: StateSpace | None = None) -> tuple[list[Step] | None, int]:
     """A path of the model that takes the abstract trace's kept interactions in order and dropped ones in between.
 
     Segment by segment: from where the previous kept interaction led, a
-    breadth-first search over dropped interactions to the nearest state where
-    the next kept one fires (so the dropped atoms catch up with the shortest
-    detour).  The path must end where the property's observer has matched
+    best-first search over dropped interactions to a state where the next
+    kept one fires, guided towards the values the abstract trace gave the
+    free booleans (``abstract_space``: the abstraction it came from), so the
+    dropped atoms catch up with a short detour.  The path must end where the property's observer has matched
     and its predicate fails.  None when a segment finds nothing within
     ``budget`` states: the abstract trace then counts as spurious (a real
     counterexample is found again after refinement; soundness never depends
@@ -308,11 +309,12 @@ def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstrac
     wanted = [s.label for s in trace if not _chaos_label(s.label)]
     free = a.free_labels if a is not None else frozenset()
     accept, pred = _acceptor(item, flat)
+    goals = _goals(space, trace, abstract_space) if abstract_space is not None else [{} for _ in wanted]
     visited = 0
     for start in space.initial_ids:
         states, labels = [start], []
-        for label in wanted:
-            got, seen = _segment(space, states[-1], label, free, budget)
+        for label, goal in zip(wanted, goals):
+            got, seen = _segment(space, states[-1], label, free, budget, goal)
             visited += seen
             if got is None:
                 break
@@ -324,14 +326,39 @@ def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstrac
     return None, visited
 
 
-def _segment(space: StateSpace, sid: int, label: str, free, budget: int):
-    """(states after sid, their labels) of a shortest path of dropped interactions then ``label``; None if none."""
+def _goals(space: StateSpace, trace: list[Step], abstract_space: StateSpace) -> list[dict[int, object]]:
+    """Per kept step of the trace: model slot -> the value its free boolean had in the abstraction just before."""
+    names = {a.name: a for a in space.engine.flat.atoms}
+    havocs = []
+    for fa in abstract_space.engine.flat.atoms:
+        for port in fa.ports:
+            if port.startswith(f"{CHAOS}havoc_") and fa.name in names:
+                var = next(v.name for v in fa.variables if port == f"{CHAOS}havoc_{v.name}" or
+                           port.startswith(f"{CHAOS}havoc_{v.name}_"))
+                havocs.append((fa.slot(var), names[fa.name].slot(var)))
+    out = []
+    for k, step in enumerate(trace):
+        if not _chaos_label(step.label):
+            state = abstract_space.concrete(trace[:k])
+            out.append({model: state[slot] for slot, model in havocs})
+    return out
+
+
+def _segment(space: StateSpace, sid: int, label: str, free, budget: int, goal: dict[int, object]):
+    """(states after sid, their labels) of a path of dropped interactions then ``label``; None if none is found.
+
+    Best first: states whose free booleans differ least from ``goal``, then the shallowest.
+    """
+    import heapq
+
+    def distance(node: int) -> int:
+        state = space.engine_state(node)
+        return sum(state[slot] != value for slot, value in goal.items())
+
     parent: dict[int, tuple[int, int] | None] = {sid: None}
-    queue = [sid]
-    head = 0
-    while head < len(queue) and len(parent) < budget:
-        node = queue[head]
-        head += 1
+    heap = [(distance(sid), 0, sid)]
+    while heap and len(parent) < budget:
+        _, depth, node = heapq.heappop(heap)
         succ = space.successors(node)
         for k in range(0, len(succ), 2):
             name = space.labels[succ[k]]
@@ -346,7 +373,7 @@ def _segment(space: StateSpace, sid: int, label: str, free, budget: int):
                 return (states[::-1], labels[::-1]), len(parent)
             if name in free and succ[k + 1] not in parent:
                 parent[succ[k + 1]] = (node, succ[k])
-                queue.append(succ[k + 1])
+                heapq.heappush(heap, (distance(succ[k + 1]), depth + 1, succ[k + 1]))
     return None, len(parent)
 
 
