@@ -83,7 +83,8 @@ def test_graph_to_an_unwritable_place_is_an_error(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--method", "compositional", "--property", "x.mcl"], "--method compositional checks deadlock freedom only"),
+    (["--method", "both", "--property", "x.mcl"], "--property with both needs one method"),
+    (["--method", "compositional", "--property", "x.mcl", "--timed"], "on untimed models; drop --timed"),
     (["--method", "both", "--engine", "spin"], "--method both decides candidates with our explorer"),
     (["--method", "compositional", "--requests", "2"], "drop --requests"),
     (["--method", "compositional", "--solver", "nosuch"], "--solver nosuch: not a python-sat solver (one of "),

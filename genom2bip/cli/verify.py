@@ -171,11 +171,19 @@ def verb_verify(args: argparse.Namespace) -> int:
         error(f"{title}: {exc}")
         return EXIT_ERRORS
     compositional = EXIT_OK
+    localized = None
+    if args.method == "compositional" and args.property:  # every property classified before anything runs
+        from genom2bip.cli.verify_localized import read_localizable
+        localized = read_localizable(args, flat)
     if args.method != "explore":
         from genom2bip.cli.verify_compositional import run as run_compositional
         print(f"model {title}")
         compositional = run_compositional(flat, package, root, args, load_externs(args.externs))
         if args.method == "compositional":
+            if localized is not None:
+                from genom2bip.cli.verify_localized import run as run_localized
+                return max(compositional, run_localized(localized, package, root, args, load_externs(args.externs),
+                                                        compositional))
             return compositional
         print("exploration")
     properties = []

@@ -39,9 +39,12 @@ def check_arguments(args: argparse.Namespace) -> None:
             error("--graph belongs to --method compositional or both")
             raise Failure(EXIT_USAGE)
         return
-    if args.property or args.aut or args.dot:
-        error(f"--method {args.method} checks deadlock freedom only; --property, --aut and --dot need "
-              "--method explore")
+    if (args.property and args.method == "both") or args.aut or args.dot:
+        error(f"--method {args.method} checks deadlock freedom (and, with compositional, --property by "
+              "localization); --aut and --dot need --method explore, --property with both needs one method")
+        raise Failure(EXIT_USAGE)
+    if args.property and getattr(args, "timed", False):
+        error("--method compositional checks --property by localization on untimed models; drop --timed")
         raise Failure(EXIT_USAGE)
     if args.engine == "spin":
         error(f"--method {args.method} decides candidates with our explorer; it does not combine with --engine "
