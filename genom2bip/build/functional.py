@@ -122,6 +122,9 @@ class FunctionalLevel:
             self._module(component)
         self._interruptions()
         for task_path, execs in self.task_execs.items():
+            if not execs:  # no codel runs in this task: a scheduler without exec (BIP2 warns of unbound ports)
+                self.asm.atoms[task_path + ("scheduler",)].type = self._atom_type(
+                    library.idle_scheduler_type(), "Scheduler of a task that runs no codel: opens and closes periods.")
             self._period(task_path[0], task_path, execs)
         self._triggers()
         port_types = library.port_types()
@@ -238,7 +241,7 @@ class FunctionalLevel:
         )
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
-            activity_type(m, name, fsm, origin=s.span), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
+            activity_type(m, name, fsm, origin=s.span, abortable=interruptible), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
         self._codel_externs(m, fsm)
         if s.validate is not None:
             v = s.validate
