@@ -249,9 +249,8 @@ def Aspect_SetParams_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -264,8 +263,6 @@ def Aspect_SetParams_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -422,23 +419,21 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '67'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -464,6 +459,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -477,6 +473,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '26'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -484,9 +481,9 @@ def Aspect_Run_Activity() -> AtomType:
                 ['FUSE_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -494,6 +491,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -519,6 +517,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '50'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -532,6 +531,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '63'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -545,6 +545,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '69'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -558,6 +559,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '69'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -565,9 +567,13 @@ def Aspect_Run_Activity() -> AtomType:
                 ['WAIT_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(3)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary(
+                        '&&',
+                        Binary('!=', Var('outcome'), Const(0)),
+                        Binary('!=', Var('outcome'), Const(1)),
+                    ),
+                    Binary('!=', Var('outcome'), Const(2)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -575,6 +581,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -600,6 +607,7 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '34'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -613,23 +621,21 @@ def Aspect_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '34'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['FUSE_PAUSED'], ['FUSE']),
@@ -745,9 +751,8 @@ def Aspect_Stop_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -760,8 +765,6 @@ def Aspect_Stop_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -852,23 +855,21 @@ def LaserRF_acquisition_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '52'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
         ],
@@ -975,9 +976,8 @@ def LaserRF_SetConfig_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -990,8 +990,6 @@ def LaserRF_SetConfig_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -1091,7 +1089,6 @@ def LaserRF_Init_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=[
             'ETHER',
@@ -1132,23 +1129,21 @@ def LaserRF_Init_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '60'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1174,6 +1169,7 @@ def LaserRF_Init_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '74'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1187,40 +1183,26 @@ def LaserRF_Init_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '74'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['CONFIGURE_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
-            Transition(
-                'abort',
-                ['CONFIGURE'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -1375,23 +1357,21 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '64'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1417,6 +1397,7 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '53'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1430,6 +1411,7 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '69'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1443,6 +1425,7 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '69'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1450,9 +1433,9 @@ def LaserRF_Start_Activity() -> AtomType:
                 ['ACQUIRE_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -1460,6 +1443,7 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1485,6 +1469,7 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '62'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1498,23 +1483,21 @@ def LaserRF_Start_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '62'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['ACQUIRE_PAUSED'], ['ACQUIRE']),
@@ -1622,9 +1605,8 @@ def LaserRF_Stop_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -1637,8 +1619,6 @@ def LaserRF_Stop_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -1741,23 +1721,21 @@ def NDD_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '69'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1783,23 +1761,21 @@ def NDD_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '50', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['PUBLISH_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['PUBLISH_PAUSED'], ['PUBLISH']),
@@ -1911,9 +1887,8 @@ def NDD_SetParams_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -1926,8 +1901,6 @@ def NDD_SetParams_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -2036,9 +2009,8 @@ def NDD_SetSpeed_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -2051,8 +2023,6 @@ def NDD_SetSpeed_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -2151,7 +2121,6 @@ def NDD_SetDataSource_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -2183,6 +2152,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '71', 'column': '82'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2196,34 +2166,26 @@ def NDD_SetDataSource_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '71', 'column': '82'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -2392,23 +2354,21 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '82', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2434,6 +2394,7 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2447,6 +2408,7 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '26'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2454,9 +2416,9 @@ def NDD_GoTo_Activity() -> AtomType:
                 ['PLAN_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -2464,6 +2426,7 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2489,6 +2452,7 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '74'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2502,23 +2466,21 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '74'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['ARRIVED_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2544,6 +2506,7 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '72'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2557,23 +2520,21 @@ def NDD_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '72'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['PLAN_PAUSED'], ['PLAN']),
@@ -2683,7 +2644,6 @@ def NDD_Stop_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -2715,6 +2675,7 @@ def NDD_Stop_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '49'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2728,34 +2689,26 @@ def NDD_Stop_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '49'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -2831,23 +2784,21 @@ def POM_fusion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '58'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -2873,23 +2824,21 @@ def POM_fusion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '31', 'column': '50'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['UPDATE_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['UPDATE_PAUSED'], ['UPDATE']),
@@ -3042,6 +2991,7 @@ def POM_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '54'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3055,6 +3005,7 @@ def POM_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '68'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3062,9 +3013,9 @@ def POM_Run_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -3072,6 +3023,7 @@ def POM_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3097,6 +3049,7 @@ def POM_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '65'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3110,23 +3063,21 @@ def POM_Run_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '65'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['FIX_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['START_PAUSED'], ['START']),
@@ -3245,7 +3196,6 @@ def POM_Reset_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -3277,6 +3227,7 @@ def POM_Reset_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '55'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3290,34 +3241,26 @@ def POM_Reset_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '55'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -3412,23 +3355,21 @@ def RFLEX_servo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '57'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3454,23 +3395,21 @@ def RFLEX_servo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '56'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['ODOMETRY_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['ODOMETRY_PAUSED'], ['ODOMETRY']),
@@ -3572,7 +3511,6 @@ def RFLEX_Init_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -3604,6 +3542,7 @@ def RFLEX_Init_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '68'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3617,34 +3556,26 @@ def RFLEX_Init_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '68'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -3738,9 +3669,8 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -3753,8 +3683,6 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -3909,23 +3837,21 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '58'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3951,6 +3877,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3964,6 +3891,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '27'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3977,6 +3905,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '27'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -3984,9 +3913,9 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 ['TRACK_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -3994,6 +3923,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -4019,6 +3949,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '66'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -4032,23 +3963,21 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '66'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['TRACK_PAUSED'], ['TRACK']),
@@ -4157,7 +4086,6 @@ def RFLEX_Stop_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -4189,6 +4117,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '52'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -4202,34 +4131,26 @@ def RFLEX_Stop_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '52'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -4237,6 +4158,18 @@ def RFLEX_Stop_Activity() -> AtomType:
                 arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
             ),
         ],
+    )
+
+
+def IdleScheduler() -> AtomType:
+    """Scheduler of a task that runs no codel: opens and closes periods."""
+    return AtomType(
+        'IdleScheduler',
+        ports=[PortDecl('Port', 'period', exported=True), PortDecl('Port', 'sleep', exported=True)],
+        places=['SLEEP', 'RUN'],
+        initial=InitialTransition(['SLEEP']),
+        transitions=[Transition('period', ['SLEEP'], ['RUN']), Transition('sleep', ['RUN'], ['SLEEP'])],
+        annotations=[Annotation('scheduler', arguments={'period': 'period', 'sleep': 'sleep'})],
     )
 
 
@@ -4922,7 +4855,7 @@ def Aspect_control_Task() -> CompoundType:
     """Compound Aspect_control_Task."""
     return CompoundType(
         'Aspect_control_Task',
-        components=[ComponentInstance('Scheduler', 'scheduler')],
+        components=[ComponentInstance('IdleScheduler', 'scheduler')],
         connectors=[
             ConnectorInstance(
                 'Rendezvous_P',
@@ -5291,7 +5224,7 @@ def LaserRF_control_Task() -> CompoundType:
     """Compound LaserRF_control_Task."""
     return CompoundType(
         'LaserRF_control_Task',
-        components=[ComponentInstance('Scheduler', 'scheduler')],
+        components=[ComponentInstance('IdleScheduler', 'scheduler')],
         connectors=[
             ConnectorInstance(
                 'Rendezvous_P',
@@ -7918,7 +7851,7 @@ def DALA() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 48 atom types, 28 connector types, 34 compound types."""
+    """The whole model: 49 atom types, 28 connector types, 34 compound types."""
     return Package(
         'dala',
         extern_functions=[
@@ -8330,6 +8263,7 @@ def package() -> Package:
             RFLEX_TrackSpeed_Activity(),
             RFLEX_Stop_Control(),
             RFLEX_Stop_Activity(),
+            IdleScheduler(),
         ],
         connector_types=[
             BroadcastX_2(),

@@ -186,23 +186,21 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '59'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '15', 'column': '25'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -228,6 +226,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '70'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -241,6 +240,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '84'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -254,6 +254,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '97'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -261,9 +262,13 @@ def counter_clock__Activity() -> AtomType:
                 ['COUNT_YIELD'],
                 ['ETHER'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(3)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary(
+                        '&&',
+                        Binary('!=', Var('outcome'), Const(0)),
+                        Binary('!=', Var('outcome'), Const(1)),
+                    ),
+                    Binary('!=', Var('outcome'), Const(2)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -271,6 +276,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '16', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -296,6 +302,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '51'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -309,6 +316,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '64'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -316,9 +324,9 @@ def counter_clock__Activity() -> AtomType:
                 ['IDLE_YIELD'],
                 ['ETHER'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -326,6 +334,7 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '17', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -351,23 +360,21 @@ def counter_clock__Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '37'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '18', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['COUNT_PAUSED'], ['COUNT']),
@@ -465,9 +472,8 @@ def counter_GetTicks_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -480,8 +486,6 @@ def counter_GetTicks_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -575,9 +579,8 @@ def counter_SetRunning_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -590,8 +593,6 @@ def counter_SetRunning_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -599,6 +600,18 @@ def counter_SetRunning_Activity() -> AtomType:
                 arguments={'file': 'tests/fixtures/genom3/counter.gen', 'line': '22', 'column': '13'},
             ),
         ],
+    )
+
+
+def IdleScheduler() -> AtomType:
+    """Scheduler of a task that runs no codel: opens and closes periods."""
+    return AtomType(
+        'IdleScheduler',
+        ports=[PortDecl('Port', 'period', exported=True), PortDecl('Port', 'sleep', exported=True)],
+        places=['SLEEP', 'RUN'],
+        initial=InitialTransition(['SLEEP']),
+        transitions=[Transition('period', ['SLEEP'], ['RUN']), Transition('sleep', ['RUN'], ['SLEEP'])],
+        annotations=[Annotation('scheduler', arguments={'period': 'period', 'sleep': 'sleep'})],
     )
 
 
@@ -849,7 +862,7 @@ def counter_control_Task() -> CompoundType:
     """Compound counter_control_Task."""
     return CompoundType(
         'counter_control_Task',
-        components=[ComponentInstance('Scheduler', 'scheduler')],
+        components=[ComponentInstance('IdleScheduler', 'scheduler')],
         connectors=[
             ConnectorInstance(
                 'Rendezvous_P',
@@ -1004,7 +1017,7 @@ def COUNTER() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 9 atom types, 5 connector types, 6 compound types."""
+    """The whole model: 10 atom types, 5 connector types, 6 compound types."""
     return Package(
         'counter',
         extern_functions=[
@@ -1067,6 +1080,7 @@ def package() -> Package:
             counter_GetTicks_Activity(),
             counter_SetRunning_Control(),
             counter_SetRunning_Activity(),
+            IdleScheduler(),
         ],
         connector_types=[
             RendezvousX_PP(),

@@ -195,23 +195,21 @@ def demo_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '53'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '47', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -237,6 +235,7 @@ def demo_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '70'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -250,6 +249,7 @@ def demo_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '83'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -257,9 +257,9 @@ def demo_motion_Activity() -> AtomType:
                 ['MAIN_YIELD'],
                 ['ETHER'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -267,6 +267,7 @@ def demo_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '48', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -292,23 +293,21 @@ def demo_motion_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '51'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['ETHER'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '49', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
@@ -420,9 +419,8 @@ def demo_SetSpeed_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
-        places=['ETHER', 'FINISHED', 'FAILED', 'INTERRUPTED'],
+        places=['ETHER', 'FINISHED'],
         initial=InitialTransition(
             ['ETHER'],
             action=[Assign(Var('outcome'), Const(0)), Assign(Var('aborted'), Const(False))],
@@ -435,8 +433,6 @@ def demo_SetSpeed_Activity() -> AtomType:
                 action=[Assign(Var('aborted'), Const(False))],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
-            Transition('fail', ['FAILED'], ['ETHER']),
-            Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
         ],
         annotations=[
             Annotation(
@@ -531,7 +527,6 @@ def demo_Stop_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
-            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -563,6 +558,7 @@ def demo_Stop_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -576,34 +572,26 @@ def demo_Stop_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '61', 'column': '11'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('finish', ['FINISHED'], ['ETHER']),
             Transition('fail', ['FAILED'], ['ETHER']),
             Transition('interrupted', ['INTERRUPTED'], ['ETHER']),
-            Transition(
-                'abort',
-                ['START'],
-                ['INTERRUPTED'],
-                action=[Assign(Var('aborted'), Const(True))],
-            ),
         ],
         annotations=[
             Annotation(
@@ -763,6 +751,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '63'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -776,6 +765,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '70'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -789,6 +779,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '70'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -796,9 +787,9 @@ def demo_GoTo_Activity() -> AtomType:
                 ['START_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -806,6 +797,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '69', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -831,6 +823,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '71', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -844,6 +837,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '71', 'column': '27'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -857,6 +851,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '71', 'column': '27'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -864,9 +859,9 @@ def demo_GoTo_Activity() -> AtomType:
                 ['DRIVE_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -874,6 +869,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '70', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -899,6 +895,7 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '53'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -912,23 +909,21 @@ def demo_GoTo_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '53'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['STOP_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '72', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['DRIVE_PAUSED'], ['DRIVE']),
@@ -1090,23 +1085,21 @@ def demo_MoveDistance_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '80', 'column': '65'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
                 None,
                 ['START_YIELD'],
                 ['FAILED'],
-                guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(1)),
-                    Binary('<', Var('outcome'), Const(0)),
-                ),
+                guard=Binary('!=', Var('outcome'), Const(0)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '80', 'column': '19'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1132,6 +1125,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '82', 'column': '13'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1145,6 +1139,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '82', 'column': '26'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1158,6 +1153,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '82', 'column': '26'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition(
@@ -1165,9 +1161,9 @@ def demo_MoveDistance_Activity() -> AtomType:
                 ['MAIN_YIELD'],
                 ['FAILED'],
                 guard=Binary(
-                    '||',
-                    Binary('>=', Var('outcome'), Const(2)),
-                    Binary('<', Var('outcome'), Const(0)),
+                    '&&',
+                    Binary('!=', Var('outcome'), Const(0)),
+                    Binary('!=', Var('outcome'), Const(1)),
                 ),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -1175,6 +1171,7 @@ def demo_MoveDistance_Activity() -> AtomType:
                         'source',
                         arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '81', 'column': '18'},
                     ),
+                    Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
             ),
             Transition('wake', ['MAIN_PAUSED'], ['MAIN']),
