@@ -241,7 +241,8 @@ class FunctionalLevel:
         )
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
-            activity_type(m, name, fsm, origin=s.span, abortable=interruptible), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
+            activity_type(m, name, fsm, origin=s.span, abortable=interruptible),
+            f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
         self._codel_externs(m, fsm)
         if s.validate is not None:
             v = s.validate
