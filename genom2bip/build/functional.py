@@ -121,6 +121,11 @@ class FunctionalLevel:
         for component in self.description.components:
             self._module(component)
         self._interruptions()
+        written = {e.atom for w in self.asm.wires for e in w.ends if e.port == "write"}
+        for path, inst in self.asm.atoms.items():
+            if inst.type == "Poster" and path not in written:  # no codel has it as port out (BIP2: unbound port)
+                inst.type = self._atom_type(library.unwritten_poster_type(),
+                                            "Poster (GenoM port out) that no codel writes: it keeps its initial value.")
         for task_path, execs in self.task_execs.items():
             if not execs:  # no codel runs in this task: a scheduler without exec (BIP2 warns of unbound ports)
                 self.asm.atoms[task_path + ("scheduler",)].type = self._atom_type(

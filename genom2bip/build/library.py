@@ -102,6 +102,12 @@ def idle_scheduler_type(scheduler: AtomType | None = None) -> AtomType:
     )
 
 
+def unwritten_poster_type() -> AtomType:
+    """A poster that no codel writes: :func:`poster_type` without ``write``."""
+    base = poster_type()
+    return AtomType(name="UnwrittenPoster", data=base.data, places=base.places, initial=base.initial)
+
+
 def poster_type() -> AtomType:
     """Poster: ``write`` synchronises with every codel that has the port as ``port out``."""
     return AtomType(
