@@ -1497,6 +1497,16 @@ def rflex_Stop_Activity() -> AtomType:
     )
 
 
+def UnwrittenPoster() -> AtomType:
+    """Poster (GenoM port out) that no codel writes: it keeps its initial value."""
+    return AtomType(
+        'UnwrittenPoster',
+        data=[DataDecl('bool', 'written')],
+        places=['READY'],
+        initial=InitialTransition(['READY'], action=[Assign(Var('written'), Const(False))]),
+    )
+
+
 def IdleScheduler() -> AtomType:
     """Scheduler of a task that runs no codel: opens and closes periods."""
     return AtomType(
@@ -2143,8 +2153,8 @@ def rflex_Module() -> CompoundType:
         'rflex_Module',
         components=[
             ComponentInstance('rflex_Requests', 'requests'),
-            ComponentInstance('Poster', 'Robot'),
-            ComponentInstance('Poster', 'Sonars'),
+            ComponentInstance('UnwrittenPoster', 'Robot'),
+            ComponentInstance('UnwrittenPoster', 'Sonars'),
             ComponentInstance('rflex_MotorsTask_Task', 'MotorsTask'),
             ComponentInstance('rflex_SonarTask_Task', 'SonarTask'),
             ComponentInstance('rflex_control_Task', 'control'),
@@ -2585,7 +2595,7 @@ def RFLEX() -> CompoundType:
 
 
 def package() -> Package:
-    """The whole model: 17 atom types, 10 connector types, 10 compound types."""
+    """The whole model: 18 atom types, 10 connector types, 10 compound types."""
     return Package(
         'rflex',
         extern_functions=[
@@ -2735,6 +2745,7 @@ def package() -> Package:
             rflex_TrackSpeed_Activity(),
             rflex_Stop_Control(),
             rflex_Stop_Activity(),
+            UnwrittenPoster(),
             IdleScheduler(),
         ],
         connector_types=[
