@@ -85,7 +85,7 @@ def model_of(description: ir.Description, system: str,
         raise GenerateError(no_component(description) + "; a model needs at least one component (or module)")
     level = FunctionalLevel(description, system, rules, time)
     package = level.build()
-    problems = validate(package)
+    problems = [d for d in validate(package) if d.severity == "error"]
     if problems:
         raise GenerateError("the generated model is invalid (a generator bug):\n" +
                             "\n".join(f"  {d.span}: {d.message}" if d.span.line > 0 else f"  {d.message}"

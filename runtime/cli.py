@@ -3,7 +3,8 @@
 Every failure (unreadable or malformed file, bad root, missing extern
 binding, model error at a step) is a message on stderr and a non-zero exit
 status, never a traceback: 1 for bad input, 2 for a model error during the run,
-5 when an atom invariant fails (the Verimag engine's status).
+5 when an atom invariant fails, 6 when an event reaches an extern port with
+policy ``error`` that cannot take it (the Verimag engine's statuses).
 A run that ends in a deadlock or at the step limit exits with 0.
 A timed model (clocks, invariants: runtime/timed_cli.py) exits as the Verimag
 engine does: 0 also on a time-lock, 5 when an invariant fails, 7 when a
@@ -42,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     explore.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions")
     run.add_argument("--no-maximal-progress", action="store_true",
                      help="offer every enabled interaction of a connector, not only the maximal ones")
+    run.add_argument("--events", metavar="FILE",
+                     help='events for the extern ports, JSON lines {"port": "a.p", "values": [1], "after": 0}')
     return ap
 
 
@@ -56,6 +59,8 @@ def run_command(args, out=None, err=None) -> int:
         if is_timed(package) and not args.show_source:
             return run_timed_command(package, args, out, err)
         engine = Engine(package, args.root, externs=args.externs, maximal_progress=not args.no_maximal_progress)
+        if args.events:
+            push_events(engine, args.events)
     except DiagnosticError as e:
         print(e.render(), file=err)
         return 1
@@ -93,7 +98,22 @@ def execute(engine, args, name: str, out, err) -> int:
     if summary.outcome == "invariant":
         print(f"{name}: ERROR: {summary.message}", file=err)
         return 5
+    if summary.outcome == "event":
+        print(f"{name}: ERROR: {summary.message}", file=err)
+        return 6
     return 0
+
+
+def push_events(engine, path: str) -> None:
+    """Queue the events of the JSON-lines file ``path`` for the extern ports of ``engine``."""
+    from runtime.engine import EngineError
+    from runtime.engine.extern_ports import read_events
+
+    events = read_events(path)
+    if events and engine.extern is None:
+        raise EngineError(f"{path}: the model has no extern port to take events")
+    for e in events:
+        engine.extern.push(e.port, *e.values, after=e.after)
 
 
 def add_run_options(run: argparse.ArgumentParser) -> None:

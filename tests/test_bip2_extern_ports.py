@@ -1,4 +1,4 @@
-"""``extern port T p(x) as "Name" policy``: read, checked, written back; the engine refuses to run it."""
+"""``extern port T p(x) as "Name" policy``: read, checked, written back (running them: test_engine_extern_ports)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,8 +8,6 @@ import pytest
 from genom2bip.back.bip2 import write_package
 from runtime.bip2 import parse_file, parse_text
 from runtime.diagnostics import DiagnosticError
-from runtime.engine import Engine, EngineError
-from runtime.explore import StateSpace
 
 FIXTURE = Path(__file__).parent / "fixtures" / "bip" / "roundtrip" / "rt_extern_ports.bip"
 
@@ -72,12 +70,3 @@ def test_a_connector_cannot_bind_an_extern_port():
         parse_text(text, "rt_extern_ports.bip")
     assert ("port 'sample' of component 's' (atom type Sensor) is an extern port: events from outside the model "
             "fire it, no connector") in err.value.render()
-
-
-def test_the_engine_and_the_explorer_refuse_extern_ports():
-    model = parse_file(FIXTURE)
-    message = "port s.sample is an extern port: events pushed from outside the model are not run by this engine"
-    with pytest.raises(EngineError, match=message):
-        Engine(model, "System()")
-    with pytest.raises(EngineError, match=message):
-        StateSpace(model, "System()")

@@ -121,7 +121,15 @@ class FunctionalLevel:
         for component in self.description.components:
             self._module(component)
         self._interruptions()
+        written = {e.atom for w in self.asm.wires for e in w.ends if e.port == "write"}
+        for path, inst in self.asm.atoms.items():
+            if inst.type == "Poster" and path not in written:  # no codel has it as port out (BIP2: unbound port)
+                inst.type = self._atom_type(library.unwritten_poster_type(),
+                                            "Poster (GenoM port out) that no codel writes: it keeps its initial value.")
         for task_path, execs in self.task_execs.items():
+            if not execs:  # no codel runs in this task: a scheduler without exec (BIP2 warns of unbound ports)
+                self.asm.atoms[task_path + ("scheduler",)].type = self._atom_type(
+                    library.idle_scheduler_type(), "Scheduler of a task that runs no codel: opens and closes periods.")
             self._period(task_path[0], task_path, execs)
         self._triggers()
         port_types = library.port_types()
@@ -237,7 +245,8 @@ class FunctionalLevel:
         )
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
-            activity_type(m, name, fsm, origin=s.span), f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
+            activity_type(m, name, fsm, origin=s.span, abortable=interruptible),
+            f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
         self._codel_externs(m, fsm)
         if s.validate is not None:
             v = s.validate

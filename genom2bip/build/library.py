@@ -88,6 +88,26 @@ def scheduler_type() -> AtomType:
     )
 
 
+def idle_scheduler_type(scheduler: AtomType | None = None) -> AtomType:
+    """``scheduler`` (by default :func:`scheduler_type`) without ``exec``: the scheduler of a task with no codel."""
+    base = scheduler or scheduler_type()
+    return AtomType(
+        name="IdleScheduler",
+        annotations=[Annotation("scheduler", {"period": "period", "sleep": "sleep"})],
+        data=list(base.data),
+        ports=[p for p in base.ports if p.name != "exec"],
+        places=list(base.places),
+        initial=base.initial,
+        transitions=[t for t in base.transitions if t.port != "exec"],
+    )
+
+
+def unwritten_poster_type() -> AtomType:
+    """A poster that no codel writes: :func:`poster_type` without ``write``."""
+    base = poster_type()
+    return AtomType(name="UnwrittenPoster", data=base.data, places=base.places, initial=base.initial)
+
+
 def poster_type() -> AtomType:
     """Poster: ``write`` synchronises with every codel that has the port as ``port out``."""
     return AtomType(

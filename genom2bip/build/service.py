@@ -28,7 +28,6 @@ from runtime.model import (
     Transition,
     Unary,
     Var,
-    SOURCE,
     source_annotation,
 )
 from runtime.diagnostics import NOWHERE, Span
@@ -94,21 +93,16 @@ def codel_extern(module: str, codel: ir.Codel, throws: list[str]) -> ExternFunct
     return ExternFunction(joined(module, codel.name), "int", [], [Annotation("codel", args)])
 
 
-def located(transitions: list[Transition], span: Span) -> list[Transition]:
-    """``transitions``, each without a line of its own given ``span``'s (the service or task whose protocol it is)."""
-    for t in transitions:
-        if not any(a.name == SOURCE for a in t.annotations):
-            t.annotations = t.annotations + source_annotation(span)
-    return transitions
-
-
-def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, origin: Span = NOWHERE) -> AtomType:
+def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, origin: Span = NOWHERE,
+                  abortable: bool = True) -> AtomType:
     """Activity automaton (Fig. 3): ETHER → start → codel steps → finish / fail / interrupted.
 
     A permanent activity (the codels of a task) starts at once and has no
     start/finish/abort ports: nobody requests it and nobody waits for it.
-    ``origin`` is the service or task it models; each codel step carries the
-    codel's line and each outcome the line of its yield (``@source``).
+    ``abort`` exists when another service may interrupt this one (BIP2 warns
+    about a port no connector binds).  ``origin`` is the service or task it
+    models; each codel step carries the codel's line and each outcome the
+    line of its yield (``@source``).
     """
     data = [DataDecl("int", "outcome"), DataDecl("bool", "aborted")]
     places = [ETHER] + [place(s) for s in fsm.states]
@@ -147,6 +141,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, ori
         for port, source in (("finish", FINISHED), ("fail", FAILED), ("interrupted", INTERRUPTED)):
             ports.append(PortDecl(PORT, port, exported=True))
             transitions.append(Transition(port, [source], [ETHER]))
+    if not permanent and abortable:
         ports.append(PortDecl(PORT, "abort", exported=True))
         running = [place(s) for s in fsm.states if s != "stop"] + [
             place(s) + "_PAUSED" for s in fsm.paused if s != "stop"
@@ -156,26 +151,43 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, ori
             transitions.append(Transition("abort", [p], [target], action=[Assign(Var("aborted"), Const(True))]))
 
     init = place("start") if permanent and "start" in fsm.codel_of else ETHER
+    places, transitions = _live(init, places, transitions)
     return AtomType(
         name=joined(module, name, "Activity"),
         data=data,
         ports=ports,
         places=places,
         initial=InitialTransition([init], [Assign(Var("outcome"), Const(0)), Assign(Var("aborted"), Const(False))]),
-        transitions=located(transitions, origin),
+        transitions=transitions,
         annotations=source_annotation(origin),
     )
 
 
+def _live(init: str, places: list[str], transitions: list[Transition]) -> tuple[list[str], list[Transition]]:
+    """The places a run can mark from ``init`` and the transitions leaving them (BIP2 reports the rest as dead code)."""
+    seen = [init]
+    for p in seen:
+        for t in transitions:
+            if p in t.sources:
+                seen += [q for q in t.targets if q not in seen]
+    return [p for p in places if p in seen], [t for t in transitions if all(p in seen for p in t.sources)]
+
+
+#: Outcome transitions leave one place with guards exclusive by construction (each pair has ``outcome == a``
+#: against ``outcome == b`` or ``outcome != a``, or ``aborted`` against ``!aborted``); BIP2's analysis does
+#: not read guards, so it is told (runtime.bip2.determinism checks the claim).
+EXCLUSIVE = Annotation("SuppressWarning", {"nondeterminism": ""})
+
+
 def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool) -> list[Transition]:
-    """Eager internal transitions from ``STATE_YIELD``, one per outcome of the codel."""
+    """Eager internal transitions from ``STATE_YIELD``, one per outcome of the codel, with exclusive guards."""
     source = [place(state) + "_YIELD"]
     out: list[Transition] = []
     outcome = Var("outcome")
     spent = [Assign(outcome, Const(0))]  # read once: reset so that states differ only in what matters
     for k, y in enumerate(codel.yields):
         is_k = Binary("==", outcome, Const(k))
-        at = source_annotation(y.span if y.span.line > 0 else codel.span)
+        at = source_annotation(y.span if y.span.line > 0 else codel.span) + [EXCLUSIVE]
         if y.state == "ether":
             if permanent:
                 out.append(Transition(None, source, [ETHER], guard=is_k, action=spent, annotations=at))
@@ -189,11 +201,13 @@ def _outcome_transitions(state: str, codel: ir.Codel, fsm: Fsm, permanent: bool)
             target = place(y.state) + "_PAUSED" if y.pause else place(y.state)
             out.append(Transition(None, source, [target], guard=is_k, action=spent, annotations=at))
     failed = [ETHER] if permanent else [FAILED]
-    n = len(codel.yields)
-    thrown = Binary(">=", outcome, Const(n))
-    undeclared = Binary("<", outcome, Const(0))
-    out.append(Transition(None, source, failed, guard=Binary("||", thrown, undeclared), action=spent,
-                          annotations=source_annotation(codel.span)))
+    # Any other outcome (a thrown exception, or an undeclared failure): none of the yields.
+    other = None
+    for k in range(len(codel.yields)):
+        not_k = Binary("!=", outcome, Const(k))
+        other = not_k if other is None else Binary("&&", other, not_k)
+    out.append(Transition(None, source, failed, guard=other, action=spent,
+                          annotations=source_annotation(codel.span) + ([EXCLUSIVE] if out else [])))
     return out
 
 
@@ -258,26 +272,23 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         initial=InitialTransition(
             ["IDLE"], [Assign(Var(v), Const(0 if v == "verdict" else False)) for v in ("verdict",) + STATUS_FIELDS]
         ),
-        transitions=located(transitions, service.span),
+        transitions=transitions,
         annotations=source_annotation(service.span),
     )
 
 
-def acceptor_type(module: str, requests: list[tuple[str, str]], origin: Span = NOWHERE,
-                  sources: dict[str, Span] | None = None) -> AtomType:
+def acceptor_type(module: str, requests: list[tuple[str, str]]) -> AtomType:
     """Request acceptor of a module: one port per service, enabled while a request for it is pending.
 
     ``requests`` pairs each port with the service's ``Module.Service`` name;
     ``request_pending("NDD.GoTo")`` is answered by the services interface at
     run time and by the environment (any request, any time) in exploration;
     ``take_request`` tells the interface the request has been consumed.
-    ``origin`` is the component's span, ``sources`` each port's service span (``@source``).
     """
     ports = [PortDecl(PORT, port, exported=True) for port, _ in requests]
     transitions = [
         Transition(port, ["READY"], ["READY"], guard=Call("request_pending", (Const(name),)),
-                   action=[Do(Call("take_request", (Const(name),)))],
-                   annotations=source_annotation((sources or {}).get(port, NOWHERE)))
+                   action=[Do(Call("take_request", (Const(name),)))])
         for port, name in requests
     ]
     return AtomType(
@@ -286,5 +297,4 @@ def acceptor_type(module: str, requests: list[tuple[str, str]], origin: Span = N
         places=["READY"],
         initial=InitialTransition(["READY"]),
         transitions=transitions,
-        annotations=source_annotation(origin),
     )

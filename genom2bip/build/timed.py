@@ -340,6 +340,8 @@ def apply(level, options: TimeOptions) -> Timing:
     if options.ticks:
         level.atom_types["Timer"] = timer_type()
         level.atom_types["Scheduler"] = scheduler_type()
+        if "IdleScheduler" in level.atom_types:
+            level.atom_types["IdleScheduler"] = library.idle_scheduler_type(scheduler_type())
         for path, inst in timers.items():
             inst.args.append(Const(periods[path]))
             ticking.append(End(path, "tick"))

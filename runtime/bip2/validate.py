@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from runtime.bip2.defines import allows, define_ports
 from runtime.bip2.interfaces import data_offer, port_offer
+from runtime.bip2.lint import lint
 from runtime.bip2.locator import Locator
 from runtime.bip2.timed_checks import check_atom_timing
 from runtime.bip2.scope import ExpressionChecker, Scope, suggestion
@@ -15,10 +16,16 @@ from runtime.model import BUILTIN_TYPES, AtomType, CompoundType, ConnectorType, 
 
 
 def validate(package: Package, locator: Locator | None = None, reporter: Reporter | None = None) -> list[Diagnostic]:
-    """Every problem found in ``package``; they are also added to ``reporter`` when one is given."""
+    """Every problem found in ``package``; they are also added to ``reporter`` when one is given.
+
+    Errors, then (on a model with none) the Verimag compiler's warnings (runtime.bip2.lint), severity "warning".
+    """
     reporter = reporter if reporter is not None else Reporter()
     before = len(reporter.diagnostics)
-    _Checker(package, locator or Locator(), reporter).run()
+    locator = locator or Locator()
+    _Checker(package, locator, reporter).run()
+    if not any(d.severity == "error" for d in reporter.diagnostics[before:]):
+        lint(package, locator, reporter)
     return reporter.diagnostics[before:]
 
 

@@ -13,6 +13,7 @@ from runtime.engine import defines, support
 from runtime.engine.cexpr import HELPERS
 from runtime.engine.codegen import ErrorSite, generate
 from runtime.engine.errors import EngineError, ModelError
+from runtime.engine.extern_ports import ExternPorts, UnexpectedEvent
 from runtime.engine.externs import bind_externs, guarded_call
 from runtime.engine.flatten import flatten
 from runtime.engine.interaction import Interaction, interaction_label
@@ -28,7 +29,7 @@ Policy = Callable[[State, list[Interaction]], "Interaction | None"]
 @dataclass
 class RunSummary:
     """How a run ended: ``outcome`` is ``deadlock``, ``limit``, ``error``, ``invariant`` (an atom invariant
-    failed) or ``stopped`` (the policy gave up)."""
+    failed), ``event`` (an extern port with policy ``error`` got an event it cannot take) or ``stopped``."""
 
     steps: int
     outcome: str
@@ -39,17 +40,9 @@ class RunSummary:
     def line(self) -> str:
         what = {"deadlock": "deadlock (no enabled interaction)", "limit": "step limit reached",
                 "stopped": "stopped", "error": f"model error: {self.message}",
-                "invariant": f"invariant violated: {self.message}"}[self.outcome]
+                "invariant": f"invariant violated: {self.message}",
+                "event": f"unexpected event: {self.message}"}[self.outcome]
         return f"{self.steps} step{'s' if self.steps != 1 else ''}, {what}"
-
-
-def refuse_extern_ports(flat) -> None:
-    """An extern port fires on events pushed from outside the model, which this engine does not take."""
-    for fa in flat.atoms:
-        for p in fa.type.ports:
-            if p.extern:
-                raise EngineError(f"port {fa.name}.{p.name} is an extern port: events pushed from outside the "
-                                  "model are not run by this engine")
 
 
 def _raisers(errors: list[ErrorSite]) -> dict[str, Callable]:
@@ -101,8 +94,11 @@ class Engine:
         self.package = package
         self.root = root
         self.flat = flatten(package, root)
-        refuse_extern_ports(self.flat)
         self.infos, self.sources = plan(self.flat, maximal_progress)
+        #: events pushed into the extern ports (``engine.extern.push("a.p", 3)``); None when there is none
+        self.extern: ExternPorts | None = ExternPorts(self.flat, self.sources)
+        if not self.extern.ports:
+            self.extern = None
         gen = generate(self.flat, self.infos, self.sources)
         self.source: str = gen.source
         bound = bind_externs(package, externs, gen.called)
@@ -210,11 +206,38 @@ class Engine:
         except Exception as err:
             raise self._model_error(err) from err
 
+    def offered(self, state: State, steps: int = 0) -> list[Interaction]:
+        """What a run may fire at ``state`` after ``steps`` steps: :meth:`enabled`, with each extern port only
+        while an event is pending for it (runtime.engine.extern_ports); events arrive first and, while nothing
+        can fire, the next ones come."""
+        enabled = self.enabled(state)
+        if self.extern is None:
+            return enabled
+        self.extern.arrive(steps)
+        offered = self.extern.settle(enabled)  # UnexpectedEvent for a port whose policy is error
+        while not offered and self.extern.next_arrival() is not None:
+            self.extern.arrive(max(steps, self.extern.next_arrival()))
+            offered = self.extern.settle(enabled)
+        return offered
+
+    def _fire_event(self, state: State, source: int, rec) -> State:
+        """Fire the extern port of ``source`` with the values of the event it takes."""
+        L = list(state)
+        self.namespace[f"_ap{self.sources[source].port.id}"](L, self.extern.take(source), rec)
+        new = tuple(L)
+        if self.invariants:
+            return self.invariants.check(new, self._make(source, self.sources[source].full).label)
+        return new
+
     def fire_traced(self, state: State, interaction: Interaction) -> tuple[State, dict[str, dict[str, Any]]]:
-        """Like :meth:`fire`, and also the values each atom port received (after ``down``), by ``atom.port``."""
+        """Like :meth:`fire`, and also the values each atom port received (after ``down``), by ``atom.port``;
+        an extern port takes the values of its pending event."""
         rec: list[tuple[int, tuple]] = []
         try:
-            new = self._fire[interaction.source](state, interaction.mask, rec)
+            if self.extern is not None and interaction.source in self.extern.by_source:
+                new = self._fire_event(state, interaction.source, rec)
+            else:
+                new = self._fire[interaction.source](state, interaction.mask, rec)
         except Exception as err:
             raise self._model_error(err) from err
         values = {}
@@ -303,7 +326,7 @@ class Engine:
             if tracer is not None:
                 tracer.start(self, state)
             while True:
-                enabled = self.enabled(state)
+                enabled = self.offered(state, steps) if self.extern is not None else self.enabled(state)
                 if not enabled:
                     summary = RunSummary(steps, "deadlock", state=state)
                     break
@@ -314,16 +337,19 @@ class Engine:
                 if chosen is None:
                     summary = RunSummary(steps, "stopped", state=state, enabled=[i.label for i in enabled])
                     break
-                if tracer is not None:
+                if tracer is not None or self.extern is not None:
                     new, values = self.fire_traced(state, chosen)
                     steps += 1
-                    tracer.step(steps, enabled, chosen, values, new)
+                    if tracer is not None:
+                        tracer.step(steps, enabled, chosen, values, new)
                 else:
                     new = self.fire(state, chosen)
                     steps += 1
                 state = new
         except InvariantViolation as err:
             summary = RunSummary(steps, "invariant", str(err), state=state)
+        except UnexpectedEvent as err:
+            summary = RunSummary(steps, "event", str(err), state=state)
         except ModelError as err:
             summary = RunSummary(steps, "error", str(err), state=state)
         if tracer is not None:

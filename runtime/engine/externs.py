@@ -8,6 +8,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, Callable, Iterable, Mapping
 
+from runtime.engine.clib import DEFAULTS
 from runtime.engine.errors import ExternError, ModelError
 from runtime.model import Package
 
@@ -48,12 +49,18 @@ def _lookup(source: Any) -> Callable[[str], Any]:
 def bind_externs(package: Package, source: Any, needed: Iterable[str] | None = None) -> dict[str, Callable]:
     """Python callables for the package's extern functions, by name.
 
-    ``source`` is a dict, a module, or a module's dotted name or file path.
+    ``source`` is a dict, a module, or a module's dotted name or file path; ``printf`` is C's unless
+    ``source`` binds it (runtime.engine.clib).
     ``needed`` restricts the check to the functions the model actually calls
     (default: every declared one).  Raises :class:`ExternError` listing every
     name without a callable binding.
     """
-    get = _lookup(source)
+    given = _lookup(source)
+
+    def get(name: str):  # the C library's printf when nothing else binds it (runtime.engine.clib)
+        fn = given(name)
+        return fn if fn is not None else DEFAULTS.get(name)
+
     names = sorted(set(needed) if needed is not None else {f.name for f in package.extern_functions})
     bound: dict[str, Callable] = {}
     missing = []

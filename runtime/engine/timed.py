@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from runtime.bip2.printer import expr as print_expr
 from runtime.engine.engine import Engine
-from runtime.engine.errors import ModelError
+from runtime.engine.errors import EngineError, ModelError
 from runtime.engine.interaction import Interaction
 from runtime.engine.invariants import compile_state_expr
 from runtime.model import Assign, AtomType, Binary, Const, DataDecl, If, Package, Rate, Unary, Var
@@ -225,6 +225,9 @@ class TimedEngine:
     def __init__(self, package: Package, root: str = "System()", externs: Any = None) -> None:
         self.package = package
         self.engine = Engine(untimed_view(package), root, externs)
+        if self.engine.extern is not None:
+            raise EngineError(f"extern port {next(iter(self.engine.extern.ports))}: timed runs do not take events "
+                              "pushed from outside yet (events carry no time here)")
         flat = self.engine.flat
         self.port_owner = {p.path: (p.atom, p.name) for p in flat.ports}
         self.atoms: list[_AtomTiming] = []

@@ -19,6 +19,7 @@ from typing import Any, Iterable
 from runtime.engine import Engine, Interaction
 from runtime.engine.emit import PythonWriter
 from runtime.engine.errors import ExternError, ModelError
+from runtime.engine.extern_ports import refuse_extern_data
 from runtime.engine.source import compile_generated
 from runtime.explore.choices import (
     Environment,
@@ -73,6 +74,7 @@ class StateSpace:
             self.engine = Engine(package, root, bound)
         except ExternError as err:
             raise ExploreError(unbound_message(err.missing)) from None
+        refuse_extern_data(self.engine.flat)  # a dataless extern port is an environment choice
         self.services = request_services(package) if requests is not None else []
         for k, name in enumerate(self.services):
             self.environment.services[name] = k

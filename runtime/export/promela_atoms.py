@@ -80,7 +80,10 @@ class AtomWriter(ExprWriter):
                 for var, v in zip(fp.decl.data, vals):
                     out.append(f"{ind}   {sc.variables[var].text} = {v};")
             out.extend(self.move(fa, t, sc, ind + "   "))
-        out.append(f"{ind}fi;")
+        if len(out) == 1:  # a port with no transition: never enabled, so never fired (Promela has no empty if)
+            out = [f"{ind}skip;"]
+        else:
+            out.append(f"{ind}fi;")
         internal = [t for t in fa.type.transitions if t.internal]
         if internal:
             out.append(f"{ind}do")

@@ -81,7 +81,7 @@ def _role(type_name: str, annotations: list[str]) -> str:
     for suffix, role in (("_Requests", "requests"), ("_Control", "control"), ("_Activity", "activity")):
         if type_name.endswith(suffix):
             return role
-    return "poster" if type_name == "Poster" else "atom"
+    return "poster" if type_name in ("Poster", "UnwrittenPoster") else "atom"
 
 
 def _owners(interface: dict[str, Any] | None, atoms: list[str]) -> dict[str, str]:
