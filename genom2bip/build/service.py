@@ -28,6 +28,7 @@ from runtime.model import (
     Transition,
     Unary,
     Var,
+    SOURCE,
     source_annotation,
 )
 from runtime.diagnostics import NOWHERE, Span
@@ -91,6 +92,14 @@ def codel_extern(module: str, codel: ir.Codel, throws: list[str]) -> ExternFunct
     if codel.wcet is not None:
         args["wcet_us"] = str(round(codel.wcet.seconds * 1e6))
     return ExternFunction(joined(module, codel.name), "int", [], [Annotation("codel", args)])
+
+
+def located(transitions: list[Transition], span: Span) -> list[Transition]:
+    """``transitions``, each without a line of its own given ``span``'s (the service or task whose protocol it is)."""
+    for t in transitions:
+        if not any(a.name == SOURCE for a in t.annotations):
+            t.annotations = t.annotations + source_annotation(span)
+    return transitions
 
 
 def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, origin: Span = NOWHERE,
@@ -158,7 +167,7 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, ori
         ports=ports,
         places=places,
         initial=InitialTransition([init], [Assign(Var("outcome"), Const(0)), Assign(Var("aborted"), Const(False))]),
-        transitions=transitions,
+        transitions=located(transitions, origin),
         annotations=source_annotation(origin),
     )
 
@@ -272,23 +281,26 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         initial=InitialTransition(
             ["IDLE"], [Assign(Var(v), Const(0 if v == "verdict" else False)) for v in ("verdict",) + STATUS_FIELDS]
         ),
-        transitions=transitions,
+        transitions=located(transitions, service.span),
         annotations=source_annotation(service.span),
     )
 
 
-def acceptor_type(module: str, requests: list[tuple[str, str]]) -> AtomType:
+def acceptor_type(module: str, requests: list[tuple[str, str]], origin: Span = NOWHERE,
+                  sources: dict[str, Span] | None = None) -> AtomType:
     """Request acceptor of a module: one port per service, enabled while a request for it is pending.
 
     ``requests`` pairs each port with the service's ``Module.Service`` name;
     ``request_pending("NDD.GoTo")`` is answered by the services interface at
     run time and by the environment (any request, any time) in exploration;
     ``take_request`` tells the interface the request has been consumed.
+    ``origin`` is the component's span, ``sources`` each port's service span (``@source``).
     """
     ports = [PortDecl(PORT, port, exported=True) for port, _ in requests]
     transitions = [
         Transition(port, ["READY"], ["READY"], guard=Call("request_pending", (Const(name),)),
-                   action=[Do(Call("take_request", (Const(name),)))])
+                   action=[Do(Call("take_request", (Const(name),)))],
+                   annotations=source_annotation((sources or {}).get(port, NOWHERE)))
         for port, name in requests
     ]
     return AtomType(
@@ -297,4 +309,5 @@ def acceptor_type(module: str, requests: list[tuple[str, str]]) -> AtomType:
         places=["READY"],
         initial=InitialTransition(["READY"]),
         transitions=transitions,
+        annotations=source_annotation(origin),
     )
