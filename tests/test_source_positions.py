@@ -93,7 +93,8 @@ def _break_exec_plan(package) -> None:
                 c.ports[1] = PortRef(c.ports[1].component, "no_such_port")
 
 
-def test_a_refused_connector_of_a_generated_model_names_its_codel_line(monkeypatch):
+def _refusal(monkeypatch, spoil) -> str:
+    """The message that refuses NDD's model once ``spoil`` has broken the package the builder made."""
     import genom2bip.generate as generate
     from genom2bip.parser import parse_paths
 
@@ -101,16 +102,19 @@ def test_a_refused_connector_of_a_generated_model_names_its_codel_line(monkeypat
 
     def broken(self):
         package = build(self)
-        _break_exec_plan(package)
+        spoil(package)
         return package
 
     monkeypatch.setattr(generate.FunctionalLevel, "build", broken)
     try:
         generate.model_of(parse_paths([str(NDD)]), "NDD")
     except generate.GenerateError as exc:
-        message = str(exc)
-    else:
-        raise AssertionError("the broken model was accepted")
+        return str(exc)
+    raise AssertionError("the broken model was accepted")
+
+
+def test_a_refused_connector_of_a_generated_model_names_its_codel_line(monkeypatch):
+    message = _refusal(monkeypatch, _break_exec_plan)
     found = re.search(r"^  (\S+NDD\.gen:\d+:\d+): component 'GoTo' .* exports no port 'no_such_port'$", message, re.M)
     assert found, message
     assert "codel <plan> nddPlan(" in _line(found.group(1))
@@ -150,27 +154,15 @@ def test_every_element_of_generated_dala_built_from_the_description_names_its_li
 
 
 def test_a_refused_split_sub_connector_names_the_line_of_the_connector_it_was_split_from(monkeypatch):
-    import genom2bip.generate as generate
-    from genom2bip.parser import parse_paths
     from runtime.model import PortRef
 
-    build = generate.FunctionalLevel.build
-
-    def broken(self):
-        package = build(self)
+    def spoil(package):
         task = next(ct for ct in package.compound_types if ct.name == "NDD_motion_Task")
         sub = next(c for c in task.connectors if c.name == "period")  # unlabelled: a part of NDD.motion:period
         assert not any(a.name == "label" for a in sub.annotations)
         sub.ports[0] = PortRef(sub.ports[0].component, "no_such_port")
-        return package
 
-    monkeypatch.setattr(generate.FunctionalLevel, "build", broken)
-    try:
-        generate.model_of(parse_paths([str(NDD)]), "NDD")
-    except generate.GenerateError as exc:
-        message = str(exc)
-    else:
-        raise AssertionError("the broken model was accepted")
+    message = _refusal(monkeypatch, spoil)
     found = re.search(r"^  (\S+NDD\.gen:\d+:\d+): component 'timer' \(atom type Timer\) has no port 'no_such_port'$",
                       message, re.M)
     assert found, message
