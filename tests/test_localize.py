@@ -183,7 +183,7 @@ def test_a_false_property_of_whole_dala_gets_a_counterexample_that_replays(capsy
     code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(wrong))
     assert code == 4, err
     assert "deadlock-free (compositional, " in out
-    assert "  round 1: 4 of 65 atoms kept" in out and ": violated, concrete search " in out
+    assert "  round 1: 4 of 65 atoms kept" in out and ": violated, replayed on the model (" in out
     assert "  violated (localization, 1 round, 4 of 65 atoms kept" in out
     assert "  counterexample on the model (1 step):" in out
     assert "POM.Run:trigger" in out.split("counterexample on the model")[1]
@@ -211,3 +211,13 @@ def test_deadlock_freedom_in_a_property_file_is_the_invariants_verdict(capsys, t
     code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(f))
     assert code == 0, err
     assert "property d: deadlock free\n  means: [true*] <true> true\n  holds (compositional invariants, above)" in out
+
+
+def test_the_rounds_of_a_possibility_speak_of_runs_found_not_of_violations(capsys, tmp_path):
+    possible = tmp_path / "possible.mcl"
+    possible.write_text('-- SetSpeed can finish before any GoTo\npossible: mu X.(<"NDD.SetSpeed:finish">T or '
+                        '<not "NDD.GoTo:trigger">X);\n')
+    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(possible))
+    assert code == 0, err
+    assert ": run found, replayed on the model (" in out and "violated" not in out
+    assert "  witness on the model (3 steps):" in out

@@ -66,7 +66,8 @@ def run(items, package, root: str, args: argparse.Namespace, externs, deadlock_v
         def say(r) -> None:
             what = "every atom kept (the exact search)" if r.kept == r.atoms else \
                 f"{r.kept} of {r.atoms} atoms kept, {r.chaos} free"
-            tail = f", concrete search {r.concrete_states:,} states" if r.concrete_states else ""
+            replayed = "replayed on the model" if r.outcome in ("violated", "run found") else "not replayed"
+            tail = f", {replayed} ({r.concrete_states:,} states searched)" if r.concrete_states else ""
             print(f"  round {len(rounds) + 1}: {what}: {r.states:,} states, {r.seconds:.2f} s: {r.outcome}{tail}",
                   flush=True)
             rounds.append(r)

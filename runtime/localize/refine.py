@@ -196,8 +196,14 @@ def check_localized(package, root: str, item: Checkable, externs=None, *, max_st
     if why:
         raise NotLocalizable(why)
     if spin_shape(item) != "observer":  # a possibility: the witnesses are the counterexamples of its negation
+        def said(r: Round) -> None:  # the rounds speak of runs of the possibility, not of violations
+            r.outcome = {"violated": "run found", "holds": "no run", "spurious": "spurious run"}.get(r.outcome,
+                                                                                                    r.outcome)
+            if on_round:
+                on_round(r)
+
         dual = check_localized(package, root, as_reachability(item), externs, max_states=max_states,
-                               max_bytes=max_bytes, concrete_budget=concrete_budget, on_round=on_round,
+                               max_bytes=max_bytes, concrete_budget=concrete_budget, on_round=said,
                                progress=progress)
         v = dual.verdict
         holds = None if v.holds is None else not v.holds
