@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import pytest
 
@@ -221,3 +222,32 @@ def test_the_rounds_of_a_possibility_speak_of_runs_found_not_of_violations(capsy
     assert code == 0, err
     assert ": run found, replayed on the model (" in out and "violated" not in out
     assert "  witness on the model (3 steps):" in out
+
+
+def test_goto_after_pom_run_holds_by_its_rule_and_fails_without_it(capsys, tmp_path):
+    """rules.mcl's property is not vacuous: with the GoTo rules taken out of rules.yaml, a real counterexample."""
+    import shutil
+
+    import yaml
+
+    stated = next(line for line in (Path(DALA) / "properties" / "rules.mcl").read_text().splitlines()
+                  if line.startswith("goto_after_pom_run:"))
+    prop = tmp_path / "pom.mcl"
+    prop.write_text(stated + "\n")
+    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(prop))
+    assert code == 0, err
+    assert "  holds (localization, 1 round" in out
+
+    loose = tmp_path / "dala"
+    loose.mkdir()
+    for f in Path(DALA).glob("*.gen"):
+        shutil.copy(f, loose)
+    shutil.copy(Path(DALA) / "dala.idl", loose)
+    rules = yaml.safe_load((Path(DALA) / "rules.yaml").read_text())
+    rules["rules"] = [r for r in rules["rules"] if not r["id"].startswith("goto-")]
+    (loose / "rules.yaml").write_text(yaml.safe_dump(rules))
+    code, out, err = run(capsys, "verify", str(loose), "--method", "compositional", "--property", str(prop))
+    assert code == 4, err
+    assert "  counterexample on the model (" in out
+    steps = out.split("counterexample on the model")[1]
+    assert "NDD.GoTo:trigger" in steps and "POM.Run:finish" not in steps
