@@ -81,3 +81,17 @@ def promela_pred(p: Pred, writer) -> str:
     if isinstance(p, POr):
         return f"({promela_pred(p.left, writer)} || {promela_pred(p.right, writer)})"
     raise PromelaError(f"cannot translate predicate {p!r}")
+
+
+def equivalent_states(mon: Monitor) -> list[int]:
+    """The block of each state of ``mon`` in its minimal automaton: Moore's partition refinement, from accepting
+    against not, over every interaction (a state without an entry for one stays where it is)."""
+    ks = range(len(mon.delta))
+    block = [int(q in mon.accepting) for q in range(mon.states)]
+    while True:
+        sig = [(block[q], *(block[mon.delta[k].get(q, q)] for k in ks)) for q in range(mon.states)]
+        ids: dict[tuple, int] = {}
+        refined = [ids.setdefault(s, len(ids)) for s in sig]
+        if len(ids) == len(set(block)):
+            return refined
+        block = refined

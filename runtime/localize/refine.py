@@ -5,7 +5,7 @@ Round by round: keep a set K of atoms exact and the others free
 over-approximation with the compiled search, and
 
 * if it holds there, it holds on the model;
-* if the abstract counterexample replays on the model (a breadth-first search
+* if the abstract counterexample replays on the model (a best-first search
   of the model that follows the counterexample's kept interactions in order,
   any number of dropped ones in between), it is a real counterexample;
 * otherwise K grows by the dropped atoms the counterexample used, and again.
@@ -24,12 +24,13 @@ from types import SimpleNamespace
 
 from runtime.engine.flatten import FlatSystem, flatten
 from runtime.explore.space import StateSpace, Step
-from runtime.export.monitors import build_monitor, spin_shape
+from runtime.export.monitors import build_monitor, equivalent_states, spin_shape
 from runtime.export.promela_base import PromelaError
 from runtime.localize.abstraction import CHAOS, Abstraction, abstract, close, optional_leaves
-from runtime.props.check import Checkable, Verdict, check, model_labels
+from runtime.props.check import Checkable, Verdict, _preds, check, model_labels
 from runtime.props.formulas import Property, Regular, RSeq, RStar, SBox, SConst, SDia, SFix, SOr, SVar
 from runtime.props.normal import normalize, positive
+from runtime.props.predicates import atoms_read
 
 METHOD = "localization"
 #: States the search for a concrete counterexample may visit before the round counts the abstract one as spurious.
@@ -108,7 +109,7 @@ def visible_labels(item: Checkable, labels: list[str]) -> set[str]:
         monitor, _ = build_monitor(item, statics, "p")
     except PromelaError as exc:
         raise NotLocalizable(str(exc)) from None
-    block = _minimal(monitor, len(statics))
+    block = equivalent_states(monitor)
     n = len(statics)
 
     def step(q: int, k: int) -> int:
@@ -126,18 +127,6 @@ def visible_labels(item: Checkable, labels: list[str]) -> set[str]:
     return {lab for lab, moved in zip(labels, moves) if moved}
 
 
-def _minimal(monitor, symbols: int) -> list[int]:
-    """The block of each observer state in the minimal automaton (Moore's partition refinement)."""
-    block = [int(q in monitor.accepting) for q in range(monitor.states)]
-    while True:
-        sig = [(block[q], *(block[monitor.delta[k].get(q, q)] for k in range(symbols))) for q in range(monitor.states)]
-        ids: dict[tuple, int] = {}
-        new = [ids.setdefault(x, len(ids)) for x in sig]
-        if len(ids) == len(set(block)):
-            return new
-        block = new
-
-
 def initial_kept(flat: FlatSystem, item: Checkable, visible: set[str]) -> set[int]:
     """The atoms that take part in a visible interaction by a port that changes them, and the atoms P reads."""
     kept = set()
@@ -148,34 +137,9 @@ def initial_kept(flat: FlatSystem, item: Checkable, visible: set[str]) -> set[in
     kept |= {fp.atom for fp in flat.ports if not fp.decl.exported and fp.path in visible}
     names = {a.name: a.index for a in flat.atoms}
     kept |= {names[atom] for atom, _ in item.observed if atom in names}
-    kept |= {names[atom] for atom in _pred_atoms(flat, item.property.formula) if atom in names}
+    for p in _preds(item.property.formula):
+        kept |= atoms_read(flat, p)
     return kept
-
-
-def _pred_atoms(flat: FlatSystem, formula) -> set[str]:
-    """The atoms the state predicates of a formula read (places and variables)."""
-    from runtime.props.check import _preds
-    from runtime.props.formulas import PAnd, PAt, PCmp, PNot, POr
-    from runtime.props.predicates import split_path
-
-    out: set[str] = set()
-
-    def walk(p) -> None:
-        if isinstance(p, PAt):
-            out.add(p.atom)
-        elif isinstance(p, PCmp):
-            got = split_path(flat, p.path)
-            if got is not None:
-                out.add(got[0].name)
-        elif isinstance(p, PNot):
-            walk(p.operand)
-        elif isinstance(p, (PAnd, POr)):
-            walk(p.left)
-            walk(p.right)
-
-    for p in _preds(formula):
-        walk(p)
-    return out
 
 
 def _read_only(flat: FlatSystem, port: int) -> bool:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from runtime.engine.emit import CWriter
+from runtime.export.monitors import equivalent_states
 from runtime.export.promela_base import Monitor
 from runtime.native.cexpr import Unsupported
 from runtime.props.formulas import PAnd, PAt, PCmp, PConst, PNot, POr, Pred
@@ -58,17 +59,10 @@ def minimal(mon: Monitor) -> Monitor:
     ``[R] false`` (no predicate) reaching an accepting state is the violation, which ends the search: its
     way out is never taken, so accepting states become one sink first.
     """
-    n, ks = mon.states, range(len(mon.delta))
+    ks = range(len(mon.delta))
     if mon.pred is None:
         mon = replace(mon, delta=[{q: q if q in mon.accepting else t for q, t in d.items()} for d in mon.delta])
-    block = [1 if q in mon.accepting else 0 for q in range(n)]
-    while True:
-        sig = [(block[q], *(block[mon.delta[k].get(q, q)] for k in ks)) for q in range(n)]
-        ids: dict[tuple, int] = {}
-        new = [ids.setdefault(s, len(ids)) for s in sig]
-        if len(ids) == len(set(block)):
-            break
-        block = new
+    block = equivalent_states(mon)
     order = {block[mon.initial]: 0}
     stack = [mon.initial]
     rep = {block[mon.initial]: mon.initial}

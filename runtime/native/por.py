@@ -16,8 +16,7 @@ the observer's predicate reads; a proper ample set holds no visible source.
 """
 from __future__ import annotations
 
-from runtime.props.formulas import PAnd, PAt, PCmp, PNot, POr, Pred
-from runtime.props.predicates import split_path
+from runtime.props.predicates import atoms_read
 
 
 def source_atoms(src, flat) -> set[int]:
@@ -59,24 +58,11 @@ def written_atoms(src, flat) -> set[int]:
             if not _reads_only(flat.ports[q], flat) or names.get(q) in down or q not in names}
 
 
-def _pred_atoms(p: Pred | None, flat) -> set[int]:
-    if isinstance(p, PAt):
-        return {a.index for a in flat.atoms if a.name == p.atom}
-    if isinstance(p, PCmp):
-        got = split_path(flat, p.path)
-        return {got[0].index} if got else {a.index for a in flat.atoms}
-    if isinstance(p, PNot):
-        return _pred_atoms(p.operand, flat)
-    if isinstance(p, (PAnd, POr)):
-        return _pred_atoms(p.left, flat) | _pred_atoms(p.right, flat)
-    return set()
-
-
 def visible_sources(sources, flat, monitors) -> list[bool]:
     """Sources some observer watches: its automaton moves on one of their interactions, or its predicate's atoms."""
     out = [False] * len(sources)
     for mon, statics in monitors:  # statics list every mask a source's define allows (export.interactions)
-        watched = _pred_atoms(mon.pred, flat)
+        watched = atoms_read(flat, mon.pred)
         for k, st in enumerate(statics):
             if any(q2 != q for q, q2 in mon.delta[k].items()):
                 out[st.source.index] = True

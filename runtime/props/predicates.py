@@ -49,6 +49,20 @@ def variables_read(flat: FlatSystem, p: Pred) -> set[tuple[str, str]]:
     return out
 
 
+def atoms_read(flat: FlatSystem, p: Pred | None) -> set[int]:
+    """Indexes of the atoms a predicate reads (places and variables); every atom where a name does not resolve."""
+    if isinstance(p, PAt):
+        return {a.index for a in flat.atoms if a.name == p.atom}
+    if isinstance(p, PCmp):
+        got = split_path(flat, p.path)
+        return {got[0].index} if got else {a.index for a in flat.atoms}
+    if isinstance(p, PNot):
+        return atoms_read(flat, p.operand)
+    if isinstance(p, (PAnd, POr)):
+        return atoms_read(flat, p.left) | atoms_read(flat, p.right)
+    return set()
+
+
 def bind(flat: FlatSystem, p: Pred, problems: list[Diagnostic]) -> Callable[[tuple], bool]:
     """A function of an engine state for the predicate; unknown names are appended to ``problems``."""
     atoms = {a.name: a for a in flat.atoms}
