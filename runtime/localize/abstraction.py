@@ -245,12 +245,18 @@ def _atom_of_slot(flat: FlatSystem, slot: int) -> int:
     return next(a.index for a in flat.atoms if a.offset <= slot < a.offset + a.size)
 
 
-def _fresh(pkg: Package, base: str) -> str:
+def _unused(base: str, used) -> str:
+    """``base``, else ``base_2``, ``base_3``, ...: the first name ``used(name)`` says is free."""
     name, n = base, 1
-    while pkg.component_type(name) is not None:
+    while used(name):
         n += 1
         name = f"{base}_{n}"
     return name
+
+
+def _fresh(pkg: Package, base: str) -> str:
+    """A type name no component type of the package has."""
+    return _unused(base, lambda name: pkg.component_type(name) is not None)
 
 
 def _chaos_type(pkg: Package, fa, ports: dict[str, bool], havoc: set[str], result: Abstraction) -> AtomType:
@@ -264,10 +270,7 @@ def _chaos_type(pkg: Package, fa, ports: dict[str, bool], havoc: set[str], resul
     taken = {p.name for p in t.ports} | set(t.places) | {d.name for d in t.data}
 
     def fresh(base: str) -> str:
-        name, n = base, 1
-        while name in taken:
-            n += 1
-            name = f"{base}_{n}"
+        name = _unused(base, taken.__contains__)
         taken.add(name)
         return name
 
