@@ -29,6 +29,7 @@ from runtime.model import (
     Unary,
     Var,
     SOURCE,
+    coverable_places,
     source_annotation,
 )
 from runtime.diagnostics import NOWHERE, Span
@@ -174,17 +175,13 @@ def activity_type(module: str, name: str, fsm: Fsm, permanent: bool = False, ori
 
 def _live(init: str, places: list[str], transitions: list[Transition]) -> tuple[list[str], list[Transition]]:
     """The places a run can mark from ``init`` and the transitions leaving them (BIP2 reports the rest as dead code)."""
-    seen = [init]
-    for p in seen:
-        for t in transitions:
-            if p in t.sources:
-                seen += [q for q in t.targets if q not in seen]
+    seen = coverable_places([init], transitions)
     return [p for p in places if p in seen], [t for t in transitions if all(p in seen for p in t.sources)]
 
 
 #: Outcome transitions leave one place with guards exclusive by construction (each pair has ``outcome == a``
 #: against ``outcome == b`` or ``outcome != a``, or ``aborted`` against ``!aborted``); BIP2's analysis does
-#: not read guards, so it is told (runtime.bip2.determinism checks the claim).
+#: not read guards, so it is told (runtime.bip2.lint.exclusive checks the claim).
 EXCLUSIVE = Annotation("SuppressWarning", {"nondeterminism": ""})
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from runtime.bip2.locator import Locator
 from runtime.diagnostics import Reporter
-from runtime.model import AtomType, Binary, CompoundType, Const, Expr, Package, Transition, Unary
+from runtime.model import AtomType, Binary, CompoundType, Const, Expr, Package, Transition, Unary, coverable_places
 
 NONDETERMINISM, DEADCODE, UNBOUND = "nondeterminism", "deadcode", "unboundcomponentport"
 
@@ -68,14 +68,7 @@ def _nondeterminism(atom: AtomType, loc: Locator, rep: Reporter) -> None:
 
 def dead_transitions(atom: AtomType) -> list[Transition]:
     """Transitions whose source places no run can mark, guards aside (bipc's ``mayBeCoverable``)."""
-    marked = set(atom.initial.targets) if atom.initial else set()
-    grown = True
-    while grown:
-        grown = False
-        for t in atom.transitions:
-            if set(t.sources) <= marked and not set(t.targets) <= marked:
-                marked |= set(t.targets)
-                grown = True
+    marked = coverable_places(atom.initial.targets if atom.initial else [], atom.transitions)
     return [t for t in atom.transitions if not set(t.sources) <= marked]
 
 

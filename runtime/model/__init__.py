@@ -3,7 +3,15 @@
 ``Package`` (in :mod:`runtime.model.compounds`) holds every declaration; a
 running system is a package plus the root instance (``System()``).
 """
-from runtime.model.behaviors import AtomPriority, AtomType, InitialTransition, PortDecl, PortType, Transition
+from runtime.model.behaviors import (
+    AtomPriority,
+    AtomType,
+    InitialTransition,
+    PortDecl,
+    PortType,
+    Transition,
+    coverable_places,
+)
 from runtime.model.common import BUILTIN_TYPES, SOURCE, Annotation, DataDecl, DataParam, source_annotation, source_of
 from runtime.model.compounds import (
     ComponentInstance,
@@ -69,6 +77,7 @@ __all__ = [
     "Transition",
     "Unary",
     "Var",
+    "coverable_places",
     "source_annotation",
     "source_of",
     "ClockDecl",

@@ -75,6 +75,19 @@ class Transition:
         return self.port is None
 
 
+def coverable_places(initial: list[str], transitions: list[Transition]) -> set[str]:
+    """The places some run from ``initial`` can mark, guards aside: a transition fires once its sources all can."""
+    marked = set(initial)
+    grown = True
+    while grown:
+        grown = False
+        for t in transitions:
+            if set(t.sources) <= marked and not set(t.targets) <= marked:
+                marked |= set(t.targets)
+                grown = True
+    return marked
+
+
 @dataclass
 class AtomPriority:
     """``priority name low < high provided (g)`` between ports of one atom (``*`` allowed on either side)."""
