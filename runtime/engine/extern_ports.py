@@ -13,6 +13,7 @@ of reporting a deadlock.
 """
 from __future__ import annotations
 
+import bisect
 import json
 from collections import deque
 from dataclasses import dataclass
@@ -74,8 +75,7 @@ class ExternPorts:
                 raise EngineError(f"event for extern port {port}: {name} is {t}, got {v!r}")
         typed = tuple(coerce(v, t) for t, v in zip(p.fp.field_types, values))
         event = Event(port, typed, self.steps if after is None else after)
-        self.coming.append(event)
-        self.coming.sort(key=lambda e: e.after)  # stable: events due together keep their order
+        bisect.insort(self.coming, event, key=lambda e: e.after)  # after its equals: events due together keep order
 
     def arrive(self, steps: int) -> None:
         """Move the events due after ``steps`` steps to their ports' queues."""
