@@ -177,11 +177,16 @@ def run(capsys, *argv):
     return code, out, err
 
 
+def localized(capsys, tmp_path, text: str, model: str = DALA, name: str = "p.mcl"):
+    """``verify MODEL --method compositional --property F`` with F holding ``text``: (exit status, out, err, F)."""
+    f = tmp_path / name
+    f.write_text(text)
+    return (*run(capsys, "verify", model, "--method", "compositional", "--property", str(f)), f)
+
+
 def test_a_false_property_of_whole_dala_gets_a_counterexample_that_replays(capsys, tmp_path):
-    wrong = tmp_path / "wrong.mcl"
-    wrong.write_text('-- POM runs whether or not NDD set its speed\nwrong: "NDD.SetSpeed:finish" precedes '
-                     '"POM.Run:trigger";\n')
-    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(wrong))
+    code, out, err, wrong = localized(capsys, tmp_path, '-- POM runs whether or not NDD set its speed\n'
+                                      'wrong: "NDD.SetSpeed:finish" precedes "POM.Run:trigger";\n')
     assert code == 4, err
     assert "deadlock-free (compositional, " in out
     assert "  round 1: 4 of 65 atoms kept" in out and ": violated, replayed on the model (" in out
@@ -195,10 +200,9 @@ def test_a_false_property_of_whole_dala_gets_a_counterexample_that_replays(capsy
 
 
 def test_a_property_it_cannot_take_is_refused_before_anything_runs(capsys, tmp_path):
-    bad = tmp_path / "live.mcl"
-    bad.write_text('ok: never "NDD.GoTo:fail";\nlive: [true*] <true* . "NDD.GoTo:finish"> true;\n')
-    before = sorted(p.name for p in tmp_path.iterdir())
-    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(bad))
+    before = sorted([*(p.name for p in tmp_path.iterdir()), "live.mcl"])
+    code, out, err, bad = localized(capsys, tmp_path, 'ok: never "NDD.GoTo:fail";\n'
+                                    'live: [true*] <true* . "NDD.GoTo:finish"> true;\n', name="live.mcl")
     assert code == 1
     assert f"{bad}:2:1: property live: not checked by --method compositional: neither a safety property" in err
     assert "property ok" not in err
@@ -207,18 +211,14 @@ def test_a_property_it_cannot_take_is_refused_before_anything_runs(capsys, tmp_p
 
 
 def test_deadlock_freedom_in_a_property_file_is_the_invariants_verdict(capsys, tmp_path):
-    f = tmp_path / "d.mcl"
-    f.write_text("d: deadlock free;\n")
-    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(f))
+    code, out, err, _ = localized(capsys, tmp_path, "d: deadlock free;\n")
     assert code == 0, err
     assert "property d: deadlock free\n  means: [true*] <true> true\n  holds (compositional invariants, above)" in out
 
 
 def test_the_rounds_of_a_possibility_speak_of_runs_found_not_of_violations(capsys, tmp_path):
-    possible = tmp_path / "possible.mcl"
-    possible.write_text('-- SetSpeed can finish before any GoTo\npossible: mu X.(<"NDD.SetSpeed:finish">T or '
-                        '<not "NDD.GoTo:trigger">X);\n')
-    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(possible))
+    code, out, err, _ = localized(capsys, tmp_path, '-- SetSpeed can finish before any GoTo\n'
+                                  'possible: mu X.(<"NDD.SetSpeed:finish">T or <not "NDD.GoTo:trigger">X);\n')
     assert code == 0, err
     assert ": run found, replayed on the model (" in out and "violated" not in out
     assert "  witness on the model (3 steps):" in out
@@ -232,9 +232,7 @@ def test_goto_after_pom_run_holds_by_its_rule_and_fails_without_it(capsys, tmp_p
 
     stated = next(line for line in (Path(DALA) / "properties" / "rules.mcl").read_text().splitlines()
                   if line.startswith("goto_after_pom_run:"))
-    prop = tmp_path / "pom.mcl"
-    prop.write_text(stated + "\n")
-    code, out, err = run(capsys, "verify", DALA, "--method", "compositional", "--property", str(prop))
+    code, out, err, _ = localized(capsys, tmp_path, stated + "\n")
     assert code == 0, err
     assert "  holds (localization, 1 round" in out
 
@@ -246,7 +244,7 @@ def test_goto_after_pom_run_holds_by_its_rule_and_fails_without_it(capsys, tmp_p
     rules = yaml.safe_load((Path(DALA) / "rules.yaml").read_text())
     rules["rules"] = [r for r in rules["rules"] if not r["id"].startswith("goto-")]
     (loose / "rules.yaml").write_text(yaml.safe_dump(rules))
-    code, out, err = run(capsys, "verify", str(loose), "--method", "compositional", "--property", str(prop))
+    code, out, err, _ = localized(capsys, tmp_path, stated + "\n", model=str(loose))
     assert code == 4, err
     assert "  counterexample on the model (" in out
     steps = out.split("counterexample on the model")[1]
