@@ -286,20 +286,33 @@ class CodeGen(StepEmitter):
         fl = self.flat
         with w.block("def enabled(s)"):
             w('"""Enabled interactions at state s: maximal ports, connectors, lone ports, then priorities."""')
-            names = []
-            for fa in fl.atoms:
-                names.append(f"m{fa.index}")
-                names.extend(f"a{fa.index}_{d.name}" for d in fa.variables)
-            if names:
-                w(f"{', '.join(names)}, = s")
-            for fa in fl.atoms:
-                self.gen_atom_enabled(fa)
+            self.gen_ports_enabled()
             if any(s.kind == "generic" for s in self.sources):
                 w(f"E = ({''.join(f'e{p.id}, ' for p in fl.ports)})")
             w("out = []")
             for src in self.sources:
                 self.gen_source_enabled(src)
             w("return _prio(out, s)" if fl.priorities else "return out")
+
+    def gen_ports_enabled(self) -> None:
+        """The state's atoms unpacked, then ``e<p>`` for every atom port (after the atoms' own priorities)."""
+        names = []
+        for fa in self.flat.atoms:
+            names.append(f"m{fa.index}")
+            names.extend(f"a{fa.index}_{d.name}" for d in fa.variables)
+        if names:
+            self.w(f"{', '.join(names)}, = s")
+        for fa in self.flat.atoms:
+            self.gen_atom_enabled(fa)
+
+    def generate_ready(self) -> Generated:
+        """A module with ``ready(s)``: per atom port, whether the atom offers it at ``s`` (why an interaction is
+        not enabled: which of its ports are missing).  Generated on demand, beside the step."""
+        with self.w.block("def ready(s)"):
+            self.w('"""Per atom port (flat port order): a transition on it is enabled at state s."""')
+            self.gen_ports_enabled()
+            self.w(f"return ({''.join(f'e{p.id}, ' for p in self.flat.ports)})")
+        return Generated(self.w.source(), self.errors, self.atom_priorities, self.called, self.type_index)
 
     def atom_heading(self, fa: FlatAtom) -> None:
         places = ", ".join(f"{p}={1 << i}" for i, p in enumerate(fa.places))

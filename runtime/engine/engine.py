@@ -11,7 +11,7 @@ from typing import Any, Callable
 
 from runtime.engine import defines, support
 from runtime.engine.cexpr import HELPERS
-from runtime.engine.codegen import ErrorSite, generate
+from runtime.engine.codegen import CodeGen, ErrorSite, generate
 from runtime.engine.errors import EngineError, ModelError
 from runtime.engine.extern_ports import ExternPorts, UnexpectedEvent
 from runtime.engine.externs import bind_externs, guarded_call
@@ -144,6 +144,7 @@ class Engine:
             self._fire = [self.invariants.guard_fire(f, lambda mask, k=k: self._make(k, mask).label)
                           for k, f in enumerate(self._fire)]
         self.step = CompiledStep(self._enabled, tuple(self._fire), self._make)
+        self._ready = None
 
     def _attach(self, node: TreeNode, type_index: dict[str, int], ns) -> None:
         info = node.info
@@ -196,6 +197,22 @@ class Engine:
         """Interactions that may fire at ``state``, after maximal progress and priorities, in a fixed order."""
         try:
             return self._enabled(state)
+        except Exception as err:
+            raise self._model_error(err) from err
+
+    def ready(self, state: State) -> tuple[bool, ...]:
+        """Per atom port (``flat.ports`` order): the atom offers it at ``state``, its own priorities applied.
+
+        What an interaction that is not enabled lacks; the function is generated at the first call.
+        """
+        if self._ready is None:
+            gen = CodeGen(self.flat, self.infos, self.sources).generate_ready()
+            ns = dict(self.namespace)
+            ns.update(_raisers(gen.errors))
+            exec(compile_generated(gen.source, f"bip ready: {self.package.name} {self.root}"), ns)  # noqa: S102
+            self._ready = ns["ready"]
+        try:
+            return self._ready(state)
         except Exception as err:
             raise self._model_error(err) from err
 
