@@ -15,8 +15,10 @@ traces run on it unchanged.  Every step only adds behaviour (docs/verification.m
   (:func:`close`);
 * connectors among dropped atoms disappear, with their interactions (they
   change no kept atom, and the property must not see them);
-* a compound priority stays only when its high side and its guard read kept
-  atoms alone (removing a priority only adds behaviour).
+* a compound priority stays only when its guard reads kept atoms alone and its
+  high side touches dropped atoms only by ports they offer in every state
+  without a guard (a poster's ``write``, an observer's ports), which their
+  chaos atoms offer no more often (removing a priority only adds behaviour).
 """
 from __future__ import annotations
 
@@ -223,13 +225,29 @@ def abstract(package: Package, root: str, flat: FlatSystem, kept: set[int]) -> A
     return result
 
 
+def always_ready(flat: FlatSystem, port: int) -> bool:
+    """Whether atom port ``port`` is offered in every state: from every place a transition on it without a guard,
+    and no atom priority over it (a poster's ``write``, an observer's ports)."""
+    fp = flat.ports[port]
+    t = flat.atoms[fp.atom].type
+    if any(pr.low in (fp.name, "*") for pr in t.priorities):
+        return False
+    free = {tr.sources[0] for tr in t.transitions
+            if tr.port == fp.name and tr.guard is None and len(tr.sources) == 1 and tr.resume is None}
+    return free >= set(t.places)
+
+
 def _keeps(flat: FlatSystem, pr, keep: list[bool], kept: set[int]) -> bool:
-    """A priority stays when both sides' connectors stay, its high side touches kept atoms only, and its guard too."""
+    """A priority stays when both sides' connectors stay, its guard reads kept atoms only, and its high side's
+    connectors touch dropped atoms only by ports always ready whose data they do not read: a chaos atom offers such
+    a port at most when the atom would, so the high side is enabled at most when it would be, and blocks no more."""
     for cid, _ in pr.low.entries + pr.high.entries:
         if flat.connectors[cid].top and not keep[cid]:
             return False
     for cid, _ in pr.high.entries:
-        if not connector_atoms(flat, flat.connectors[cid]) <= kept:
+        fc = flat.connectors[cid]
+        read = data_read(flat, fc)
+        if any(flat.ports[p].atom not in kept and (p in read or not always_ready(flat, p)) for p in flat.leaves(fc)):
             return False
     if pr.guard is not None:
         reads: set[tuple[str, str]] = set()
