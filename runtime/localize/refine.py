@@ -26,7 +26,9 @@ from runtime.engine.flatten import FlatSystem, flatten
 from runtime.explore.space import StateSpace, Step
 from runtime.export.monitors import build_monitor, equivalent_states, spin_shape
 from runtime.export.promela_base import PromelaError
-from runtime.localize.abstraction import CHAOS, Abstraction, abstract, close, optional_leaves
+from runtime.explore.timed import TICK
+from runtime.localize.timed import observer_seed
+from runtime.localize.abstraction import CHAOS, Abstraction, abstract, always_ready, close, optional_leaves
 from runtime.props.check import Checkable, Verdict, _preds, check, model_labels
 from runtime.props.formulas import Property, Regular, RSeq, RStar, SBox, SConst, SDia, SFix, SOr, SVar
 from runtime.props.normal import normalize, positive
@@ -128,7 +130,8 @@ def visible_labels(item: Checkable, labels: list[str]) -> set[str]:
 
 
 def initial_kept(flat: FlatSystem, item: Checkable, visible: set[str]) -> set[int]:
-    """The atoms that take part in a visible interaction by a port that changes them, and the atoms P reads."""
+    """The atoms that take part in a visible interaction by a port that changes them, the atoms P reads, and for a
+    timing observer among them the atoms that force its close event in time."""
     kept = set()
     for fc in flat.connectors:
         if fc.top and fc.label in visible:
@@ -139,6 +142,8 @@ def initial_kept(flat: FlatSystem, item: Checkable, visible: set[str]) -> set[in
     kept |= {names[atom] for atom, _ in item.observed if atom in names}
     for p in _preds(item.property.formula):
         kept |= atoms_read(flat, p)
+    for atom in list(kept):  # a timing observer: what forces its close event in time (runtime.localize.timed)
+        kept |= observer_seed(flat, atom)
     return kept
 
 
@@ -202,7 +207,7 @@ def check_localized(package, root: str, item: Checkable, externs=None, *, max_st
         used = _used(space, verdict.trace, kept, flat)
         if concrete is None:
             concrete = StateSpace(package, root, externs, None, True, item.observed)
-        steps, visited = concretize(concrete, item, verdict.trace, a, concrete_budget, space)
+        steps, visited, blockers = concretize(concrete, item, verdict.trace, a, concrete_budget, space)
         rnd.concrete_states = visited
         rnd.seconds = time.perf_counter() - t0
         if steps is not None:
@@ -214,7 +219,7 @@ def check_localized(package, root: str, item: Checkable, externs=None, *, max_st
         rnd.outcome = "spurious"
         if on_round:
             on_round(rnd)
-        grow = used - kept or {flat.atom_of(p).index for p in _offered(flat, kept)}
+        grow = blockers - kept or used - kept or {flat.atom_of(p).index for p in _offered(flat, kept)}
         kept = kept | (grow or {a.index for a in flat.atoms})
 
 
@@ -250,19 +255,26 @@ def _offered(flat: FlatSystem, kept: set[int]) -> set[int]:
 
 
 def _used(space: StateSpace, trace: list[Step], kept: set[int], flat: FlatSystem) -> set[int]:
-    """The dropped atoms an abstract counterexample used: their ports took part, or their toggles and havocs fired."""
+    """The dropped atoms an abstract counterexample used: their ports took part, or their toggles and havocs fired.
+
+    A port the atom offers in every state (a poster's ``write``, an observer's) does not count: its chaos atom
+    offered it no more than the atom would have, so keeping the atom cannot rule the counterexample out.
+    """
     names = {a.name: a.index for a in flat.atoms}
+    ports = {fp.path: fp.id for fp in flat.ports}
     out = set()
     for step in trace:
+        if step.label == TICK:  # every timed atom lets time pass in turn (no time-lock): the tick blames none
+            continue
         for port in space.interaction(step.index).ports:
             atom = names.get(port.rpartition(".")[0])
-            if atom is not None and atom not in kept:
+            if atom is not None and atom not in kept and not (port in ports and always_ready(flat, ports[port])):
                 out.add(atom)
     return out
 
 
 def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstraction | None,
-               budget: int, abstract_space: StateSpace | None = None) -> tuple[list[Step] | None, int]:
+               budget: int, abstract_space: StateSpace | None = None) -> tuple[list[Step] | None, int, set[int]]:
     """A path of the model that takes the abstract trace's kept interactions in order and dropped ones in between.
 
     Segment by segment: from where the previous kept interaction led, a
@@ -273,7 +285,9 @@ def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstrac
     and its predicate fails.  None when a segment finds nothing within
     ``budget`` states: the abstract trace then counts as spurious (a real
     counterexample is found again after refinement; soundness never depends
-    on this search).
+    on this search), and the third value names the atoms that withheld the
+    interaction the search could not reach: the ones whose ports it lacked in
+    the state closest to it.
     """
     flat = space.engine.flat
     wanted = [s.label for s in trace if not _chaos_label(s.label)]
@@ -281,19 +295,21 @@ def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstrac
     accept, pred = _acceptor(item, flat)
     goals = _goals(space, trace, abstract_space) if abstract_space is not None else [{} for _ in wanted]
     visited = 0
+    blockers: set[int] = set()
     for start in space.initial_ids:
         states, labels = [start], []
         for label, goal in zip(wanted, goals):
-            got, seen = _segment(space, states[-1], label, free, budget, goal)
+            got, seen, closest = _segment(space, states[-1], label, free, budget, goal)
             visited += seen
             if got is None:
+                blockers |= {flat.ports[p].atom for p in _missing(space, closest, _needed_ports(flat, label))}
                 break
             states += got[0]
             labels += got[1]
         else:
             if accept(labels) and not pred(space.engine_state(states[-1])):
-                return space.steps_along(states, labels), visited
-    return None, visited
+                return space.steps_along(states, labels), visited, set()
+    return None, visited, blockers
 
 
 def _goals(space: StateSpace, trace: list[Step], abstract_space: StateSpace) -> list[dict[int, object]]:
@@ -317,17 +333,22 @@ def _goals(space: StateSpace, trace: list[Step], abstract_space: StateSpace) -> 
 def _segment(space: StateSpace, sid: int, label: str, free, budget: int, goal: dict[int, object]):
     """(states after sid, their labels) of a path of dropped interactions then ``label``; None if none is found.
 
-    Best first: states whose free booleans differ least from ``goal``, then the shallowest.
+    Best first: states where the fewest atom ports that ``label`` needs are missing and whose free booleans differ
+    least from ``goal``, then the shallowest.
     """
     import heapq
 
+    needs = _needed_ports(space.engine.flat, label)
+
     def distance(node: int) -> int:
         state = space.engine_state(node)
-        return sum(state[slot] != value for slot, value in goal.items())
+        return len(_missing(space, node, needs)) + sum(state[slot] != value for slot, value in goal.items())
 
     parent: dict[int, tuple[int, int] | None] = {sid: None}
     heap = [(distance(sid), 0, sid)]
+    closest = heap[0]
     while heap and len(parent) < budget:
+        closest = min(closest, heap[0])
         _, depth, node = heapq.heappop(heap)
         succ = space.successors(node)
         for k in range(0, len(succ), 2):
@@ -340,11 +361,27 @@ def _segment(space: StateSpace, sid: int, label: str, free, budget: int, goal: d
                     states.append(cur)
                     labels.append(space.labels[lab])
                     cur = prev
-                return (states[::-1], labels[::-1]), len(parent)
+                return (states[::-1], labels[::-1]), len(parent), node
             if name in free and succ[k + 1] not in parent:
                 parent[succ[k + 1]] = (node, succ[k])
                 heapq.heappush(heap, (distance(succ[k + 1]), depth + 1, succ[k + 1]))
-    return None, len(parent)
+    return None, len(parent), closest[2]
+
+
+def _missing(space: StateSpace, node: int, needs: list[list[int]]) -> list[int]:
+    """The atom ports an interaction needs (``needs``: per source, from :func:`_needed_ports`) that are not offered
+    at ``node``, for the source that lacks the fewest."""
+    ready = space.engine.ready(space.engine_state(node))
+    lacks = [[p for p in ports if not ready[p]] for ports in needs]
+    return min(lacks, key=len, default=[])
+
+
+def _needed_ports(flat: FlatSystem, label: str) -> list[list[int]]:
+    """Per interaction source labelled ``label`` (a top connector, or a lone atom port): the atom ports every one
+    of its interactions needs."""
+    out = [[p for p in flat.leaves(fc) if p not in optional_leaves(flat, fc)]
+           for fc in flat.connectors if fc.top and fc.label == label]
+    return out + [[fp.id] for fp in flat.ports if fp.path == label and not fp.decl.exported]
 
 
 def _acceptor(item: Checkable, flat: FlatSystem):
