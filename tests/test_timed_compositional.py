@@ -1,6 +1,7 @@
-"""Time in the compositional analysis: the tick is one more interaction; observers are left to exploration."""
+"""Time in the compositional analysis: the tick is one more interaction; observers are decided by localization."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from genom2bip.cli import main
@@ -18,21 +19,22 @@ def verify(capsys, *argv: str) -> tuple[int, str, str]:
 
 def test_a_timed_model_is_proved_free_of_time_locks_as_exploration_finds(capsys):
     code, out, _ = verify(capsys, NDD, "--no-rules", "--timed", "--method", "compositional")
-    assert code == 0 and out.splitlines()[-1].startswith("deadlock-free (compositional")
-    assert "  time: the tick is one more interaction (all timed atoms at once); deadlock-free means no time-lock; " \
-           "the observers are checked by --method both or explore" in out.splitlines()
+    assert code == 0 and "deadlock-free (compositional" in out
+    assert "  time: the tick is one more interaction (all timed atoms at once); deadlock-free means no time-lock" \
+        in out.splitlines()
+    assert out.splitlines()[-1].startswith("period of NDD.motion (100 ms): no overrun reachable (localization, ")
     code, out, _ = verify(capsys, NDD, "--no-rules", "--timed", "--deadlock")
     assert code == 0 and "deadlocks: none" in out
 
 
-def test_observers_are_refused_by_the_compositional_method_alone(capsys):
+def test_the_compositional_method_decides_the_observers_as_exploration_does(capsys):
     for option in (["--schedulability"], ["--observers", str(ROOT / "tests/fixtures/timed/observers.yaml")]):
         code, out, err = verify(capsys, CRUISE, "--timed", "--method", "compositional", *option)
-        assert code == 2 and out == ""
-        assert err.strip() == (
-            "genom2bip: error: --method compositional proves deadlock freedom (on a --timed model: no time-lock); "
-            "whether an observer reaches ERROR is reachability, which it does not decide: use --method both (the "
-            "observers are then checked by exploration) or --method explore")
+        explored, by_search, _ = verify(capsys, CRUISE, "--timed", *option)
+        assert code == explored == 4 and "error" not in err
+        verdicts = re.findall(r"^(period of .*?|latency .*?) \(.*?\): (.*? reachable)", out, re.M)
+        assert verdicts == re.findall(r"^(period of .*?|latency .*?) \(.*?\): (.*? reachable)", by_search, re.M)
+        assert ("period of Cruise.loop", "overrun reachable") in verdicts
 
 
 def test_both_methods_prove_no_time_lock_then_explore_the_observers(capsys):

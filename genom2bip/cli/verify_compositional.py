@@ -53,11 +53,6 @@ def check_arguments(args: argparse.Namespace) -> None:
     if args.requests is not None:
         error("--method compositional analyses the open environment (any number of requests); drop --requests")
         raise Failure(EXIT_USAGE)
-    if args.method == "compositional" and (getattr(args, "schedulability", False) or getattr(args, "observers", None)):
-        error("--method compositional proves deadlock freedom (on a --timed model: no time-lock); whether an "
-              "observer reaches ERROR is reachability, which it does not decide: use --method both (the observers "
-              "are then checked by exploration) or --method explore")
-        raise Failure(EXIT_USAGE)
     if args.check_states is not None and args.check_states < 0:
         error("--check-states must be >= 0")
         raise Failure(EXIT_USAGE)
@@ -80,8 +75,7 @@ def run(flat, package, root: str, args: argparse.Namespace, externs) -> int:
         print(f"  {line}", flush=True)
 
     if getattr(args, "timed", False):
-        print("  time: the tick is one more interaction (all timed atoms at once); deadlock-free means no time-lock"
-              + ("" if args.method == "both" else "; the observers are checked by --method both or explore"))
+        print("  time: the tick is one more interaction (all timed atoms at once); deadlock-free means no time-lock")
     analysis = analyse(flat, args.solver, progress=phase)
     budgets = {} if args.check_states is None else {"bfs_budget": args.check_states,
                                                      "guided_budget": args.check_states}

@@ -13,6 +13,10 @@ import sys
 
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_VIOLATED, Failure, error
 
+#: States one round's search may visit unless --max-states says otherwise: the rounds that prove DALA's properties
+#: and observers take at most a few hundred thousand; past this, refinement has kept too much to stay cheap.
+ROUND_STATES = 5_000_000
+
 
 def read_localizable(args: argparse.Namespace, flat) -> list:
     """The properties of the --property files, every one of a shape this method takes; else fail with where."""
@@ -46,13 +50,12 @@ def read_localizable(args: argparse.Namespace, flat) -> list:
 def run(items, package, root: str, args: argparse.Namespace, externs, deadlock_verdict: int) -> int:
     """Check each property by localization (deadlock freedom: the analysis above); the worst exit status."""
     from genom2bip.cli.printers import print_trace, step_sources
-    from genom2bip.cli.verify_native import default_memory
     from runtime.localize.refine import NotLocalizable, check_localized
     from runtime.props import describe
 
     print("properties by localization (the atoms a property involves kept exact, the others a free environment; "
           "counterexample-guided refinement; deadlock freedom is not preserved by it and stays with the invariants)")
-    max_bytes = args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()
+    max_bytes = _max_bytes(args)
     worst = EXIT_OK
     sources = None
     for item in items:
@@ -62,25 +65,14 @@ def run(items, package, root: str, args: argparse.Namespace, externs, deadlock_v
             print(f"  {word} (compositional invariants, above)")
             worst = max(worst, deadlock_verdict)
             continue
-
-        def say(r) -> None:
-            what = "every atom kept (the exact search)" if r.kept == r.atoms else \
-                f"{r.kept} of {r.atoms} atoms kept, {r.chaos} free"
-            replayed = "replayed on the model" if r.outcome in ("violated", "run found") else "not replayed"
-            tail = f", {replayed} ({r.concrete_states:,} states searched)" if r.concrete_states else ""
-            print(f"  round {len(rounds) + 1}: {what}: {r.states:,} states, {r.seconds:.2f} s: {r.outcome}{tail}",
-                  flush=True)
-            rounds.append(r)
-
-        rounds: list = []
         try:
-            result = check_localized(package, root, item, externs, max_states=args.max_states, max_bytes=max_bytes,
-                                     on_round=say)
+            result = check_localized(package, root, item, externs, max_states=_round_states(args),
+                                     max_bytes=max_bytes, on_round=round_printer())
         except NotLocalizable as exc:  # classified above; an abstraction's own labels may still count
             error(f"{item.property.span}: property {item.name}: {exc}")
             worst = max(worst, EXIT_ERRORS)
             continue
-        v = result.verdict
+        v = _capped(result.verdict, args)
         print(f"  {v.word} ({v.method}, {v.states:,} states, {v.seconds:.2f} s)" + (f": {v.note}" if v.note else ""))
         if v.trace:
             what = "counterexample" if v.holds is False else "witness"
@@ -94,3 +86,52 @@ def run(items, package, root: str, args: argparse.Namespace, externs, deadlock_v
         elif v.holds is None:
             worst = max(worst, EXIT_INCONCLUSIVE)
     return worst
+
+
+def observers(package, root: str, flat, kinds: set[str], args: argparse.Namespace, externs) -> int:
+    """``--timed --method compositional``: each observer's ERROR unreachable, by localization; the worst status."""
+    from genom2bip.cli.verify_timed import check_observers
+    from runtime.localize.refine import check_localized
+
+    print("observers by localization (the observer, what forces its close event in time and what the rounds add "
+          "kept exact, the others a free environment)")
+
+    def decide(item):
+        return _capped(check_localized(package, root, item, externs, max_states=_round_states(args),
+                                       max_bytes=_max_bytes(args), on_round=round_printer()).verdict, args)
+
+    return check_observers(None, flat, package, root, kinds, None, decide=decide)
+
+
+def round_printer():
+    """``on_round`` for check_localized: one line per round (kept atoms, states, time, outcome, replay)."""
+    rounds: list = []
+
+    def say(r) -> None:
+        what = "every atom kept (the exact search)" if r.kept == r.atoms else \
+            f"{r.kept} of {r.atoms} atoms kept, {r.chaos} free"
+        replayed = "replayed on the model" if r.outcome in ("violated", "run found") else "not replayed"
+        tail = f", {replayed} ({r.concrete_states:,} states searched)" if r.concrete_states else ""
+        print(f"  round {len(rounds) + 1}: {what}: {r.states:,} states, {r.seconds:.2f} s: {r.outcome}{tail}",
+              flush=True)
+        rounds.append(r)
+
+    return say
+
+
+def _round_states(args: argparse.Namespace) -> int:
+    return args.max_states if args.max_states is not None else ROUND_STATES
+
+
+def _capped(verdict, args: argparse.Namespace):
+    """An inconclusive verdict says that the rounds' default limit stopped it, and how to lift it."""
+    if verdict.holds is None and args.max_states is None and "max-states" in (verdict.note or ""):
+        verdict.note = (f"a round stopped at {ROUND_STATES:,} states (the default limit of a localization round; "
+                        "--max-states N sets another)")
+    return verdict
+
+
+def _max_bytes(args: argparse.Namespace) -> int:
+    from genom2bip.cli.verify_native import default_memory
+
+    return args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()

@@ -174,11 +174,11 @@ def timed_trace(steps, tick: int | None, indent: str = "    ") -> None:
         print(f"{indent}(the initial state)")
 
 
-def check_observers(space, flat, package, root: str, kinds: set[str], progress, args=None) -> int:
+def check_observers(space, flat, package, root: str, kinds: set[str], progress, args=None, decide=None) -> int:
     """Check ``invariant not (OBS @ ERROR)`` for every observer of the given kinds; print verdicts and traces.
 
-    With the command line's ``args`` the compiled explorer checks them (``--engine``, ``--max-states``,
-    ``--por``, ...), else the Python checker.
+    ``decide(item)`` gives each verdict (localization, with ``--method compositional``); else, with the command
+    line's ``args``, the compiled explorer (``--engine``, ``--max-states``, ``--por``, ...), else the Python checker.
     """
     from genom2bip.cli.verify_native import check_property
     from runtime.props import check, read_property_text
@@ -193,15 +193,22 @@ def check_observers(space, flat, package, root: str, kinds: set[str], progress, 
     worst = EXIT_OK
     for a in atoms:
         item = read_property_text(f"invariant not ({a.path} @ ERROR)", flat)
-        verdict = check(space, item, progress) if args is None else check_property(space, item, args, progress)
         what = ("overrun" if a.kind == "overrun" else "violation")
         limit = f"{a.bound * tick / 1000:g} ms" if tick else f"{a.bound} ticks"
         subject = (f"period of {a.path.rsplit('.', 1)[0]} ({limit})" if a.kind == "overrun"
                    else f"latency {a.path} (within {limit})")
+        if decide is not None:
+            print(f"{subject}:", flush=True)
+            verdict = decide(item)
+        elif args is None:
+            verdict = check(space, item, progress)
+        else:
+            verdict = check_property(space, item, args, progress)
+        how = f"{verdict.method}, " if decide is not None and verdict.method else ""
         if verdict.holds is True:
-            print(f"{subject}: no {what} reachable ({verdict.states:,} states, {verdict.seconds:.2f} s)")
+            print(f"{subject}: no {what} reachable ({how}{verdict.states:,} states, {verdict.seconds:.2f} s)")
         elif verdict.holds is False:
-            print(f"{subject}: {what} reachable ({len(verdict.trace)} steps):")
+            print(f"{subject}: {what} reachable ({how}{len(verdict.trace)} steps):")
             timed_trace(verdict.trace, tick)
             worst = EXIT_VIOLATED
         else:
