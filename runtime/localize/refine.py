@@ -8,7 +8,8 @@ over-approximation with the compiled search, and
 * if the abstract counterexample replays on the model (a best-first search
   of the model that follows the counterexample's kept interactions in order,
   any number of dropped ones in between), it is a real counterexample;
-* otherwise K grows by the dropped atoms the counterexample used, and again.
+* otherwise K grows by the dropped atoms that withheld the interaction the
+  replay could not reach (else by those the counterexample used), and again.
 
 When K is every atom the round is the exact search.  Only properties whose
 observer ignores every interaction it does not name can be localized: they
