@@ -394,6 +394,3 @@ class StateSpace:
         total = sys.getsizeof(self.ids) + sys.getsizeof(self.packed) + keys + numbers
         total += self.parent.buffer_info()[1] * self.parent.itemsize * 2
         return int(total)
-
-    def edges_memory(self) -> int:
-        return sum(sys.getsizeof(t) for t in self.edges.values()) + sys.getsizeof(self.edges)
