@@ -20,8 +20,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from runtime.compositional.analysis import DEFAULT_SOLVER
     group = parser.add_argument_group("compositional deadlock analysis (--method compositional or both)")
     group.add_argument("--method", choices=METHODS, default="explore",
-                       help="deadlock-freedom by exploration (default), by invariants and SAT (compositional), "
-                            "or both side by side")
+                       help="deadlock-freedom by exploration (default), by invariants and SAT (compositional: "
+                            "--property and the observers of --timed then by localization), or both side by side")
     group.add_argument("--solver", default=DEFAULT_SOLVER, metavar="NAME",
                        help=f"python-sat solver for the formulas (default {DEFAULT_SOLVER}; e.g. minisat22, "
                             "glucose4, cadical195)")
