@@ -1,10 +1,11 @@
-"""``genom2bip verify --method compositional --property FILE``: the properties of a model too large to explore.
+"""``genom2bip verify --method compositional --property FILE`` (or ``--timed``): properties and timing observers
+of a model too large to explore.
 
 Deadlock freedom is the compositional analysis's (invariants and SAT); safety
-properties and possibilities are decided by localization with
-counterexample-guided refinement (runtime.localize).  Every property is
-classified before anything runs: one the method cannot take is refused with
-its file:line:column.
+properties, possibilities and the observers of a timed model are decided by
+localization with counterexample-guided refinement (runtime.localize).  Every
+property is classified before anything runs: one the method cannot take is
+refused with its file:line:column.
 """
 from __future__ import annotations
 
