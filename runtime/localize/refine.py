@@ -25,11 +25,11 @@ from types import SimpleNamespace
 
 from runtime.engine.flatten import FlatSystem, flatten
 from runtime.explore.space import StateSpace, Step
+from runtime.explore.timed import TICK
 from runtime.export.monitors import build_monitor, equivalent_states, spin_shape
 from runtime.export.promela_base import PromelaError
-from runtime.explore.timed import TICK
-from runtime.localize.timed import observer_seed
 from runtime.localize.abstraction import CHAOS, Abstraction, abstract, always_ready, close, optional_leaves
+from runtime.localize.timed import observer_seed
 from runtime.props.check import Checkable, Verdict, _preds, check, model_labels
 from runtime.props.formulas import Property, Regular, RSeq, RStar, SBox, SConst, SDia, SFix, SOr, SVar
 from runtime.props.normal import normalize, positive
