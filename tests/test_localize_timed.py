@@ -196,3 +196,18 @@ def test_a_violated_observer_is_printed_with_its_timed_trace(capsys):
                                                       "Cruise.Track:start", "Cruise.Track:exec_start  "
                                                       "[track_start -> pause::track]"]
     assert after[4].strip() == "[0 ms .. 4 ms] time passes (2 ticks)"
+
+
+def test_a_round_stopped_by_its_default_limit_says_so_and_how_to_lift_it(capsys, monkeypatch):
+    from genom2bip.cli import verify_localized
+
+    monkeypatch.setattr(verify_localized, "ROUND_STATES", 5)
+    code, out, _ = verify(capsys, str(CRUISE), "--timed", "--method", "compositional", "--schedulability")
+    assert code == 5
+    assert ("period of Cruise.loop (10 ms): inconclusive (a round stopped at 5 states (the default limit of a "
+            "localization round; --max-states N sets another))") in out.splitlines()
+    code, out, _ = verify(capsys, str(CRUISE), "--timed", "--method", "compositional", "--schedulability",
+                          "--max-states", "5")
+    assert code == 5
+    assert ("period of Cruise.loop (10 ms): inconclusive (the search stopped at max-states before an answer)"
+            in out.splitlines())
