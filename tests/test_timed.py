@@ -73,6 +73,38 @@ def test_codels_without_wcet_are_named_in_a_warning(capsys):
     assert "NDD.nddPlan" in err
 
 
+ODO = """
+component Odo {
+  version "1.0";
+  lang "c";
+  ids { double x; };
+  task odo { period 50 ms; };
+  activity Track() {
+    task odo;
+    codel <start> to_start() yield compute wcet 5 ms;
+    codel <compute> to_compute(ids inout x) yield pause::compute wcet 15 ms;
+    codel <stop> to_stop() yield ether wcet 10 ms;
+    interrupts Track;
+  };
+};
+"""
+
+
+def test_a_codel_no_state_reaches_still_gets_its_wcet(tmp_path, capsys):
+    # Track interrupts only itself, which the model serialises: its stop state is never reached, so the
+    # activity has no transition on exec_stop; the task's exec connector for it still takes the codel's 10 ms.
+    gen = tmp_path / "Odo.gen"
+    gen.write_text(ODO)
+    code, out, err = verify(capsys, str(gen), "--timed", "--schedulability")
+    assert code == 0 and err == ""
+    assert "period of Odo.odo (50 ms): no overrun reachable" in out
+    assert main([str(gen), "--timed", "-o", str(tmp_path / "out")]) == 0
+    capsys.readouterr()
+    bip = (tmp_path / "out" / "odo" / "odo.bip").read_text()
+    assert "on exec_stop" not in bip
+    assert "connector Exec2_PP Track_exec_stop(odo.scheduler_exec, Track.activity_exec_stop)" in bip  # 10 ms / 5 ms
+
+
 def test_a_default_wcet_gives_them_time(capsys):
     description = parse_paths([NDD])
     package, _, _ = model_of(description, "NDD", None, TimeOptions(default_wcet_us=20_000))

@@ -81,6 +81,7 @@ class FunctionalLevel:
         self.asm = Assembly(self._port_type, self._connector)
         self.services: dict[tuple[str, str], ServiceParts] = {}  # (component, service) as written
         self.task_execs: dict[Path, list[Wire]] = {}
+        self.exec_codels: dict[str, ir.Codel] = {}  # exec wire label -> the codel it runs (even one no state reaches)
         self.wakes: dict[Path, list[End]] = {}
         self.docs: dict[str, str] = {}  # type name -> one line saying what it stands for
         self.task_labels: dict[Path, str] = {}  # task compound -> "Component.task" as its labels say it
@@ -226,6 +227,7 @@ class FunctionalLevel:
                  comment=f"codel {codel.name} of state {state}", annotations=source_annotation(codel.span))
         )
         self.task_execs[task].append(w)
+        self.exec_codels[w.label] = codel
         return w
 
     def _service(self, m: str, c: ir.Component, root: Path, s: ir.Service, task: Path) -> None:

@@ -36,7 +36,6 @@ from runtime.model import (
     Assign,
     AtomType,
     Binary,
-    Call,
     Const,
     ConnectorParam,
     ConnectorType,
@@ -298,18 +297,15 @@ def exec_type(ctype: ConnectorType, cost: int) -> ConnectorType:
     )
 
 
-def _codel_of(level, end: End) -> tuple[str, int | None]:
-    """The codel an activity's exec port calls: (its name, its ``wcet_us`` annotation or None)."""
-    atom = level.atom_types[level.asm.atoms[end.atom].type]
-    for t in atom.transitions:
-        if t.port == end.port:
-            for stmt in t.action:
-                if isinstance(stmt, Assign) and isinstance(stmt.value, Call):
-                    extern = level.externs[stmt.value.function]
-                    ann = next(a for a in extern.annotations if a.name == "codel")
-                    wcet = ann.arguments.get("wcet_us")
-                    return ann.arguments["codel"], int(wcet) if wcet is not None else None
-    raise ValueError(f"no codel on {end}")
+def _codel_of(level, wire: Wire) -> tuple[str, int | None]:
+    """The codel an exec wire runs: (its name, its WCET in µs or None).
+
+    Read from the description, not from the activity's transitions: a codel
+    of a state no run reaches has no transition left, and its wire still
+    needs a cost.
+    """
+    codel = level.exec_codels[wire.label]
+    return codel.name, round(codel.wcet.seconds * 1e6) if codel.wcet is not None else None
 
 
 def apply(level, options: TimeOptions) -> Timing:
@@ -322,7 +318,7 @@ def apply(level, options: TimeOptions) -> Timing:
     execs: list[tuple[Wire, str, int | None]] = []
     for task, wires in level.task_execs.items():
         for w in wires:
-            execs.append((w, *_codel_of(level, w.ends[1])))
+            execs.append((w, *_codel_of(level, w)))
     timers = {path: inst for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
     untimed = sorted({f"{w.label.split('.')[0]}.{name}" for w, name, wcet in execs if wcet is None})
     constants = [inst.args[0].value for inst in timers.values()]
