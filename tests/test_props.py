@@ -126,6 +126,34 @@ def test_invariant():
     assert v.holds is False and [s.label for s in v.trace] == ["S.req", "S.work"]
 
 
+def test_a_name_that_starts_like_t_or_f_is_a_name_not_true_or_false():
+    # T and F abbreviate true and false only as whole words: T265.main.overrun is an atom's path
+    text = """
+    package Flags
+    port type Port()
+    atom type Flag()
+      data bool raised
+      port Port set()
+      place Off, On
+      initial to Off do { raised = false; }
+      on set from Off to On do { raised = true; }
+    end
+    compound type Main()
+      component Flag T265()
+      component Flag Fx()
+    end
+    end
+    """
+    from runtime.bip2 import parse_text
+
+    pkg = parse_text(text, "Flags.bip")
+    flat = flatten(pkg, "Main()")
+    for prop, want in (("invariant not (T265 @ On)", False), ("invariant (T265.raised == F or T265 @ On) and T", True),
+                       ("invariant Fx.raised == F", False)):
+        (item,), _ = read_properties(prop, "test.mcl", flat)
+        assert check(StateSpace(pkg, "Main()", observed=item.observed, keep_edges=True), item).holds is want, prop
+
+
 def test_deadlock_free():
     assert holds("deadlock free")
     v = verdict("deadlock free", "Dining", "Table2()")
