@@ -1,4 +1,5 @@
 """``genom2bip verify --method compositional|both``: report, verdicts, exit statuses, graph, usage errors."""
+import re
 from pathlib import Path
 
 import pytest
@@ -57,6 +58,7 @@ def test_an_unreached_candidate_is_unknown_with_its_reason(capsys):
                        "--check-states", "5")
     assert code == 5
     assert "candidate 1: unknown: breadth-first exploration stopped at 5 states" in out
+    assert re.search(r"^  check: candidate 1: [\d.]+ s \(unknown\)$", out, re.M)  # no empty "()" of a method
     assert out.splitlines()[-1].startswith("unknown: deadlock freedom neither proved nor refuted")
 
 

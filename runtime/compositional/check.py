@@ -68,7 +68,7 @@ def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int
         started = time.perf_counter()
         _guided(analysis, p, package, root, externs, guided_budget, bfs_budget)
         analysis.phases.append(_phase(f"check: candidate {open_.index(p) + 1}", started,
-                                      f"{p.verdict} ({p.method})", progress))
+                                      p.verdict + (f" ({p.method})" if p.method else ""), progress))
 
 
 def _phase(name: str, started: float, note: str, progress):
