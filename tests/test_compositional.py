@@ -10,6 +10,7 @@ from runtime.compositional import TrapStore, analyse, decide
 from runtime.engine import Engine, flatten
 from runtime.explore import StateSpace, explore
 from tests.compositionalkit import models
+from tests.nativekit import compiler
 
 FIXTURES = Path(__file__).parent / "fixtures" / "compositional"
 
@@ -43,11 +44,11 @@ def test_every_deadlock_exploration_finds_is_a_candidate_and_never_deadlock_free
         for sid in result.deadlocks:
             state = space.concrete(space.trace_to(sid))
             assert tuple(analysis.abstract(state)) in candidates, text
-    decide(analysis, package, "Top()", bfs_budget=3000, guided_budget=3000)
+    decide(analysis, package, "Top()", bfs_budget=3000, guided_budget=3000, compiled=False)
     if result.deadlocks:
         assert analysis.verdict in (("deadlock",) if analysis.complete else ("deadlock", "unknown")), text
-    elif result.complete:
-        assert analysis.verdict == ("deadlock-free" if analysis.complete else "unknown"), text
+    elif result.complete:  # the check's exploration is complete too: it decides even an unfinished listing
+        assert analysis.verdict == "deadlock-free", text
     assert not any("UNSOUND" in p.reason for p in analysis.potentials), text
     for p in analysis.candidates:
         if p.verdict == "reachable":  # the trace replays on the engine and ends in a deadlock
@@ -89,6 +90,22 @@ def test_interaction_invariants_are_necessary_for_the_ordered_philosophers():
     both = judged("Philosophers", "Ordered3()")  # the restricted searches settle what traps leave
     assert both.candidates == [] and {p.method for p in both.potentials} == {"interaction invariant",
                                                                              "restricted search"}
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_complete_exploration_decides_the_candidates_a_cut_listing_left_out(compiled):
+    if compiled and compiler() is None:
+        pytest.skip("no C compiler (gcc) on PATH")
+    package = fixture("Philosophers")
+    cut = analyse(flatten(package, "Ordered3()"), use_traps=False, use_restricted=False, max_candidates=1)
+    assert not cut.complete and len(cut.candidates) == 1  # CI ∧ DIS has more models than were listed
+    decide(cut, package, "Ordered3()", compiled=compiled)
+    assert cut.explored and cut.verdict == "deadlock-free"
+    note = next(ph.note for ph in cut.phases if ph.name == "check: exploration")
+    assert note.startswith(f"breadth-first ({'compiled' if compiled else 'Python'}), ") and note.endswith("complete")
+    small = analyse(flatten(package, "Ordered3()"), use_traps=False, use_restricted=False, max_candidates=1)
+    decide(small, package, "Ordered3()", bfs_budget=3, guided_budget=3, compiled=compiled)
+    assert not small.explored and small.verdict == "unknown"  # a budget spent decides nothing unlisted
 
 
 def test_traps_found_once_are_reused_by_the_next_analysis():

@@ -72,6 +72,7 @@ class Analysis:
     clauses: int = 0
     sat_calls: int = 0
     complete: bool = True  # every model of the formula was listed
+    explored: bool = False  # an exhaustive exploration saw every reachable state (it decides the unlisted ones too)
     solver: str = DEFAULT_SOLVER
 
     @property
@@ -83,7 +84,7 @@ class Analysis:
         """``deadlock-free``, ``deadlock`` (one is reachable) or ``unknown``."""
         if any(p.verdict == "reachable" for p in self.potentials):
             return "deadlock"
-        if not self.complete or any(p.verdict in ("unknown", "candidate") for p in self.potentials):
+        if not (self.complete or self.explored) or any(p.verdict in ("unknown", "candidate") for p in self.potentials):
             return "unknown"
         return "deadlock-free"
 

@@ -1,7 +1,8 @@
 """Verdicts for the candidates the formula leaves: reachable (with a trace) or unreachable, by exploration.
 
-First a breadth-first exploration with a state budget: every deadlock it
-meets is mapped onto the abstract states; a candidate it meets is
+First a breadth-first exploration with a state budget (the compiled
+explorer where it takes the model, 2,000,000 states; else the Python one,
+20,000): every deadlock it meets is mapped onto the abstract states; a candidate it meets is
 *reachable* with a shortest trace, and when the exploration is complete the
 others are *unreachable*.  Candidates still open then get a guided search:
 best-first on the number of atoms whose place differs from the candidate's,
@@ -22,29 +23,33 @@ from runtime.compositional.analysis import Analysis, Potential
 from runtime.engine.errors import EngineError
 from runtime.explore import LimitReached, StateSpace, explore
 
-#: States the breadth-first check may number, then each guided search.
+#: States the breadth-first check may number (with the compiled explorer, with the Python one), then each
+#: guided search.
+COMPILED_BFS_BUDGET = 2_000_000
 BFS_BUDGET = 20_000
 GUIDED_BUDGET = 50_000
 
 
-def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int = BFS_BUDGET,
-           guided_budget: int = GUIDED_BUDGET, progress: Callable[[str], None] | None = None) -> None:
-    """Give each candidate of ``analysis`` its verdict (in place), timing the checks as phases."""
+def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int | None = None,
+           guided_budget: int = GUIDED_BUDGET, progress: Callable[[str], None] | None = None,
+           compiled: bool = True) -> None:
+    """Give each candidate of ``analysis`` its verdict (in place), timing the checks as phases; ``compiled``
+    False keeps the breadth-first search in Python (small models, where compiling would cost more)."""
     open_ = [p for p in analysis.potentials if p.verdict == "candidate"]
     if not open_:
         return
     started = time.perf_counter()
     by_state = {tuple(p.state): p for p in open_}
     try:
-        space = StateSpace(package, root, externs, max_states=bfs_budget)
+        space = StateSpace(package, root, externs)
     except EngineError as err:
         for p in open_:
             p.verdict, p.method, p.reason = "unknown", "", f"the explorer cannot run this model: {err}"
         return
-    result = explore(space)
+    searched, result, bfs_budget = _breadth_first(space, externs, bfs_budget, compiled)
     found = 0
     for sid in result.deadlocks:
-        trace = space.trace_to(sid)
+        trace = searched.trace_to(sid)
         abstract = tuple(analysis.abstract(space.concrete(trace)))
         p = by_state.get(abstract)
         if p is None:
@@ -60,7 +65,9 @@ def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int
         if p.verdict == "candidate" and result.complete:
             p.verdict, p.method = "unreachable", "exhaustive exploration"
             p.reason = f"not among the deadlocks of all {result.states:,} reachable states"
-    note = f"breadth-first, {result.states:,} states, {'complete' if result.complete else 'budget spent'}"
+    analysis.explored = result.complete
+    how = "compiled" if searched is not space else "Python"
+    note = f"breadth-first ({how}), {result.states:,} states, {'complete' if result.complete else 'budget spent'}"
     analysis.phases.append(_phase("check: exploration", started, note, progress))
     for p in open_:
         if p.verdict != "candidate":
@@ -69,6 +76,25 @@ def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int
         _guided(analysis, p, package, root, externs, guided_budget, bfs_budget)
         analysis.phases.append(_phase(f"check: candidate {open_.index(p) + 1}", started,
                                       p.verdict + (f" ({p.method})" if p.method else ""), progress))
+
+
+def _breadth_first(space: StateSpace, externs, budget: int | None, use_compiled: bool):
+    """(the space searched, its ExploreResult, the budget used): the compiled search where it takes the model
+    (2,000,000 states unless ``budget``), else the Python one (20,000)."""
+    from runtime.native.compiled import Diverged, compile_space
+
+    compiled = compile_space(space, externs)[0] if use_compiled else None
+    if compiled is not None:
+        limit = COMPILED_BFS_BUDGET if budget is None else budget
+        try:
+            return compiled, compiled.explore(max_states=limit), limit
+        except Diverged:
+            pass
+    limit = BFS_BUDGET if budget is None else budget
+    space.max_states = limit
+    result = explore(space)
+    space.max_states = None
+    return space, result, limit
 
 
 def _phase(name: str, started: float, note: str, progress):
