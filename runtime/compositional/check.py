@@ -52,10 +52,10 @@ def decide(analysis: Analysis, package, root: str, externs=None, bfs_budget: int
         trace = searched.trace_to(sid)
         abstract = tuple(analysis.abstract(space.concrete(trace)))
         p = by_state.get(abstract)
-        if p is None:
-            p = Potential(list(abstract), "reachable", "exploration",
-                          "UNSOUND ANALYSIS: a reachable deadlock that is not among the potential deadlocks",
-                          trace, checked=True)
+        if p is None:  # unlisted: past a cut listing, else a flaw of the analysis, never hidden
+            why = ("a reachable deadlock the listing did not reach (it stopped at its limit)" if not analysis.complete
+                   else "UNSOUND ANALYSIS: a reachable deadlock that is not among the potential deadlocks")
+            p = Potential(list(abstract), "reachable", "exploration", why, trace, checked=True)
             analysis.potentials.append(p)
             by_state[abstract] = p
         elif p.verdict == "candidate":
