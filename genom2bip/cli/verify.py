@@ -180,10 +180,11 @@ def verb_verify(args: argparse.Namespace) -> int:
         print(f"model {title}")
         compositional = run_compositional(flat, package, root, args, load_externs(args.externs))
         if args.method == "compositional":
-            if _observer_kinds(args):
+            kinds = _observer_kinds(args)
+            if kinds:
                 from genom2bip.cli.verify_localized import observers as localized_observers
-                compositional = max(compositional, localized_observers(package, root, flat, _observer_kinds(args),
-                                                                       args, load_externs(args.externs)))
+                compositional = max(compositional, localized_observers(package, root, flat, kinds, args,
+                                                                       load_externs(args.externs)))
             if localized is not None:
                 from genom2bip.cli.verify_localized import run as run_localized
                 return max(compositional, run_localized(localized, package, root, args, load_externs(args.externs),

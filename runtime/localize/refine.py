@@ -295,15 +295,16 @@ def concretize(space: StateSpace, item: Checkable, trace: list[Step], a: Abstrac
     free = a.free_labels if a is not None else frozenset()
     accept, pred = _acceptor(item, flat)
     goals = _goals(space, trace, abstract_space) if abstract_space is not None else [{} for _ in wanted]
+    needs = {label: _needed_ports(flat, label) for label in set(wanted)}
     visited = 0
     blockers: set[int] = set()
     for start in space.initial_ids:
         states, labels = [start], []
         for label, goal in zip(wanted, goals):
-            got, seen, closest = _segment(space, states[-1], label, free, budget, goal)
+            got, seen, lacking = _segment(space, states[-1], label, needs[label], free, budget, goal)
             visited += seen
             if got is None:
-                blockers |= {flat.ports[p].atom for p in _missing(space, closest, _needed_ports(flat, label))}
+                blockers |= {flat.ports[p].atom for p in lacking}
                 break
             states += got[0]
             labels += got[1]
@@ -331,19 +332,19 @@ def _goals(space: StateSpace, trace: list[Step], abstract_space: StateSpace) -> 
     return out
 
 
-def _segment(space: StateSpace, sid: int, label: str, free, budget: int, goal: dict[int, object]):
-    """(states after sid, their labels) of a path of dropped interactions then ``label``; None if none is found.
+def _segment(space: StateSpace, sid: int, label: str, needs: list[list[int]], free, budget: int,
+             goal: dict[int, object]):
+    """(states after sid, their labels) of a path of dropped interactions then ``label`` (None if none is found),
+    the states visited, and the ports ``label`` lacked in the state the search came closest from.
 
-    Best first: states where the fewest atom ports that ``label`` needs are missing and whose free booleans differ
-    least from ``goal``, then the shallowest.
+    Best first: states where the fewest atom ports that ``label`` needs (``needs``, from :func:`_needed_ports`)
+    are missing and whose free booleans differ least from ``goal``, then the shallowest.
     """
     import heapq
 
-    needs = _needed_ports(space.engine.flat, label)
-
     def distance(node: int) -> int:
         state = space.engine_state(node)
-        return len(_missing(space, node, needs)) + sum(state[slot] != value for slot, value in goal.items())
+        return len(_missing(space, state, needs)) + sum(state[slot] != value for slot, value in goal.items())
 
     parent: dict[int, tuple[int, int] | None] = {sid: None}
     heap = [(distance(sid), 0, sid)]
@@ -362,17 +363,17 @@ def _segment(space: StateSpace, sid: int, label: str, free, budget: int, goal: d
                     states.append(cur)
                     labels.append(space.labels[lab])
                     cur = prev
-                return (states[::-1], labels[::-1]), len(parent), node
+                return (states[::-1], labels[::-1]), len(parent), []
             if name in free and succ[k + 1] not in parent:
                 parent[succ[k + 1]] = (node, succ[k])
                 heapq.heappush(heap, (distance(succ[k + 1]), depth + 1, succ[k + 1]))
-    return None, len(parent), closest[2]
+    return None, len(parent), _missing(space, space.engine_state(closest[2]), needs)
 
 
-def _missing(space: StateSpace, node: int, needs: list[list[int]]) -> list[int]:
+def _missing(space: StateSpace, state: tuple, needs: list[list[int]]) -> list[int]:
     """The atom ports an interaction needs (``needs``: per source, from :func:`_needed_ports`) that are not offered
-    at ``node``, for the source that lacks the fewest."""
-    ready = space.engine.ready(space.engine_state(node))
+    at engine state ``state``, for the source that lacks the fewest."""
+    ready = space.engine.ready(state)
     lacks = [[p for p in ports if not ready[p]] for ports in needs]
     return min(lacks, key=len, default=[])
 
@@ -380,8 +381,11 @@ def _missing(space: StateSpace, node: int, needs: list[list[int]]) -> list[int]:
 def _needed_ports(flat: FlatSystem, label: str) -> list[list[int]]:
     """Per interaction source labelled ``label`` (a top connector, or a lone atom port): the atom ports every one
     of its interactions needs."""
-    out = [[p for p in flat.leaves(fc) if p not in optional_leaves(flat, fc)]
-           for fc in flat.connectors if fc.top and fc.label == label]
+    out = []
+    for fc in flat.connectors:
+        if fc.top and fc.label == label:
+            optional = optional_leaves(flat, fc)
+            out.append([p for p in flat.leaves(fc) if p not in optional])
     return out + [[fp.id] for fp in flat.ports if fp.path == label and not fp.decl.exported]
 
 
