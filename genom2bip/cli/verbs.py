@@ -22,7 +22,8 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from genom2bip.ir import Description
-from runtime.diagnostics import Diagnostic, DiagnosticError, Reporter, SourceCache
+from genom2bip.loading import InputError, UsageError
+from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache
 from runtime.errors import Genom2bipError
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
@@ -31,8 +32,6 @@ EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
 
 #: The verb run when the first argument is not a verb (``genom2bip descriptions/dala -o gen/``).
 DEFAULT_VERB = "generate"
-
-DESCRIPTION_SUFFIXES = (".gen",)
 
 
 @dataclass
@@ -87,27 +86,9 @@ def add_preprocessor_arguments(parser: argparse.ArgumentParser) -> None:
 
 def description_files(paths: Sequence[str]) -> list[Path]:
     """Expand directories into their description files (sorted); missing paths are reported."""
-    files: list[Path] = []
-    missing: list[str] = []
-    for raw in paths:
-        path = Path(raw)
-        if path.is_dir():
-            found = sorted(p for p in path.iterdir() if p.suffix in DESCRIPTION_SUFFIXES and p.is_file())
-            if not found:
-                error(f"{raw}: no {'/'.join(DESCRIPTION_SUFFIXES)} file in this directory")
-                missing.append(raw)
-            files.extend(found)
-        elif path.exists() and not path.is_file():
-            error(f"{raw}: not a regular file (a device or a pipe cannot be read as a description)")
-            missing.append(raw)
-        elif path.exists():
-            files.append(path)
-        else:
-            error(f"{raw}: no such file or directory")
-            missing.append(raw)
-    if missing:
-        raise Failure(EXIT_ERRORS)
-    return files
+    from genom2bip.loading import description_files as files
+
+    return files(paths)
 
 
 def parse_defines(items: Sequence[str]) -> dict[str, str]:
@@ -137,60 +118,26 @@ def print_diagnostics(diagnostics: Sequence[Diagnostic], sources: SourceCache | 
 
 def load(args: argparse.Namespace, check: bool = True) -> Description:
     """Parse (and check) the descriptions named on the command line; print problems and fail on errors."""
+    from genom2bip.loading import Diagnostics, read_description
+
     files = description_files(args.paths)
     defines = parse_defines(args.defines)
-    from genom2bip.checks import check_description
-    from genom2bip.parser import parse_paths
-
-    reporter = Reporter()  # the parsers' warnings, then the checks' diagnostics
-    try:
-        description = parse_paths([str(f) for f in files], include_dirs=tuple(args.include_dirs), defines=defines,
-                                  reporter=reporter)
-    except DiagnosticError as exc:
-        print_diagnostics(exc.diagnostics, exc.sources)
-        raise Failure(EXIT_ERRORS) from None
-    if not check and reporter.diagnostics:
-        print_diagnostics(reporter.diagnostics, reporter.sources)
-    if check:
-        check_description(description, reporter)
-        if reporter.diagnostics:
-            print_diagnostics(reporter.diagnostics, reporter.sources)
-        if reporter.has_errors:
-            raise Failure(EXIT_ERRORS)
-    return description
+    return read_description(files, defines, args.include_dirs, check, Diagnostics(print_diagnostics))
 
 
 def rules_file(args: argparse.Namespace) -> Path | None:
-    """``--rules FILE``; else, when descriptions are given as a directory, its ``rules.yaml``.
+    """``--rules FILE``; else, when descriptions are given as a directory, its ``rules.yaml`` (``--no-rules``: none)."""
+    from genom2bip.loading import rule_file
 
-    A single description file does not pick up the rule file beside it: that
-    file names the other modules of the system (verify one module alone).
-    ``--no-rules`` keeps only the descriptions' own constraints.
-    """
-    if getattr(args, "no_rules", False):
-        return None
-    if getattr(args, "rules", None):
-        return Path(args.rules)
-    first = Path(args.paths[0])
-    default = first / "rules.yaml"
-    return default if first.is_dir() and default.is_file() else None
+    return rule_file(args.paths, getattr(args, "rules", None), getattr(args, "no_rules", False))
 
 
 def load_rules(args: argparse.Namespace, description: Description) -> list:
     """The description's constraints plus the rule file's; print problems and fail on errors."""
-    from genom2bip.rules import all_rules
+    from genom2bip.loading import Diagnostics, read_rules
 
-    reporter = Reporter()
-    path = rules_file(args)
-    if path is not None and args.rules and not path.is_file():
-        error(f"{args.rules}: no such rule file")
-        raise Failure(EXIT_ERRORS)
-    rules = all_rules(description, path, reporter)
-    if reporter.diagnostics:
-        print_diagnostics(reporter.diagnostics, reporter.sources)
-    if reporter.has_errors:
-        raise Failure(EXIT_ERRORS)
-    return rules
+    return read_rules(description, args.paths, getattr(args, "rules", None), getattr(args, "no_rules", False),
+                      Diagnostics(print_diagnostics))
 
 
 def add_rules_arguments(parser: argparse.ArgumentParser) -> None:
@@ -205,6 +152,12 @@ def exit_status(exc: Genom2bipError) -> int:
     """The one place where the product's errors become an exit status (and a message, unless already printed)."""
     if isinstance(exc, Failure):
         return exc.code
+    if isinstance(exc, InputError):  # its diagnostics, if any, were printed as they were found
+        for message in exc.messages:
+            error(message)
+        for group in exc.groups:
+            print_diagnostics(group.diagnostics, group.sources)
+        return EXIT_USAGE if isinstance(exc, UsageError) else EXIT_ERRORS
     if isinstance(exc, DiagnosticError):  # a verb that let its input's problems through
         print_diagnostics(exc.diagnostics, exc.sources)
         return EXIT_ERRORS
