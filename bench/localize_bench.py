@@ -71,7 +71,7 @@ def untimed(max_states: int) -> None:
 
 
 def timed(wcet_ms: float, max_states: int) -> None:
-    from genom2bip.cli.verify_timed import observer_atoms
+    from genom2bip.verify.timing import observer_atoms
     from runtime.engine import flatten
     from runtime.props import read_property_text
 

@@ -27,7 +27,8 @@ from genom2bip.build.timed import TimeOptions  # noqa: E402
 from genom2bip.generate import model_of  # noqa: E402
 from genom2bip.parser import parse_paths  # noqa: E402
 from genom2bip.rules import description_rules  # noqa: E402
-from genom2bip.cli.verify_timed import observer_atoms, tick_us  # noqa: E402
+from genom2bip.verify.model import tick_us  # noqa: E402
+from genom2bip.verify.timing import observer_atoms  # noqa: E402
 from runtime.engine import flatten  # noqa: E402
 from runtime.explore import StateSpace, explore  # noqa: E402
 from runtime.native.compiled import compile_space  # noqa: E402

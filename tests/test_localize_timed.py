@@ -8,7 +8,7 @@ import pytest
 
 from genom2bip.build.timed import TimeOptions
 from genom2bip.cli import main
-from genom2bip.cli.verify_timed import observer_atoms
+from genom2bip.verify.timing import observer_atoms
 from genom2bip.generate import model_of
 from genom2bip.observers import load_observers
 from genom2bip.parser import parse_paths
@@ -199,9 +199,9 @@ def test_a_violated_observer_is_printed_with_its_timed_trace(capsys):
 
 
 def test_a_round_stopped_by_its_default_limit_says_so_and_how_to_lift_it(capsys, monkeypatch):
-    from genom2bip.cli import verify_localized
+    from genom2bip.verify import localized
 
-    monkeypatch.setattr(verify_localized, "ROUND_STATES", 5)
+    monkeypatch.setattr(localized, "ROUND_STATES", 5)
     code, out, _ = verify(capsys, str(CRUISE), "--timed", "--method", "compositional", "--schedulability")
     assert code == 5
     assert ("period of Cruise.loop (10 ms): inconclusive (a round stopped at 5 states (the default limit of a "

@@ -3,7 +3,8 @@
 ``verbs`` (exit codes, the ``@verb`` mark, argument helpers) imports no other
 module here; ``check``, ``generate``, ``call``, ``verify`` (with its engines
 ``verify_native``, ``verify_spin``, ``verify_compositional``, ``verify_timed``),
-``graph`` and ``mission`` are the verbs; ``printers`` prints traces and states;
+``graph`` and ``mission`` are the verbs (``verify`` prints what the verification API,
+:mod:`genom2bip.verify`, returns); ``printers`` prints traces and states;
 ``command`` builds the parser and runs a verb.
 """
 from __future__ import annotations

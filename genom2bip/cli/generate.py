@@ -6,8 +6,8 @@ import sys
 from pathlib import Path
 
 from genom2bip.cli.verbs import (
-    EXIT_ERRORS, EXIT_OK, EXIT_USAGE, add_rules_arguments, add_source_arguments, error, load, load_rules, rules_file,
-    verb, version,
+    EXIT_ERRORS, EXIT_OK, EXIT_USAGE, add_rules_arguments, add_source_arguments, error, load, load_rules,
+    print_diagnostics, rules_file, verb, version,
 )
 from runtime.diagnostics import DiagnosticError
 
@@ -36,8 +36,9 @@ def verb_generate(args: argparse.Namespace) -> int:
     rules = load_rules(args, description)
     system = args.name or system_name(args.paths)
     sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
-    from genom2bip.cli.verify_timed import time_options, warn_untimed
-    time = time_options(args, description)
+    from genom2bip.cli.verify_timed import time_settings, warn_untimed
+    from genom2bip.loading import Diagnostics, time_options
+    time = time_options(description, args.paths, time_settings(args), Diagnostics(print_diagnostics))
     sources += (" --timed" if time.ticks else " --monitor") if time is not None else ""
     try:
         inputs = [*args.paths, *args.include_dirs, *([str(rules_file(args))] if rules_file(args) else [])]

@@ -46,7 +46,8 @@ def load_structure(args: argparse.Namespace):
     if len(args.paths) == 1 and args.paths[0].endswith(".bip"):
         from genom2bip.cli.verify import load_model
 
-        package, root, title = load_model(args)
+        model = load_model(args)
+        package, root, title = model.package, model.root, model.title
     else:
         from genom2bip.back.interface import interface_data
         from genom2bip.cli.verbs import load, load_rules

@@ -1,5 +1,10 @@
-"""Traces, states and progress as ``verify`` and its engines print them."""
+"""Traces, states and progress as ``verify`` and its engines print them; :class:`Printer` is the verification
+API's listener on a terminal."""
 from __future__ import annotations
+
+import sys
+
+from genom2bip.verify.options import Listener
 
 
 def print_trace(steps, indent: str = "    ", sources: dict[str, str] | None = None) -> None:
@@ -24,12 +29,46 @@ def step_sources(flat) -> dict[str, str]:
     return out
 
 
-def print_state(engine, state, indent: str = "    ") -> None:
-    for line in engine.format_state(state).splitlines():
+def print_lines(text: str, indent: str = "    ") -> None:
+    for line in text.splitlines():
         print(f"{indent}{line}")
+
+
+def print_state(engine, state, indent: str = "    ") -> None:
+    print_lines(engine.format_state(state), indent)
 
 
 def progress(args):
     """The progress line of a search, as ``--progress`` / ``--quiet`` ask."""
     from runtime.explore import Progress
     return Progress(force=args.progress, enabled=not args.quiet)
+
+
+class Printer(Listener):
+    """What a check says while it runs, printed: progress on stderr, notes, phases and rounds on stdout."""
+
+    def __init__(self, args) -> None:
+        self.args = args
+
+    def progress(self):
+        return progress(self.args)
+
+    def note(self, text: str) -> None:
+        print(f"note: {text}")
+
+    def unbounded(self, max_bytes: int) -> None:
+        """On a terminal, a search given no bound says which one it has and how to stop it."""
+        if (self.args.progress or sys.stderr.isatty()) and not self.args.quiet:
+            print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
+                  "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
+
+    def phase(self, line: str) -> None:
+        print(f"  {line}", flush=True)
+
+    def round(self, number: int, r) -> None:
+        """One line per localization round: kept atoms, states, time, outcome, replay."""
+        what = "every atom kept (the exact search)" if r.kept == r.atoms else \
+            f"{r.kept} of {r.atoms} atoms kept, {r.chaos} free"
+        replayed = "replayed on the model" if r.outcome in ("violated", "run found") else "not replayed"
+        tail = f", {replayed} ({r.concrete_states:,} states searched)" if r.concrete_states else ""
+        print(f"  round {number}: {what}: {r.states:,} states, {r.seconds:.2f} s: {r.outcome}{tail}", flush=True)

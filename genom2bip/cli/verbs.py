@@ -167,14 +167,11 @@ def exit_status(exc: Genom2bipError) -> int:
 
 def load_externs(spec: str | None) -> dict[str, Any]:
     """``--externs MODULE``: the public names of that Python module, binding extern functions that are not codels."""
-    if not spec:
-        return {}
-    from runtime.engine.externs import load_module
+    from genom2bip.verify.search import extern_bindings
     from runtime.engine.errors import EngineError
 
     try:
-        module = load_module(spec)
+        return extern_bindings(spec)
     except EngineError as exc:
         error(str(exc))
         raise Failure(EXIT_ERRORS) from None
-    return {k: getattr(module, k) for k in dir(module) if not k.startswith("_")}

@@ -12,10 +12,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from genom2bip.cli.printers import print_state, print_trace, progress, step_sources
+from genom2bip.cli.printers import Printer, print_lines, print_trace, step_sources
 from genom2bip.cli.verbs import (
     EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, add_preprocessor_arguments,
-    add_rules_arguments, error, load_externs, verb,
+    add_rules_arguments, description_files, error, load_externs, parse_defines, print_diagnostics, verb,
 )
 
 
@@ -77,48 +77,28 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def load_model(args: argparse.Namespace):
-    """(package, root, title) from a .bip file or from descriptions."""
-    paths = args.paths
-    if len(paths) == 1 and paths[0].endswith(".bip"):
-        from runtime.bip2 import parse_file
-        from runtime.diagnostics import DiagnosticError
-
-        if not Path(paths[0]).is_file():
-            error(f"{paths[0]}: no such file")
-            raise Failure(EXIT_ERRORS)
-        try:
-            package = parse_file(paths[0])
-        except DiagnosticError as exc:
-            print(exc.render(), file=sys.stderr)
-            raise Failure(EXIT_ERRORS) from None
-        if not package.compound_types and not args.root:
-            error(f"{paths[0]}: no compound type to use as root; give --root")
-            raise Failure(EXIT_ERRORS)
-        root = args.root or package.compound_types[-1].name + "()"
-        return package, root, f"{paths[0]} ({root})"
-    if any(p.endswith(".bip") for p in paths):
-        error("give either one .bip file or description files, not both")
-        raise Failure(EXIT_USAGE)
-    from genom2bip.cli.verbs import load, load_rules
-    from genom2bip.generate import GenerateError, model_of, system_name
-    from genom2bip.cli.verify_timed import time_options, warn_untimed
+    """The :class:`~genom2bip.verify.Model` of a .bip file or of descriptions (rules, defines, time options)."""
+    from genom2bip.cli.verify_timed import time_settings, warn_untimed
+    from genom2bip.generate import GenerateError
+    from genom2bip.verify import build_model
     from runtime.diagnostics import DiagnosticError
 
-    description = load(args)
-    rules = load_rules(args, description)
-    system = args.name or system_name(paths)
     try:
-        package, root, _ = model_of(description, system, rules, time_options(args, description))
-    except GenerateError as exc:
-        error(str(exc))
-        raise Failure(EXIT_ERRORS) from None
+        if any(p.endswith(".bip") for p in args.paths):  # one .bip file, or the usage error of a mix
+            return build_model(args.paths, root=args.root)
+        description_files(args.paths)  # a missing path is named before the options are read
+        defines = parse_defines(args.defines)
+        model = build_model(args.paths, rules=args.rules, no_rules=args.no_rules, defines=defines,
+                            include_dirs=args.include_dirs, name=args.name, root=args.root,
+                            time=time_settings(args), report=print_diagnostics)
     except DiagnosticError as exc:
         print(exc.render(), file=sys.stderr)
         raise Failure(EXIT_ERRORS) from None
-    warn_untimed(package)
-    if args.root:
-        root = args.root
-    return package, root, f"{system} ({root})"
+    except GenerateError as exc:
+        error(str(exc))
+        raise Failure(EXIT_ERRORS) from None
+    warn_untimed(model.package)
+    return model
 
 
 def _check_options(args) -> None:
@@ -157,74 +137,76 @@ def _check_options(args) -> None:
       arguments=_arguments)
 def verb_verify(args: argparse.Namespace) -> int:
     """Build or read the model, then run the checks asked for and print a verdict for each."""
-    from runtime.diagnostics import DiagnosticError
-    from runtime.engine import EngineError, flatten
-    from runtime.props import read_property_file
+    from genom2bip.cli.verify_compositional import check_arguments as check_compositional
+    from genom2bip.cli.verify_native import search_options
+    from runtime.engine import EngineError
 
     _check_options(args)
-    from genom2bip.cli.verify_compositional import check_arguments as check_compositional
     check_compositional(args)
-    package, root, title = load_model(args)
+    model = load_model(args)
     try:
-        flat = flatten(package, root)
+        model.flat
     except EngineError as exc:
-        error(f"{title}: {exc}")
+        error(f"{model.title}: {exc}")
         return EXIT_ERRORS
-    compositional = EXIT_OK
+    options, listener = search_options(args), Printer(args)
+    if args.method == "explore":
+        return _explore(model, args, options, listener, EXIT_OK)
     localized = None
     if args.method == "compositional" and args.property:  # every property classified before anything runs
         from genom2bip.cli.verify_localized import read_localizable
-        localized = read_localizable(args, flat)
-    if args.method != "explore":
-        from genom2bip.cli.verify_compositional import run as run_compositional
-        print(f"model {title}")
-        compositional = run_compositional(flat, package, root, args, load_externs(args.externs))
-        if args.method == "compositional":
-            kinds = _observer_kinds(args)
-            if kinds:
-                from genom2bip.cli.verify_localized import observers as localized_observers
-                compositional = max(compositional, localized_observers(package, root, flat, kinds, args,
-                                                                       load_externs(args.externs)))
-            if localized is not None:
-                from genom2bip.cli.verify_localized import run as run_localized
-                return max(compositional, run_localized(localized, package, root, args, load_externs(args.externs),
-                                                        compositional))
-            return compositional
+        localized = read_localizable(args, model)
+    from genom2bip.cli.verify_compositional import run as run_compositional
+    print(f"model {model.title}")
+    load_externs(args.externs)
+    compositional = run_compositional(model, args, options, listener)
+    if args.method == "both":
         print("exploration")
-    properties = []
-    for path in args.property:
-        try:
-            props, warnings = read_property_file(path, flat)
-        except DiagnosticError as exc:
-            print(exc.render(), file=sys.stderr)
-            return EXIT_ERRORS
-        for w in warnings:
-            print(w.render(), file=sys.stderr)
-        properties.extend(props)
-    observers = _observer_kinds(args)
-    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers)
-    observed = set().union(*(p.observed for p in properties)) if properties else set()
-    from runtime.explore import ExploreError, StateSpace
+        return _explore(model, args, options, listener, compositional)
+    kinds = _observer_kinds(args)
+    if kinds:
+        from genom2bip.cli.verify_localized import observers as localized_observers
+        compositional = max(compositional, localized_observers(model, kinds, options, listener))
+    if localized is not None:
+        from genom2bip.cli.verify_localized import run as run_localized
+        return max(compositional, run_localized(localized, model, args, options, listener, compositional))
+    return compositional
+
+
+def _explore(model, args: argparse.Namespace, options, listener, compositional: int) -> int:
+    """``--method explore`` (and the second half of ``both``): one state space for every check asked for."""
+    from genom2bip.cli.verify_localized import print_warnings
+    from genom2bip.verify import read_properties, state_space
+    from runtime.diagnostics import DiagnosticError
+    from runtime.engine import EngineError
+    from runtime.explore import ExploreError
 
     try:
-        space = StateSpace(package, root, load_externs(args.externs), args.requests, not args.no_reduce, observed,
-                           keep_edges=bool(properties or args.aut or args.dot), max_states=args.max_states)
+        properties, _ = read_properties(model, args.property, print_warnings)
+    except DiagnosticError as exc:
+        print(exc.render(), file=sys.stderr)
+        return EXIT_ERRORS
+    observers = _observer_kinds(args)
+    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers)
+    load_externs(args.externs)
+    try:
+        space = state_space(model, options, properties, keep_edges=bool(properties or args.aut or args.dot))
     except (ExploreError, EngineError) as exc:
-        error(f"{title}: {exc}")
+        error(f"{model.title}: {exc}")
         return EXIT_ERRORS
     if args.promela:
         code = _write_promela(space, properties, args.promela)
         if code != EXIT_OK:
             return code
     if args.method == "explore":
-        print(f"model {title}")
+        print(f"model {model.title}")
     if args.engine == "spin":
         from genom2bip.cli.verify_spin import run_spin
-        return run_spin(space, args, deadlock, properties)
-    worst = max(compositional, _run_explorer(space, args, deadlock, properties))
+        return run_spin(space, args, options, listener, deadlock, properties)
+    worst = max(compositional, _run_explorer(space, args, options, listener, deadlock, properties))
     if observers:
         from genom2bip.cli.verify_timed import check_observers
-        worst = max(worst, check_observers(space, flat, package, root, observers, progress(args), args))
+        worst = max(worst, check_observers(model, observers, space, options, listener))
     return worst
 
 
@@ -259,80 +241,75 @@ def _write_promela(space, properties, path: str) -> int:
     return EXIT_OK
 
 
-def _run_explorer(space, args, deadlock: bool, properties) -> int:
-    from runtime.props import describe
+def _run_explorer(space, args, options, listener, deadlock: bool, properties) -> int:
+    """Deadlocks (and the LTS exports) by one exploration, then each property; print them, the worst status."""
+    from genom2bip.verify import Verdict, check_deadlock, check_property, explore
 
     worst = EXIT_OK
-    need_full = deadlock or args.aut or args.dot
-    if need_full:
-        from genom2bip.cli.verify_native import explore_model
-        result, view = explore_model(space, args, progress(args))
-        print(f"explored: {result.summary()}")
-        if result.error is not None:
+    sources = step_sources(space.engine.flat)
+    lts = bool(args.aut or args.dot)
+    if deadlock or lts:
+        exploration = explore(space, options, listener, lts)
+        print(f"explored: {exploration.result.summary()}")
+        error_ = exploration.model_error
+        if error_ is not None:
             worst = EXIT_VIOLATED
-            print(f"model error in state {result.error.state}: {result.error.message}")
+            print(f"model error in state {error_.state}: {error_.message}")
             print("  trace to the state where it happens:")
-            print_trace(result.error.trace, sources=step_sources(space.engine.flat))
-            _trace_picture(args, space.engine, result.error.trace, [f"model error: {result.error.message}"])
+            print_trace(error_.trace.steps, sources=sources)
+            _trace_picture(args, space.engine, error_.trace.steps, [f"model error: {error_.message}"])
         if deadlock:
-            worst = max(worst, _report_deadlocks(view, result, args))
-        if not result.complete and worst == EXIT_OK:
+            worst = max(worst, _report_deadlocks(space, check_deadlock(space, options, listener, lts, exploration),
+                                                 args, sources))
+        if not exploration.result.complete and worst == EXIT_OK:
             worst = EXIT_INCONCLUSIVE
-        if args.aut or args.dot:
-            if not result.complete:
+        if lts:
+            if not exploration.result.complete:
                 error("the LTS is not complete (a limit stopped the exploration): not exported")
                 worst = max(worst, EXIT_INCONCLUSIVE)
             else:
                 worst = max(worst, _export_lts(space, args))
     for item in properties:
-        from genom2bip.cli.verify_native import check_property
-        verdict = check_property(space, item, args, progress(args))
-        print(f"property {describe(item)}")
-        head = f"  {verdict.word}"
-        stats = f"{verdict.method}, {verdict.states:,} states, {verdict.seconds:.2f} s" if verdict.method else ""
-        print(head + (f" ({stats})" if stats else "") + (f": {verdict.note}" if verdict.note else ""))
-        if verdict.evidence:
-            what = "counterexample" if verdict.evidence == "counterexample" else "witness"
-            print(f"  {what} ({len(verdict.trace)} step{'s' if len(verdict.trace) != 1 else ''}):")
-            print_trace(verdict.trace, sources=step_sources(space.engine.flat))
-            if verdict.loop >= 0:
-                print(f"    ... and back to the state after step {verdict.loop}, forever")
-            if verdict.holds is False:
-                _trace_picture(args, space.engine, verdict.trace, [f"violates {describe(item)}"]
-                               + ([f"then back to step {verdict.loop}, forever"] if verdict.loop >= 0 else []))
-        if verdict.holds is False or verdict.error:
+        found = check_property(space, item, options, listener)
+        print(f"property {found.subject}")
+        stats = (f"{found.method}, {found.figures.states:,} states, {found.figures.seconds:.2f} s"
+                 if found.method else "")
+        print(f"  {found.word}" + (f" ({stats})" if stats else "") + (f": {found.message}" if found.message else ""))
+        if found.evidence:
+            what = "counterexample" if found.evidence == "counterexample" else "witness"
+            n = len(found.trace)
+            print(f"  {what} ({n} step{'s' if n != 1 else ''}):")
+            print_trace(found.trace.steps, sources=sources)
+            if found.trace.loop is not None:
+                print(f"    ... and back to the state after step {found.trace.loop}, forever")
+            if found.verdict is Verdict.VIOLATED:
+                _trace_picture(args, space.engine, found.trace.steps, [f"violates {found.subject}"]
+                               + ([f"then back to step {found.trace.loop}, forever"]
+                                  if found.trace.loop is not None else []))
+        if found.verdict in (Verdict.VIOLATED, Verdict.ERROR):
             worst = max(worst, EXIT_VIOLATED)
-        elif verdict.holds is None and worst == EXIT_OK:
+        elif found.verdict is Verdict.INCONCLUSIVE and worst == EXIT_OK:
             worst = EXIT_INCONCLUSIVE
     return worst
 
 
-def _report_deadlocks(space, result, args) -> int:
-    if not result.deadlocks:
-        print("deadlocks: none reachable" + ("" if result.complete else " in the explored part"))
+def _report_deadlocks(space, found, args, sources) -> int:
+    """Each deadlock with its trace and state (the first one drawn with --trace-picture)."""
+    if not found.deadlocks:
+        print("deadlocks: none reachable" + ("" if found.complete else " in the explored part"))
         return EXIT_OK
-    n = len(result.deadlocks)
-    shortest = "" if args.dfs or getattr(args, "por", False) else ", each with a shortest trace"
+    n = len(found.deadlocks)
+    shortest = ", each with a shortest trace" if found.shortest else ""
     print(f"deadlocks: {n} reachable state{'s' if n != 1 else ''} without enabled interaction{shortest}")
-    for k, sid in enumerate(result.deadlocks, 1):
-        trace = space.trace_to(sid)
-        print(f"deadlock {k} of {n} (state {sid}, {len(trace)} steps):")
-        print_trace(trace, sources=step_sources(space.engine.flat))
+    for k, d in enumerate(found.deadlocks, 1):
+        print(f"deadlock {k} of {n} (state {d.state}, {len(d.trace)} steps):")
+        print_trace(d.trace.steps, sources=sources)
         print("  state:")
-        state = space.concrete(trace)
-        print_state(space.engine, state)
+        print_lines(d.text)
         if k == 1:
-            _trace_picture(args, space.engine, trace, [f"deadlock {k} of {n}: no interaction enabled"]
-                           + moved_atoms(space.engine, space.concrete([]), state))
+            _trace_picture(args, space.engine, d.trace.steps, [f"deadlock {k} of {n}: no interaction enabled"]
+                           + d.moved)
     return EXIT_VIOLATED
-
-
-def moved_atoms(engine, initial, state, most: int = 10) -> list[str]:
-    """``atom: PLACE`` for the atoms that are not in their initial places (what a deadlock picture shows)."""
-    first = engine.describe_state(initial)
-    now = engine.describe_state(state)
-    moved = [f"{a}: {','.join(v['places']) or '-'}" for a, v in now.items() if v["places"] != first[a]["places"]]
-    return moved[:most] + ([f"… and {len(moved) - most} more atoms"] if len(moved) > most else [])
 
 
 def _trace_picture(args, engine, steps, ending: list[str]) -> None:

@@ -1,13 +1,13 @@
 """``genom2bip verify --deadlock --method compositional|both``: the D-Finder style analysis and its report.
 
-The analysis lives in runtime/compositional; this module only adds the
+The analysis lives in runtime/compositional and the verification API
+(genom2bip/verify/compositional.py) runs it; this module only adds the
 options, prints the phases as they end, each potential deadlock with its
 verdict and the method that decided it, and writes the dependency graph.
 """
 from __future__ import annotations
 
 import argparse
-import time
 
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error
 
@@ -63,67 +63,58 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise Failure(EXIT_USAGE)
 
 
-def run(flat, package, root: str, args: argparse.Namespace, externs) -> int:
+def run(model, args: argparse.Namespace, options, listener) -> int:
     """Analyse, decide the candidates, print the report; the exit status of the verdict."""
     from genom2bip.cli.printers import print_trace, step_sources
-    from runtime.compositional import analyse, decide
+    from genom2bip.verify import Verdict, check_deadlock_compositional
 
-    started = time.perf_counter()
     print(f"compositional analysis (component invariants, interaction invariants, DIS; SAT: {args.solver})")
-
-    def phase(line: str) -> None:
-        print(f"  {line}", flush=True)
-
     if getattr(args, "timed", False):
         print("  time: the tick is one more interaction (all timed atoms at once); deadlock-free means no time-lock")
-    analysis = analyse(flat, args.solver, progress=phase)
-    budgets = {} if args.check_states is None else {"bfs_budget": args.check_states,
-                                                     "guided_budget": args.check_states}
-    decide(analysis, package, root, externs, progress=phase, **budgets)
-    if args.graph and _write_graph(analysis, args.graph) != EXIT_OK:
+    found = check_deadlock_compositional(model, options, listener)
+    if args.graph and _write_graph(found.analysis, args.graph) != EXIT_OK:
         return EXIT_ERRORS
-    sources = step_sources(flat)
-    _report(analysis, lambda trace: print_trace(trace, sources=sources))
-    verdict = analysis.verdict
-    total = time.perf_counter() - started
-    if verdict == "deadlock-free":
+    sources = step_sources(model.flat)
+    _report(found, lambda trace: print_trace(trace, sources=sources))
+    total = found.figures.seconds
+    if found.verdict is Verdict.HOLDS:
         print(f"deadlock-free (compositional, {total:.2f} s)")
         return EXIT_OK
-    if verdict == "deadlock":
+    if found.verdict is Verdict.VIOLATED:
         print(f"deadlock reachable (compositional, {total:.2f} s)")
         return EXIT_VIOLATED
     print(f"unknown: deadlock freedom neither proved nor refuted (compositional, {total:.2f} s)")
     return EXIT_INCONCLUSIVE
 
 
-def _report(analysis, print_trace) -> None:
-    pots = analysis.potentials
-    refuted = [p for p in pots if not p.checked]
+def _report(found, print_trace) -> None:
+    """The potential deadlocks, the first refuted ones, and each candidate with its verdict, state and trace."""
+    refuted = found.refuted
     counts: dict[str, int] = {}
     for p in refuted:
         counts[p.method] = counts.get(p.method, 0) + 1
     how = ", ".join(f"{n} by {m}" for m, n in counts.items())
-    print(f"potential deadlocks: {len(pots)} models of CI ∧ DIS; {len(refuted)} refuted"
-          + (f" ({how})" if how else "") + f"; {len(analysis.candidates)} candidate(s) checked"
-          + (f"; {analysis.reused_traps} traps reused" if analysis.reused_traps else ""))
+    print(f"potential deadlocks: {found.potentials} models of CI ∧ DIS; {len(refuted)} refuted"
+          + (f" ({how})" if how else "") + f"; {len(found.candidates)} candidate(s) checked"
+          + (f"; {found.reused_traps} traps reused" if found.reused_traps else ""))
     for n, p in enumerate(refuted[:SHOWN_REFUTED], 1):
         print(f"  refuted {n}: {p.method}: {p.reason}")
     if len(refuted) > SHOWN_REFUTED:
         print(f"  ... and {len(refuted) - SHOWN_REFUTED} more refuted")
-    for n, p in enumerate(analysis.candidates, 1):
+    for n, p in enumerate(found.candidates, 1):
         how = f" by {p.method}" if p.method else ""
         print(f"candidate {n}: {p.verdict}{how}" + (f": {p.reason}" if p.reason else ""))
         print("  state:")
-        for line in analysis.describe(p.state):
+        for line in p.state:
             print(f"    {line}")
         for cycle in p.waits[:5]:
             print(f"  waits: {' -> '.join(cycle + cycle[:1])}")
-        if p.verdict == "reachable":
+        if p.trace is not None:
             print(f"  trace ({len(p.trace)} steps):")
-            print_trace(p.trace)
-    if not analysis.complete:
-        print(f"the listing stopped after {len(analysis.candidates)} candidates; "
-              + ("the exhaustive exploration decided the others too" if analysis.explored else "more may exist"))
+            print_trace(p.trace.steps)
+    if not found.listing_complete:
+        print(f"the listing stopped after {len(found.candidates)} candidates; "
+              + ("the exhaustive exploration decided the others too" if found.explored else "more may exist"))
 
 
 def _write_graph(analysis, path: str) -> int:

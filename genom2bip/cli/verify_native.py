@@ -1,33 +1,12 @@
-"""Which explorer ``genom2bip verify`` runs: the compiled one (default) or the Python one.
+"""The compiled search's options of ``genom2bip verify`` (threads, store, bits), and every search option as the
+verification API's :class:`~genom2bip.verify.SearchOptions`.
 
-A note says when it falls back.
-
-The compiled search answers deadlocks, model errors, deadlock freedom and
-safety properties (through observers); LTS exports and the other properties
-need the successor lists the Python explorer keeps, so they run there (a
-note says so).  A model the C back end does not take, or a machine
-without a C compiler, gets the Python explorer and a one-line note.
+Which explorer runs, and the notes that say when it falls back, are the
+API's (genom2bip/verify/search.py).
 """
 from __future__ import annotations
 
 import argparse
-import os
-import sys
-
-#: Share of the machine's memory the compiled search may use when --max-memory is not given.
-MEMORY_SHARE = 0.5
-
-
-def default_memory() -> int | None:
-    """Half of the physical memory, in bytes (None where the system does not say)."""
-    try:
-        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") * MEMORY_SHARE)
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
-def note(text: str) -> None:
-    print(f"note: {text}")
 
 
 def add_arguments(search) -> None:
@@ -59,100 +38,14 @@ def check_arguments(args: argparse.Namespace) -> str | None:
     return None
 
 
-def search_options(args: argparse.Namespace) -> dict:
-    """The keyword arguments of CompiledSpace.explore that the command line sets."""
-    workers = args.workers or os.cpu_count() or 1
-    return {"workers": workers, "store": args.store, "bits": args.bits}
+def search_options(args: argparse.Namespace):
+    """The command line's search settings as the verification API takes them."""
+    from genom2bip.verify import SearchOptions
 
-
-def store_note(cs) -> None:
-    """What a lossy store may have missed, or that a multi-threaded bitstate search may count a state twice."""
-    if cs.lossiness is not None:
-        note(cs.lossiness.line() + "; traces are shortest among the states stored")
-
-
-def explore_model(space, args: argparse.Namespace, progress):
-    """``(result, view)``: the exploration result, and what gives its traces (the compiled space or ``space``)."""
-    from runtime.explore import explore
-
-    if args.engine in ("compiled", "explore"):
-        if args.aut or args.dot:
-            note("LTS exports need every successor list: exploring with the Python step")
-        else:
-            found = _compiled(space, args, progress)
-            if found is not None:
-                return found
-    if args.por:
-        note("no partial-order reduction in the Python explorer: every interleaving is explored")
-    if args.workers != 1 or args.store != "exact":
-        note("the Python explorer runs on one thread over exact states (--workers and --store are the compiled "
-             "explorer's)")
-    max_bytes = _max_bytes(args)
-    _say_unbounded(args, max_bytes)
-    result = explore(space, args.max_depth, args.dfs, progress, max_bytes=max_bytes)
-    if result.stopped_by == "max-memory":
-        note(f"the Python search stopped past {max_bytes / 2**20:,.0f} MB (--max-memory MB sets the bound)")
-    return result, space
-
-
-def check_property(space, item, args: argparse.Namespace, progress):
-    """The verdict of one property: by the compiled search when it takes it, else by the Python checker (noted)."""
-    from runtime.props import check
-
-    if args.engine in ("compiled", "explore"):
-        from genom2bip.cli.verbs import load_externs
-        from runtime.native.properties import compiled_check
-
-        verdict = compiled_check(space, item, load_externs(args.externs), progress, args.max_states, _max_bytes(args),
-                                 por=args.por, **search_options(args))
-        if verdict is not None:
-            if getattr(verdict, "lossiness", None) is not None:
-                note(verdict.lossiness.line())
-            return verdict
-        note(f"property {item.name} is checked with the Python step (the compiled search takes deadlock freedom "
-             "and [R] false / [R] {P} shapes, on models it compiles)")
-    return check(space, item, progress)
-
-
-def por_note(cs, states: int) -> str:
-    """What the partial-order reduction did, in one line."""
-    if not cs.por_available:
-        return "no partial-order reduction: the request counts of --requests are shared by every service"
-    return (f"partial-order reduction: {cs.reduced:,} of {states:,} states expanded with an ample set "
-            "(deadlocks and safety verdicts as the full search; traces are shortest in the reduced graph only)")
-
-
-def _max_bytes(args) -> int | None:
-    return args.max_memory * 1024 * 1024 if args.max_memory is not None else default_memory()
-
-
-def _say_unbounded(args, max_bytes: int | None) -> None:
-    """On a terminal, a search given no bound says which one it has and how to stop it."""
-    if args.max_states is None and args.max_depth is None and (args.progress or sys.stderr.isatty()) \
-            and not args.quiet and max_bytes is not None:
-        print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
-              "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
-
-
-def _compiled(space, args, progress):
-    from genom2bip.cli.verbs import load_externs
-    from runtime.native.compiled import Diverged, compile_space
-
-    cs, why = compile_space(space, load_externs(args.externs))
-    if cs is None:
-        note(why)
-        return None
-    max_bytes = _max_bytes(args)
-    _say_unbounded(args, max_bytes)
-    try:
-        result = cs.explore(args.max_states, args.max_depth, args.dfs, progress, max_bytes=max_bytes,
-                            por=args.por, **search_options(args))
-    except Diverged as exc:
-        note(f"the compiled step met an integer past 64 bits ({exc}): exploring with the Python step")
-        return None
-    if args.por:
-        note(por_note(cs, result.states))
-    store_note(cs)
-    if result.stopped_by == "max-memory":
-        note(f"the compiled search stopped at {result.memory / 2**20:,.0f} MB (--max-memory MB sets the bound)")
-    return result, cs
+    return SearchOptions(engine=args.engine, max_states=args.max_states, max_depth=args.max_depth,
+                         max_memory_mb=args.max_memory, dfs=args.dfs, requests=args.requests,
+                         reduce=not args.no_reduce, externs=args.externs, por=args.por, workers=args.workers,
+                         store=args.store, bits=args.bits, spin_cores=args.spin_cores,
+                         spin_bitstate=args.spin_bitstate, spin_hash_bits=args.spin_hash_bits,
+                         spin_swarm=args.spin_swarm, spin_dir=args.spin_dir, solver=args.solver,
+                         check_states=args.check_states)
