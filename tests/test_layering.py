@@ -72,3 +72,13 @@ def test_back_ends_return_text_and_only_generate_writes_files():
                 if name in writes:
                     offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}: calls {name}")
     assert offenders == []
+
+
+def test_the_verification_api_never_imports_the_command_line():
+    # genom2bip/verify is a library beside build and back ends: the CLI prints its results, a campaign records them
+    offenders = []
+    for path in [*sorted((ROOT / "genom2bip" / "verify").rglob("*.py")), ROOT / "genom2bip" / "loading.py"]:
+        bad = {m for m in _imported_modules(path) if m == "genom2bip.cli" or m.startswith("genom2bip.cli.")}
+        if bad:
+            offenders.append(f"{path.relative_to(ROOT)}: {sorted(bad)}")
+    assert offenders == []
