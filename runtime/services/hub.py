@@ -13,7 +13,7 @@ from runtime.controller import Controller
 
 #: Events kept for a slow event-stream client before it is cut off.
 QUEUE_SIZE = 10_000
-EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller", "observer")
+EVENT_KINDS = ("report", "poster", "overrun", "codel_error", "controller", "observer", "codel_overrun")
 
 
 class Subscriber:

@@ -129,7 +129,9 @@ def read_events(sock: socket.socket, until, timeout: float = 60.0) -> list[dict]
         buffer += chunk
         while b"\n\n" in buffer:
             frame, buffer = buffer.split(b"\n\n", 1)
-            data = [line[5:] for line in frame.split(b"\n") if line.startswith(b"data:")]
-            if data:
-                events.append(json.loads(data[-1]))
+            lines = frame.split(b"\n")
+            kind = next((line[6:].strip().decode() for line in lines if line.startswith(b"event:")), None)
+            data = [line[5:] for line in lines if line.startswith(b"data:")]
+            if data and kind != "hello":
+                events.append({"event": kind} | json.loads(data[-1]))
     return events

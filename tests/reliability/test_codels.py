@@ -7,7 +7,7 @@ import signal
 from controlproc import ControllerProcess
 from probes import EventLog, codels_with, tasks
 
-#: lrfAcquire blocks for ever once SetConfig has asked for 7 beams (a driver waiting on a device that died).
+#: lrfAcquire blocks for ever once Init has configured 7 beams (a driver waiting on a device that died).
 STUCK_ACQUIRE = '''
 import threading as _threading
 _acquire = lrfAcquire
@@ -60,10 +60,10 @@ def test_a_codel_that_never_returns_is_reported_and_holds_neither_the_other_task
         ctl.wait_ready()
         client = ctl.client()
         log = EventLog(ctl.url)
-        assert client.call("LaserRF", "Init", timeout=30)["status"] == "ok"
         assert client.call("LaserRF", "SetConfig", beams=7, timeout=30)["status"] == "ok"
+        assert client.call("LaserRF", "Init", timeout=30)["status"] == "ok"  # configures the driver
         start = client.send("LaserRF", "Start")
-        stuck = log.wait(lambda e: e["event"] == "codel_overrun")
+        stuck = log.wait(lambda e: e["event"] == "codel_overrun" and e["codel"] == "lrfAcquire")
         assert (stuck["codel"], stuck["task"], stuck["service"], stuck["request"]) == \
             ("lrfAcquire", "LaserRF.acquisition", "LaserRF.Start", start), stuck
         assert stuck["bound_ms"] == 75.0 and stuck["running_ms"] >= 75.0, stuck
