@@ -11,12 +11,14 @@ two waits for its answer, the others are long-polled, /events is read all along)
   after a stop at the end of the flood, and with SIGINT or SIGTERM sent in the middle of it;
 * RFLEX.servo's missed and overrun periods during the flood (the controller's own counters, GET /tasks),
   with ``--subscribers`` event-stream clients that never read, with as many that stop reading and then
-  disconnect, and with a stdout nobody reads;
+  disconnect, and with a stdout nobody reads (filled first by 3,000 report lines; a controller whose
+  engine then makes no step in 2 s is reported FROZE);
 * the periods missed while the controller started (the world loading).
 """
 from __future__ import annotations
 
 import argparse
+import re
 import signal
 import socket
 import statistics
@@ -58,6 +60,17 @@ def idle_subscribers(port: int, n: int, disconnect: bool) -> list[socket.socket]
     return socks
 
 
+def filled(ctl, client, clients: int) -> bool:
+    """Fill the unread stdout (3,000 report lines and more): whether the engine still steps afterwards."""
+    Flood(ctl.url, 3000, clients, wait_every=1, answer_wait=5, timeout=30).run()
+    try:
+        steps = client.info()["steps"]
+        time.sleep(2.0)
+        return client.info()["steps"] > steps
+    except OSError:  # the server does not answer either (it waits for the engine's lock)
+        return False
+
+
 def index_p50(client, n: int = 40) -> float:
     """Median time of ``GET /`` (ms)."""
     times = []
@@ -73,7 +86,7 @@ def scenario(name: str, args, sig: int | None = None, subscribers: str | None = 
     """One controller, one flood: the line of figures it gives."""
     with ControllerProcess(read_stdout=read_stdout) as ctl:
         ctl.wait_ready()
-        client = ctl.client(timeout=20)
+        client = ctl.client(timeout=10)
         startup = servo(client)
         modules_up(client)
         port = int(ctl.url.rsplit(":", 1)[1])
@@ -86,6 +99,10 @@ def scenario(name: str, args, sig: int | None = None, subscribers: str | None = 
                     s.close()
                 socks = []
         extra = ""
+        if not read_stdout and not filled(ctl, client, args.clients):
+            end = ctl.stop(timeout=120)
+            return (f"{name}: FROZE once stdout was full: the engine made no step in 2 s; exit {end.status}, "
+                    f"{end.err.count('Traceback')} tracebacks")
         first = client.requests(limit=1)[0]["id"] + 1
         flood = Flood(ctl.url, args.requests, args.clients, wait_every=args.wait_every, first_id=first,
                       on_accepted=(args.requests // 2, lambda: ctl.send_signal(sig)) if sig else None, timeout=60)
@@ -111,6 +128,9 @@ def scenario(name: str, args, sig: int | None = None, subscribers: str | None = 
             s.close()
         flood.join_listener(10)
         missing = flood.missing(end.out)
+        dropped = re.search(r"; (\d+) output lines dropped", end.out)
+        if dropped:
+            extra += f"; console lines dropped (counted): {dropped.group(1)}"
         tracebacks = end.err.count("Traceback")
         rate = missing.accepted / took if took else 0.0
         return (f"{name}: {'FROZE; ' if froze else ''}{missing.line()}; {rate:.0f} requests/s{extra}; "

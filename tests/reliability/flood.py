@@ -164,26 +164,40 @@ class Flood:
                 self._polls.put(body["id"])
 
     def _poll(self) -> None:
-        """A poller: long-polls each 202 request until its final report; a poll that could not start is not counted."""
+        """A poller: long-polls each 202 request until its final report; a poll that could not start is not counted.
+
+        A poll sent on a kept-alive connection the server closed meanwhile (it closes idle ones when it stops)
+        gets no answer at all: it is sent once more on a new connection, as HTTP clients do for a GET.
+        """
         conn = self._connection()
         while True:
             rid = self._polls.get()
             if rid is None:
                 return
-            try:
-                conn.request("GET", f"/requests/{rid}?wait=60")
-            except GONE:
-                conn = self._connection()
-                continue
-            try:
-                response = conn.getresponse()
-                body = json.loads(response.read() or b"null")
-                ended = response.status == 200 and body.get("final") is not None
-            except GONE:
-                ended = False
-                conn = self._connection()
-            with self._lock:
-                self.seen.polls[rid] = ended
+            for attempt in (1, 2):
+                try:
+                    conn.request("GET", f"/requests/{rid}?wait=60")
+                    response = conn.getresponse()
+                    body = json.loads(response.read() or b"null")
+                    ended = response.status == 200 and body.get("final") is not None
+                except (http.client.RemoteDisconnected, ConnectionResetError, BrokenPipeError):
+                    conn.close()
+                    conn = self._connection()
+                    if attempt == 1:
+                        continue
+                    ended = False
+                except ConnectionRefusedError:
+                    conn.close()
+                    conn = self._connection()
+                    ended = None  # the server has gone: this poll was never asked
+                except GONE + (http.client.HTTPException,):
+                    conn.close()
+                    conn = self._connection()
+                    ended = False
+                break
+            if ended is not None:
+                with self._lock:
+                    self.seen.polls[rid] = ended
 
     def _listen(self) -> None:
         """/events, all along: queued and final reports by request, and the controller's last event."""
@@ -227,7 +241,7 @@ class Flood:
         s = self.seen
         first = self.first_id
         console = Counter(int(m) for m in re.findall(r"^\[(\d+)\] ", out, re.M) if int(m) >= first)
-        summary = re.search(r"requests: (.*)$", out, re.M)
+        summary = re.search(r"^stopped after \d+ steps; requests: ([^;\n]*)", out, re.M)
         total = sum(int(n) for n in re.findall(r"(\d+) \w+", summary.group(1))) - (first - 1) if summary else 0
         accepted = s.sent_202 | set(s.answers) | {rid for rid in s.queued if rid >= first}
         total = max(total, len(accepted))
