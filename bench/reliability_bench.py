@@ -62,7 +62,9 @@ def idle_subscribers(port: int, n: int, disconnect: bool) -> list[socket.socket]
 
 def filled(ctl, client, clients: int) -> bool:
     """Fill the unread stdout (3,000 report lines and more): whether the engine still steps afterwards."""
-    Flood(ctl.url, 3000, clients, wait_every=1, answer_wait=5, timeout=30).run()
+    fill = Flood(ctl.url, 3000, clients, wait_every=1, answer_wait=5, timeout=30)
+    fill.run()
+    fill.close()
     try:
         steps = client.info()["steps"]
         time.sleep(2.0)

@@ -123,7 +123,7 @@ def exit_now(controller, prog: str, sig: int = signal.SIGINT) -> None:
     os._exit(128 + sig)
 
 
-def _build(package: Package, root: str, interface: dict[str, Any], args, prog: str, origin: str | None):
+def _build(package: Package, root: str, interface: dict[str, Any], args, origin: str | None):
     """The controller and its server as the options say; :class:`UsageError` for what cannot be used."""
     from runtime.controller import Controller
     from runtime.controller.recovery import RecoveryError, on_violation
@@ -173,7 +173,7 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
               file=sys.stderr)
         return 1
     try:
-        controller, server = _build(package, root, interface, args, prog, origin)
+        controller, server = _build(package, root, interface, args, origin)
     except UsageError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 1

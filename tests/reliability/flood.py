@@ -110,6 +110,12 @@ class Flood:
             t.join(self.timeout)
         return self.seen
 
+    def close(self) -> None:
+        """Stop listening to /events (the flood is over)."""
+        conn = getattr(self, "_listening_on", None)
+        if conn is not None and conn.sock is not None:
+            conn.sock.shutdown(socket.SHUT_RDWR)
+
     def join_listener(self, timeout: float = 30.0) -> None:
         """Wait for /events to end (the controller stopped)."""
         self._listener.join(timeout)
@@ -207,6 +213,7 @@ class Flood:
             conn.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, self.rcvbuf)
             conn.sock.connect((self.host, self.port))
         conn.request("GET", "/events")  # every kind: poster writes (laser scans) too
+        self._listening_on = conn
         response = conn.getresponse()
         self.listening.set()
         data = None
