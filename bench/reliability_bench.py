@@ -151,6 +151,7 @@ SCENARIOS = {
 
 
 def main() -> None:
+    """Run the scenarios asked for, one line of figures each."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--requests", type=int, default=2000)
     ap.add_argument("--clients", type=int, default=8)

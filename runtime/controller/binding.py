@@ -203,6 +203,7 @@ class Binder:
         return call.codel if call is not None and not call.done and not call.detached else None
 
     def _caller(self, extern: str, spec: CodelSpec, component: str, fn: Callable) -> Callable[[], int]:
+        """The extern calling ``fn``: its arguments built, the call recorded for the watchdog, the outcome mapped."""
         def call() -> int:
             self.calls += 1
             replayed = self.replay.pop(extern, None)

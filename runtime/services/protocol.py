@@ -54,6 +54,7 @@ class GuardedH11Protocol(H11Protocol):
     max_connections = MAX_CONNECTIONS
 
     def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
+        """Bound the send buffers, refuse a connection beyond the limit, start the read timeout."""
         super().connection_made(transport)
         self._timer: asyncio.TimerHandle | None = None
         self._started = False  # bytes of the current request have come

@@ -28,6 +28,7 @@ class EventLog:
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
+        """The reader thread: every event but the hello, in order, until the stream ends."""
         kind, data = None, None
         try:
             for raw in iter(self._response.readline, b""):

@@ -106,7 +106,7 @@ def test_a_repeated_security_header_is_refused(headers, what):
 
 
 def test_slow_clients_are_cut_by_read_timeouts_and_a_connection_limit():
-    with ControllerProcess("--read-timeout", "1", "--max-connections", "20") as ctl:
+    with ControllerProcess("--read-timeout", "3", "--max-connections", "20") as ctl:
         port = int(ctl.url.rsplit(":", 1)[1])
 
         def cut(sock: socket.socket, trickle: bytes) -> bytes:

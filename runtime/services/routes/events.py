@@ -34,6 +34,7 @@ class EventStream(Response):
         self.init_headers(HEADERS)
 
     async def __call__(self, scope, receive, send) -> None:
+        """Send the hello, then batches of events as they come, until the client goes or the hub closes."""
         hub, sub = self.hub, self.sub
         gone = asyncio.Event()
         watcher = asyncio.ensure_future(self._watch(receive, gone))
