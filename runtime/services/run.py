@@ -67,8 +67,8 @@ def port_of(text: str) -> int:
 def token_of(args) -> str | None:
     """The token from ``--token-file`` or the environment; on the command line it is refused."""
     if args.token is not None:
-        raise UsageError(f"--token {args.token} would show the token to anyone who lists the processes (ps): give "
-                         f"--token-file FILE or set {TOKEN_ENV}")
+        raise UsageError(f"--token: a token on the command line shows to anyone who lists the processes (ps): "
+                         f"give --token-file FILE or set {TOKEN_ENV}")  # the token itself is not repeated
     if args.token_file is None:
         token = os.environ.get(TOKEN_ENV) or None
         where = f"${TOKEN_ENV}"
