@@ -457,3 +457,70 @@ def test_requests_beyond_the_bound_of_waiting_ones_are_refused_with_429(tick):
     assert sorted(c.requests) == [first.id, second.id]
     c.run(duration=0.1)
     assert first.status == second.status == "ok"
+
+
+def test_a_codel_may_run_its_declared_wcet_else_its_task_period_else_the_default(tmp_path):
+    from runtime.controller.stuck import DEFAULT_BOUND, Bound, bounds
+
+    text = TICK.replace("yield pause::count;", "yield pause::count wcet 3 ms;")
+    package, root, interface = build(tmp_path, text)
+    assert interface["components"]["tick"]["tasks"]["t"]["codels"]["tick_tickCount"]["wcet_us"] == 3000
+    got = bounds(interface)
+    assert got["tick_tickCount"] == Bound(0.003, "its declared WCET")
+    assert got["tick_tickStart"] == got["tick_tickSlow"] == Bound(0.01, "the period of task tick.t; no WCET declared")
+    assert got["tick_tickWork"] == Bound(DEFAULT_BOUND, "the default for the control task; no WCET declared")
+
+
+#: A component whose attribute's validate codel the test holds (a device that does not answer) while a 10 ms task runs.
+HELD = """
+component held {
+  ids { long n; long seen; };
+  task t {
+    period 10 ms;
+    codel <start> heldTick(ids inout n) yield pause::start;
+  };
+  attribute Set(in seen = 0 : "a value") {
+    validate heldCheck(local in seen);
+  };
+};
+"""
+
+
+def test_a_stuck_validate_codel_is_reported_detached_and_its_step_fired_once_when_it_returns(tmp_path):
+    package, root, interface = build(tmp_path, HELD, "held")
+    release, calls = threading.Event(), []
+
+    def heldTick(n):
+        n.value += 1
+        return "pause::start"
+
+    def heldCheck(seen):
+        calls.append(seen)
+        if seen == 7:
+            release.wait(30)
+
+    c = Controller(package, root, interface, {"held": {"heldTick": heldTick, "heldCheck": heldCheck}})
+    events, overrun = [], threading.Event()
+    c.subscribe(lambda e: (events.append(e), e["event"] == "codel_overrun" and overrun.set()))
+    c.start()
+    try:
+        req = c.submit("held", "Set", {"seen": 7})
+        assert overrun.wait(30)
+        stuck = next(e for e in events if e["event"] == "codel_overrun")
+        assert (stuck["codel"], stuck["service"], stuck["request"], stuck["bound_ms"]) == \
+            ("heldCheck", "held.Set", req.id, 100.0), stuck
+        ticks = c.data.ids["held"]["n"]
+        deadline = time.monotonic() + 30
+        while c.data.ids["held"]["n"] < ticks + 5:  # the task goes on while the codel is held
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        assert req.final is None and c.detached
+        release.set()
+        assert c.wait(req.id, timeout=30).final["status"] == "ok"
+        assert c.data.ids["held"]["seen"] == 7 and calls == [7]  # called once, its step fired once
+        assert c.wait(c.submit("held", "Set", {"seen": 8}).id, timeout=30).final["status"] == "ok"
+        assert calls == [7, 8] and not c.detached and not c.frozen
+    finally:
+        release.set()
+        c.stop(timeout=30)
+    assert c.status == "stopped" and c.error is None

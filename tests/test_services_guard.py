@@ -107,7 +107,7 @@ def test_listening_beyond_the_loopback_needs_a_token():
     controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
     with pytest.raises(ValueError) as err:
         ServiceServer(controller, host="0.0.0.0")
-    assert "listening on 0.0.0.0 lets other machines command the robot: give a token (--token or " \
+    assert "listening on 0.0.0.0 lets other machines command the robot: give a token (--token-file or " \
            "GENOM2BIP_TOKEN)" in str(err.value)
     controller.start()
     server = ServiceServer(controller, host="0.0.0.0", token="s3cret").start()

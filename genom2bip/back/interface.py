@@ -192,9 +192,13 @@ def _codels(m: str, codels: list[ir.Codel], locals_: set[str], ids_inputs: set[s
     if validate is not None:
         out[joined(m, validate.name)] = {"codel": validate.name, "role": "validate",
                                          "params": codel_params(validate, locals_, ids_inputs, True)}
+        if validate.wcet is not None:
+            out[joined(m, validate.name)]["wcet_us"] = round(validate.wcet.seconds * 1e6)
     for c in codels:
-        out.setdefault(joined(m, c.name), {"codel": c.name, "role": "fsm",
-                                           "params": codel_params(c, locals_, ids_inputs, False)})
+        entry = out.setdefault(joined(m, c.name), {"codel": c.name, "role": "fsm",
+                                                   "params": codel_params(c, locals_, ids_inputs, False)})
+        if c.wcet is not None:  # the run-time watchdog's bound for this codel (runtime/controller/stuck.py)
+            entry["wcet_us"] = round(c.wcet.seconds * 1e6)
     return out
 
 

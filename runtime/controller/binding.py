@@ -9,9 +9,17 @@ writes ``out``/``inout`` holders back, and maps the yield (or the exception)
 to the outcome.  Anything wrong becomes :attr:`Binder.failure`, with the
 codel's name, and the undeclared outcome: the service fails, the controller
 keeps running.
+
+Each call is a :class:`CodelCall`, which the watchdog reads
+(runtime.controller.stuck): a call past its bound may be *detached*, the
+engine going on without it in another thread; when the codel returns, its
+outcome waits in the call, and the controller fires the step again with
+:attr:`Binder.replay` holding it, so that the codel is not called twice.
 """
 from __future__ import annotations
 
+import threading
+import time
 import traceback
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -25,6 +33,13 @@ from runtime.genom import Ref, Throw
 
 class CodelInterrupted(BaseException):
     """Raised inside a codel that would not return after the controller was told to stop."""
+
+
+class CodelDetached(BaseException):
+    """Raised in the thread of a detached codel once it returns: the engine went on in another thread.
+
+    ``args[0]`` is the :class:`CodelCall`.
+    """
 
 
 @dataclass
@@ -55,6 +70,63 @@ class Scope:
     @property
     def label(self) -> str:
         return f"{self.component}.{self.name}"
+
+    @property
+    def posters(self) -> list[str]:
+        """The posters (port out) its codels write."""
+        return sorted({a.port for args in self.codels.values() for a in args
+                       if a.source == "port" and a.direction != "in"})
+
+
+@dataclass(eq=False)
+class CodelCall:
+    """One call of a codel: whose, since when, in which thread; once detached, its outcome when it comes.
+
+    ``outcome`` is ``("return", value)`` or ``("raise", exception)``;
+    ``abandoned`` says why the controller gave up waiting for it.
+    """
+
+    codel: str
+    extern: str
+    component: str
+    scope: Scope | None
+    locals: dict[str, Any] | None
+    holders: list[tuple[Arg, Any]]
+    started: float
+    thread: threading.Thread
+    reported: bool = False  # the watchdog has said it runs past its bound
+    detached: bool = False
+    done: bool = False
+    outcome: tuple[str, Any] | None = None
+    abandoned: str | None = None
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def finish(self, outcome: tuple[str, Any]) -> bool:
+        """The codel returned: True when the step that called it goes on, False when it was detached."""
+        with self.lock:
+            self.done = True
+            if self.abandoned is None:
+                self.outcome = outcome
+            return not self.detached
+
+    def detach(self) -> bool:
+        """Let the engine go on without this call (False: it has just returned)."""
+        with self.lock:
+            if self.done:
+                return False
+            self.detached = True
+            return True
+
+    def abandon(self, why: str) -> None:
+        """Give up on a detached call that has not returned: its step fails with ``why``."""
+        with self.lock:
+            if not self.done:
+                self.abandoned = why
+
+    @property
+    def settled(self) -> bool:
+        """A detached call whose step can be fired again: it returned, or was given up on."""
+        return self.done or self.abandoned is not None
 
 
 def scopes(interface: dict[str, Any]) -> tuple[dict[str, Scope], dict[str, Scope]]:
@@ -92,7 +164,8 @@ class Binder:
         self.locals: dict[str, Any] | None = None
         self.failure: dict[str, Any] | None = None
         self.calls = 0
-        self.running: str | None = None  # the codel being called (to say what a stop interrupted)
+        self.call: CodelCall | None = None  # the codel the engine thread is calling (the watchdog reads it)
+        self.replay: dict[str, CodelCall] = {}  # extern -> a detached call whose step is fired again
         self.missing: list[str] = []
         self._externs: dict[str, Callable[[], int]] | None = None
         # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
@@ -123,54 +196,74 @@ class Binder:
             return UNDECLARED
         return call
 
-    def _caller(self, extern: str, spec: CodelSpec, component: str, fn: Callable) -> Callable[[], int]:
-        validate = spec.yields == ("ok",)
+    @property
+    def running(self) -> str | None:
+        """The codel the engine thread is calling (to say what a stop interrupted)."""
+        call = self.call
+        return call.codel if call is not None and not call.done and not call.detached else None
 
+    def _caller(self, extern: str, spec: CodelSpec, component: str, fn: Callable) -> Callable[[], int]:
+        """The extern calling ``fn``: its arguments built, the call recorded for the watchdog, the outcome mapped."""
         def call() -> int:
             self.calls += 1
+            replayed = self.replay.pop(extern, None)
+            if replayed is not None:
+                return self._conclude(spec, replayed)
             scope = self.scope
             args = scope.codels.get(extern) if scope is not None else None
             comp = scope.component if scope is not None and args is not None else component
             if args is None:
                 args = self._anywhere.get(extern, (component, []))[1]
             kwargs, holders = self._arguments(comp, args)
-            self.running = spec.codel
+            record = CodelCall(spec.codel, extern, comp, scope, self.locals, holders, time.monotonic(),
+                               threading.current_thread())
+            self.call = record
             try:
-                result = fn(**kwargs)
-            except Throw as thrown:
-                if not self._write_back(comp, holders, spec):
+                outcome: tuple[str, Any] = ("return", fn(**kwargs))
+            except BaseException as err:  # noqa: BLE001 - the codel's bug (even SystemExit), reported with its name
+                outcome = ("raise", err)
+            if not record.finish(outcome):
+                raise CodelDetached(record)  # the engine went on in another thread: the outcome waits there
+            return self._conclude(spec, record)
+
+        call.__name__ = spec.codel
+        return call
+
+    def _conclude(self, spec: CodelSpec, record: CodelCall) -> int:
+        """The outcome index of a call that ended (or was given up on), its outputs stored; failures named."""
+        if record.abandoned is not None:
+            self.failure = {"codel": spec.codel, "error": "abandoned", "message": record.abandoned}
+            return UNDECLARED
+        how, value = record.outcome if record.outcome is not None else ("return", None)
+        if how == "raise":
+            if isinstance(value, Throw):
+                if not self._write_back(record, spec):
                     return UNDECLARED
-                return self._thrown(spec, thrown)
-            except CodelInterrupted:
+                return self._thrown(spec, value)
+            if isinstance(value, CodelInterrupted):
                 self.failure = {"codel": spec.codel, "error": "interrupted",
                                 "message": f"codel {spec.codel} did not return after the controller was told to "
                                            "stop: interrupted"}
                 return UNDECLARED
-            except BaseException as err:  # noqa: BLE001 - the codel's bug (even SystemExit), reported with its name
-                frame = traceback.extract_tb(err.__traceback__)[-1]
-                self.failure = {
-                    "codel": spec.codel,
-                    "error": "python exception",
-                    "message": f"codel {spec.codel} raised {type(err).__name__}" + (f": {err}" if str(err) else ""),
-                    "where": f"{frame.filename}:{frame.lineno}",
-                }
-                return UNDECLARED
-            finally:
-                self.running = None
-            if not self._write_back(comp, holders, spec):
-                return UNDECLARED
-            if validate and result in (None, "ok"):
-                return 0
-            if isinstance(result, str) and result in spec.yields:
-                return spec.yields.index(result)
-            declared = ", ".join(spec.yields) or "nothing"
-            self.failure = {"codel": spec.codel, "error": "undeclared yield",
-                            "message": f"codel {spec.codel} returned {result!r}, not a declared yield "
-                                       f"(declared: {declared})"}
+            frame = traceback.extract_tb(value.__traceback__)[-1]
+            self.failure = {
+                "codel": spec.codel,
+                "error": "python exception",
+                "message": f"codel {spec.codel} raised {type(value).__name__}" + (f": {value}" if str(value) else ""),
+                "where": f"{frame.filename}:{frame.lineno}",
+            }
             return UNDECLARED
-
-        call.__name__ = spec.codel
-        return call
+        if not self._write_back(record, spec):
+            return UNDECLARED
+        if spec.yields == ("ok",) and value in (None, "ok"):
+            return 0
+        if isinstance(value, str) and value in spec.yields:
+            return spec.yields.index(value)
+        declared = ", ".join(spec.yields) or "nothing"
+        self.failure = {"codel": spec.codel, "error": "undeclared yield",
+                        "message": f"codel {spec.codel} returned {value!r}, not a declared yield "
+                                   f"(declared: {declared})"}
+        return UNDECLARED
 
     def _thrown(self, spec: CodelSpec, thrown: Throw) -> int:
         name = thrown.name
@@ -221,9 +314,10 @@ class Binder:
             return []
         return problems(value, spec["schema"], self.interface.get("types", {}), port)
 
-    def _write_back(self, component: str, holders: list[tuple[Arg, Ref]], spec: CodelSpec) -> bool:
+    def _write_back(self, record: CodelCall, spec: CodelSpec) -> bool:
         """Store what the codel left in its holders; False (and a failure) when a value has nowhere to go."""
-        for a, ref in holders:
+        component, local = record.component, record.locals
+        for a, ref in record.holders:
             try:
                 if a.source == "port":
                     if ref.value is not None:
@@ -238,8 +332,8 @@ class Binder:
                             self.on_poster(component, a.port, written)
                 elif a.source == "ids":
                     set_path(self.data.ids[component], a.steps, ref.value)
-                elif self.locals is not None:
-                    set_path(self.locals, a.steps, ref.value)
+                elif local is not None:
+                    set_path(local, a.steps, ref.value)
             except (KeyError, IndexError, TypeError) as err:
                 self.failure = {"codel": spec.codel, "error": "bad output",
                                 "message": f"codel {spec.codel}: cannot store argument {a.name} "

@@ -25,9 +25,13 @@ class Choice:
         self.rng = random.Random(seed) if seed is not None else None
         self.last: dict[int, int] = {}  # interaction index -> step when it last fired (fair choice)
         self.work: dict[tuple, bool] = {}  # (untimed period, state) -> a codel would run in it
+        self.atoms: dict[int, frozenset[str]] = {}  # interaction index -> the atoms taking part
 
-    def choose(self, state: tuple, now: float, step: int) -> Chosen:
-        """A due period first (earliest deadline), else an untimed interaction, else a period with work to do."""
+    def choose(self, state: tuple, now: float, step: int, frozen: set[str] | frozenset = frozenset()) -> Chosen:
+        """A due period first (earliest deadline), else an untimed interaction, else a period with work to do.
+
+        Interactions of ``frozen`` atoms (waiting for a detached codel) are left out.
+        """
         due: tuple[float, Interaction, StepInfo] | None = None
         ready: list[tuple[Interaction, StepInfo]] = []
         lazy: list[tuple[Interaction, StepInfo]] = []
@@ -35,6 +39,8 @@ class Choice:
         answerable: set[str] = set()  # services whose queued request can be accepted or refused now
         cache, meaning = self.meanings.cache, self.meanings.info
         for inter in self.engine.enabled(state):
+            if frozen and self._frozen(inter, frozen):
+                continue
             info = cache.get(inter.index) or meaning(inter)
             if info.service is not None and info.kind in ("trigger", "refuse"):
                 answerable.add(info.service.label)
@@ -63,6 +69,12 @@ class Choice:
             if self.has_work(state, inter, info):
                 return inter, info, wake_at, answerable
         return None, None, wake_at, answerable
+
+    def _frozen(self, inter: Interaction, frozen: set[str] | frozenset) -> bool:
+        atoms = self.atoms.get(inter.index)
+        if atoms is None:
+            atoms = self.atoms[inter.index] = frozenset(p.rsplit(".", 1)[0] for p in inter.ports)
+        return not atoms.isdisjoint(frozen)
 
     def has_work(self, state: tuple, inter: Interaction, info: StepInfo) -> bool:
         """Would opening this untimed period let one of its task's codels run?  (Memoised by state.)"""

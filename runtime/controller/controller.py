@@ -76,6 +76,11 @@ class Controller(Running):
         self._thread: threading.Thread | None = None
         self._firing: Request | None = None  # the request whose step is under way (to say what a stop cut short)
         self._finished = False
+        self._threaded = False  # run by start(): in a thread of its own, which may be taken over
+        self._then: Callable[[], None] | None = None
+        self._limit: int | None = None
+        self._end: float | None = None
+        self._init_takeover()
 
     @property
     def requests(self) -> dict[int, Request]:
@@ -128,7 +133,7 @@ class Controller(Running):
                     raise RequestError(409, f"{svc.label} is busy with request {busy.id} ({busy.status}): an activity "
                                             f"takes one request at a time; wait for its report{hint}")
             waiting = sum(len(s.queue) for s in self.services.values())
-            if waiting >= self.max_queued:
+            if waiting >= self.max_queued and svc.queue:  # a service with none waiting always gets one (a Stop)
                 raise RequestError(429, f"{waiting} requests are waiting to be taken: request to {svc.label} "
                                         "not accepted, send it again later")
             req = self.reports.new(component, service, values, local)
@@ -179,6 +184,7 @@ class Controller(Running):
         if svc is not None and svc.queue:
             with self._lock:
                 svc.current = svc.queue.popleft()
+            self._taken = (svc, svc.current)  # a step fired again after a detached codel takes it again
 
     def _poster_written(self, component: str, port: str, value: PosterValue) -> None:
         if self.reports.listeners:
@@ -196,6 +202,7 @@ class Controller(Running):
         if status == "running" and self._thread is not None and not self._thread.is_alive():
             status, error = "error", error or "the engine thread has died"
         uptime = round(now - self.started_at, 3) if self.started_at is not None else 0.0
+        startup = self.timers.startup
         return {"system": self.interface.get("system"), "status": status, "error": error, "steps": self.steps,
-                "uptime": uptime,
+                "uptime": uptime, "startup_ms": round(startup * 1e3, 1) if startup is not None else None,
                 "requests": counts, "codels": {"source": self.codels.where or None, "missing": self.binder.missing}}

@@ -85,6 +85,8 @@ class Data:
         self.ids: dict[str, dict[str, Any]] = {
             c: {name: clone(m["initial"]) for name, m in spec["ids"].items()} for c, spec in comps.items()}
         self.posters: dict[tuple[str, str], PosterValue] = {}
+        # why a poster is no longer written: the failure of the codel that writes it, until its next write
+        self.failures: dict[tuple[str, str], dict[str, Any]] = {}
         self.inputs: dict[tuple[str, str], tuple[str, str] | None] = {}
         outs: dict[str, list[str]] = {}
         for c, spec in comps.items():
@@ -121,4 +123,18 @@ class Data:
         old = self.posters[(component, port)]
         new = PosterValue(component, port, clone(value), old.seq + 1, time.monotonic())
         self.posters[(component, port)] = new
+        self.failures.pop((component, port), None)
         return new
+
+    def stale(self, component: str, ports: list[str], who: dict[str, Any]) -> list[str]:
+        """Mark the posters ``ports`` as no longer written, for the failure ``who``; their names."""
+        for port in ports:
+            if (component, port) in self.posters:
+                self.failures[(component, port)] = dict(who)
+        return [f"{component}.{port}" for port in ports if (component, port) in self.posters]
+
+    def poster_view(self, component: str, port: str) -> dict[str, Any]:
+        """A poster as a client sees it: its value, how old it is, and why it is no longer written, if it is not."""
+        value = self.posters[(component, port)]
+        age = round((time.monotonic() - value.time) * 1e3, 1) if value.time is not None else None
+        return value.as_json() | {"age_ms": age, "failure": self.failures.get((component, port))}

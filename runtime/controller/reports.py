@@ -139,8 +139,11 @@ class Reports:
         """The reports a step makes: a codel's failure, a rule's or validate's refusal, a start, an end."""
         svc = info.service
         if svc is None:
-            if info.scope is not None and failure is not None:
-                self.emit({"event": "codel_error", "task": info.scope.label, **failure})
+            if info.scope is not None and failure is not None:  # the task's permanent activity ends
+                scope = info.scope
+                posters = data.stale(scope.component, scope.posters, {"task": scope.label, **failure_fields(failure),
+                                                                      "message": failure.get("message")})
+                self.emit({"event": "codel_error", "task": scope.label, **failure, "posters": posters})
             return
         if req is None:
             return
@@ -171,7 +174,10 @@ class Reports:
             self.report(req, "ok", outputs=outputs(svc, req, data.ids[svc.scope.component]))
         elif kind == "fail":
             f = req.failure or {}
-            self.report(req, "failed", **failure_fields(f), message=f.get("message", f"{req.label} failed"))
+            message = f.get("message", f"{req.label} failed")
+            data.stale(svc.scope.component, svc.scope.posters, {"service": svc.label, "request": req.id,
+                                                                **failure_fields(f), "message": message})
+            self.report(req, "failed", **failure_fields(f), message=message)
         elif kind == "interrupted":
             by, by_request = req.interrupted_by or (None, None)
             self.report(req, "interrupted", by=by, by_request=by_request,

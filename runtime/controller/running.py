@@ -5,32 +5,36 @@ functions the explorer branches on; what real time adds is only *which*
 enabled interaction fires and *when* (runtime.controller.choice): when
 nothing may fire yet the thread sleeps until the next deadline or until a
 request arrives.  A stop ends the run after the step (and codel) under way;
-a codel that does not return can be interrupted, then abandoned.
+a codel that does not return can be interrupted, then abandoned.  A codel
+past its bound is detached and a new engine thread goes on without it
+(runtime.controller.takeover).
 """
 from __future__ import annotations
 
-import ctypes
 import gc
 import sys
 import threading
 from typing import Any, Callable
 
-from runtime.controller.binding import Binder, CodelInterrupted
+from runtime.controller.binding import Binder, CodelDetached, CodelInterrupted
 from runtime.controller.choice import Choice
 from runtime.controller.data import Data
 from runtime.controller.meaning import Meanings, StepInfo
 from runtime.controller.monitor import Monitor
 from runtime.controller.reports import Reports
 from runtime.controller.requests import Request
+from runtime.controller.takeover import Takeover
 from runtime.controller.timing import Timers
 from runtime.engine import Engine, Interaction, ModelError
 
 #: The interpreter's switch interval while the engine thread runs (s): a thread woken for a period gets the
 #: interpreter back within about this long, even while the services interface is busy (docs/runtime.md).
 SWITCH_INTERVAL = 0.001
+#: Seconds after which the level counts as started even if a task has not ended its first period.
+STARTUP_LIMIT = 30.0
 
 
-class Running:
+class Running(Takeover):
     """The run of a controller in a thread of its own: base of :class:`~runtime.controller.Controller`.
 
     The controller's constructor sets what the run works on (below); the
@@ -63,65 +67,49 @@ class Running:
     def start(self, limit: int | None = None, duration: float | None = None,
               then: Callable[[], None] | None = None) -> None:
         """Run in a thread of its own (``stop()`` ends it); ``then()`` is called when the run has ended."""
-        real_time = not self.clock.virtual
-
-        def body() -> None:
-            try:
-                self.run(limit, duration)
-            finally:
-                if real_time:
-                    gc.unfreeze()  # what the run left behind is collected as usual
-                if then is not None:
-                    then()
-        if real_time:
+        self._then = then
+        self._threaded = True
+        if not self.clock.virtual:
             sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_INTERVAL))
             # The model, codels and server are built: while the run lasts, full collections leave them out.  A
             # full collection walking them held the interpreter for up to 100 ms, a period missed by any task.
             gc.freeze()
-        self._thread = threading.Thread(target=body, name="bip-controller", daemon=True)
+        self._thread = threading.Thread(target=self.run, args=(limit, duration), name="bip-controller", daemon=True)
         self._thread.start()
 
     def stop(self, timeout: float | None = None) -> None:
-        """End the run after the step (and codel) under way; waits for the thread when there is one."""
+        """End the run after the step (and codel) under way; waits (up to ``timeout`` s) for it to have ended."""
         with self._lock:
             self._stopping = True
             self._wake.notify_all()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout)
+            if self._thread is None or self._thread is threading.current_thread():
+                return
+            # the run's end, whichever engine thread it is in (one may have taken over from a stuck codel)
+            ended = self._wake.wait_for(lambda: self._finished, timeout)
+        thread = self._thread
+        if ended and thread is not None and thread is not threading.current_thread():
+            thread.join(timeout)
 
     def run(self, limit: int | None = None, duration: float | None = None) -> str:
         """Run until ``stop()``, ``limit`` steps or ``duration`` seconds; returns the final status."""
-        clock = self.clock
-        self.started_at = t0 = clock.now()
-        end = t0 + duration if duration is not None else None
+        self.started_at = t0 = self.clock.now()
+        self._limit, self._end = limit, (t0 + duration if duration is not None else None)
         self.timers.start(t0)
         if self.monitor is not None:
             self.monitor.start(t0)
         self.status = "running"
+        if getattr(self, "_threaded", False) and not self.clock.virtual:
+            self.watch()
+        self.state = self.engine.initial_state()
+        return self._drive()
+
+    def _drive(self) -> str:
+        """The loop of the engine thread (the first one, or one that took over), then the end of the run."""
         try:
-            self.state = self.engine.initial_state()
-            while True:
-                with self._lock:
-                    if self._stopping:
-                        break
-                    epoch = self._epoch
-                if limit is not None and self.steps >= limit:
-                    break
-                now = clock.now()
-                if end is not None and now >= end:
-                    break
-                chosen, info, wake_at = self._choose(now)
-                if chosen is not None:
-                    self._fire(chosen, info)
-                    continue
-                if end is not None:
-                    wake_at = end if wake_at is None else min(wake_at, end)
-                if clock.virtual and wake_at is not None:
-                    clock.advance(wake_at)
-                    continue
-                with self._lock:
-                    if self._epoch == epoch and not self._stopping:
-                        self._wake.wait(None if wake_at is None else max(0.0, wake_at - clock.now()))
+            self._loop()
+        except CodelDetached as gone:
+            self.left(gone.args[0])  # this thread ran a codel the engine went on without: it is done
+            return self.status
         except ModelError as err:
             self.error = f"model error: {err}"
         except CodelInterrupted:
@@ -130,12 +118,54 @@ class Running:
             self.error = f"internal error: {type(err).__name__}: {err}"
         except BaseException as err:  # SystemExit, KeyboardInterrupt...: the run ends, reported, never silently
             self.error = f"the engine stopped on {type(err).__name__}{f': {err}' if str(err) else ''}"
-            self._finish()
+            self._end_run()
             if threading.current_thread() is threading.main_thread():
                 raise
             return self.status
-        self._finish()
+        if not self.error:
+            self.settle()  # at the stop: the detached codels return (interrupted) or are abandoned
+        self._end_run()
         return self.status
+
+    def _loop(self) -> None:
+        """Fire what may fire, else sleep until the next deadline or a request, until told to stop."""
+        clock = self.clock
+        while True:
+            with self._lock:
+                if self._stopping:
+                    return
+                epoch = self._epoch
+            if self._limit is not None and self.steps >= self._limit:
+                return
+            now = clock.now()
+            if self._end is not None and now >= self._end:
+                return
+            if self.detached:
+                self.tend()
+            if not self.timers.ready and now - self.started_at > STARTUP_LIMIT:
+                self.timers.ready_at(now)
+            chosen, info, wake_at = self._choose(now)
+            if chosen is not None:
+                self._fire(chosen, info)
+                continue
+            if self._end is not None:
+                wake_at = self._end if wake_at is None else min(wake_at, self._end)
+            if clock.virtual and wake_at is not None:
+                clock.advance(wake_at)
+                continue
+            with self._lock:
+                if self._epoch == epoch and not self._stopping:
+                    self._wake.wait(None if wake_at is None else max(0.0, wake_at - clock.now()))
+
+    def _end_run(self) -> None:
+        """The run has ended in this thread: final reports, then what the starter asked for."""
+        self._finish()
+        self.unwatch()
+        if getattr(self, "_threaded", False):
+            if not self.clock.virtual:
+                gc.unfreeze()  # what the run left behind is collected as usual
+            if self._then is not None:
+                self._then()
 
     def _finish(self) -> None:
         """The run has ended: its status, a final report for every pending request, the ``controller`` event."""
@@ -143,37 +173,14 @@ class Running:
             if self._finished:
                 return
             self._finished = True
+            self._wake.notify_all()
         self.status = "error" if self.error else "stopped"
         self.reports.end_pending(f"the controller stopped ({self.error})" if self.error else "the controller stopped")
         self.reports.emit({"event": "controller", "status": self.status, "steps": self.steps, "error": self.error})
 
-    # -- a stop that the step under way does not let happen ----------------------------------------------
-    def busy(self) -> str | None:
-        """What the engine thread is doing that a stop waits for: ``codel X of M.S (request N)``, or None."""
-        codel = self.binder.running
-        if codel is None:
-            return None
-        scope = self.binder.scope
-        req = self._firing
-        return f"codel {codel}" + (f" of {scope.label}" if scope is not None else "") + \
-            (f" (request {req.id})" if req is not None else "")
-
     def alive(self) -> bool:
         """The engine thread is still running (False when run without a thread)."""
         return self._thread is not None and self._thread.is_alive()
-
-    def interrupt_codel(self) -> str | None:
-        """Raise :class:`CodelInterrupted` in a codel that does not return after a stop; returns what it interrupted.
-
-        It interrupts Python code only: a codel blocked in a system call
-        (``time.sleep``, a read) sees it when the call returns.
-        """
-        what = self.busy()
-        thread = self._thread
-        if what is None or thread is None or not thread.is_alive() or not self._stopping:
-            return None
-        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident), ctypes.py_object(CodelInterrupted))
-        return what
 
     def abandon(self, why: str) -> None:
         """Give up on an engine thread that does not stop: every pending request gets its final report now."""
@@ -182,11 +189,12 @@ class Running:
                 return
             self._stopping = True
             self.error = why
+        self.give_up(why)
         self._finish()
 
     def _choose(self, now: float) -> tuple[Interaction | None, StepInfo | None, float | None]:
         """What fires next and when the next period is due (:class:`~runtime.controller.choice.Choice`)."""
-        inter, info, wake_at, answerable = self.choice.choose(self.state, now, self.steps)
+        inter, info, wake_at, answerable = self.choice.choose(self.state, now, self.steps, self.frozen)
         if self.meanings.waits:
             self.reports.held(self.meanings.waits, answerable, self.state)
         return inter, info, wake_at
@@ -205,16 +213,26 @@ class Running:
             b.scope, b.locals = info.scope, None
         now = self.clock.now()
         self._firing = req
-        self.state = self.engine.fire(self.state, inter)
+        self._taken = None
+        self._step = (inter, info, req, now)  # what the watchdog detaches if a codel of this step is stuck
+        state = self.engine.fire(self.state, inter)  # CodelDetached: another thread is the engine now
+        self.state = state
         self._firing = None
+        self._account(inter, info, req, now)
+
+    def _account(self, inter: Interaction, info: StepInfo, req: Request | None, now: float) -> None:
+        """What a fired step means: a period opened or closed, the level ready, its reports, the observers."""
         self.steps += 1
+        timers = self.timers
         if info.opens is not None:
             info.opens.open(now)
         if info.closes is not None:
             overrun = info.closes.close(now)
             if overrun is not None:
                 self.reports.emit({"event": "overrun", **overrun})
-        self.reports.after_step(info, req, b.failure, self.state, self.data)
+            if not timers.ready and timers.started_up():
+                timers.ready_at(self.clock.now())
+        self.reports.after_step(info, req, self.binder.failure, self.state, self.data)
         if self.monitor is not None:
             for event in self.monitor.step(inter.ports, inter.label, now, self.clock.now()):
                 self.reports.emit(event)

@@ -5,7 +5,10 @@ trigger="trigger", sleep="sleep")``: the parameter holding its period in µs
 and the ports that open and close a period.  An interaction containing the
 trigger port may fire only once the timer's deadline has passed; a period
 whose closing (sleep) comes after the next period should have started is an
-overrun.  Schedulers (``@scheduler(period=..., exec=..., sleep=...)``)
+overrun.  The level starts when every task has ended its first period (its
+drivers opened, its world loaded): until then nothing is counted late,
+missed or overrun, and a task behind its deadlines then starts afresh.
+Schedulers (``@scheduler(period=..., exec=..., sleep=...)``)
 without a timer open a period only when a codel is waiting to run in it.
 """
 from __future__ import annotations
@@ -63,6 +66,9 @@ class Timer:
     missed: int = 0
     overruns: int = 0
     lateness: deque = field(default_factory=lambda: deque(maxlen=100_000))
+    counting: bool = False  # the level has started: lateness, missed periods and overruns count
+    counted: bool = False  # the period now open opened while counting
+    closed_once: bool = False  # its first period has ended
 
     @property
     def deadline(self) -> float:
@@ -72,12 +78,14 @@ class Timer:
     def open(self, now: float) -> None:
         """The period interaction fired at ``now``: record the lateness, skip whole periods missed."""
         late = now - self.deadline
-        self.lateness.append(late)
         self.periods += 1
         missed = int(late // self.period) if late >= self.period else 0
-        self.missed += missed
+        if self.counting:
+            self.lateness.append(late)
+            self.missed += missed
         self.index += missed
         self.opened = self.deadline
+        self.counted = self.counting
         self.index += 1
 
     def close(self, now: float) -> dict[str, Any] | None:
@@ -86,7 +94,8 @@ class Timer:
             return None
         took = now - self.opened
         self.opened = None
-        if took <= self.period:
+        self.closed_once = True
+        if took <= self.period or not self.counted:
             return None
         self.overruns += 1
         return {"task": self.task, "period_ms": round(self.period * 1e3, 3), "took_ms": round(took * 1e3, 3),
@@ -113,6 +122,9 @@ class Timers:
     by_trigger: dict[str, Timer]
     by_sleep: dict[str, Timer]
     lazy: dict[str, str]  # period port of a scheduler without timer -> its exec port
+    t0: float = 0.0
+    ready: bool = False  # every task has ended its first period
+    startup: float | None = None  # seconds from the start to the level ready
 
     @classmethod
     def of(cls, flat, clock_rates: dict[str, int | None] | None = None) -> "Timers":
@@ -143,8 +155,24 @@ class Timers:
 
     def start(self, now: float) -> None:
         """Every task's first period starts now."""
+        self.t0, self.ready, self.startup = now, False, None
         for t in self.timers:
             t.base, t.index, t.opened = now, 0, None
+            t.counting = t.counted = t.closed_once = False
+        if not self.timers:
+            self.ready_at(now)
+
+    def started_up(self) -> bool:
+        """Every task has ended its first period."""
+        return all(t.closed_once for t in self.timers)
+
+    def ready_at(self, now: float) -> None:
+        """The level is ready: from now on periods count; a task behind its deadlines starts afresh now."""
+        self.ready, self.startup = True, now - self.t0
+        for t in self.timers:
+            t.counting = True
+            if t.deadline < now:
+                t.base += now - t.deadline
 
     def stats(self) -> list[dict[str, Any]]:
         return [t.stats() for t in self.timers]

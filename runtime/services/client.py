@@ -51,7 +51,8 @@ class Client:
         self.url = f"http://{self.host}:{self.port}"
         self.timeout = timeout
         token = os.environ.get(TOKEN_ENV) if token is None else token
-        self._auth = {"Authorization": f"Bearer {token}"} if token else {}
+        # as bytes: http.client would encode a str as Latin-1, which many tokens are not
+        self._auth = {"Authorization": b"Bearer " + token.encode("utf-8")} if token else {}
         self._local = threading.local()
 
     # -- plumbing ------------------------------------------------------------------------------------

@@ -10,8 +10,11 @@ An ASGI middleware in front of the application (docs/runtime.md, "Security"):
   the server's own (``http://`` + its ``Host``);
 * a request that acts (POST) must say ``Content-Type: application/json``,
   which a plain HTML form or a "simple" cross-site fetch cannot send;
-* with a token (``--token`` or ``GENOM2BIP_TOKEN``), every request carries
-  ``Authorization: Bearer TOKEN``.
+* with a token (``--token-file`` or ``GENOM2BIP_TOKEN``), every request
+  carries ``Authorization: Bearer TOKEN`` (compared as UTF-8 bytes, so that
+  any token the operator can type works);
+* each of these headers appears at most once: with two, which one a check
+  read and which one a proxy or the application would read could differ.
 """
 from __future__ import annotations
 
@@ -23,6 +26,8 @@ from typing import Any, Awaitable, Callable
 #: The environment variable the server and the client take the token from.
 TOKEN_ENV = "GENOM2BIP_TOKEN"
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
+#: The headers the guard reads: a request naming one of them twice is refused.
+SINGLE = {b"host": "Host", b"origin": "Origin", b"content-type": "Content-Type", b"authorization": "Authorization"}
 
 Scope = dict[str, Any]
 ASGIApp = Callable[[Scope, Callable, Callable], Awaitable[None]]
@@ -50,7 +55,7 @@ class Guard:
 
     def __init__(self, app: ASGIApp, token: str | None = None, loopback: bool = True) -> None:
         self.app = app
-        self.token = token or None
+        self.token = token.encode("utf-8") if token else None
         self.loopback = loopback
 
     async def __call__(self, scope: Scope, receive: Callable, send: Callable) -> None:
@@ -71,28 +76,32 @@ class Guard:
 
     def problem(self, scope: Scope) -> tuple[int, str] | None:
         """(status, message) when the request is refused, else None."""
-        headers: dict[str, str] = {}
+        raw: dict[bytes, bytes] = {}
         for k, v in scope.get("headers", []):
-            headers[k.decode("latin-1").lower()] = v.decode("latin-1")
-        host = headers.get("host", "")
+            name = k.lower()
+            if name in SINGLE and name in raw:
+                return 400, f"repeated {SINGLE[name]} header: refused (a request names it once)"
+            raw[name] = v
+        host = raw.get(b"host", b"").decode("latin-1")
         if self.loopback and not is_loopback(host_name(host)):
             return 403, (f"Host {host!r} is not this server: a controller on the loopback answers only to "
                          f"{', '.join(LOOPBACK_NAMES)} (a guard against DNS rebinding)")
-        origin = headers.get("origin")
-        if origin is not None and origin != f"http://{host}":
-            return 403, (f"cross-site request from Origin {origin!r} refused: only pages of http://{host} "
-                         "may call this interface")
+        origin = raw.get(b"origin")
+        if origin is not None and origin.decode("latin-1") != f"http://{host}":
+            return 403, (f"cross-site request from Origin {origin.decode('latin-1')!r} refused: only pages of "
+                         f"http://{host} may call this interface")
         if self.token is not None:
-            given = headers.get("authorization", "")
-            scheme, _, value = given.partition(" ")
-            if scheme.lower() != "bearer" or not hmac.compare_digest(value.strip().encode(), self.token.encode()):
+            given = raw.get(b"authorization", b"")
+            scheme, _, value = given.partition(b" ")
+            if scheme.lower() != b"bearer" or not hmac.compare_digest(value.strip(), self.token):
                 what = "a wrong token" if given else "no token"
                 return 401, (f"{what}: this controller requires 'Authorization: Bearer TOKEN' "
                              f"(the client takes it from {TOKEN_ENV})")
         if scope["method"] == "POST":
-            kind = headers.get("content-type", "").split(";", 1)[0].strip().lower()
+            given = raw.get(b"content-type")
+            kind = (given or b"").decode("latin-1").split(";", 1)[0].strip().lower()
             if kind != "application/json":
-                shown = repr(headers["content-type"]) if "content-type" in headers else "none"
+                shown = repr(given.decode("latin-1")) if given is not None else "none"
                 return 415, (f"Content-Type {shown}: a request that acts must be sent as application/json "
                              "(a guard against cross-site form posts)")
         return None

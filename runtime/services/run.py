@@ -2,28 +2,48 @@
 
 Starts the engine thread and the HTTP server on 127.0.0.1 (``--port``,
 default a free port, printed), prints reports as they come unless
-``--quiet``, and stops on Ctrl-C (or ``--duration`` / ``--limit``): the
-codel under way finishes (or is interrupted after a few seconds), the
-requests still pending get a final report; a second Ctrl-C exits at once.
+``--quiet`` (through a console that never waits for its reader:
+runtime.services.console), and stops on Ctrl-C or SIGTERM (or ``--duration``
+/ ``--limit``): the codel under way finishes (or is interrupted after a few
+seconds), the requests still pending get a final report; a second signal
+exits at once.
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import signal
 import sys
 from pathlib import Path
 from typing import Any
 
 from runtime.model import Package
+from runtime.services.guard import TOKEN_ENV
+from runtime.services.protocol import MAX_CONNECTIONS, READ_TIMEOUT
+
+#: How long the last lines may take to reach an output nobody reads before the command exits anyway (s).
+LAST_WORDS = 5.0
+
+
+class UsageError(Exception):
+    """A command-line value that cannot be used: the message names the option."""
 
 
 def add_arguments(run: argparse.ArgumentParser) -> None:
-    run.add_argument("--port", type=int, default=0, help="TCP port on 127.0.0.1 (default: a free one, printed)")
+    run.add_argument("--port", default="0", help="TCP port on 127.0.0.1 (default: a free one, printed)")
     run.add_argument("--host", default="127.0.0.1", metavar="ADDRESS",
                      help="address to listen on (default 127.0.0.1); another one only with a token")
-    run.add_argument("--token", metavar="TOKEN", default=os.environ.get("GENOM2BIP_TOKEN"),
-                     help="every client must send 'Authorization: Bearer TOKEN' (default: $GENOM2BIP_TOKEN)")
+    run.add_argument("--token-file", metavar="FILE",
+                     help=f"every client must send 'Authorization: Bearer TOKEN', TOKEN being this file's first "
+                          f"line (default: the environment variable {TOKEN_ENV}); never on the command line, "
+                          "where ps shows it to every user")
+    run.add_argument("--token", help=argparse.SUPPRESS)  # refused with a message: see token_of
+    run.add_argument("--read-timeout", type=float, default=READ_TIMEOUT, metavar="SECONDS",
+                     help=f"a request must arrive whole within this time of its first byte (default "
+                          f"{READ_TIMEOUT:g}); slower clients get 408")
+    run.add_argument("--max-connections", type=int, default=MAX_CONNECTIONS, metavar="N",
+                     help=f"connections open at once (default {MAX_CONNECTIONS}); one more gets 503")
     run.add_argument("--codels", metavar="DIR|MODULE",
                      help="the codels package (default: codels/ next to the descriptions, see docs/runtime.md)")
     run.add_argument("--connect", metavar="C.IN=D.OUT", action="append", default=[],
@@ -36,6 +56,34 @@ def add_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--on-violation", metavar="OBSERVER=C.S", action="append", default=[],
                      help="when OBSERVER (its instance path) is violated, request service S of component C "
                           "(e.g. a Stop that interrupts the faulty activity)")
+
+
+def port_of(text: str) -> int:
+    if not text.isdigit() or int(text) > 65535:
+        raise UsageError(f"--port {text}: a TCP port from 0 to 65535 expected")
+    return int(text)
+
+
+def token_of(args) -> str | None:
+    """The token from ``--token-file`` or the environment; on the command line it is refused."""
+    if args.token is not None:
+        raise UsageError(f"--token: a token on the command line shows to anyone who lists the processes (ps): "
+                         f"give --token-file FILE or set {TOKEN_ENV}")  # the token itself is not repeated
+    if args.token_file is None:
+        token = os.environ.get(TOKEN_ENV) or None
+        where = f"${TOKEN_ENV}"
+    else:
+        try:
+            lines = Path(args.token_file).read_text(encoding="utf-8").splitlines()
+        except (OSError, UnicodeDecodeError) as err:
+            raise UsageError(f"--token-file {args.token_file}: {getattr(err, 'strerror', None) or err}") from None
+        token = lines[0].strip() if lines else ""
+        if not token:
+            raise UsageError(f"--token-file {args.token_file}: the file holds no token")
+        where = f"--token-file {args.token_file}"
+    if token is not None and any(c.isspace() or ord(c) < 32 or ord(c) == 127 for c in token):
+        raise UsageError(f"{where}: a token cannot hold spaces or control characters (it travels in a header)")
+    return token
 
 
 def find_codels(interface: dict[str, Any], given: str | None, origin: str | None) -> str | None:
@@ -60,67 +108,74 @@ def _line(event: dict[str, Any]) -> str | None:
         extra = event.get("outputs") if event["status"] == "ok" else event.get("message")
         text = json.dumps(extra) if isinstance(extra, (dict, list)) else (extra or "")
         return f"[{event['request']}] {event['component']}.{event['service']}: {event['status']} {text}".rstrip()
-    if kind in ("overrun", "codel_error", "observer"):
+    if kind in ("overrun", "codel_error", "observer", "codel_overrun"):
         return f"{kind}: {event.get('message')}"
     return None
 
 
-def exit_now(controller, prog: str) -> None:
-    """A second Ctrl-C: say what is cut short, then leave without waiting for anything."""
-    busy = controller.busy()
-    pending = sorted(r.id for r in list(controller.requests.values()) if r.final is None)
-    listed = ", ".join(map(str, pending[:20])) + (" ..." if len(pending) > 20 else "")
-    print(f"{prog}: second Ctrl-C: exiting at once; interrupted: {busy or 'no codel running'}; "
-          f"{len(pending)} request(s) left without a final report{': ' + listed if pending else ''}",
-          file=sys.stderr, flush=True)
-    sys.stdout.flush()
-    os._exit(130)
+def exit_now(controller, prog: str, sig: int = signal.SIGINT) -> None:
+    """A second Ctrl-C (or SIGTERM): say what is cut short, then leave without waiting for anything."""
+    from runtime.services.lastwords import pending_line
+
+    name = "Ctrl-C" if sig == signal.SIGINT else signal.Signals(sig).name
+    print(f"{prog}: second {name}: exiting at once; interrupted: {controller.busy() or 'no codel running'}; "
+          f"{pending_line(controller)}", file=sys.stderr, flush=True)
+    os._exit(128 + sig)
+
+
+def _build(package: Package, root: str, interface: dict[str, Any], args, origin: str | None):
+    """The controller and its server as the options say; :class:`UsageError` for what cannot be used."""
+    from runtime.controller import Controller
+    from runtime.controller.recovery import RecoveryError, on_violation
+    from runtime.engine import EngineError
+    from runtime.services.server import ServiceServer
+
+    port, token = port_of(args.port), token_of(args)
+    if any(a.name == "timed" for a in package.annotations):
+        raise UsageError("this model is timed (generated with --timed) for verification: its timers wait for "
+                         "ticks; generate it with --monitor to run it with its observers")
+    codels = find_codels(interface, args.codels, origin)
+    dotted = args.codels and all(part.isidentifier() for part in args.codels.split("."))
+    if args.codels and not Path(args.codels).is_dir() and not dotted:
+        raise UsageError(f"--codels {args.codels}: no such directory")
+    try:
+        controller = Controller(package, root, interface, codels, seed=args.seed)
+        for item in args.connect:
+            left, _, right = item.partition("=")
+            component, _, port_name = left.partition(".")
+            controller.data.connect(component, port_name, right)
+    except EngineError as e:
+        raise UsageError(str(e)) from None
+    except KeyError as e:
+        raise UsageError(f"--connect: {e.args[0]}") from None
+    try:
+        on_violation(controller, args.on_violation)
+    except RecoveryError as e:
+        raise UsageError(f"--on-violation: {e}") from None
+    try:
+        server = ServiceServer(controller, port, args.host, token, args.read_timeout, args.max_connections)
+    except ValueError as e:
+        raise UsageError(f"--host {args.host}: {e}") from None
+    except OSError as e:
+        raise UsageError(f"cannot listen on {args.host}:{port}: {e.strerror or e}") from None
+    return controller, server
 
 
 def run_controller(package: Package, root: str, interface: dict[str, Any] | None, args, prog: str,
                    origin: str | None = None) -> int:
-    from runtime.controller import Controller
-    from runtime.engine import EngineError
-    from runtime.services.server import INTERRUPT_GRACE, STOP_GRACE, ServiceServer
+    """The ``run`` command: start, serve until stopped, say how it ended; returns the exit status."""
+    from runtime.services.console import Console
+    from runtime.services.lastwords import guard_exit
+    from runtime.services.server import INTERRUPT_GRACE, STOP_GRACE
 
     if interface is None:
         print(f"{prog}: error: this package has no interface.py (generated by an older genom2bip): regenerate it",
               file=sys.stderr)
         return 1
-    if any(a.name == "timed" for a in package.annotations):
-        print(f"{prog}: error: this model is timed (generated with --timed) for verification: its timers wait for "
-              f"ticks; generate it with --monitor to run it with its observers", file=sys.stderr)
-        return 1
-    codels = find_codels(interface, args.codels, origin)
-    dotted = args.codels and all(part.isidentifier() for part in args.codels.split("."))
-    if args.codels and not Path(args.codels).is_dir() and not dotted:
-        print(f"{prog}: error: --codels {args.codels}: no such directory", file=sys.stderr)
-        return 1
     try:
-        controller = Controller(package, root, interface, codels, seed=args.seed)
-        for item in args.connect:
-            left, _, right = item.partition("=")
-            component, _, port = left.partition(".")
-            controller.data.connect(component, port, right)
-    except EngineError as e:
+        controller, server = _build(package, root, interface, args, origin)
+    except UsageError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
-        return 1
-    except KeyError as e:
-        print(f"{prog}: error: --connect: {e.args[0]}", file=sys.stderr)
-        return 1
-    from runtime.controller.recovery import RecoveryError, on_violation
-    try:
-        on_violation(controller, args.on_violation)
-    except RecoveryError as e:
-        print(f"{prog}: error: --on-violation: {e}", file=sys.stderr)
-        return 1
-    try:
-        server = ServiceServer(controller, args.port, args.host, args.token)
-    except ValueError as e:
-        print(f"{prog}: error: --host {args.host}: {e}", file=sys.stderr)
-        return 1
-    except OSError as e:
-        print(f"{prog}: error: cannot listen on {args.host}:{args.port}: {e.strerror or e}", file=sys.stderr)
         return 1
     comps = interface["components"]
     nservices = sum(len(c["services"]) for c in comps.values())
@@ -130,27 +185,40 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
         print(f"warning: {len(controller.binder.missing)} codel(s) missing, their services will fail: "
               f"{', '.join(controller.binder.missing)}", file=sys.stderr)
     print(f"services interface on {server.url}/ (OpenAPI: {server.url}/openapi.json); Ctrl-C stops", flush=True)
+    console = Console(sys.stdout, prog=prog)
     if not args.quiet:
         def show(event: dict[str, Any]) -> None:
             text = _line(event)
             if text:
-                print(text, flush=True)
+                console.line(text)
         controller.subscribe(show)
 
     def ended() -> None:
         server.server.should_exit = True  # the run ended by itself (duration, limit, model error): so does the server
 
-    server.server.on_force = lambda: exit_now(controller, prog)
+    undo = guard_exit(controller, prog)
+    server.server.on_force = lambda sig: exit_now(controller, prog, sig)
     controller.start(args.limit, args.duration, then=ended)
     try:
         server.serve()
     except KeyboardInterrupt:
         pass
     controller.stop(timeout=0 if controller.error else STOP_GRACE + INTERRUPT_GRACE)  # abandoned: no wait
-    counts = controller.summary()["requests"]
-    done = ", ".join(f"{n} {s}" for s, n in sorted(counts.items())) or "none"
-    print(f"stopped after {controller.steps} steps; requests: {done}")
+    undo()
+    for line in _summary(controller, console):
+        console.line(line)
+    console.close(LAST_WORDS)
     if controller.error:
         print(f"{prog}: {controller.error}", file=sys.stderr)
         return 2
     return 0
+
+
+def _summary(controller, console) -> list[str]:
+    """The last lines: steps and requests by status, lines dropped, codels abandoned and still running."""
+    counts = controller.summary()["requests"]
+    done = ", ".join(f"{n} {s}" for s, n in sorted(counts.items())) or "none"
+    dropped = f"; {console.dropped} output lines dropped (the output was not read)" if console.dropped else ""
+    lines = [f"stopped after {controller.steps} steps; requests: {done}{dropped}"]
+    lines += [f"still running, abandoned: {what}" for what in controller.abandoned_codels()]
+    return lines

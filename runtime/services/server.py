@@ -25,6 +25,7 @@ serves it with uvicorn, stopping the controller cleanly.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import signal
 import socket
 import threading
@@ -42,6 +43,7 @@ from runtime.services.guard import TOKEN_ENV, Guard, is_loopback
 from runtime.services.hub import Hub
 from runtime.services.intake import MAX_BODY, MAX_WAIT
 from runtime.services.jsonio import error
+from runtime.services.protocol import MAX_CONNECTIONS, READ_TIMEOUT, guarded
 from runtime.services.routes import routes
 
 __all__ = ["INTERRUPT_GRACE", "MAX_BODY", "MAX_WAIT", "STOP_GRACE", "ServiceServer", "create_app"]
@@ -49,8 +51,12 @@ __all__ = ["INTERRUPT_GRACE", "MAX_BODY", "MAX_WAIT", "STOP_GRACE", "ServiceServ
 #: On a stop: how long the codel under way may take to return (s), then how long after it is interrupted.
 STOP_GRACE = 2.0
 INTERRUPT_GRACE = 1.0
-#: How long event streams and long polls get to send their last events (s) before their connections are cut.
-FLUSH_GRACE = 0.5
+#: At the stop, a connection still sending its last events is cut after this long (s) without progress, and all
+#: after FLUSH_LIMIT: a client that does not read cannot hold the stop, one that reads gets its final reports.
+FLUSH_IDLE = 1.0
+FLUSH_LIMIT = 10.0
+#: The kernel send buffer asked for at the stop (bytes): what is in it still reaches the client after the exit.
+HANDOVER_BUFFER = 4 << 20
 
 
 async def on_request_error(request: HttpRequest, exc: RequestError) -> Response:
@@ -90,8 +96,9 @@ class _Uvicorn(uvicorn.Server):
     ASGI lifespan task: on Ctrl-C uvicorn cancels a pending lifespan task and
     logs a traceback for it, which a clean stop must not print.  The shutdown
     ends the controller first (its final reports go out over every stream and
-    long poll), then the streams, then the connections.  A second Ctrl-C
-    calls ``on_force`` (the ``run`` command exits at once).
+    long poll), then the streams, then the connections.  SIGTERM stops it as
+    Ctrl-C does; a second one calls ``on_force(signal)`` (the ``run``
+    command exits at once).
     """
 
     def __init__(self, config: uvicorn.Config, controller: Controller, hub: "Hub", on_exit) -> None:
@@ -131,25 +138,70 @@ class _Uvicorn(uvicorn.Server):
         if c.alive():
             c.abandon(f"{c.busy() or 'the engine thread'} did not return within "
                       f"{STOP_GRACE + INTERRUPT_GRACE:g} s of the stop: abandoned")
-        await asyncio.sleep(0)  # the reports the engine thread handed over are published before the hub closes
 
     async def _flush(self) -> None:
-        """Give streams and long polls a moment to send their last events, then cut the connections still busy."""
+        """Let streams and answers still under way send their last bytes; cut a connection that makes no progress.
+
+        Each connection's kernel buffer is raised first: what is in it is
+        delivered even after the process has exited, so that a client that
+        reads slowly still gets its final reports.
+        """
         loop = asyncio.get_running_loop()
-        deadline = loop.time() + FLUSH_GRACE
-        while self.hub.streams and loop.time() < deadline:
+        connections = self.server_state.connections
+        for connection in list(connections):
+            sock = connection.transport.get_extra_info("socket") if connection.transport else None
+            with contextlib.suppress(OSError, AttributeError):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, HANDOVER_BUFFER)
+        start = loop.time()
+        seen: dict[object, tuple[tuple, float]] = {}  # connection -> (what it had left, since when)
+        while True:
+            now = loop.time()
+            busy = [c for c in list(connections) if _sending(c)]
+            progress = sum(sub.cursor for sub in self.hub.subscribers)  # streams that wrote without waiting
+            stuck = [c for c in busy if _stalled(c, seen, now, progress)]
+            if not busy or len(stuck) == len(busy) or now - start > FLUSH_LIMIT:
+                break
             await asyncio.sleep(0.02)
-        for connection in list(self.server_state.connections):
-            cycle = getattr(connection, "cycle", None)
-            transport = getattr(connection, "transport", None)
-            if cycle is not None and not cycle.response_complete and transport is not None:
-                transport.abort()  # a client that does not read: it must not hold the stop
+        for connection in busy:
+            connection.transport.abort()  # a client that does not read: it must not hold the stop
+
+    @contextlib.contextmanager
+    def capture_signals(self):
+        """SIGINT and SIGTERM stop the server (uvicorn's own would raise the signal again once stopped)."""
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+        previous = {sig: signal.signal(sig, self.handle_exit) for sig in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            yield
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
 
     def handle_exit(self, sig, frame) -> None:
-        if self.should_exit and sig == signal.SIGINT and self.on_force is not None:
-            self.on_force()
+        if self.should_exit and self.on_force is not None:
+            self.on_force(sig)
         self.on_exit()
         super().handle_exit(sig, frame)
+
+
+def _sending(connection) -> bool:
+    """A connection with an answer still under way, or bytes not yet handed to the kernel."""
+    transport = getattr(connection, "transport", None)
+    if transport is None or transport.is_closing():
+        return False
+    cycle = getattr(connection, "cycle", None)
+    return (cycle is not None and not cycle.response_complete) or transport.get_write_buffer_size() > 0
+
+
+def _stalled(connection, seen: dict, now: float, progress: int) -> bool:
+    """Whether ``connection`` has had the same bytes left to send, and no stream moved, for :data:`FLUSH_IDLE` s."""
+    left = (connection.transport.get_write_buffer_size(), id(connection.cycle), progress)
+    last = seen.get(connection)
+    if last is None or last[0] != left:
+        seen[connection] = (left, now)
+        return False
+    return now - last[1] >= FLUSH_IDLE
 
 
 class ServiceServer:
@@ -161,11 +213,12 @@ class ServiceServer:
     """
 
     def __init__(self, controller: Controller, port: int = 0, host: str = "127.0.0.1",
-                 token: str | None = None) -> None:
+                 token: str | None = None, read_timeout: float = READ_TIMEOUT,
+                 max_connections: int = MAX_CONNECTIONS) -> None:
         loopback = is_loopback(host)
         if not loopback and not token:
             raise ValueError(f"listening on {host} lets other machines command the robot: give a token "
-                             f"(--token or {TOKEN_ENV}) that every client must send")
+                             f"(--token-file or {TOKEN_ENV}) that every client must send")
         self.controller = controller
         self.app = create_app(controller, token, loopback)
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
@@ -179,7 +232,8 @@ class ServiceServer:
         shown = "127.0.0.1" if host in ("0.0.0.0", "localhost") else f"[{host}]" if ":" in host else host
         self.url = f"http://{shown}:{self.port}"
         config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off",
-                                timeout_graceful_shutdown=3, timeout_keep_alive=30)
+                                timeout_graceful_shutdown=3, timeout_keep_alive=30,
+                                http=guarded(read_timeout, max_connections))
         self.server = _Uvicorn(config, controller, self.app.state.hub, self._exiting)
         self._thread: threading.Thread | None = None
 

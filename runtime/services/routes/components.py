@@ -40,5 +40,8 @@ async def service(request: HttpRequest) -> Response:
 
 
 async def poster(request: HttpRequest) -> Response:
-    value = request.app.state.controller.poster(request.path_params["component"], request.path_params["port"])
-    return JSONResponse(value.as_json())
+    """The poster's last value, its age, and the failure that keeps it from being written, if any."""
+    c, p = request.path_params["component"], request.path_params["port"]
+    controller = request.app.state.controller
+    controller.poster(c, p)  # 404 naming what exists
+    return JSONResponse(controller.data.poster_view(c, p))

@@ -12,7 +12,9 @@ LINKS = {"components": "/components", "requests": "/requests", "events": "/event
 
 
 async def index(request: HttpRequest) -> Response:
-    return JSONResponse(request.app.state.controller.summary() | {"links": LINKS})
+    """The controller's summary, with the event streams at a glance (how many, how many behind, what they lost)."""
+    return JSONResponse(request.app.state.controller.summary() | {"events": request.app.state.hub.stats(),
+                                                                    "links": LINKS})
 
 
 async def tasks(request: HttpRequest) -> Response:

@@ -107,6 +107,7 @@ INTERFACE = {
                                     'path': 'speed_ref',
                                 },
                             ],
+                            'wcet_us': 10,
                         },
                     },
                 },
@@ -164,6 +165,7 @@ INTERFACE = {
                                 {'arg': 'position', 'source': 'local', 'direction': 'in', 'path': 'position'},
                                 {'arg': 'state', 'source': 'ids', 'direction': 'in', 'path': 'state'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'demo_goto_drive': {
                             'codel': 'goto_drive',
@@ -173,6 +175,7 @@ INTERFACE = {
                                 {'arg': 'state', 'source': 'ids', 'direction': 'inout', 'path': 'state'},
                                 {'arg': 'Mobile', 'source': 'port', 'direction': 'out', 'path': 'Mobile'},
                             ],
+                            'wcet_us': 2000,
                         },
                         'demo_goto_stop': {
                             'codel': 'goto_stop',

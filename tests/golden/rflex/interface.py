@@ -209,7 +209,12 @@ INTERFACE = {
                     'before': [],
                     'codels': {
                         'rflex_rflexTrackStart': {'codel': 'rflexTrackStart', 'role': 'fsm', 'params': []},
-                        'rflex_rflexTrackMain': {'codel': 'rflexTrackMain', 'role': 'fsm', 'params': []},
+                        'rflex_rflexTrackMain': {
+                            'codel': 'rflexTrackMain',
+                            'role': 'fsm',
+                            'params': [],
+                            'wcet_us': 2000,
+                        },
                         'rflex_rflexTrackEnd': {'codel': 'rflexTrackEnd', 'role': 'fsm', 'params': []},
                         'rflex_rflexTrackInter': {'codel': 'rflexTrackInter', 'role': 'fsm', 'params': []},
                         'rflex_rflexTrackFail': {'codel': 'rflexTrackFail', 'role': 'fsm', 'params': []},
