@@ -281,13 +281,13 @@ def _slice(text: str, span: Span) -> str:
     start = sum(len(x) for x in lines[: span.line - 1]) + span.column - 1
     end = sum(len(x) for x in lines[: span.end_line - 1]) + span.end_column - 1
     import re
-    part = re.sub(r"\(\*(.|\n)*?\*\)", " ", text[start:end])
+    part = re.sub(r"\(\*[^*]*\*+(?:[^)*][^*]*\*+)*\)", " ", text[start:end])
     part = re.sub(r"--[^\n]*", " ", part)
     return " ".join(part.split())
 
 
 def _has_content(text: str) -> bool:
     import re
-    stripped = re.sub(r"\(\*(.|\n)*?\*\)", "", text)
+    stripped = re.sub(r"\(\*[^*]*\*+(?:[^)*][^*]*\*+)*\)", "", text)
     stripped = re.sub(r"--[^\n]*", "", stripped)
     return bool(stripped.strip())
