@@ -86,13 +86,18 @@ def _is_within(inner: Path, outer: Path) -> bool:
     return inner == outer or outer in inner.parents
 
 
+def _real(path: Path) -> Path:
+    """Where ``path`` leads, links followed as far as they go (a loop of links is no error here: reading says so)."""
+    return Path(os.path.realpath(path))
+
+
 def check_files_are_not_inputs(outputs: list[Path], inputs: list[Path]) -> None:
     """Refuse an output file that is one of the inputs, or a file of an input directory (``--aut NDD.gen``)."""
     files = [f for item in inputs if item.is_dir() for f in sorted(item.iterdir()) if f.is_file()]
-    read = {item.resolve(): item for item in [*inputs, *files]}
+    read = {_real(item): item for item in [*inputs, *files]}
     for out in outputs:
-        if out.resolve() in read:
-            raise OutputError(f"refusing to write {out}: it is the input {read[out.resolve()]}")
+        if _real(out) in read:
+            raise OutputError(f"refusing to write {out}: it is the input {read[_real(out)]}")
 
 
 def write_file(path: Path, write: Callable[[TextIO], T]) -> T:
@@ -126,10 +131,10 @@ def _mode_for(path: Path) -> int:
 
 def check_inputs(target: Path, inputs: list[Path]) -> None:
     """Refuse an output directory that is, or contains, one of the inputs."""
-    where = target.resolve()
+    where = _real(target)
     for item in inputs:
-        if _is_within(item.resolve(), where):
-            what = "is" if item.resolve() == where else "contains"
+        if _is_within(_real(item), where):
+            what = "is" if _real(item) == where else "contains"
             raise OutputError(f"refusing to write {target}: it {what} the input {item}; choose another -o DIR")
 
 

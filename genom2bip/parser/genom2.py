@@ -23,7 +23,7 @@ from genom2bip.parser.genom2_base import Block, Field, FieldError, grammar_parse
 from genom2bip.parser.genom2_components import ComponentReader
 from genom2bip.parser.genom2_services import RequestReader
 from genom2bip.parser.genom2_types import TypeReader
-from genom2bip.parser.limits import TOO_DEEP, TOO_DEEP_HINT, too_deep
+from genom2bip.parser.limits import TOO_DEEP, TOO_DEEP_HINT, deep_place
 from runtime.diagnostics import Reporter
 
 # --------------------------------------------------------------------------- accepted fields
@@ -174,9 +174,9 @@ class Genom2Frontend(TypeReader, ComponentReader, RequestReader):
             if _MODULE_HEAD.match(chunk):  # its requests are not "outside a module"
                 self.broken_module = True
             return None
-        deep = too_deep(tree)
+        deep = deep_place(tree)
         if deep is not None:
-            self.reporter.error(self.span_of(deep), TOO_DEEP, TOO_DEEP_HINT)
+            self.reporter.error(self._span_at(*deep), TOO_DEEP, TOO_DEEP_HINT)
             return None
         return tree
 

@@ -1,8 +1,8 @@
 """What the front end reads at most, so that any input ends in a located error, never in exhausted memory or stack.
 
 Real descriptions are far below every limit (DALA's largest file and its
-includes: 5 kB, 13 levels of syntax tree); docs/reliability.md gives the
-memory each costs.
+includes: 5 kB, 13 levels of syntax tree, against runtime.nesting's 200);
+docs/reliability.md gives the memory each costs.
 """
 from __future__ import annotations
 
@@ -10,6 +10,8 @@ import math
 from typing import Any
 
 from lark import Token, Tree
+
+from runtime.nesting import MAX_DEPTH, too_deep
 
 #: Bytes of text read for one description file and everything it includes (a 100 kB description is large).
 MAX_INPUT_BYTES = 2 * 1024 * 1024
@@ -19,11 +21,6 @@ MAX_EXPANDED_TOKENS = 1_000_000
 MAX_OUTPUT_CHARS = 4 * MAX_INPUT_BYTES
 #: Files open at once through ``#include`` (cpp compilers allow about 200; a description needs a handful).
 MAX_INCLUDE_DEPTH = 64
-#: Levels of a file's syntax tree: a struct in a struct takes two, an operator one.  The readers walk the
-#: tree recursively; 200 levels keep them far from Python's recursion limit.
-MAX_TREE_DEPTH = 200
-
-
 def megabytes(size: int) -> str:
     return f"{size / 1024 / 1024:.1f} MB"
 
@@ -53,26 +50,17 @@ def literal_too_long(digits: str, base: int) -> bool:
 #: Durations (periods, delays, WCETs, observer bounds) in seconds: whole microseconds, a day at most.
 MIN_DURATION, MAX_DURATION = 1e-6, 86_400.0
 
-#: What a too deep syntax tree is told (:func:`too_deep`).
-TOO_DEEP = f"nested too deeply: more than {MAX_TREE_DEPTH} levels of declarations and expressions"
+#: What a syntax tree deeper than runtime.nesting.MAX_DEPTH is told (the readers recurse on it).
+TOO_DEEP = f"nested too deeply: more than {MAX_DEPTH} levels of declarations and expressions"
 TOO_DEEP_HINT = "a struct inside a struct takes two levels, an operator one"
 
 
-def too_deep(tree: Tree, limit: int = MAX_TREE_DEPTH) -> Token | None:
-    """The first token of the first subtree (in source order) lying deeper than ``limit`` levels, else None.
-
-    Walked without recursion, so that any depth is measured; the readers, which recurse, then see only
-    trees within the limit.
-    """
-    stack: list[tuple[Tree | Token, int]] = [(tree, 1)]
-    deep = None
-    while stack:
-        node, depth = stack.pop()
-        if isinstance(node, Token):
-            if deep is not None:
-                return node
-            continue
-        if depth > limit and deep is None:
-            deep, stack = node, []  # from here on, the first token below it
-        stack.extend((child, depth + 1) for child in reversed(node.children))
-    return None if deep is None else Token("DEEP", "", line=1, column=1)  # tokens lack positions: the start
+def deep_place(tree: Tree) -> tuple[int, int] | None:
+    """Line and column (1-based) where ``tree`` nests deeper than MAX_DEPTH levels, else None."""
+    node = too_deep(tree)
+    if node is None:
+        return None
+    if not getattr(node.meta, "empty", True):
+        return node.meta.line, node.meta.column
+    token = next(node.scan_values(lambda v: isinstance(v, Token) and v.line is not None), None)
+    return (token.line, token.column) if token is not None else (1, 1)

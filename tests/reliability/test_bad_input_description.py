@@ -24,7 +24,7 @@ def test_structs_nested_3000_deep_are_refused_where_the_nesting_passes_the_limit
     n = 3000
     text = "component c {\n  ids {\n" + "struct s { " * n + "long x; " + "} a; " * n + "\n  };\n};\n"
     done = _refused(tmp_path, "deep.gen", text,
-                    "3:1086: error: nested too deeply: more than 200 levels of declarations and expressions")
+                    "3:1079: error: nested too deeply: more than 200 levels of declarations and expressions")
     assert "hint: a struct inside a struct takes two levels, an operator one" in done.err
     assert max(len(line) for line in done.err.splitlines()) < 220  # the 40 kB line is quoted around the column
 
