@@ -135,6 +135,8 @@ def _member_type(schemas: Schemas, members: list[ir.Member], path: str) -> dict[
         return {}
     schema = schemas.of(m.type)
     for part in re.findall(r"\.(\w+)|\[(\d+)\]", path[len(m.name):]):
+        while "$ref" in schema:  # a named struct: its members are in the named schema
+            schema = schemas.named.get(schema["$ref"], {})
         if part[0]:
             schema = schema.get("properties", {}).get(part[0], {})
         else:
