@@ -13,6 +13,14 @@ pytestmark = pytest.mark.reliability
 MINIMAL = "component c {\n  ids { long n; };\n};\n"
 
 
+def _including(tmp_path, name: str, data: bytes):
+    """Check a main.gen whose first line includes ``name``, a file holding ``data``: (main, what the run did)."""
+    (tmp_path / name).write_bytes(data)
+    main = tmp_path / "main.gen"
+    main.write_text(f'#include "{name}"\n' + MINIMAL)
+    return main, genom2bip("check", main)
+
+
 def _no_output(tmp_path, done):
     assert "internal error" not in done.err and "Traceback" not in done.err
     assert not (tmp_path / "out").exists()
@@ -78,10 +86,7 @@ def test_an_include_of_a_pipe_is_refused_without_waiting_for_a_writer(tmp_path):
 
 
 def test_an_include_larger_than_what_is_left_is_refused_at_its_line(tmp_path):
-    (tmp_path / "huge.idl").write_text("/*" + "y" * (3 * 1024 * 1024) + "*/\n")
-    main = tmp_path / "main.gen"
-    main.write_text('#include "huge.idl"\n' + MINIMAL)
-    done = genom2bip("check", main)
+    main, done = _including(tmp_path, "huge.idl", b"/*" + b"y" * (3 * 1024 * 1024) + b"*/\n")
     assert done.code == 1
     assert done.err.startswith(f"{main}:1:10: error: cannot include 'huge.idl': it holds 3.0 MB of text, more than "
                                "the 2 MB genom2bip reads for a description and its includes\n"), done.err
@@ -144,10 +149,7 @@ def test_a_latin1_description_names_the_file_line_and_column_that_are_not_utf8(t
 
 
 def test_a_latin1_include_is_located_in_the_included_file(tmp_path):
-    (tmp_path / "types.idl").write_bytes(b"/* caract\xe8res */\nconst long k = 1;\n")
-    main = tmp_path / "main.gen"
-    main.write_text('#include "types.idl"\n' + MINIMAL)
-    done = genom2bip("check", main)
+    _, done = _including(tmp_path, "types.idl", b"/* caract\xe8res */\nconst long k = 1;\n")
     assert done.code == 1
     assert done.err.startswith(f"{tmp_path / 'types.idl'}:1:10: error: not a UTF-8 text file: byte 0xe8 cannot "
                                "be read\n"), done.err
