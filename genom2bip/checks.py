@@ -14,6 +14,7 @@ from collections import deque
 from typing import Any, Iterable, Iterator
 
 from genom2bip.check_async import check_async
+from genom2bip.check_sizes import check_sizes
 from genom2bip.ir import (
     ArrayType,
     Codel,
@@ -101,6 +102,7 @@ class _Checker:
             self._type_refs(member.type, member.span, comp)
         if comp.dialect == Dialect.GENOM3:
             check_async(comp, self.reporter)
+        check_sizes(comp, self.d, self.reporter)
         for port in comp.ports:
             self._type_refs(port.type, port.span, comp, in_port=port.direction == Direction.IN)
 

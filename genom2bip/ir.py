@@ -63,6 +63,18 @@ class Node:
     span: Span = field(default=NOWHERE, compare=False, repr=False, kw_only=True)
 
 
+#: Ranges of the IDL integer types (and C's fixed-width ones): what a constant or a schema of that type holds.
+INTEGER_RANGES = {
+    "short": (-(2 ** 15), 2 ** 15 - 1), "unsigned short": (0, 2 ** 16 - 1),
+    "long": (-(2 ** 31), 2 ** 31 - 1), "unsigned long": (0, 2 ** 32 - 1),
+    "long long": (-(2 ** 63), 2 ** 63 - 1), "unsigned long long": (0, 2 ** 64 - 1),
+    "octet": (0, 255), "int8_t": (-128, 127), "uint8_t": (0, 255),
+    "int16_t": (-(2 ** 15), 2 ** 15 - 1), "uint16_t": (0, 2 ** 16 - 1),
+    "int32_t": (-(2 ** 31), 2 ** 31 - 1), "uint32_t": (0, 2 ** 32 - 1),
+    "int64_t": (-(2 ** 63), 2 ** 63 - 1), "uint64_t": (0, 2 ** 64 - 1),
+}
+
+
 @dataclass
 class Type(Node):
     """Base of IDL type expressions."""

@@ -24,8 +24,10 @@ import yaml
 
 from genom2bip import ir
 from genom2bip.build.timed import LatencySpec
+from genom2bip.parser.limits import MAX_DURATION
 from genom2bip import rules
-from genom2bip.rules import _suggest, compose_file
+from genom2bip.rules import _suggest
+from genom2bip.yamlfile import compose_file
 from runtime.diagnostics import Reporter, Span
 
 KEYS = ("name", "doc", "from", "to", "within")
@@ -36,9 +38,12 @@ DURATION = re.compile(r"\s*(\d+(?:\.\d+)?)\s*(s|ms|us|µs|min)\s*\Z")
 
 
 def parse_duration(text: str) -> int | None:
-    """``1 s``, ``250 ms``, ``10 us`` → microseconds; None when it is not a duration."""
+    """``1 s``, ``250 ms``, ``10 us`` → microseconds; None when it is not a duration of at most a day."""
     m = DURATION.match(text)
-    return round(float(m.group(1)) * UNITS[m.group(2)]) if m else None
+    if not m or len(m.group(1)) > 20:  # float() of thousands of digits is infinite
+        return None
+    value = float(m.group(1)) * UNITS[m.group(2)]
+    return round(value) if value <= MAX_DURATION * 1e6 else None
 
 
 class _Reader(rules._Reader):
@@ -145,8 +150,9 @@ class _Reader(rules._Reader):
         within_text = self.scalar(fields["within"], "within", name)
         within = parse_duration(within_text) if within_text is not None else None
         if within_text is not None and (within is None or within <= 0):
-            self.error(fields["within"], f"observer {name}: within is '{within_text}'; expected a positive duration",
-                       "write e.g. 1 s, 250 ms or 500 us")
+            shown = within_text if len(within_text) <= 40 else within_text[:37] + "..."
+            self.error(fields["within"], f"observer {name}: within is '{shown}'; expected a positive duration",
+                       "write e.g. 1 s, 250 ms or 500 us (a day at most)")
             return None
         if begin is None or end is None or within is None:
             return None

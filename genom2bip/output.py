@@ -86,13 +86,18 @@ def _is_within(inner: Path, outer: Path) -> bool:
     return inner == outer or outer in inner.parents
 
 
+def _real(path: Path) -> Path:
+    """Where ``path`` leads, links followed as far as they go (a loop of links is no error here: reading says so)."""
+    return Path(os.path.realpath(path))
+
+
 def check_files_are_not_inputs(outputs: list[Path], inputs: list[Path]) -> None:
     """Refuse an output file that is one of the inputs, or a file of an input directory (``--aut NDD.gen``)."""
     files = [f for item in inputs if item.is_dir() for f in sorted(item.iterdir()) if f.is_file()]
-    read = {item.resolve(): item for item in [*inputs, *files]}
+    read = {_real(item): item for item in [*inputs, *files]}
     for out in outputs:
-        if out.resolve() in read:
-            raise OutputError(f"refusing to write {out}: it is the input {read[out.resolve()]}")
+        if _real(out) in read:
+            raise OutputError(f"refusing to write {out}: it is the input {read[_real(out)]}")
 
 
 def write_file(path: Path, write: Callable[[TextIO], T]) -> T:
@@ -126,10 +131,10 @@ def _mode_for(path: Path) -> int:
 
 def check_inputs(target: Path, inputs: list[Path]) -> None:
     """Refuse an output directory that is, or contains, one of the inputs."""
-    where = target.resolve()
+    where = _real(target)
     for item in inputs:
-        if _is_within(item.resolve(), where):
-            what = "is" if item.resolve() == where else "contains"
+        if _is_within(_real(item), where):
+            what = "is" if _real(item) == where else "contains"
             raise OutputError(f"refusing to write {target}: it {what} the input {item}; choose another -o DIR")
 
 
@@ -184,13 +189,20 @@ def _remove_own(directory: Path, recorded: dict[str, str]) -> bool:
 
 
 def leftovers(out: Path, name: str) -> list[Path]:
-    """Remove what an interrupted run left in ``out`` when it is all the generator's; returns what remains."""
+    """Remove what an interrupted run left in ``out`` when it is all the generator's; returns what remains.
+
+    A staging directory (``.NAME.new.*``) with its marker loses the files the
+    marker lists, whatever they hold: a run killed while writing one leaves it
+    cut short.  A previous output put aside (``.NAME.old.*``) loses only its
+    unchanged files.
+    """
     remaining = []
     for path in sorted([*out.glob(f".{name}.new.*"), *out.glob(f".{name}.old.*")]):
         if path.is_symlink() or not path.is_dir():
             continue
         recorded = _own_files(path)
-        if recorded is None or not _remove_own(path, recorded):
+        staged = f".{name}.new." in path.name
+        if recorded is None or not (_remove_listed(path, list(recorded)) if staged else _remove_own(path, recorded)):
             remaining.append(path)
     return remaining
 
@@ -212,13 +224,14 @@ def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) 
         raise OutputError(f"cannot write {out}: it exists and is not a directory")
     check_inputs(target, inputs)
     kept = kept_entries(target, files)
+    made = _missing_parents(out)
     out.mkdir(parents=True, exist_ok=True)
-    remaining = leftovers(out, name)
-    marker = encode(marker_text(data))
-    staging = Path(tempfile.mkdtemp(prefix=f".{name}.new.", dir=out))
+    staging = None
     try:
+        remaining = leftovers(out, name)
+        staging = Path(tempfile.mkdtemp(prefix=f".{name}.new.", dir=out))
         # The marker goes first: a staging directory left by a killed run is then recognised and cleared.
-        (staging / MARKER).write_bytes(marker)
+        (staging / MARKER).write_bytes(encode(marker_text(data)))
         for file_name, content in data.items():
             (staging / file_name).write_bytes(content)
         if os.path.lexists(target):
@@ -226,11 +239,38 @@ def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) 
         else:
             staging.rename(target)
     except BaseException:
-        if staging.is_dir():
-            own = {f: _digest(content) for f, content in data.items()}
-            _remove_own(staging, {**own, MARKER: _digest(marker)})
+        # A full disk or Ctrl-C: every file of the staging directory is one this run began, finished or not.
+        if staging is not None and staging.is_dir():
+            _remove_listed(staging, [MARKER, *data])
+        for directory in made:  # the directories this run made, when they hold nothing
+            with contextlib.suppress(OSError):
+                directory.rmdir()
         raise
     return Written(target, kept, remaining)
+
+
+def _missing_parents(out: Path) -> list[Path]:
+    """``out`` and those of its parents that do not exist yet, innermost first."""
+    missing = []
+    for directory in [out, *out.parents]:
+        if os.path.lexists(directory):
+            break
+        missing.append(directory)
+    return missing
+
+
+def _remove_listed(directory: Path, names: list[str]) -> bool:
+    """Delete the files ``names`` of ``directory`` whatever they hold (cut short, say), then the directory if empty."""
+    for name in names:
+        path = directory / name
+        with contextlib.suppress(OSError):
+            if not path.is_symlink() and path.is_file():
+                path.unlink()
+    try:
+        directory.rmdir()
+    except OSError:
+        return False
+    return True
 
 
 def _swap(staging: Path, target: Path, kept: list[str]) -> None:

@@ -30,8 +30,8 @@ import networkx as nx
 import yaml
 
 from genom2bip import ir
-from runtime.diagnostics import NOWHERE, DiagnosticError, Reporter, Span
-from runtime.textfile import read_text
+from genom2bip.yamlfile import compose_file, span_of
+from runtime.diagnostics import NOWHERE, Reporter, Span
 
 Ref = tuple[str, str]  # (component, service)
 
@@ -121,8 +121,7 @@ class _Reader:
             (c.name, s.name): s for c in description.components for s in c.services}
 
     def span(self, node: yaml.Node) -> Span:
-        m = node.start_mark
-        return Span(self.path, m.line + 1, m.column + 1, node.end_mark.line + 1, node.end_mark.column + 1)
+        return span_of(self.path, node)
 
     def error(self, node: yaml.Node, message: str, hint: str | None = None) -> None:
         self.reporter.error(self.span(node), message, hint)
@@ -266,49 +265,10 @@ def _suggest(word: str, choices: list[str]) -> str | None:
     return f"did you mean '{close[0]}'?" if close else (f"known: {', '.join(choices)}" if choices else None)
 
 
-#: A rule file nests three levels (rules, a rule, a list of services); reading deeper would recurse without bound.
-MAX_NESTING = 50
-
-
-def _too_deep(text: str):
-    """The YAML mark where collections nest deeper than MAX_NESTING (read as events, without recursion), or None."""
-    depth = 0
-    for event in yaml.parse(text):
-        if isinstance(event, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_NESTING:
-                return event.start_mark
-        elif isinstance(event, yaml.CollectionEndEvent):
-            depth -= 1
-    return None
-
-
 def load_rules(path: Path, description: ir.Description, reporter: Reporter) -> list[Rule]:
     """Read and check a rule file against the description; problems go to ``reporter``."""
     ok, root = compose_file(path, reporter, "rule file")
     return _Reader(str(path), description, reporter).rules(root) if ok else []
-
-
-def compose_file(path: Path, reporter: Reporter, what: str) -> tuple[bool, yaml.Node | None]:
-    """A YAML file's node tree (positions kept for messages); (False, None) after reporting a problem."""
-    try:
-        text = read_text(path, what)
-    except DiagnosticError as exc:
-        reporter.diagnostics.extend(exc.diagnostics)
-        return False, None
-    reporter.sources.add(str(path), text)
-    try:
-        deep = _too_deep(text)
-        if deep is not None:
-            reporter.error(Span(str(path), deep.line + 1, deep.column + 1),
-                           f"nested more than {MAX_NESTING} levels deep: not a {what}")
-            return False, None
-        return True, yaml.compose(text)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
-        reporter.error(Span(str(path), line, col), f"not valid YAML: {exc.problem or exc.context}")
-        return False, None
 
 
 # --------------------------------------------------------------------------- consistency

@@ -53,18 +53,37 @@ class Diagnostic:
         if text is None and sources is not None:
             text = sources.line(self.span.file, self.span.line)
         if text is not None and self.span.line > 0:
-            # control characters (a NUL byte...) are shown as '?', one for one so the caret stays aligned
-            text = "".join(ch if ch.isprintable() or ch == "\t" else "?" for ch in text.rstrip("\n"))
-            lines.append(f"    {text}")
             col = max(self.span.column, 1)
-            prefix = "".join(ch if ch == "\t" else " " for ch in text[: col - 1])
             width = 1
             if self.span.end_line == self.span.line and self.span.end_column:
                 width = max(1, self.span.end_column - col)
+            text, col = _clipped(text.rstrip("\n"), col)
+            width = min(width, max(1, len(text) - col + 1))
+            # control characters (a NUL byte...) are shown as '?', one for one so the caret stays aligned
+            text = "".join(ch if ch.isprintable() or ch == "\t" else "?" for ch in text)
+            lines.append(f"    {text}")
+            prefix = "".join(ch if ch == "\t" else " " for ch in text[: col - 1])
             lines.append(f"    {prefix}{'^' * width}")
         if self.hint:
             lines.append(f"    hint: {self.hint}")
         return "\n".join(lines)
+
+
+#: A quoted line longer than this is shown as the part around the column, so that a huge line is not printed.
+QUOTE_WIDTH = 200
+
+
+def _clipped(text: str, col: int) -> tuple[str, int]:
+    """``text`` cut to :data:`QUOTE_WIDTH` characters around ``col`` (marked ``...``), and the column in it."""
+    if len(text) <= QUOTE_WIDTH:
+        return text, col
+    start = max(0, min(col - 1 - QUOTE_WIDTH // 2, len(text) - QUOTE_WIDTH))
+    shown = text[start:start + QUOTE_WIDTH]
+    if start > 0:
+        shown, col = "..." + shown, col - start + 3
+    if start + QUOTE_WIDTH < len(text):
+        shown += "..."
+    return shown, col
 
 
 class SourceCache:

@@ -14,12 +14,12 @@ MAX_DEPTH = 200
 
 
 def too_deep(tree: Tree, limit: int = MAX_DEPTH) -> Tree | None:
-    """The first node nested deeper than ``limit``, found without recursion, or None."""
+    """The first node (in source order) nested deeper than ``limit``, found without recursion, or None."""
     stack = [(tree, 0)]
     while stack:
         node, depth = stack.pop()
         if depth > limit:
             return node
-        stack.extend((child, depth + 1) for child in node.children if isinstance(child, Tree))
+        stack.extend((child, depth + 1) for child in reversed(node.children) if isinstance(child, Tree))
     return None
 

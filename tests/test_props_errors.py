@@ -201,7 +201,7 @@ def test_a_formula_nested_too_deeply_is_an_error_not_an_internal_one():
     ((where, message),) = errors(chain)
     assert where.startswith("bad.mcl:1:") and message == "the formula is nested more than 200 operators deep here"
     nested = '<"S.req">' * 400 + "true"
-    assert errors(nested) == [("bad.mcl:1:1783", "the formula is nested more than 200 operators deep here")]
+    assert errors(nested) == [("bad.mcl:1:1775", "the formula is nested more than 200 operators deep here")]
     flat = flatten(package("Server"), "Main()")
     items, _ = read_properties(" and ".join(['<"S.req"> true'] * 100), "ok.mcl", flat)
     assert len(items) == 1

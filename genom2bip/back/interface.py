@@ -18,15 +18,7 @@ from genom2bip import ir
 from genom2bip.build.names import ident, joined
 
 #: Ranges of the IDL integer types, for the schemas' minimum and maximum.
-_INT_RANGES = {
-    "short": (-(2 ** 15), 2 ** 15 - 1), "unsigned short": (0, 2 ** 16 - 1),
-    "long": (-(2 ** 31), 2 ** 31 - 1), "unsigned long": (0, 2 ** 32 - 1),
-    "long long": (-(2 ** 63), 2 ** 63 - 1), "unsigned long long": (0, 2 ** 64 - 1),
-    "octet": (0, 255), "int8_t": (-128, 127), "uint8_t": (0, 255),
-    "int16_t": (-(2 ** 15), 2 ** 15 - 1), "uint16_t": (0, 2 ** 16 - 1),
-    "int32_t": (-(2 ** 31), 2 ** 31 - 1), "uint32_t": (0, 2 ** 32 - 1),
-    "int64_t": (-(2 ** 63), 2 ** 63 - 1), "uint64_t": (0, 2 ** 64 - 1),
-}
+_INT_RANGES = ir.INTEGER_RANGES
 
 
 class Schemas:
@@ -143,6 +135,8 @@ def _member_type(schemas: Schemas, members: list[ir.Member], path: str) -> dict[
         return {}
     schema = schemas.of(m.type)
     for part in re.findall(r"\.(\w+)|\[(\d+)\]", path[len(m.name):]):
+        while "$ref" in schema:  # a named struct: its members are in the named schema
+            schema = schemas.named.get(schema["$ref"], {})
         if part[0]:
             schema = schema.get("properties", {}).get(part[0], {})
         else:

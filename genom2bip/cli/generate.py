@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -50,7 +51,9 @@ def verb_generate(args: argparse.Namespace) -> int:
         error(str(exc))
         return EXIT_ERRORS
     except OSError as exc:
-        error(f"cannot write {args.output}: {exc.strerror or exc}")
+        name = os.path.basename(str(exc.filename or ""))
+        writing = f" (writing {name})" if name and ".new." not in name and ".old." not in name else ""
+        error(f"cannot write {args.output}: {exc.strerror or exc}{writing}; {args.output} is left as it was")
         return EXIT_ERRORS
     warn_untimed(result.package)
     print(f"generated {result.directory}/ ({len(result.files)} files): root {result.root}, "

@@ -37,12 +37,15 @@ def verb_mission(args: argparse.Namespace) -> int:
     from genom2bip.mission import picture, report
     from genom2bip.mission.session import load_package, run_mission, write_trace
     from genom2bip.mission.spec import read_mission
+    from genom2bip.mission.world import check_world
 
     mission = read_mission(args.mission)
     world = Path(args.world) if args.world else mission.world
-    if world is not None and not world.is_file():
+    if world is not None and not os.path.lexists(world):
         error(f"{args.world or world}: no such world file")
         return EXIT_ERRORS
+    if world is not None:
+        check_world(world)
     if args.live and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         error("--live needs a display (DISPLAY is not set); the run is headless without it")
         return EXIT_ERRORS
@@ -51,11 +54,11 @@ def verb_mission(args: argparse.Namespace) -> int:
     except (FileNotFoundError, ImportError) as exc:
         error(str(exc))
         return EXIT_ERRORS
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
                       log=None if args.quiet else print)
     print(report.text(run))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
     trace = out / f"{mission.name}.jsonl"
     write_trace(run, trace)
     written = [str(trace)]

@@ -9,6 +9,7 @@ starts, and read back afterwards for the trajectory and the laser's hits.
 from __future__ import annotations
 
 import importlib
+import os
 import json
 import sys
 import time
@@ -18,6 +19,11 @@ from typing import Any
 
 from genom2bip.mission.runner import Outcome, Runner
 from genom2bip.mission.spec import Mission
+from runtime.errors import Genom2bipError
+
+
+class WorldError(Genom2bipError):
+    """The world file passed the checks, and the simulator refused it still."""
 
 
 @dataclass
@@ -40,7 +46,7 @@ class Run:
 
 def load_package(directory: str | Path):
     """The generated package in ``directory`` (e.g. gen/dala), imported by its name from its parent folder."""
-    directory = Path(directory).resolve()
+    directory = Path(os.path.realpath(directory))
     if not (directory / "__init__.py").is_file():
         raise FileNotFoundError(f"{directory}: no generated package here (run genom2bip DESCRIPTIONS -o gen first)")
     parent = str(directory.parent)
@@ -74,7 +80,10 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
     controller = Controller(package.package(), package.ROOT, package.INTERFACE, codels,
                             clock=None if realtime or live else VirtualClock())
     sim_world = world_module(controller)
-    session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
+    try:
+        session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
+    except Exception as exc:  # noqa: BLE001 - the simulator's own complaint, about the user's file
+        raise WorldError(f"{world}: the simulator cannot load this world: {type(exc).__name__}: {exc}") from None
     events: list[dict[str, Any]] = []
     controller.subscribe(lambda e: events.append(e) if e["event"] in ("report", "overrun", "codel_error") else None)
     started = time.perf_counter()

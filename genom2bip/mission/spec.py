@@ -18,15 +18,19 @@ steps:
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from genom2bip.yamlfile import compose_file, span_of
 from runtime.diagnostics import Reporter, Span
 
 STATUSES = ("ok", "rejected", "failed", "interrupted", "refused")
+#: Seconds of controller time a wait or a timeout may ask for: a day.
+MAX_SECONDS = 86_400.0
 EXPECT_KEYS = ("status", "rule", "exception", "by", "reason")
 UNTIL = ("queued", "started", "final")
 DEFAULT_TIMEOUT = 120.0
@@ -68,16 +72,18 @@ class _Reader:
         self.path, self.reporter = path, reporter
 
     def span(self, node: yaml.Node) -> Span:
-        m = node.start_mark
-        return Span(str(self.path), m.line + 1, m.column + 1, node.end_mark.line + 1, node.end_mark.column + 1)
+        return span_of(self.path, node)
 
     def error(self, node: yaml.Node, message: str) -> None:
         self.reporter.error(self.span(node), message)
 
     def number(self, node: yaml.Node, what: str) -> float | None:
         value = _plain(node)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
             self.error(node, f"{what}: a number of seconds (0 or more) expected, got {node.value!r}")
+            return None
+        if value > MAX_SECONDS:
+            self.error(node, f"{what}: at most {MAX_SECONDS:g} seconds (a day) expected, got {node.value!r}")
             return None
         return float(value)
 
@@ -168,7 +174,7 @@ class _Reader:
             return None
         world = None
         if "world" in fields:
-            world = (self.path.parent / str(fields["world"][1].value)).resolve()
+            world = Path(os.path.normpath(self.path.parent.absolute() / str(fields["world"][1].value)))
         names: set[str] = set()
         steps = [self.step(n, names) for n in fields["steps"][1].value]
         name = str(fields["mission"][1].value) if "mission" in fields else self.path.stem
@@ -179,19 +185,8 @@ def read_mission(path: str | Path, reporter: Reporter | None = None) -> Mission:
     """The mission in ``path``; raises DiagnosticError listing every problem (file:line:column)."""
     path = Path(path)
     reporter = reporter or Reporter()
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        reporter.error(Span(str(path), 0, 0), f"cannot read mission file: {exc.strerror or exc}")
-        reporter.raise_if_errors()
-    reporter.sources.add(str(path), text)
-    try:
-        root = yaml.compose(text)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        reporter.error(Span(str(path), mark.line + 1 if mark else 1, mark.column + 1 if mark else 1),
-                       f"not valid YAML: {exc.problem or exc.context}")
-        reporter.raise_if_errors()
+    ok, root = compose_file(path, reporter, "mission file")
+    reporter.raise_if_errors()
     mission = _Reader(path, reporter).mission(root)
     reporter.raise_if_errors()
     return mission

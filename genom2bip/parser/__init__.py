@@ -18,7 +18,8 @@ from runtime.diagnostics import Reporter, Span
 
 __all__ = ["parse_paths", "parse_text", "detect_dialect", "preprocess", "Preprocessed"]
 
-_COMMENT_OR_STRING = re.compile(r'/\*.*?\*/|//[^\n]*|"(?:[^"\\\n]|\\.)*"|\'(?:[^\'\\\n]|\\.)*\'', re.S)
+_COMMENT_OR_STRING = re.compile(r'/\*.*?\*/|//[^\n]*|"[^"\\\n]*(?:\\.[^"\\\n]*)*"|\'[^\'\\\n]*(?:\\.[^\'\\\n]*)*\'',
+                                re.S)
 _GENOM3 = re.compile(r"(?:^|[;}])\s*(?:component|interface)\s+[A-Za-z_]\w*\s*[{;]")
 _GENOM2_BLOCK = re.compile(r"(?:^|[;}])\s*(?:request|exec_task|poster)\s+[A-Za-z_]\w*\s*\{")
 _GENOM2_MODULE = re.compile(r"(?:^|[;}])\s*module\s+[A-Za-z_]\w*\s*\{\s*[A-Za-z_]\w*\s*:")

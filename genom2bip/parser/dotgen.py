@@ -25,6 +25,7 @@ from genom2bip.parser.dotgen_components import ComponentReader
 from genom2bip.parser.dotgen_services import ServiceReader
 from genom2bip.parser.dotgen_types import TypeReader
 from genom2bip.parser.expected import blank, enclosing_item, explain, terminal_words
+from genom2bip.parser.limits import TOO_DEEP, TOO_DEEP_HINT, deep_place
 from genom2bip.parser.preprocess import Preprocessed
 from runtime.diagnostics import Reporter
 
@@ -60,6 +61,10 @@ def parse_dotgen(source: Preprocessed, reporter: Reporter, description: Descript
     """Parse one preprocessed GenoM3 file and add what it declares to ``description``."""
     tree, syntax_errors = _parse_recovering(source, reporter)
     if tree is None:
+        return
+    deep = deep_place(tree)
+    if deep is not None:
+        reporter.error(source.span(*deep), TOO_DEEP, TOO_DEEP_HINT)
         return
     _Builder(source, reporter, description, quiet_names=syntax_errors > 0).run(tree)
 

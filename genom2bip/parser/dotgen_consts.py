@@ -3,13 +3,16 @@
 IDL constant expressions follow C: integer division truncates toward zero,
 ``%`` takes the sign of the dividend, shifts and bitwise operators need
 integers.  Problems raise :class:`ConstError`, which the caller turns into a
-diagnostic at the offending sub-expression.
+diagnostic at the offending sub-expression.  Every value is an IDL one: an
+integer of 64 bits at most, a finite floating-point number (:func:`checked`).
 """
 from __future__ import annotations
 
 import re
 from typing import Any
 
+from genom2bip.ir import INTEGER_RANGES
+from genom2bip.parser.limits import INT_MAX, literal_too_long, number_problem
 from runtime.diagnostics import Span
 
 
@@ -42,18 +45,30 @@ def unescape(body: str) -> str:
 
 
 def int_literal(text: str, span: Span) -> int:
-    """Decimal, ``0x`` hexadecimal or leading-zero octal, as C writes them."""
+    """Decimal, ``0x`` hexadecimal or leading-zero octal, as C writes them; 64 bits at most."""
     if text[:2] in ("0x", "0X"):
-        return int(text[2:], 16)
-    if len(text) > 1 and text[0] == "0":
+        digits, base = text[2:], 16
+    elif len(text) > 1 and text[0] == "0":
         if not all(c in "01234567" for c in text):
             raise ConstError(span, f"invalid octal constant '{text}'")
-        return int(text, 8)
-    return int(text)
+        digits, base = text, 8
+    else:
+        digits, base = text, 10
+    if literal_too_long(digits, base):
+        raise ConstError(span, number_problem(INT_MAX + 1, text) or "")
+    return checked(int(digits, base), span, text)
 
 
-def float_literal(text: str) -> float:
-    return float(text.rstrip("fFdD"))
+def float_literal(text: str, span: Span) -> float:
+    return checked(float(text.rstrip("fFdD")), span, text)
+
+
+def checked(value: Any, span: Span, shown: str | None = None) -> Any:
+    """``value`` when it is an IDL number (or not a number at all); ConstError for a wider integer or an infinity."""
+    problem = number_problem(value, shown)
+    if problem:
+        raise ConstError(span, problem)
+    return value
 
 
 def _kind(v: Any) -> str:
@@ -93,6 +108,8 @@ def binary(op: str, a: Any, b: Any, span: Span) -> Any:
     if op in ("<<", ">>"):
         if b < 0:
             raise ConstError(span, f"negative shift count {b} in constant expression")
+        if op == "<<" and a and b >= 64:  # computed, a shift by a billion would take gigabytes
+            raise ConstError(span, f"shift count {b} is out of range: an integer has 64 bits at most")
         return a << b if op == "<<" else a >> b
     if op == "&":
         return a & b
@@ -117,6 +134,7 @@ def unary(op: str, a: Any, span: Span) -> Any:
 
 _INTEGER_TYPES = {"short", "long", "long long", "unsigned short", "unsigned long", "unsigned long long", "octet"}
 _FLOAT_TYPES = {"float", "double"}
+FLOAT_MAX = 3.4028234663852886e38
 
 
 def coerce(type_name: str | None, value: Any, span: Span, what: str) -> Any:
@@ -126,10 +144,15 @@ def coerce(type_name: str | None, value: Any, span: Span, what: str) -> Any:
     if type_name in _INTEGER_TYPES:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConstError(span, f"{what} has type {type_name} but its value {value!r} is not an integer")
+        lo, hi = INTEGER_RANGES[type_name]
+        if not lo <= value <= hi:
+            raise ConstError(span, f"{what} has type {type_name}: {value} is out of its range, {lo} to {hi}")
         return value
     if type_name in _FLOAT_TYPES:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConstError(span, f"{what} has type {type_name} but its value {value!r} is not a number")
+        if type_name == "float" and abs(value) > FLOAT_MAX:
+            raise ConstError(span, f"{what} has type float: {value!r} is out of its range (3.4e38 in magnitude)")
         return float(value)
     if type_name == "boolean":
         if not isinstance(value, bool):

@@ -28,6 +28,7 @@ from genom2bip.ir import (
 )
 from genom2bip.parser import dotgen_consts as K
 from genom2bip.parser.dotgen_base import TIME_UNITS, DotgenReader, Symbol, unquote
+from genom2bip.parser.limits import MAX_DURATION, MIN_DURATION
 from runtime.diagnostics import Span
 
 
@@ -225,7 +226,7 @@ class TypeReader(DotgenReader):
         if kind == "int_lit":
             return K.int_literal(str(ch[0]), span)
         if kind == "float_lit":
-            return K.float_literal(str(ch[0]))
+            return K.float_literal(str(ch[0]), span)
         if kind == "char_lit":
             return unquote(str(ch[0]))
         if kind == "string_lit":
@@ -246,11 +247,11 @@ class TypeReader(DotgenReader):
                 raise K.ConstError(span, f"constant '{full}' has no value (its definition has an error)")
             return value
         if kind in ("neg", "pos", "inv"):
-            return K.unary({"neg": "-", "pos": "+", "inv": "~"}[kind], self.eval(ch[0]), span)
+            return K.checked(K.unary({"neg": "-", "pos": "+", "inv": "~"}[kind], self.eval(ch[0]), span), span)
         ops = {"bit_or": "|", "bit_xor": "^", "bit_and": "&", "shl": "<<", "shr": ">>", "add": "+", "sub": "-",
                "mul": "*", "div": "/", "mod": "%"}
         if kind in ops:
-            return K.binary(ops[kind], self.eval(ch[0]), self.eval(ch[1]), span)
+            return K.checked(K.binary(ops[kind], self.eval(ch[0]), self.eval(ch[1]), span), span)
         raise AssertionError(f"unexpected expression node {kind}")
 
     def const_int(self, node: Any, what: str, minimum: int = 1) -> int | None:
@@ -287,6 +288,10 @@ class TypeReader(DotgenReader):
         text = self.text_of(expr, unit if unit is not None else expr).strip()
         if unit is None:
             text += " s"
+        if seconds > MAX_DURATION or 0 < seconds < MIN_DURATION:
+            self.error(expr, f"{what} must be between 1 us and 1 day, not {text}",
+                       hint="durations are counted in whole microseconds")
+            return None
         return Duration(float(seconds), text)
 
     def strings(self, node: Tree) -> str:

@@ -230,7 +230,7 @@ def _found(tok: Token) -> str:
 
 # ---------------------------------------------------------------------- recovery
 
-_STRUCTURE = re.compile(r'"([^"\\\n]|\\.)*"|\'([^\'\\\n]|\\.)*\'|[;{}]')
+_STRUCTURE = re.compile(r'"[^"\\\n]*(?:\\.[^"\\\n]*)*"|\'[^\'\\\n]*(?:\\.[^\'\\\n]*)*\'|[;{}]')
 
 
 def _marks(text: str) -> list[tuple[int, str]]:

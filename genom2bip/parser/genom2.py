@@ -23,6 +23,7 @@ from genom2bip.parser.genom2_base import Block, Field, FieldError, grammar_parse
 from genom2bip.parser.genom2_components import ComponentReader
 from genom2bip.parser.genom2_services import RequestReader
 from genom2bip.parser.genom2_types import TypeReader
+from genom2bip.parser.limits import TOO_DEEP, TOO_DEEP_HINT, deep_place
 from runtime.diagnostics import Reporter
 
 # --------------------------------------------------------------------------- accepted fields
@@ -167,12 +168,17 @@ class Genom2Frontend(TypeReader, ComponentReader, RequestReader):
     def _parse_chunk(self, chunk: str, line: int, column: int, end: int, text: str) -> Tree | None:
         padded = "\n" * (line - 1) + " " * (column - 1) + chunk
         try:
-            return grammar_parser().parse(padded, start="start")
+            tree = grammar_parser().parse(padded, start="start")
         except UnexpectedInput as err:
             self._syntax_error(err, text, end)
             if _MODULE_HEAD.match(chunk):  # its requests are not "outside a module"
                 self.broken_module = True
             return None
+        deep = deep_place(tree)
+        if deep is not None:
+            self.reporter.error(self._span_at(*deep), TOO_DEEP, TOO_DEEP_HINT)
+            return None
+        return tree
 
     def _syntax_error(self, err: UnexpectedInput, text: str, end: int) -> None:
         if isinstance(err, UnexpectedToken) and err.token.type != "$END":

@@ -30,6 +30,7 @@ from genom2bip.ir import (
     UnionCase,
     UnionType,
 )
+from genom2bip.parser.limits import INT_MAX, literal_too_long, number_problem
 from runtime.diagnostics import Reporter, Span
 
 
@@ -67,9 +68,8 @@ def int_literal(text: str) -> int:
     GenoM2 has no octal: ``010`` is ten and ``09001`` is 9001.  Suffixes u/l are ignored.
     """
     digits = text.rstrip("uUlL")
-    if digits.lower().startswith("0x"):
-        return int(digits, 16)
-    return int(digits)
+    digits, base = (digits[2:], 16) if digits.lower().startswith("0x") else (digits, 10)
+    return int(digits, base) if not literal_too_long(digits, base) else INT_MAX + 1  # out of range: reported
 
 
 def string_literal(text: str) -> str:
@@ -151,6 +151,16 @@ def evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
 
 
 def _evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
+    """One node's value, a number within what a description may hold (64-bit integers, finite floats)."""
+    value = _value(tree, symbols, span_of)
+    literal = getattr(tree, "data", None) in ("int_lit", "float_lit")
+    problem = number_problem(value, str(tree.children[0]) if literal else None)
+    if problem:
+        raise CError(span_of(first_token(tree)), problem)
+    return value
+
+
+def _value(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
     if isinstance(tree, Token):
         raise CError(span_of(tree), f"expected a constant expression, found '{tree}'")
     kind = tree.data
@@ -188,8 +198,8 @@ def _evaluate(tree: Any, symbols: dict[str, Any], span_of: SpanOf) -> Any:
             raise CError(span_of(ch[1]), "division by zero in a constant expression")
         if op in ("|", "^", "&", "<<", ">>", "%") and not (isinstance(left, int) and isinstance(right, int)):
             raise CError(span_of(ch[1]), f"'{op}' needs integer operands")
-        if op in ("<<", ">>") and not 0 <= right < 4096:
-            raise CError(span_of(ch[1]), f"shift count {right} out of range")
+        if op in ("<<", ">>") and not 0 <= right < 64:
+            raise CError(span_of(ch[1]), f"shift count {right} out of range (0 to 63)")
         return _BINARY[op](left, right)
     if kind == "ternary":
         cond = _evaluate(ch[0], symbols, span_of)

@@ -94,7 +94,7 @@ class TypeReader(Genom2Reader):
         text = re.sub(r"/\*.*?\*/|//.*$", "", text).strip()
         if not text:
             return None
-        if re.fullmatch(r'"(\\.|[^"\\])*"', text):
+        if re.fullmatch(r'"[^"\\]*(?:\\.[^"\\]*)*"', text):
             return string_literal(text)
         try:
             tree = grammar_parser().parse(text, start="expr")

@@ -13,6 +13,29 @@ from runtime.controller.requests import Request, RequestError, Service
 from runtime.controller.schema import completed, problems, zero
 
 
+_KINDS = ((bool, "a boolean"), (str, "a string"), ((int, float), "a number"), (list, "an array"), (dict, "an object"))
+
+
+def _kind(value: Any) -> tuple[type | tuple[type, ...], str] | None:
+    return next(((t, name) for t, name in _KINDS if isinstance(value, t)), None)
+
+
+def unsuited(held: Any, value: Any) -> str | None:
+    """Why ``value`` may not replace ``held`` in the ids: another JSON kind (a number for a string...), else None.
+
+    The schemas check inputs; this holds the ids to their kinds even where a
+    schema says nothing (a package generated before member paths had one).
+    """
+    kind, new = _kind(held), _kind(value)
+    if kind is None or new is None:
+        return None
+    if kind != new:
+        return f"it holds {kind[1]}, not {new[1]} ({value!r})"
+    if isinstance(held, int) and not isinstance(held, bool) and isinstance(value, float):
+        return f"it holds an integer, not {value!r}"
+    return None
+
+
 def unstorable(root: dict[str, Any], member: str) -> str | None:
     """Why a value cannot be stored at the ids path ``member`` (None when it can)."""
     steps = path_steps(member)
@@ -57,7 +80,8 @@ def checked_inputs(svc: Service, inputs: Any, types: dict[str, Any], ids: dict[s
             errors.append(f"missing parameter {name!r}" + (f" ({p['doc']})" if p.get("doc") else ""))
     for p in params:
         if p["source"] == "ids" and p["name"] in values:
-            problem = unstorable(ids, p.get("member") or p["name"])
+            member = p.get("member") or p["name"]
+            problem = unstorable(ids, member) or unsuited(get_path(ids, path_steps(member)), values[p["name"]])
             if problem:
                 errors.append(f"parameter {p['name']!r} cannot be stored in ids member "
                               f"{p.get('member') or p['name']}: {problem}")

@@ -244,11 +244,27 @@ def parse_properties(text: str, file: str = "<properties>") -> list[RawProperty]
             ],
             sources,
         )
+    wide = next(tree.scan_values(lambda t: isinstance(t, Token) and t.type in ("INT", "SIGNED_INT")
+                                 and not _INT_MIN <= _bounded_int(t) <= _INT_MAX), None)
+    if wide is not None:
+        shown = wide if len(wide) <= 24 else wide[:20] + "..."
+        raise DiagnosticError([Diagnostic(Span(file, wide.line, wide.column, wide.end_line, wide.end_column),
+                                          f"{shown} is out of range: a number has 64 bits at most "
+                                          "(from -2**63 to 2**63 - 1)")], sources)
     props = _Build(file).transform(tree)
     out = []
     for k, p in enumerate(props, 1):
         out.append(RawProperty(p.name or f"property {k}", p.body, p.span, _slice(text, p.body.span)))
     return out
+
+
+#: Numbers of a property are compared with model data held in 64 bits (the C explorer's int64_t).
+_INT_MIN, _INT_MAX = -(2 ** 63), 2 ** 63 - 1
+
+
+def _bounded_int(token: Token) -> int:
+    """The token's integer, or one out of range for more digits than any int64 has (int() refuses 4300)."""
+    return int(token) if len(token.lstrip("-0")) <= 19 else _INT_MAX + 1
 
 
 def _unclosed_comment(text: str) -> tuple[int, int] | None:
@@ -281,13 +297,13 @@ def _slice(text: str, span: Span) -> str:
     start = sum(len(x) for x in lines[: span.line - 1]) + span.column - 1
     end = sum(len(x) for x in lines[: span.end_line - 1]) + span.end_column - 1
     import re
-    part = re.sub(r"\(\*(.|\n)*?\*\)", " ", text[start:end])
+    part = re.sub(r"\(\*[^*]*\*+(?:[^)*][^*]*\*+)*\)", " ", text[start:end])
     part = re.sub(r"--[^\n]*", " ", part)
     return " ".join(part.split())
 
 
 def _has_content(text: str) -> bool:
     import re
-    stripped = re.sub(r"\(\*(.|\n)*?\*\)", "", text)
+    stripped = re.sub(r"\(\*[^*]*\*+(?:[^)*][^*]*\*+)*\)", "", text)
     stripped = re.sub(r"--[^\n]*", "", stripped)
     return bool(stripped.strip())

@@ -79,11 +79,22 @@ def parse_inputs(body: bytes, what: str) -> Any:
     return value
 
 
+def whole_number(text: str) -> int | None:
+    """``text`` as the server writes a whole number (ASCII digits, no sign, space, ``_`` or leading zero), else None.
+
+    ``int()`` also reads ``1_0``, `` 10``, ``+10`` and other scripts' digits: each would name request 10.
+    """
+    if not (text.isascii() and text.isdigit()) or len(text) > 18 or (text[0] == "0" and len(text) > 1):
+        return None
+    return int(text)
+
+
 def request_id(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise RequestError(400, f"request id {text!r} is not a number") from None
+    number = whole_number(text)
+    if number is None:
+        raise RequestError(400, f"request id {text!r} is not a number as the server writes them "
+                                "(digits 0-9, no sign, no leading zero)")
+    return number
 
 
 def wait_time(request: HttpRequest) -> float | None:

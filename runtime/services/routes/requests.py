@@ -5,7 +5,7 @@ from starlette.requests import Request as HttpRequest
 from starlette.responses import Response
 
 from runtime.controller import RequestError
-from runtime.services.intake import request_id, wait_time
+from runtime.services.intake import request_id, wait_time, whole_number
 from runtime.services.jsonio import JSONResponse
 
 
@@ -13,7 +13,7 @@ async def requests_list(request: HttpRequest) -> Response:
     controller = request.app.state.controller
     status = request.query_params.get("status")
     text = request.query_params.get("limit", "100")
-    limit = int(text) if text.isdigit() and len(text) < 10 else 0
+    limit = whole_number(text) or 0 if len(text) < 10 else 0
     if limit < 1:
         raise RequestError(400, f"limit={text!r}: a number of requests from 1 to 999999999 expected")
     ids = sorted(controller.requests, reverse=True)
