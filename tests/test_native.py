@@ -226,6 +226,9 @@ def test_workers_building_the_same_library_at_once_all_load_a_whole_one(tmp_path
 
 # -- random models ---------------------------------------------------------------------------------
 
+#: Written with the compiled step: the C step's successors, in the Python step's order, state by state, on
+#: guards, counters, atom and compound priorities, rendezvous and broadcasts.  40 examples (cheap: each model
+#: is small and built at -O0).
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models())
 def test_random_models_have_the_same_successors(text):
