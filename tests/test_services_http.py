@@ -218,21 +218,24 @@ def test_the_event_stream_carries_reports_and_poster_writes(ctl):
     _, server, client = ctl
     events = []
 
-    def listen():
+    def odometry(event):
+        return event["event"] == "poster" and event["component"] == "RFLEX" and event["port"] == "Odo"
+
+    def listen():  # until the request's final report and a write of RFLEX's Odo (every 25 ms) have come
         for event in client.events(types="report,poster", timeout=10):
             events.append(event)
-            if event["event"] == "report" and event["final"]:
+            if any(e["event"] == "report" and e["final"] for e in events) and any(map(odometry, events)):
                 return
 
     reader = threading.Thread(target=listen)
     reader.start()
     until(lambda: server.app.state.hub.streams == 1)  # the stream is open: it will see every report
     rid = client.send("NDD", "SetParams")
-    reader.join(10)
+    reader.join(60)
     assert not reader.is_alive()
     reports = [(e["request"], e["status"]) for e in events if e["event"] == "report"]
     assert reports == [(rid, "queued"), (rid, "started"), (rid, "ok")]
-    assert any(e["event"] == "poster" and e["component"] == "RFLEX" and e["port"] == "Odo" for e in events)
+    assert any(map(odometry, events))
 
 
 def test_a_flood_of_requests_from_concurrent_clients_gets_exactly_one_final_report_each(ctl):
