@@ -17,8 +17,7 @@ from runtime.props.check import model_labels
 from tests.nativekit import needs_cc
 from tests.verifykit import NDD_NO_AFTER, ROOT, ndd_model, package
 
-# each round explores hundreds of thousands of states: built at the level users get (tests/conftest.py)
-pytestmark = [needs_cc, pytest.mark.usefixtures("shipped_c_level")]
+pytestmark = needs_cc
 
 
 def full(pkg, root, item):

@@ -23,8 +23,7 @@ from runtime.native.properties import compiled_check
 from runtime.props import read_property_text
 from tests.nativekit import needs_cc
 
-# each round explores hundreds of thousands of states: built at the level users get (tests/conftest.py)
-pytestmark = [needs_cc, pytest.mark.usefixtures("shipped_c_level")]
+pytestmark = needs_cc
 
 ROOT = Path(__file__).resolve().parents[1]
 DALA = ROOT / "descriptions" / "dala"

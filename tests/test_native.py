@@ -59,7 +59,8 @@ def test_same_search_on_verify_fixtures(name, root):
     same_search((verifykit.package(name), root))
 
 
-def test_ndd_has_55680_states_and_no_deadlock():
+def test_ndd_has_55680_states_and_no_deadlock(shipped_c_level):
+    # the level users get, on the whole search of the main model (the other tests build at -O0)
     pkg, root = verifykit.ndd_model()
     cs = compiled(StateSpace(pkg, root))
     result = cs.explore()
