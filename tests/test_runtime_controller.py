@@ -290,9 +290,9 @@ def test_the_simulated_dala_codels_drive_the_robot_to_its_goal():
     world_module(c).load()  # the open field, the robot at its start
     c.start()
 
-    def call(component, service, **inputs):
+    def call(component, service, **inputs):  # the virtual clock runs as fast as the machine: no bound on time
         req = c.submit(component, service, inputs)
-        c.wait(req.id, timeout=20)
+        c.wait(req.id, timeout=600)
         return req
 
     try:
@@ -302,10 +302,7 @@ def test_the_simulated_dala_codels_drive_the_robot_to_its_goal():
                 ("RFLEX", "Init", {}), ("RFLEX", "SetAcceleration", {"acceleration_max": 1.0})]:
             assert call(component, service, **inputs).status == "ok", (component, service)
         running = [c.submit(m, s, {}) for m, s in (("LaserRF", "Start"), ("Aspect", "Run"), ("RFLEX", "TrackSpeed"))]
-        t = time.monotonic()
-        while any(r.status != "running" for r in running):
-            assert time.monotonic() - t < 10
-            time.sleep(0.01)
+        until(lambda: all(r.status == "running" for r in running), timeout=600)
         goto = call("NDD", "GoTo", goal={"x": 3.0, "y": 2.0, "theta": 0.0})
         assert goto.final["status"] == "ok", goto.final
         where = c.data.poster("POM", "Pos").value["estimate"]
