@@ -89,8 +89,12 @@ def navigation_ready(client):
         until(lambda: client.request(rid)["status"] == "running")
 
 
-def until(predicate, timeout=5.0):
-    """Poll ``predicate`` until it holds (the controller runs in real time)."""
+def until(predicate, timeout=60.0):
+    """Poll ``predicate`` until it holds (the controller runs in real time).
+
+    It returns as soon as it holds; ``timeout`` only keeps a condition that never comes from hanging the suite,
+    so it stays far above what a loaded machine takes.
+    """
     deadline = time.monotonic() + timeout
     while not predicate():
         assert time.monotonic() < deadline, "condition not reached in time"

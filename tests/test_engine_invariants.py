@@ -172,6 +172,7 @@ def test_timed_invariants_use_the_same_at_and_from(tmp_path):
 
 
 def test_spin_refuses_a_model_with_invariants(capsys, tmp_path):
+    # said whether SPIN is installed or not: installing it would not help
     code = main(["verify", str(MODEL), "--root", "Unsafe()", "--engine", "spin", "--spin-dir", str(tmp_path)])
     err = capsys.readouterr().err
     assert code == 1

@@ -14,6 +14,7 @@ from genom2bip.parser import parse_paths
 from runtime.controller import Controller
 from runtime.controller.recovery import RecoveryError, on_violation
 from runtime.controller.timing import VirtualClock
+from runkit import until
 
 #: A 10 ms task whose codel sleeps when asked to, and a Stop that interrupts the activity.
 WATCHED = """
@@ -131,7 +132,8 @@ def test_the_event_reaches_an_http_client_and_the_recovery_service_is_requested(
     listener.start()
     try:
         hold = client.send("watched", "Hold")
-        time.sleep(0.3)  # the stream is open and the task runs quietly
+        until(lambda: server.app.state.hub.streams == 1)  # the stream is open
+        time.sleep(0.3)  # and the task runs quietly: no event for that while
         assert got == []
         client.call("watched", "Slow", {"seconds": 0.05})
         listener.join(5)

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -57,7 +59,8 @@ def test_same_search_on_verify_fixtures(name, root):
     same_search((verifykit.package(name), root))
 
 
-def test_ndd_has_55680_states_and_no_deadlock():
+def test_ndd_has_55680_states_and_no_deadlock(shipped_c_level):
+    # the level users get, on the whole search of the main model (the other tests build at -O0)
     pkg, root = verifykit.ndd_model()
     cs = compiled(StateSpace(pkg, root))
     result = cs.explore()
@@ -180,8 +183,53 @@ def test_the_library_is_cached_by_model(tmp_path, monkeypatch):
     assert sorted(os.listdir(tmp_path)) == sorted(libraries + [p[:-3] + ".c" for p in libraries])
 
 
+
+def test_the_optimisation_level_is_part_of_the_cache_key(tmp_path, monkeypatch):
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path))
+    for level in ("0", "2", "0"):
+        monkeypatch.setenv("GENOM2BIP_OPT", level)
+        cs = compiled(verifykit.space("Dining", "Table2()"))
+        result = cs.explore()
+        assert (result.states, result.deadlocks) == (6, [4])  # every level: the same search
+    assert len([p for p in os.listdir(tmp_path) if p.endswith(".so")]) == 2  # one per level, never mixed
+
+
+def test_an_unknown_optimisation_level_is_refused_by_name(tmp_path, monkeypatch):
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path))
+    monkeypatch.setenv("GENOM2BIP_OPT", "fast")
+    cs, note = native.compile_space(verifykit.space("Dining", "Table2()"))
+    assert cs is None
+    assert note == ("compiling the step failed (GENOM2BIP_OPT='fast': expected one of 0, 1, 2, 3 (gcc's -O level)): "
+                    "exploring with the Python step")
+    assert os.listdir(tmp_path) == []
+
+
+BUILD_ONE = """
+import sys
+from tests import verifykit
+from runtime.native.compiled import compile_space
+cs, note = compile_space(verifykit.space("Dining", "Table3()"))
+assert cs is not None, note
+print(cs.explore().states)
+"""
+
+
+def test_workers_building_the_same_library_at_once_all_load_a_whole_one(tmp_path):
+    """What ``pytest -n`` relies on: each writes under its own name and renames into place."""
+    env = dict(os.environ, GENOM2BIP_CACHE=str(tmp_path), PYTHONPATH=str(verifykit.ROOT))
+    procs = [subprocess.Popen([sys.executable, "-c", BUILD_ONE], env=env, cwd=verifykit.ROOT, text=True,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE) for _ in range(4)]
+    results = [p.communicate(timeout=600) for p in procs]
+    assert [p.returncode for p in procs] == [0] * 4, results
+    assert len({out for out, _ in results}) == 1
+    names = sorted(os.listdir(tmp_path))
+    assert len(names) == 2 and {n.rsplit(".", 1)[1] for n in names} == {"so", "c"}, names  # no partial file
+
 # -- random models ---------------------------------------------------------------------------------
 
+#: Written with the compiled step: the C step's successors, in the Python step's order, state by state, on
+#: guards, counters, atom and compound priorities, rendezvous and broadcasts.  40 examples (cheap: each model
+#: is small and built at -O0).
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models())
 def test_random_models_have_the_same_successors(text):

@@ -184,6 +184,8 @@ def test_strings_are_compared_for_equality_only():
         "string (strings are only compared with == and !=)" in note
 
 
+#: Written with floats in the C step: Python's float arithmetic, comparisons and errors (a division by zero,
+#: a float made an int past 64 bits) at the same states.  15 examples.
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models(floats=True))
 def test_random_models_with_floats_have_the_same_successors(text):

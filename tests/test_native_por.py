@@ -137,7 +137,12 @@ def test_request_counts_turn_the_reduction_off():
     assert not cs.por_available and cs.reduced == 0 and result.states == 3000
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: Written with the reduction (ample sets over strong stubborn sets); no bug is recorded as found by it.  It
+#: guards that the reduction never changes the deadlocks of an arbitrary model; the reduction's own defects are
+#: found by the ring, NDD and fixture tests above: the drawn models seldom reduce (2 of 40 had a proper ample
+#: set), and a stubborn set left without its dependencies went unnoticed here at 20 and at 60 examples alike,
+#: so the count is sized for cost: 30.
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models(atoms_range=(2, 5), connectors_range=(1, 5)))
 def test_random_models_keep_their_deadlocks(text):
     try:
@@ -194,7 +199,12 @@ def test_server_and_ndd_properties_keep_their_verdicts():
         assert answered >= 2
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: Written with the reduction under observers, then given the depth-first proviso and two threads (one place
+#: for all of them); no bug is recorded as found by it.  Like the deadlock test above it guards arbitrary
+#: models, not the reduction's corner cases (a stubborn set without its dependencies, or one that takes a
+#: visible interaction, went unnoticed at 15 examples as at 40); two threads keeping the shortest traces is
+#: checked on every drawn model.  20 examples.
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models(atoms_range=(2, 4), connectors_range=(1, 4)))
 def test_random_invariants_keep_their_verdicts(text):
     try:

@@ -162,6 +162,7 @@ def test_rule_model_properties_keep_their_verdicts_under_every_proviso():
     same_deadlocks(look)
 
 
+#: Written with the reduction's provisos for regular properties (observers of runs); 8 examples.
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models(atoms_range=(2, 4), connectors_range=(2, 4)))
 def test_random_models_keep_their_regular_verdicts(text):

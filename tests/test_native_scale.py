@@ -153,7 +153,10 @@ def test_threaded_build_keeps_every_mutable_global_per_thread():
     assert mutable == []
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: Written with the two-thread search and the compact store; no bug is recorded as found by it.  Each drawn
+#: model is searched three times (one thread, two, two over the compact store): what it guards is that
+#: threads and compaction never change states, deadlocks or shortest traces; 20 examples.
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(models(atoms_range=(2, 5), connectors_range=(1, 5)))
 def test_random_models_agree(text):
     try:

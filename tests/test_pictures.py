@@ -233,11 +233,19 @@ def test_unknown_format_and_missing_layout_engine_write_nothing(tmp_path, monkey
     with pytest.raises(PictureError, match=r"unknown picture format '\.jpeg'"):
         render("digraph x {}", tmp_path / "x.jpeg")
     monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    monkeypatch.setattr(sys.modules["runtime.pictures.render"], "script_dirs", lambda: [str(tmp_path / "empty")])
     with pytest.raises(PictureError, match="no Graphviz layout engine found: `pip install graphviz-pure`"):
         render("digraph x {}", tmp_path / "x.png")
     assert list(tmp_path.iterdir()) == []
     assert render("digraph x {}", tmp_path / "x.dot").read_text() == "digraph x {}"
 
+
+
+def test_the_layout_engine_installed_with_genom2bip_is_found_off_path(tmp_path, monkeypatch):
+    """An environment used without being activated has its commands off PATH: graphviz-pure is found all the same."""
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    out = render("digraph x { a -> b }", tmp_path / "x.svg")
+    assert "<svg" in out.read_text()[:500]
 
 def test_a_failing_layout_leaves_no_file(tmp_path):
     with pytest.raises(PictureError, match="layout engine .* failed"):

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pytest
 
-from runkit import ORIGIN, ndd_settings, serving_dala, until
-from runtime.controller import Controller
+from runkit import DALA_CODELS, ORIGIN, dala, ndd_settings, serving_dala, until
+from runtime.controller import Controller, VirtualClock
 
 GOAL = {"x": 1000.0, "y": 0.0, "theta": 0.0}  # far away: GoTo keeps running until something stops it
 
@@ -54,6 +54,28 @@ def test_a_waiting_rule_holds_the_request_then_lets_it_proceed(client):
     until(lambda: client.request(goto)["status"] == "running")
     assert [r["status"] for r in client.request(goto)["reports"]] == ["queued", "held", "started"]
 
+
+
+def test_a_request_that_arrives_while_the_next_step_is_chosen_is_not_reported_held():
+    """A request queued after the ready interactions were listed, before the look for held ones, is not held.
+
+    On a loaded machine the services thread often queues a request at that moment: POM.Reset, which
+    ``no-reset-while-navigating`` allows when no GoTo runs, was reported held by that rule.
+    """
+    pkg = dala()
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS), clock=VirtualClock())
+    choose, sent = controller.choice.choose, {}
+
+    def choose_then_receive(*args):
+        chosen = choose(*args)
+        if not sent:
+            sent["reset"] = controller.submit("POM", "Reset")
+        return chosen
+
+    controller.choice.choose = choose_then_receive
+    controller.run(duration=0.5)
+    # the stub codels leave pomReset out: Reset starts, then fails naming it
+    assert [r["status"] for r in sent["reset"].reports] == ["queued", "started", "failed"]
 
 def test_stopping_the_base_interrupts_the_navigation_in_another_module(client):
     sensors_and_settings(client)

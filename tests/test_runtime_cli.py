@@ -241,9 +241,11 @@ def launch():
             proc.communicate(timeout=10)
 
 
-def stopped(proc, signals=1, between=0.5, timeout=20):
-    """Send Ctrl-C ``signals`` times: (seconds the process took to end after the first, stdout, stderr)."""
-    t0 = time.monotonic()
+def stopped(proc, signals=1, between=0.5, timeout=120):
+    """Send Ctrl-C ``signals`` times: (stdout, stderr) once the process has ended.
+
+    ``timeout`` fails the test: far above what a loaded machine takes, far below the codels that never return.
+    """
     for k in range(signals):
         if k:
             time.sleep(between)
@@ -254,7 +256,7 @@ def stopped(proc, signals=1, between=0.5, timeout=20):
         proc.kill()
         out, err = proc.communicate()
         pytest.fail(f"still running {timeout} s after Ctrl-C: {out}{err}")
-    return time.monotonic() - t0, out, err
+    return out, err
 
 
 def running_work(url, add):
@@ -277,7 +279,7 @@ def test_a_codel_raising_system_exit_fails_its_request_and_the_controller_runs_o
     assert report["status"] == "failed" and report["message"] == "codel tickWork raised SystemExit: 4"
     assert client.info()["status"] == "running"
     assert client.call("tick", "Work", add=1, timeout=10)["status"] == "ok"
-    took, out, err = stopped(proc)
+    out, err = stopped(proc)
     assert proc.returncode == 0 and "Traceback" not in err, err
 
 
@@ -292,8 +294,7 @@ def test_ctrl_c_stops_within_a_bounded_time_whatever_the_codel_under_way_does(la
     gen, codels = tick_package
     proc, url = launch(gen, "tick", "--codels", codels)
     client, rid = running_work(url, add)
-    took, out, err = stopped(proc)
-    assert took < 6, took
+    out, err = stopped(proc)  # within stopped()'s bound: the codel never returns by itself
     assert line.format(rid=rid) in out, out
     assert re.search(r"stopped after \d+ steps; requests: 1 interrupted", out), out
     assert proc.returncode == status and "Traceback" not in err, err
@@ -304,9 +305,8 @@ def test_a_second_ctrl_c_exits_at_once_saying_what_it_interrupted(launch, tick_p
     proc, url = launch(gen, "tick", "--codels", codels)
     client, rid = running_work(url, 3)
     queued = client.send("tick", "Work", add=1)
-    took, out, err = stopped(proc, signals=2, between=0.3)
-    assert took < 1.5, took
-    assert proc.returncode == 130
+    out, err = stopped(proc, signals=2, between=0.3)
+    assert proc.returncode == 130  # the exit at once: the stop would wait 3 s for the codel, then exit 2
     assert f"second Ctrl-C: exiting at once; interrupted: codel tickWork of tick.Work (request {rid}); " \
            f"2 request(s) left without a final report: {rid}, {queued}" in err, err
     assert "Traceback" not in err
@@ -345,7 +345,7 @@ def test_every_accepted_request_gets_one_final_report_on_every_channel_when_stop
     poller.start()
     time.sleep(0.3)
     accepted = [r["id"] for r in client.requests(limit=1000)]
-    took, out, err = stopped(proc)
+    out, err = stopped(proc)
     poller.join(10)
     reader.join(10)
     assert proc.returncode == 0 and "Traceback" not in err, err
@@ -373,8 +373,8 @@ def test_an_event_stream_client_that_stopped_reading_does_not_hold_the_stop(laun
     stalled.connect(("127.0.0.1", port))
     stalled.sendall(b"GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")  # and never reads
     until(lambda: client.poster("LaserRF", "Scan")["seq"] > 20, timeout=20)
-    took, out, err = stopped(proc)
+    out, err = stopped(proc)
     stalled.close()
     assert proc.returncode == 0, err
-    assert took < 2.5, took
-    assert "Traceback" not in err and "CancelledError" not in err, err
+    # held, the stop would wait for the server's graceful-shutdown timeout (3 s) and say so
+    assert "Traceback" not in err and "CancelledError" not in err and "graceful shutdown exceeded" not in err, err

@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from runkit import DALA_CODELS, ROOT, dala, serving_dala
+from runkit import DALA_CODELS, ROOT, dala, serving_dala, until
 from runtime.services.client import Client, ServiceError
 from runtime.services.guard import TOKEN_ENV
 from runtime.services.server import MAX_BODY, ServiceServer
@@ -91,7 +91,7 @@ def test_with_a_token_every_request_must_carry_it(with_token, monkeypatch):
     got = []
     reader = threading.Thread(target=lambda: got.append(next(Client(server.url).events(types="report", timeout=10))))
     reader.start()
-    time.sleep(0.3)
+    until(lambda: server.app.state.hub.streams == 1)  # the stream is open: it will see the report
     rid = Client(server.url).send("NDD", "SetParams")
     reader.join(10)
     assert got and got[0]["request"] == rid

@@ -4,7 +4,6 @@ from __future__ import annotations
 import http.client
 import json
 import threading
-import time
 from collections import Counter
 
 import pytest
@@ -216,35 +215,36 @@ def test_post_with_wait_returns_the_ended_request(ctl):
 
 
 def test_the_event_stream_carries_reports_and_poster_writes(ctl):
-    _, _, client = ctl
+    _, server, client = ctl
     events = []
 
-    def listen():
+    def odometry(event):
+        return event["event"] == "poster" and event["component"] == "RFLEX" and event["port"] == "Odo"
+
+    def listen():  # until the request's final report and a write of RFLEX's Odo (every 25 ms) have come
         for event in client.events(types="report,poster", timeout=10):
             events.append(event)
-            if event["event"] == "report" and event["final"]:
+            if any(e["event"] == "report" and e["final"] for e in events) and any(map(odometry, events)):
                 return
 
     reader = threading.Thread(target=listen)
     reader.start()
-    time.sleep(0.2)
+    until(lambda: server.app.state.hub.streams == 1)  # the stream is open: it will see every report
     rid = client.send("NDD", "SetParams")
-    reader.join(10)
+    reader.join(60)
     assert not reader.is_alive()
     reports = [(e["request"], e["status"]) for e in events if e["event"] == "report"]
     assert reports == [(rid, "queued"), (rid, "started"), (rid, "ok")]
-    assert any(e["event"] == "poster" and e["component"] == "RFLEX" and e["port"] == "Odo" for e in events)
+    assert any(map(odometry, events))
 
 
 def test_a_flood_of_requests_from_concurrent_clients_gets_exactly_one_final_report_each(ctl):
     controller, server, client = ctl
     finals: Counter = Counter()
-    listening = threading.Event()
     expected = 2000
     done = threading.Event()
 
     def listen():
-        listening.set()
         for event in client.events(types="report", timeout=60):
             if event["final"]:
                 finals[event["request"]] += 1
@@ -254,8 +254,7 @@ def test_a_flood_of_requests_from_concurrent_clients_gets_exactly_one_final_repo
 
     reader = threading.Thread(target=listen, daemon=True)
     reader.start()
-    listening.wait(5)
-    time.sleep(0.2)
+    until(lambda: server.app.state.hub.streams == 1)  # the stream is open: it will see every final report
     services = [("NDD", "SetSpeed", {"max_speed": {"v": 0.2, "w": 0.3}}),
                 ("NDD", "SetSpeed", {"max_speed": {"v": -1.0}}),  # rejected by its validate codel
                 ("NDD", "SetParams", {}), ("NDD", "SetDataSource", {"obs": "Obs"}), ("Aspect", "SetParams", {}),
@@ -278,14 +277,12 @@ def test_a_flood_of_requests_from_concurrent_clients_gets_exactly_one_final_repo
             with lock:
                 ids.append(rid)
 
-    t0 = time.monotonic()
     senders = [threading.Thread(target=flood, args=(k,)) for k in range(8)]
     for s in senders:
         s.start()
-    for s in senders:
-        s.join(40)
-    assert done.wait(30), f"{sum(finals.values())} final reports of {expected}"
-    elapsed = time.monotonic() - t0
+    for s in senders:  # a few seconds here; the bounds only keep a lost report from hanging the suite
+        s.join(300)
+    assert done.wait(300), f"{sum(finals.values())} final reports of {expected}"
     assert len(ids) == expected == len(set(ids))
     assert set(finals) == set(ids) and set(finals.values()) == {1}
     assert refused == [422] * len(refused) and len(refused) == 8 * (expected // 8 // 50)
@@ -294,7 +291,6 @@ def test_a_flood_of_requests_from_concurrent_clients_gets_exactly_one_final_repo
     for rid in ids[::97]:
         reports = client.request(rid)["reports"]
         assert [r["final"] for r in reports].count(True) == 1
-    assert elapsed < 40
 
     def servo_accounted():  # every deadline of the 25 ms task so far: a period run or a period counted missed
         servo = next(t for t in client.tasks() if t["task"] == "RFLEX.servo")
@@ -344,14 +340,12 @@ def test_an_event_stream_blocked_on_a_full_socket_does_not_hold_the_stop(capfd):
         assert sent < 3000, f"the stalled client's buffers did not fill: {unsent[-5:]}"
         for _ in range(200):  # and more, that the server can only keep: its writer to the stream waits
             client.send("NDD", "SetSpeed")
-        t0 = time.monotonic()
         server.stop()
-        took = time.monotonic() - t0
     finally:
         stalled.close()
         server.stop()
         controller.stop()
-    assert took < 2.5, took
+    # held, the stop would wait for the server's graceful-shutdown timeout (3 s) and say so
     assert not server._thread.is_alive()
     err = capfd.readouterr().err
-    assert "Traceback" not in err and "CancelledError" not in err, err
+    assert "Traceback" not in err and "CancelledError" not in err and "graceful shutdown exceeded" not in err, err

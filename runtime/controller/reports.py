@@ -120,14 +120,25 @@ class Reports:
                     self.report(req, "interrupted", by=None, by_request=None, message=f"{req.label}: {why}{cut}",
                                 **failure_fields(req.failure or {}))
 
-    def held(self, waits: dict[str, tuple[list[str], list[Service]]], answerable: set[str], state: tuple) -> None:
-        """A queued request that only a wait rule keeps from starting gets one intermediate ``held`` report."""
+    def queue_heads(self, waits: dict[str, tuple[list[str], list[Service]]]) -> dict[str, Request]:
+        """The first queued request of each service that a wait rule may hold, by service label."""
+        with self.lock:
+            return {label: svc.queue[0] for label in waits
+                    if (svc := self.services.get(label)) is not None and svc.queue}
+
+    def held(self, waits: dict[str, tuple[list[str], list[Service]]], answerable: set[str], state: tuple,
+             seen: dict[str, Request]) -> None:
+        """A queued request that only a wait rule keeps from starting gets one intermediate ``held`` report.
+
+        ``seen``: the queue heads from before ``answerable`` was computed; a request queued since then
+        may well be answerable, so it waits for the next look.
+        """
         for label, (rules, reads) in waits.items():
             svc = self.services.get(label)
             if svc is None or not svc.queue or svc.current is not None or label in answerable:
                 continue
             head = svc.queue[0]
-            if head.held:
+            if head.held or seen.get(label) is not head:
                 continue
             head.held = True
             self.report(head, "held", reason="rule", rules=rules, status_of=status_of(reads, state),

@@ -194,9 +194,11 @@ class Running(Takeover):
 
     def _choose(self, now: float) -> tuple[Interaction | None, StepInfo | None, float | None]:
         """What fires next and when the next period is due (:class:`~runtime.controller.choice.Choice`)."""
+        # a request queued while the ready interactions are listed was not seen by them: it is not held (yet)
+        seen = self.reports.queue_heads(self.meanings.waits) if self.meanings.waits else {}
         inter, info, wake_at, answerable = self.choice.choose(self.state, now, self.steps, self.frozen)
-        if self.meanings.waits:
-            self.reports.held(self.meanings.waits, answerable, self.state)
+        if seen:
+            self.reports.held(self.meanings.waits, answerable, self.state, seen)
         return inter, info, wake_at
 
     def _fire(self, inter: Interaction, info: StepInfo) -> None:

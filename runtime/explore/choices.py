@@ -40,7 +40,7 @@ class Choice:
 
 
 def codel_choices(package: Package) -> dict[str, Choice]:
-    """One :class:`Choice` per codel extern: its yields, then its exceptions (DESIGN.md §4).
+    """One :class:`Choice` per codel extern: its yields, then its exceptions (docs/engine.md).
 
     A codel that declares no outcome at all can only fail: its domain is the
     undeclared outcome, which the activity treats as a failure.

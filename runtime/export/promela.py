@@ -217,7 +217,12 @@ def write_promela(space: StateSpace, monitors: list[Monitor] | None = None, hidd
     ``hidden=False`` declares temporaries as ordinary variables reset after
     each step (SPIN's multi-core mode does not accept hidden ones).
     """
+    refuse_untranslatable(space)
+    return PromelaWriter(space, monitors, hidden).write()
+
+
+def refuse_untranslatable(space: StateSpace) -> None:
+    """A PromelaError for a model the translation does not take, said before SPIN is looked for or run."""
     if space.engine.invariants:
         raise PromelaError("the Promela translation does not check atom invariants: verify with --engine compiled "
                            "or python")
-    return PromelaWriter(space, monitors, hidden).write()

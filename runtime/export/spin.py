@@ -22,7 +22,7 @@ from pathlib import Path
 
 from runtime.explore.choices import ExploreError
 from runtime.explore.space import StateSpace, Step
-from runtime.export.promela import Monitor, write_promela
+from runtime.export.promela import Monitor, refuse_untranslatable, write_promela
 
 #: pan's search depth bound (its default, 10 000, is too small for our models; the stack costs ~50 bytes a level).
 DEPTH = 1_000_000
@@ -109,6 +109,7 @@ class SpinRun:
 
     def __init__(self, space: StateSpace, workdir: str | Path | None = None, cores: int = 1,
                  bitstate: bool = False, hash_bits: int = 27, keep: bool = False, opt: str = "-O2") -> None:
+        refuse_untranslatable(space)  # installing SPIN would not help: say so first
         if spin_path() is None:
             raise SpinError("spin is not installed (Debian: apt-get install spin); use --engine explore")
         if shutil.which("gcc") is None and shutil.which("cc") is None:

@@ -21,6 +21,8 @@ from runtime.engine.source import dumped
 
 HERE = Path(__file__).parent
 FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w")
+#: GENOM2BIP_OPT's values: gcc's -O levels.
+LEVELS = ("0", "1", "2", "3")
 #: Added for the multi-threaded search (search.c's PARALLEL: per-thread scratch, atomic shared counters).
 PARALLEL_FLAGS = ("-DPARALLEL", "-pthread")
 #: Added when the C text is dumped (GENOM2BIP_DUMP): line tables for gdb and perf; the code is the same.
@@ -37,6 +39,15 @@ def compiler() -> str | None:
         if name and shutil.which(name):
             return shutil.which(name)
     return None
+
+
+def flags(parallel: bool = False) -> tuple[str, ...]:
+    """gcc's flags: :data:`FLAGS` with the level of ``GENOM2BIP_OPT`` if set, the threaded build's if ``parallel``."""
+    level = os.environ.get("GENOM2BIP_OPT", "").strip()
+    if level and level not in LEVELS:
+        raise BuildError(f"GENOM2BIP_OPT={level!r}: expected one of {', '.join(LEVELS)} (gcc's -O level)")
+    base = tuple(f"-O{level}" if f == "-O2" and level else f for f in FLAGS)
+    return base + PARALLEL_FLAGS if parallel else base
 
 
 def cache_dir() -> Path:
@@ -58,11 +69,11 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
     debugger finds the lines it was built from.  With ``GENOM2BIP_DUMP=DIR`` it is written to DIR instead
     (named after ``what``) and compiled from that file with ``-g``: gdb and perf then show its lines.
     """
-    flags = FLAGS + PARALLEL_FLAGS if parallel else FLAGS
+    opts = flags(parallel)
     dump = dumped(source, what, ".c")
     if dump is not None:
-        flags += DEBUG_FLAGS
-    parts = (source, _headers(), " ".join(flags), cc) + ((str(dump),) if dump is not None else ())
+        opts += DEBUG_FLAGS
+    parts = (source, _headers(), " ".join(opts), cc) + ((str(dump),) if dump is not None else ())
     key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
     out_dir = cache_dir()
     lib = out_dir / f"step-{key[:24]}.so"
@@ -76,7 +87,7 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
         return lib
     with tempfile.TemporaryDirectory(prefix="genom2bip-c-") as tmp:
         so = Path(tmp) / "model.so"
-        proc = subprocess.run([cc, *flags, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
+        proc = subprocess.run([cc, *opts, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
                               capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{proc.stderr[-4000:]}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import sysconfig
 import tempfile
 from pathlib import Path
 
@@ -22,13 +23,23 @@ class PictureError(Genom2bipError):
     """A picture that cannot be written: unknown format, no layout engine, or the engine failed."""
 
 
+def script_dirs() -> list[str]:
+    """Where pip puts the commands of this Python's packages, which PATH may not name (an environment used
+    without being activated, ``~/.local/bin`` on a fresh Debian)."""
+    found = [sysconfig.get_path("scripts")]
+    if f"{os.name}_user" in sysconfig.get_scheme_names():
+        found.append(sysconfig.get_path("scripts", f"{os.name}_user"))
+    return found
+
+
 def layout_command() -> list[str] | None:
     """The command that lays out DOT text: ``dot``, else ``graphviz-pure``; None when neither is installed."""
     for name in ("dot", "graphviz-pure"):
         found = shutil.which(name)
         if found:
             return [found]
-    return None
+    found = shutil.which("graphviz-pure", path=os.pathsep.join(script_dirs()))  # installed with genom2bip
+    return [found] if found else None
 
 
 def render(text: str, path: str | Path, *, fixed_positions: bool = False) -> Path:

@@ -1,0 +1,28 @@
+"""What every test shares, whoever wrote it and whichever worker runs it (docs/architecture.md, *Tests*).
+
+* The compiled explorer's gcc level, ``GENOM2BIP_OPT`` (runtime/native/build.py): the tests check
+  states, verdicts and traces, never speed, and most of them compile far more than they explore, so the
+  suite builds at :data:`TEST_LEVEL` unless the run sets the variable itself
+  (``GENOM2BIP_OPT=2 python -m pytest`` tests the level users get throughout).  Set in ``os.environ``, it
+  reaches the commands the tests start.  :func:`shipped_c_level` gives a test the level users get.
+* The compiled-C cache (``$XDG_CACHE_HOME/genom2bip/native``) is shared by the workers of ``-n``: a
+  library is written under a name of its own and renamed into place, so two workers building the same
+  model at once both load a whole library (tests/test_native.py checks it).
+"""
+from __future__ import annotations
+
+import os
+
+import pytest
+
+#: gcc's level for the suite's builds.
+TEST_LEVEL = "0"
+os.environ.setdefault("GENOM2BIP_OPT", TEST_LEVEL)
+
+
+@pytest.fixture
+def shipped_c_level(monkeypatch):
+    """Build at the level users get (-O2): a test of what the shipped build computes, or whose exploration costs
+    more than its builds (measure first: the localization tests build about 150 libraries, and take about a
+    quarter of the CPU time at -O0)."""
+    monkeypatch.setenv("GENOM2BIP_OPT", "2")
