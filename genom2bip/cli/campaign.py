@@ -1,0 +1,171 @@
+"""``genom2bip campaign FILE``: every job of a campaign file on Dask workers, one JSON line each, a summary table,
+a picture per numeric axis (docs/verification.md, Campaigns).
+
+Exit status: 0 every job done and every check holds, 4 a check is violated
+(or meets a model error), 5 a job is inconclusive, failed or crashed, 1 bad
+input (the campaign file, a model, a property file: nothing is run or
+written), 130 interrupted (what is done is written; the same command runs the
+rest).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from genom2bip.cli.verbs import (
+    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error, print_diagnostics, verb,
+)
+
+EXIT_INTERRUPTED = 130
+#: A job's answer -> the exit status it asks for.
+EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("file", metavar="FILE", help="a campaign file (YAML): models, checks, values to vary over")
+    parser.add_argument("-o", "--output", metavar="DIR",
+                        help="where results.jsonl, jobs/ and the pictures go (default: out/<campaign name>); "
+                             "the jobs whose results are there already are not run again")
+    parser.add_argument("--set", dest="settings", metavar="NAME=VALUE", action="append", default=[],
+                        help="the value of ${NAME} in the campaign file's paths (e.g. --set corpus=DIR)")
+    parser.add_argument("--list", action="store_true", help="list the jobs and run nothing")
+    parser.add_argument("--retry-failed", action="store_true",
+                        help="run again the jobs recorded as failed or crashed (the others done are kept)")
+    cluster = parser.add_argument_group("the Dask cluster (default: a local one, a worker process per core)")
+    cluster.add_argument("--scheduler", metavar="ADDRESS",
+                         help="a running cluster's scheduler, tcp://HOST:PORT or tls://HOST:PORT")
+    cluster.add_argument("--workers", type=int, metavar="N", help="local cluster: N worker processes")
+    cluster.add_argument("--listen", metavar="HOST", default="127.0.0.1",
+                         help="local cluster: the address its scheduler and workers listen on (default: loopback)")
+    cluster.add_argument("--tls-ca-file", metavar="FILE", help="TLS: the certificate authority of the cluster")
+    cluster.add_argument("--tls-cert", metavar="FILE", help="TLS: this client's certificate")
+    cluster.add_argument("--tls-key", metavar="FILE", help="TLS: this client's private key")
+
+
+def _settings(items: list[str]) -> dict[str, str]:
+    out = {}
+    for item in items:
+        name, eq, value = item.partition("=")
+        if not eq or not name.isidentifier():
+            error(f"--set {item}: NAME=VALUE expected")
+            raise Failure(EXIT_USAGE)
+        out[name] = value
+    return out
+
+
+def _cluster(args: argparse.Namespace):
+    from genom2bip.campaign.cluster import ClusterSpec
+
+    if args.workers is not None and args.workers < 1:
+        error("--workers must be >= 1")
+        raise Failure(EXIT_USAGE)
+    if args.scheduler and (args.workers is not None or args.listen != "127.0.0.1"):
+        error("--workers and --listen belong to the local cluster: drop them with --scheduler")
+        raise Failure(EXIT_USAGE)
+    tls = (args.tls_ca_file, args.tls_cert, args.tls_key)
+    if any(tls) and not (all(tls) and args.scheduler):
+        error("TLS takes --scheduler tls://HOST:PORT with --tls-ca-file, --tls-cert and --tls-key together")
+        raise Failure(EXIT_USAGE)
+    return ClusterSpec(args.scheduler, args.workers, args.listen, *tls)
+
+
+@verb("campaign", help="run a campaign of checks (a YAML file) on Dask workers: JSON lines, a table, pictures",
+      arguments=_arguments)
+def verb_campaign(args: argparse.Namespace) -> int:
+    """Read and expand the campaign (nothing runs on an error), run the jobs not done yet, report them all."""
+    from pathlib import Path
+
+    from genom2bip.campaign.jobs import expand
+    from genom2bip.campaign.output import Output
+    from genom2bip.campaign.spec import read_campaign
+
+    settings, spec = _settings(args.settings), _cluster(args)
+    campaign = read_campaign(args.file, settings)
+    expansion = expand(campaign)
+    if expansion.warnings:
+        print_diagnostics(expansion.warnings, None)
+    _warn_models(expansion)
+    jobs = expansion.jobs
+    if args.list:
+        for job in jobs:
+            print(f"{job.id}  {job.title}  ({job.method})")
+        print(f"{len(jobs)} jobs")
+        return EXIT_OK
+    out = Output.open(Path(args.output) if args.output else Path("out") / campaign.name)
+    try:
+        if out.dropped:
+            print(f"note: {out.dropped} unfinished line(s) of {out.results} dropped: those jobs run again")
+        todo = [j for j in jobs if j.id not in out.records
+                or (args.retry_failed and out.records[j.id].get("status") != "done")]
+        print(f"campaign {campaign.name}: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {out.results}, "
+              f"{len(todo)} to run", flush=True)
+        run = _run(todo, spec, out) if todo else None
+        return _report(campaign, jobs, out, run)
+    finally:
+        out.close()
+
+
+def _run(todo, spec, out):
+    """The jobs on the cluster, each record written as it comes; the cluster closed whatever happens."""
+    from genom2bip.campaign.cluster import connect, describe, run
+    from genom2bip.campaign.report import Display
+
+    try:
+        client, cluster = connect(spec)
+    except (OSError, TimeoutError) as exc:
+        error(f"cannot reach the Dask scheduler {spec.scheduler}: {exc}")
+        raise Failure(EXIT_ERRORS) from None
+    display = Display(len(todo))
+    try:
+        print(describe(client, cluster), flush=True)
+        found = run(todo, client, out.write, display)
+        found.where = describe(client, cluster)
+        return found
+    finally:
+        display.close()
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _report(campaign, jobs, out, run) -> int:
+    """The summary table, the pictures, what an interruption left undone; the exit status."""
+    from genom2bip.campaign.pictures import draw
+    from genom2bip.campaign.report import summary
+
+    print()
+    counts = summary(jobs, out.records)
+    if run is not None:
+        busy = sum(r.get("seconds") or 0 for r in run.written)
+        print(f"{len(run.written)} jobs run in {run.seconds:.1f} s of wall clock ({busy:.1f} s of job time)")
+    for path in draw(jobs, out.records, out.directory):
+        print(f"picture: {path}")
+    print(f"results: {out.results}")
+    if run is not None and run.interrupted:
+        print(f"interrupted: {len(run.written)} jobs done in this run and written; {len(run.undone)} not done:",
+              file=sys.stderr)
+        for job in run.undone[:10]:
+            print(f"  {job.title}", file=sys.stderr)
+        if len(run.undone) > 10:
+            print(f"  … and {len(run.undone) - 10} more", file=sys.stderr)
+        print(f"run the same command again to run them (the {len(out.records)} results written are kept)",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return max((EXITS.get(word, EXIT_INCONCLUSIVE) for word in counts), default=EXIT_OK)
+
+
+def _warn_models(expansion) -> None:
+    """The warnings of the models built to name the jobs (codels without WCET), once per model."""
+    from genom2bip.verify.model import untimed_codels
+
+    seen = set()
+    for model in expansion.built.values():
+        if model is None:
+            continue
+        for group in model.warnings:
+            print_diagnostics(group.diagnostics, group.sources)
+        default, codels = untimed_codels(model.package)
+        if codels and model.title not in seen:
+            seen.add(model.title)
+            print(f"genom2bip: warning: {model.title}: codels without wcet take {default / 1000:g} ms: "
+                  f"{', '.join(codels)}", file=sys.stderr)
