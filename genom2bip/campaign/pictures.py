@@ -47,7 +47,8 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
         if key not in point:
             continue
         rest = " ".join(f"{k}={v}" for k, v in job.point if k != key)
-        name = f"{job.model} {job.target}" + (f" [{rest}]" if rest else "")
+        what = job.target if job.target.startswith(job.model) else f"{job.model} {job.target}"
+        name = what + (f" [{rest}]" if rest else "")
         series.setdefault(name, []).append((shown(kind, kind.read(point[key])), records.get(job.id)))
     extra = _figures(jobs, records, key, kind)
     panels = 2 + bool(extra)
@@ -75,7 +76,7 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     states.set_ylabel("states")
     states.grid(alpha=0.3)
     if len(names) <= 12 and states.lines:
-        states.legend(fontsize=7)
+        states.legend(fontsize=7, loc="best", framealpha=0.7)
     if extra:
         for name, points in extra.items():
             xs, ys = zip(*sorted(points))

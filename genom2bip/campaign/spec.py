@@ -311,7 +311,7 @@ class _Reader:
                     self.error(item, f"{what}vary: {key}: {exc}, got {value!r}")
                     ok = False
                 values.append(value)
-            if len({repr(p) for p in parsed}) < len(parsed):
+            if any(p == q for i, p in enumerate(parsed) for q in parsed[:i]):
                 self.error(v, f"{what}vary: {key}: a value is given twice")
                 ok = False
             if ok:
@@ -376,19 +376,19 @@ class _Reader:
         own = self.axes(fields["vary"][1], f"{what}: ") if "vary" in fields else []
         spec.axes = [a for a in axes if all(a.key != b.key for b in own)] + own
         if model in models:
-            self._fits(spec, kind, models[model], fields["model"][1])
+            self._fits(spec, kind, models[model], fields["model"][1], what)
         return spec
 
-    def _fits(self, spec: CheckSpec, kind, models: list[ModelSpec], node) -> None:
+    def _fits(self, spec: CheckSpec, kind, models: list[ModelSpec], node, what: str) -> None:
         """A timed check or a timed axis on a model without time is refused where the check names it."""
         untimed = [m.name for m in models if not m.params.timed]
         if not untimed:
             return
         if kind.timed:
-            self.error(node, f"check {spec.kind}: model {spec.model} is not timed", "add timed: true to the model")
+            self.error(node, f"{what}: model {spec.model} is not timed", "add timed: true to the model")
         for axis in spec.axes:
             if axis.kind.timed:
-                self.reporter.error(axis.span, f"axis {axis.key} changes only a timed model, and model "
+                self.reporter.error(axis.span, f"{what}: axis {axis.key} changes only a timed model, and model "
                                                f"{spec.model} is not timed", "add timed: true to the model")
 
     def campaign(self, root: yaml.Node | None) -> Campaign | None:
