@@ -204,3 +204,13 @@ def test_a_sweep_point_is_the_model_built_with_its_value(tmp_path, axis, value, 
     assert (record["status"], record["verdict"], record["target"]) == ("done", verdict, "Cruise.loop.overrun")
     assert record["point"] == {axis: value}
     assert record["result"]["trace"] is None if verdict == "holds" else record["result"]["trace"]["timed"]
+
+
+def test_a_job_stopped_by_its_limit_is_recorded_as_inconclusive_with_the_limit(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text(f"models:\n  ndd: {{paths: [{DALA / 'NDD.gen'}]}}\n"
+                    "checks: [{check: deadlock, model: ndd, options: {max-states: 100}}]\n")
+    (job,) = expand(read_campaign(path)).jobs
+    record = run_job(job)
+    assert (record["status"], record["verdict"], record["limit"]) == ("done", "inconclusive", "max-states")
+    assert record["options"] == {"max_states": 100} and record["figures"]["states"] <= 101

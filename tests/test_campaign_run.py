@@ -72,7 +72,7 @@ def test_a_sweep_writes_a_line_per_job_a_table_a_picture_and_a_second_run_resume
     violated = by_point[10, "Cruise.loop.overrun"]
     assert json.loads((out / violated["trace"]).read_text())["trace"]["timed"]
     # the table: a row per job, the answers counted; the picture of the numeric axis
-    assert "model   check     target" in proc.stdout and "define.PERIOD=15" in proc.stdout
+    assert "model   check     method   target" in proc.stdout and "define.PERIOD=15" in proc.stdout
     assert "9 jobs: " in proc.stdout and f"picture: {out / 'define.PERIOD.png'}" in proc.stdout
     assert (out / "define.PERIOD.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -37,7 +37,8 @@ class Job:
     @property
     def title(self) -> str:
         where = " ".join(f"{k}={v}" for k, v in self.point)
-        return f"{self.model} {self.check} {self.target}" + (f" [{where}]" if where else "")
+        how = f" ({self.method})" if self.method != "explore" else ""
+        return f"{self.model} {self.check} {self.target}{how}" + (f" [{where}]" if where else "")
 
     def parameters(self) -> dict[str, Any]:
         """What the results file says of the job: the model, the check, the point."""

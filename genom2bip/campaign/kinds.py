@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable
 
 if TYPE_CHECKING:
-    from genom2bip.campaign.spec import CheckSpec
     from genom2bip.verify import CheckResult, Model, SearchOptions
 
 #: How a check is decided, in ``verify``'s words: the explorer, or (``compositional``) deadlock freedom by
@@ -38,7 +37,8 @@ class CheckKind:
     keys: tuple[str, ...]  # besides check, model, method, options, vary
     required: tuple[str, ...]
     # the targets, each a name, or (kind, name) for a job of another kind that answers it
-    targets: Callable[["CheckSpec", Callable[[], "Model"]], list[str | tuple[str, str]]]
+    # (a check of the file: genom2bip.campaign.spec.CheckSpec, its model on the first point) -> targets
+    targets: Callable[[Any, Callable[[], "Model"]], list[str | tuple[str, str]]]
     run: Callable[["Model", Any, "SearchOptions"], "CheckResult"]
     timed: bool = False  # needs a timed model
     # numbers a result gives besides states and seconds (a response time per task): a record's ``values``, plotted
@@ -64,18 +64,15 @@ def _run_deadlock(model, job, options):
 # --------------------------------------------------------------------------- properties
 
 
-def _property_targets(check, model) -> list[str]:
+def _property_targets(check, model) -> list[str | tuple[str, str]]:
     """The properties of the check's files, in order (``only``: those named); the files' errors are raised."""
-    from runtime.props import read_property_file
+    from genom2bip.verify import read_properties
 
-    names, deadlock = [], []
-    for path in check.files:
-        items, _ = read_property_file(path)  # DiagnosticError: the property file's own file:line:column
-        names += [i.name for i in items]
-        deadlock += [i.name for i in items if i.property.pattern == "deadlock free"]
+    items, _ = read_properties(model(), check.files)  # DiagnosticError: the property file's own file:line:column
+    deadlock = {i.name for i in items if i.property.pattern == "deadlock free"}
     # compositionally, deadlock freedom is the invariants' (not localization's): the deadlock check's job
     return [("deadlock", "deadlock freedom") if check.method == "compositional" and n in deadlock else n
-            for n in _only(check, names, "property")]
+            for n in _only(check, [i.name for i in items], "property")]
 
 
 def _run_property(model, job, options):

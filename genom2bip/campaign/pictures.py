@@ -35,10 +35,7 @@ def draw(jobs: list[Job], records: dict[str, dict[str, Any]], directory: Path) -
 
 def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]], directory: Path) -> Path:
     """Top: a row per check, the answer at each value; below: states (log) per check; then a kind's own figures."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # the object API: no pyplot state, no window
 
     kind, _ = axis_kind(key)
     series: dict[str, list[tuple[float, dict[str, Any] | None]]] = {}
@@ -53,8 +50,8 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     extra = _figures(jobs, records, key, kind)
     panels = 2 + bool(extra)
     height = max(2.5, 0.35 * len(series) + 1.2)
-    fig, axes = plt.subplots(panels, 1, figsize=(9, height + 3 * (panels - 1)), sharex=True,
-                             gridspec_kw={"height_ratios": [height] + [3] * (panels - 1)})
+    fig = Figure(figsize=(9, height + 3 * (panels - 1)))
+    axes = fig.subplots(panels, 1, sharex=True, gridspec_kw={"height_ratios": [height] + [3] * (panels - 1)})
     top, states = axes[0], axes[1]
     names = list(series)
     for row, name in enumerate(names):
@@ -87,7 +84,6 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     fig.tight_layout()
     path = directory / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', key)}.png"
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 

@@ -8,7 +8,15 @@ from collections import Counter
 from typing import Any, TextIO
 
 from genom2bip.campaign.jobs import Job
-from runtime.explore.progress import human_bytes
+
+
+def human_bytes(n: float) -> str:
+    """``98.2 MB``: a memory figure as the table shows it."""
+    for unit in ("B", "KB", "MB"):
+        if n < 1024:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} GB"
 
 
 def outcome(record: dict[str, Any] | None) -> str:
@@ -78,10 +86,10 @@ class Display:
 
 
 def summary(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | None = None) -> Counter:
-    """The table of every job (model, check, target, point, answer, states, seconds, memory, host); the answers
-    counted."""
+    """The table of every job (model, check, method, target, point, answer, states, seconds, memory, host); the
+    answers counted."""
     out = out or sys.stdout
-    header = ("model", "check", "target", "point", "answer", "states", "seconds", "memory", "host")
+    header = ("model", "check", "method", "target", "point", "answer", "states", "seconds", "memory", "host")
     rows = []
     counts: Counter = Counter()
     for job in sorted(jobs, key=lambda j: j.index):
@@ -90,11 +98,12 @@ def summary(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | N
         counts[answer] += 1
         seconds = record.get("seconds") if record else None
         memory = record.get("peak_memory") if record else None
-        rows.append((job.model, job.check, job.target, " ".join(f"{k}={v}" for k, v in job.point) or "-", answer,
+        point = " ".join(f"{k}={v}" for k, v in job.point) or "-"
+        rows.append((job.model, job.check, job.method, job.target, point, answer,
                      _states(record) if record else "-", f"{seconds:.2f}" if seconds is not None else "-",
                      human_bytes(memory) if memory else "-", (record or {}).get("host") or "-"))
     widths = [max(len(str(r[i])) for r in (header, *rows)) for i in range(len(header))]
-    right = {5, 6, 7}
+    right = {6, 7, 8}
     for row in (header, *rows):
         cells = [str(c).rjust(w) if i in right else str(c).ljust(w) for i, (c, w) in enumerate(zip(row, widths))]
         print("  ".join(cells).rstrip(), file=out)

@@ -151,7 +151,8 @@ class _Reader:
         return None if any(v is None for v in out) else out
 
     def file_path(self, node: yaml.Node, what: str, must_exist: bool = True) -> str | None:
-        """A path relative to the campaign file, ``${NAME}`` replaced by --set NAME=VALUE or the environment."""
+        """A path relative to the campaign file, ``${NAME}`` replaced by --set NAME=VALUE or the environment (a path
+        that starts with one is relative to the working directory, as the command line's paths are)."""
         text = self.text(node, what)
         if text is None:
             return None
@@ -160,8 +161,10 @@ class _Reader:
         if unset:
             self.error(node, f"{what}: ${{{unset[0]}}} is not set", f"give --set {unset[0]}=VALUE")
             return None
+        given = text.startswith("${")  # a path that starts with a setting is the command line's: from its cwd
         text = VARIABLE.sub(lambda m: self.settings.get(m.group(1), os.environ.get(m.group(1), "")), text)
-        path = (self.base / Path(text).expanduser()).resolve()
+        path = (Path.cwd() if given else self.base) / Path(text).expanduser()
+        path = path.resolve()
         if must_exist and not path.exists():
             self.error(node, f"{what}: {text}: no such file or directory")
             return None
