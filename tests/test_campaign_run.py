@@ -138,3 +138,18 @@ def test_ctrl_c_writes_what_is_done_says_what_is_not_and_the_next_run_does_it(tm
     assert "3 already in" in again.stdout and "1 to run" in again.stdout, again.stderr
     records = lines(out / "results.jsonl")
     assert len(records) == 4 and len({r["job"] for r in records}) == 4
+
+
+def test_a_scheduler_out_of_reach_is_named_and_nothing_is_written(tmp_path):
+    import socket
+
+    path = tmp_path / "c.yaml"
+    path.write_text(SWEEP)
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proc = campaign([path, "-o", tmp_path / "out", "--scheduler", f"tcp://127.0.0.1:{port}", "--connect-timeout", "2"],
+                    tmp_path)
+    assert proc.returncode == 1
+    assert f"genom2bip: error: cannot reach the Dask scheduler tcp://127.0.0.1:{port}" in proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]

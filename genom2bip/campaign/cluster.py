@@ -37,6 +37,7 @@ class ClusterSpec:
     tls_ca_file: str | None = None
     tls_cert: str | None = None
     tls_key: str | None = None
+    connect_timeout: float = 30.0  # seconds to reach a running scheduler
 
     def security(self):
         """Dask's ``Security`` for the TLS files given, else None (plain TCP)."""
@@ -65,7 +66,7 @@ def connect(spec: ClusterSpec):
     from distributed import Client, LocalCluster
 
     if spec.scheduler:
-        return Client(spec.scheduler, security=spec.security(), timeout="30s"), None
+        return Client(spec.scheduler, security=spec.security(), timeout=spec.connect_timeout), None
     workers = spec.workers or os.cpu_count() or 1
     with dask.config.set({"distributed.scheduler.allowed-failures": LOCAL_ALLOWED_FAILURES}):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=spec.listen,

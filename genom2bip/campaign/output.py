@@ -40,6 +40,14 @@ class Output:
         return self.directory / RESULTS
 
     @classmethod
+    def peek(cls, directory: str | Path) -> dict[str, dict[str, Any]]:
+        """The records ``directory`` holds, read without creating or changing anything."""
+        out = cls(Path(directory))
+        if out.results.is_file():
+            out._read(rewrite=False)
+        return out.records
+
+    @classmethod
     def open(cls, directory: str | Path) -> "Output":
         """Create or reopen ``directory``: lock it, read the records it holds, drop a line a kill cut short."""
         directory = Path(directory)
@@ -62,7 +70,7 @@ class Output:
             self._lock.close()
             self._lock = None
 
-    def _read(self) -> None:
+    def _read(self, rewrite: bool = True) -> None:
         """The whole records of ``results.jsonl``; a damaged line is dropped and the file rewritten without it."""
         if not self.results.exists():
             return
@@ -78,7 +86,7 @@ class Output:
                 continue
             self.records[record["job"]] = record
             kept.append(line)
-        if self.dropped:
+        if self.dropped and rewrite:
             _replace(self.results, "".join(kept))
 
     def write(self, record: dict[str, Any]) -> dict[str, Any]:

@@ -37,6 +37,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     cluster.add_argument("--workers", type=int, metavar="N", help="local cluster: N worker processes")
     cluster.add_argument("--listen", metavar="HOST", default="127.0.0.1",
                          help="local cluster: the address its scheduler and workers listen on (default: loopback)")
+    cluster.add_argument("--connect-timeout", type=float, default=30, metavar="SECONDS",
+                         help="--scheduler: how long to try to reach it (default 30)")
     cluster.add_argument("--tls-ca-file", metavar="FILE", help="TLS: the certificate authority of the cluster")
     cluster.add_argument("--tls-cert", metavar="FILE", help="TLS: this client's certificate")
     cluster.add_argument("--tls-key", metavar="FILE", help="TLS: this client's private key")
@@ -66,7 +68,10 @@ def _cluster(args: argparse.Namespace):
     if any(tls) and not (all(tls) and args.scheduler):
         error("TLS takes --scheduler tls://HOST:PORT with --tls-ca-file, --tls-cert and --tls-key together")
         raise Failure(EXIT_USAGE)
-    return ClusterSpec(args.scheduler, args.workers, args.listen, *tls)
+    if args.connect_timeout <= 0:
+        error("--connect-timeout must be positive")
+        raise Failure(EXIT_USAGE)
+    return ClusterSpec(args.scheduler, args.workers, args.listen, *tls, connect_timeout=args.connect_timeout)
 
 
 @verb("campaign", help="run a campaign of checks (a YAML file) on Dask workers: JSON lines, a table, pictures",
@@ -91,7 +96,16 @@ def verb_campaign(args: argparse.Namespace) -> int:
             print(f"{job.id}  {job.title}  ({job.method})")
         print(f"{len(jobs)} jobs")
         return EXIT_OK
-    out = Output.open(Path(args.output) if args.output else Path("out") / campaign.name)
+    directory = Path(args.output) if args.output else Path("out") / campaign.name
+    done = Output.peek(directory)
+    todo = [j for j in jobs if j.id not in done
+            or (args.retry_failed and done[j.id].get("status") != "done")]
+    client = _connect(spec) if todo else None  # a scheduler out of reach: nothing written
+    try:
+        out = Output.open(directory)
+    except BaseException:
+        _close(client)
+        raise
     try:
         if out.dropped:
             print(f"note: {out.dropped} unfinished line(s) of {out.results} dropped: those jobs run again")
@@ -99,22 +113,37 @@ def verb_campaign(args: argparse.Namespace) -> int:
                 or (args.retry_failed and out.records[j.id].get("status") != "done")]
         print(f"campaign {campaign.name}: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {out.results}, "
               f"{len(todo)} to run", flush=True)
-        run = _run(todo, spec, out) if todo else None
+        run = _run(todo, client, out) if todo and client else None
         return _report(campaign, jobs, out, run)
     finally:
+        _close(client)
         out.close()
 
 
-def _run(todo, spec, out):
-    """The jobs on the cluster, each record written as it comes; the cluster closed whatever happens."""
-    from genom2bip.campaign.cluster import connect, describe, run
-    from genom2bip.campaign.report import Display
+def _connect(spec):
+    """``(client, cluster)`` of the cluster asked for; a scheduler out of reach is an error (exit 1)."""
+    from genom2bip.campaign.cluster import connect
 
     try:
-        client, cluster = connect(spec)
+        return connect(spec)
     except (OSError, TimeoutError) as exc:
         error(f"cannot reach the Dask scheduler {spec.scheduler}: {exc}")
         raise Failure(EXIT_ERRORS) from None
+
+
+def _close(client) -> None:
+    if client is not None:
+        client[0].close()
+        if client[1] is not None:
+            client[1].close()
+
+
+def _run(todo, connection, out):
+    """The jobs on the cluster, each record written as it comes."""
+    from genom2bip.campaign.cluster import describe, run
+    from genom2bip.campaign.report import Display
+
+    client, cluster = connection
     display = Display(len(todo))
     try:
         print(describe(client, cluster), flush=True)
@@ -123,9 +152,6 @@ def _run(todo, spec, out):
         return found
     finally:
         display.close()
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def _report(campaign, jobs, out, run) -> int:
