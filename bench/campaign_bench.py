@@ -30,6 +30,9 @@ README = [
 ]
 
 
+NOTES: list[str] = []  # what the last run said of itself, printed under its figure
+
+
 def load() -> str:
     return "/".join(f"{x:.1f}" for x in os.getloadavg())
 
@@ -39,7 +42,9 @@ def timed(label: str, fn) -> float:
     start = time.perf_counter()
     fn()
     seconds = time.perf_counter() - start
-    print(f"{label:<44} {seconds:7.1f} s   load {before} -> {load()}", flush=True)
+    print(f"{label:<48} {seconds:7.1f} s   load {before} -> {load()}", flush=True)
+    while NOTES:
+        print(f"    ({NOTES.pop(0)})", flush=True)
     return seconds
 
 
@@ -47,6 +52,9 @@ def genom2bip(*args: str) -> None:
     proc = subprocess.run([sys.executable, "-m", "genom2bip", *args], capture_output=True, text=True, cwd=ROOT)
     if proc.returncode not in (0,):
         raise SystemExit(f"genom2bip {' '.join(args)} exited {proc.returncode}:\n{proc.stderr[-2000:]}")
+    for line in proc.stdout.splitlines():  # a campaign's own account: its jobs' phase, the time its jobs took
+        if " jobs run in " in line:
+            NOTES.append(line.strip())
 
 
 def in_process() -> None:
