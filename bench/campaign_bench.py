@@ -5,13 +5,21 @@ the machine's load averages before and after (a shared machine's figures mean li
 
 Runs, in each round and in turn: the README's three ``verify`` commands (the main job's checks, sequentially),
 every job of descriptions/dala/campaign.yaml in one process through the verification API (sequentially, models
-built once), and ``genom2bip campaign descriptions/dala/campaign.yaml`` on a local cluster (cluster start and
-the models built to name the jobs included).  The C cache is warmed first, so no run pays for compiling.
+built once), ``genom2bip campaign descriptions/dala/campaign.yaml`` on a local cluster (cluster start and the
+models built to name the jobs included), and the same campaign on a running cluster: a ``dask scheduler`` and one
+``dask worker`` per core started beforehand, each in a session of its own, as workers started on other machines
+are.  The C cache is warmed first, so no run pays for compiling.
+
+Where the kernel shares the CPU between sessions (Linux's autogroup, ``/proc/sys/kernel/sched_autogroup_enabled``),
+every process of one session shares one session's part of a busy machine: the local cluster's workers, children of
+the command, then get no more CPU than one process would, while workers in sessions of their own each get a part.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -66,28 +74,68 @@ def in_process() -> None:
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
 
 
+def running_cluster(workers: int, log: Path):
+    """A scheduler and ``workers`` workers on loopback, each in a session of its own: ``(address, processes)``."""
+    from distributed import Client
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    dask = str(Path(sys.executable).parent / "dask")
+    out = log.open("w")
+    procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                              stdout=out, stderr=subprocess.STDOUT, start_new_session=True)]
+    procs += [subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard"],
+                               stdout=out, stderr=subprocess.STDOUT, start_new_session=True) for _ in range(workers)]
+    with Client(address, timeout=120) as client:
+        client.wait_for_workers(workers, timeout=120)
+    return address, procs
+
+
+def autogroup() -> str:
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip()
+    except OSError:
+        return "?"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     args = parser.parse_args()
-    print(f"{os.cpu_count()} cores; campaign: {args.workers} workers; {args.rounds} rounds")
+    print(f"{os.cpu_count()} cores; campaign: {args.workers} workers; {args.rounds} rounds; "
+          f"autogroup {autogroup()}")
     with tempfile.TemporaryDirectory() as tmp:
-        timed("warm-up (C cache): the campaign, 1 worker", lambda: genom2bip("campaign", str(CAMPAIGN), "-o",
-                                                                            f"{tmp}/warm", "--workers", "1"))
-        totals: dict[str, list[float]] = {}
-        for n in range(args.rounds):
-            runs = {
-                "README's 3 verify commands, one after another": lambda: [genom2bip(*c) for c in README],
-                "campaign's jobs, one process, one after another": in_process,
-                f"genom2bip campaign, local cluster of {args.workers}": lambda: genom2bip(
-                    "campaign", str(CAMPAIGN), "-o", f"{tmp}/run{n}", "--workers", str(args.workers)),
-            }
-            for label, fn in runs.items():
-                totals.setdefault(label, []).append(timed(label, fn))
-        print("median of the rounds:")
-        for label, values in totals.items():
-            print(f"  {label:<48} {sorted(values)[len(values) // 2]:7.1f} s")
+        address, procs = running_cluster(args.workers, Path(tmp) / "cluster.log")
+        try:
+            rounds(args, tmp, address)
+        finally:
+            for p in procs:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+
+
+def rounds(args, tmp: str, address: str) -> None:
+    """Warm the cache, then each way of running the checks in turn, ``args.rounds`` times; the medians."""
+    timed("warm-up (C cache): the campaign, 1 worker", lambda: genom2bip("campaign", str(CAMPAIGN), "-o",
+                                                                        f"{tmp}/warm", "--workers", "1"))
+    totals: dict[str, list[float]] = {}
+    for n in range(args.rounds):
+        runs = {
+            "README's 3 verify commands, one after another": lambda: [genom2bip(*c) for c in README],
+            "campaign's jobs, one process, one after another": in_process,
+            f"genom2bip campaign, local cluster of {args.workers}": lambda: genom2bip(
+                "campaign", str(CAMPAIGN), "-o", f"{tmp}/run{n}", "--workers", str(args.workers)),
+            f"genom2bip campaign, {args.workers} workers in own sessions": lambda: genom2bip(
+                "campaign", str(CAMPAIGN), "-o", f"{tmp}/remote{n}", "--scheduler", address),
+        }
+        for label, fn in runs.items():
+            totals.setdefault(label, []).append(timed(label, fn))
+    print("median of the rounds:")
+    for label, values in totals.items():
+        print(f"  {label:<48} {sorted(values)[len(values) // 2]:7.1f} s")
 
 
 if __name__ == "__main__":

@@ -112,6 +112,28 @@ checks:
     assert "crashed" in proc.stdout and "failed" in proc.stdout and "3 jobs: " in proc.stdout
 
 
+def test_a_job_past_its_time_limit_is_stopped_and_recorded_and_its_worker_serves_again(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text(f"""models:
+  gate: {{paths: [{FIXTURES / 'Gate.bip'}]}}
+  cruise: {{paths: [{CRUISE}], timed: true, defines: {{PERIOD: 15}}}}
+checks:
+  - {{check: deadlock, model: gate, timeout: 2 s, options: {{externs: {FIXTURES / 'gate.py'}}}}}
+  - {{check: observer, model: cruise, vary: {{wcet-scale: [1, 2, 3]}}}}
+""")
+    out = tmp_path / "out"  # the gate never opens: the job would wait forever
+    proc = campaign([path, "-o", out, "--workers", "1"], tmp_path, env={"GENOM2BIP_TEST_GATE": str(tmp_path / "no")})
+    assert proc.returncode == 5, proc.stderr
+    records = lines(out / "results.jsonl")
+    stopped = next(r for r in records if r["model"] == "gate")
+    assert (stopped["status"], stopped["limit"], stopped["timeout"]) == ("timeout", "timeout", 2.0)
+    assert stopped["message"] == "stopped past its time limit of 2 s; its worker was restarted"
+    # the one worker, restarted, ran the others: 12 ms of codels in 15 ms hold, twice or thrice that do not
+    verdicts = {r["point"]["wcet-scale"]: r["verdict"] for r in records if r["model"] == "cruise"}
+    assert verdicts == {1: "holds", 2: "violated", 3: "violated"}
+    assert "timeout" in proc.stdout and "4 jobs: " in proc.stdout
+
+
 def test_ctrl_c_writes_what_is_done_says_what_is_not_and_the_next_run_does_it(tmp_path):
     gate = tmp_path / "gate"
     path = tmp_path / "c.yaml"

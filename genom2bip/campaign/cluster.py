@@ -23,6 +23,8 @@ from genom2bip.campaign.worker import TOPIC, run_job
 
 #: A job whose worker dies is run again; one that has killed this many workers more is recorded as crashed.
 LOCAL_ALLOWED_FAILURES = 2
+#: Seconds between two looks at the running jobs' time limits.
+WATCH_PERIOD = 0.5
 #: Where a local cluster listens unless told otherwise.
 LOOPBACK = "127.0.0.1"
 
@@ -84,43 +86,99 @@ def describe(client, cluster) -> str:
 
 
 def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any]], display) -> Run:
-    """Submit every job, write each record as it comes back, tell ``display``; Ctrl-C stops with what is done."""
+    """Submit every job, write each record as it comes back, tell ``display``; Ctrl-C stops with what is done.
+
+    A job past its ``timeout`` is cancelled and recorded as such, and its worker restarted (the only way to stop
+    a search in another process); the others go on.
+    """
     from distributed import as_completed
 
     out = Run()
     token = uuid.uuid4().hex[:8]  # another run's keys never collide with this one's on a shared scheduler
     lock = threading.Lock()
     by_id = {job.id: job for job in jobs}
+    started_at: dict[str, tuple[float, dict]] = {}
+    recorded: set[str] = set()
+
+    def keep(job: Job, record: dict[str, Any]) -> None:
+        """Write a record, once per job (called with ``lock`` held)."""
+        if job.id not in recorded:
+            recorded.add(job.id)
+            line = write(record)
+            out.written.append(line)
+            display.finished(job, line)
 
     def started(event) -> None:
         _, message = event
         if isinstance(message, dict) and message.get("job") in by_id:
             with lock:
+                started_at[message["job"]] = (time.monotonic(), message)
                 display.started(message["job"], message.get("worker", ""))
 
     client.subscribe_topic(TOPIC, started)
     futures = {client.submit(run_job, job, key=f"genom2bip-{job.id}-{token}", pure=False): job for job in jobs}
+    future_of = {job.id: f for f, job in futures.items()}
     remaining = dict(futures)
+    stop = threading.Event()
+
+    def watch() -> None:
+        """Stop the jobs past their time limit."""
+        while not stop.wait(WATCH_PERIOD):
+            now = time.monotonic()
+            with lock:
+                late = [(by_id[j], m) for j, (t, m) in started_at.items() if j not in recorded
+                        and by_id[j].timeout is not None and now - t > by_id[j].timeout]
+            for job, message in late:
+                client.cancel([future_of[job.id]])
+                restarted = _restart(client, message.get("worker", ""))
+                with lock:
+                    keep(job, _timed_out(job, message, restarted))
+
+    watchdog = threading.Thread(target=watch, daemon=True, name="campaign-timeouts")
+    if any(job.timeout is not None for job in jobs):
+        watchdog.start()
     start = time.perf_counter()
     try:
         for future in as_completed(futures):
             job = remaining.pop(future)
+            if future.status == "cancelled":
+                continue  # stopped past its time limit: recorded as such
             record = _record(job, future)
-            line = write(record)
-            out.written.append(line)
             with lock:
-                display.finished(job, line)
+                keep(job, record)
     except KeyboardInterrupt:
         out.interrupted = True
-        out.undone = sorted(remaining.values(), key=lambda j: j.index)
+        out.undone = sorted((j for j in remaining.values() if j.id not in recorded), key=lambda j: j.index)
         client.cancel(list(remaining))
     finally:
+        stop.set()
+        if watchdog.is_alive():
+            watchdog.join()
         out.seconds = time.perf_counter() - start
         try:
             client.unsubscribe_topic(TOPIC)
         except Exception:  # noqa: BLE001 - a client closing after Ctrl-C
             pass
     return out
+
+
+def _restart(client, worker: str) -> str:
+    """Restart ``worker`` (its nanny starts a fresh process); "" when done, else why not."""
+    try:
+        client.restart_workers([worker])
+        return ""
+    except Exception as exc:  # noqa: BLE001 - a worker without a nanny, gone already: said in the record
+        return f"{type(exc).__name__}: {exc}"
+
+
+def _timed_out(job: Job, started: dict, restarted: str) -> dict[str, Any]:
+    """The record of a job stopped past its time limit."""
+    how = "its worker was restarted" if not restarted else f"its worker could not be restarted ({restarted})"
+    return {"job": job.id, **job.parameters(), "host": started.get("host"), "worker": started.get("worker"),
+            "pid": started.get("pid"), "status": "timeout", "verdict": None,
+            "message": f"stopped past its time limit of {job.timeout:g} s; {how}", "limit": "timeout",
+            "figures": None, "values": None, "result": None, "seconds": job.timeout, "cpu_seconds": None,
+            "peak_memory": None}
 
 
 def _record(job: Job, future) -> dict[str, Any]:
@@ -133,4 +191,4 @@ def _record(job: Job, future) -> dict[str, Any]:
     return {"job": job.id, **job.parameters(), "host": None, "worker": None, "pid": None, "status": "crashed",
             "verdict": None, "message": f"the job's worker process died each time it ran it ({message})"
             if name == "KilledWorker" else message, "limit": None, "figures": None, "values": None, "result": None,
-            "seconds": None, "peak_memory": None}
+            "seconds": None, "cpu_seconds": None, "peak_memory": None}

@@ -33,6 +33,7 @@ class Job:
     options: tuple[tuple[str, Any], ...] = ()  # SearchOptions keyword arguments
     point: tuple[tuple[str, Any], ...] = ()  # axis -> value as written in the file
     index: int = 0  # the job's place in the campaign (the order of the summary)
+    timeout: float | None = None  # seconds of wall clock before the job is stopped (not part of its id)
 
     @property
     def title(self) -> str:
@@ -43,7 +44,7 @@ class Job:
     def parameters(self) -> dict[str, Any]:
         """What the results file says of the job: the model, the check, the point."""
         return {"model": self.model, "check": self.check, "method": self.method, "target": self.target,
-                "point": dict(self.point), "options": dict(self.options)}
+                "point": dict(self.point), "options": dict(self.options), "timeout": self.timeout}
 
 
 @dataclass
@@ -105,7 +106,7 @@ def expand(campaign: Campaign, reporter: Reporter | None = None) -> Expansion:
                         continue  # the same job twice (two checks overlap): run once
                     seen.add(jid)
                     out.jobs.append(Job(jid, spec.name, params, name, check.method, target, files, options,
-                                        tuple((a.key, v) for a, v, _ in point), len(out.jobs)))
+                                        tuple((a.key, v) for a, v, _ in point), len(out.jobs), check.timeout))
     reporter.raise_if_errors()
     out.warnings = [d for d in reporter.diagnostics if d.severity == "warning"]
     return out

@@ -37,10 +37,10 @@ from genom2bip.campaign.kinds import KINDS, METHODS
 from genom2bip.campaign.params import ModelParams
 from runtime.diagnostics import Reporter, Span
 
-TOP = ("campaign", "doc", "models", "options", "vary", "checks")
+TOP = ("campaign", "doc", "models", "options", "timeout", "vary", "checks")
 MODEL_KEYS = ("paths", "each", "rules", "no-rules", "defines", "include", "root", "timed", "doc")
 TIME_KEYS = ("tick", "default-wcet", "observers")
-CHECK_KEYS = ("check", "model", "method", "options", "vary", "doc")
+CHECK_KEYS = ("check", "model", "method", "options", "timeout", "vary", "doc")
 OBSERVER_KINDS = ("overrun", "latency")
 #: Search options: key -> (SearchOptions field, reader).  Integers are 0 or more.
 OPTION_FIELDS = {
@@ -88,6 +88,7 @@ class CheckSpec:
     kinds: tuple[str, ...] = OBSERVER_KINDS
     options: dict[str, Any] = field(default_factory=dict)  # SearchOptions keyword arguments
     axes: list[Axis] = field(default_factory=list)
+    timeout: float | None = None  # seconds of wall clock a job may take before it is stopped
     spans: dict[str, Span] = field(default_factory=dict)  # key -> where its value is
 
 
@@ -114,6 +115,7 @@ class _Reader:
     def __init__(self, path: Path, reporter: Reporter, settings: Mapping[str, str]) -> None:
         self.path, self.reporter, self.settings = path, reporter, settings
         self.base = path.resolve().parent
+        self.timeout: float | None = None  # the file's, for every check that gives none
 
     def span(self, node: yaml.Node) -> Span:
         m = node.start_mark
@@ -255,6 +257,16 @@ class _Reader:
             out["observers"] = self.file_path(fields["observers"][1], f"model {name}: observers")
         return out
 
+    def seconds(self, node: yaml.Node, what: str) -> float | None:
+        """A positive duration (``10 min``, ``30 s``) in seconds."""
+        from genom2bip.observers import parse_duration
+
+        us = parse_duration(node.value) if isinstance(node, yaml.ScalarNode) else None
+        if not us:
+            self.error(node, f"{what}: a positive duration expected (e.g. 30 s, 10 min)")
+            return None
+        return us / 1e6
+
     # -- options and axes ------------------------------------------------------------------------------------
     def options(self, node: yaml.Node, what: str) -> dict[str, Any]:
         """Search options as :class:`~genom2bip.verify.SearchOptions` keyword arguments."""
@@ -376,6 +388,7 @@ class _Reader:
                 self.error(fields["kinds"][1], f"{what}: kinds: {bad!r} is not one of {', '.join(OBSERVER_KINDS)}")
             spec.kinds = tuple(kinds)
         spec.options = {**options, **(self.options(fields["options"][1], f"{what}: ") if "options" in fields else {})}
+        spec.timeout = self.seconds(fields["timeout"][1], f"{what}: timeout") if "timeout" in fields else self.timeout
         own = self.axes(fields["vary"][1], f"{what}: ") if "vary" in fields else []
         spec.axes = [a for a in axes if all(a.key != b.key for b in own)] + own
         if model in models:
@@ -409,6 +422,8 @@ class _Reader:
         doc = str(_plain(fields["doc"][1])) if "doc" in fields else ""
         models = self.models(fields["models"][1])
         options = self.options(fields["options"][1], "") if "options" in fields else {}
+        if "timeout" in fields:
+            self.timeout = self.seconds(fields["timeout"][1], "timeout")
         axes = self.axes(fields["vary"][1], "") if "vary" in fields else []
         checks = self.checks(fields["checks"][1], models, options, axes)
         return Campaign(name or self.path.stem, self.path, doc, models, checks)

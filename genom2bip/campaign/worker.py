@@ -43,7 +43,8 @@ def model_of(params: ModelParams):
 
 
 def run_job(job: Job) -> dict[str, Any]:
-    """Run ``job`` here; its record: parameters, status, verdict, figures, seconds, peak memory, host, result."""
+    """Run ``job`` here; its record: parameters, status, verdict, figures, seconds (wall clock, and the CPU time of
+    the thread that ran it), peak memory, host, result."""
     from genom2bip.campaign.kinds import KINDS
 
     worker = _dask_worker()
@@ -52,7 +53,7 @@ def run_job(job: Job) -> dict[str, Any]:
         worker.log_event(TOPIC, {"event": "started", "job": job.id, "worker": address, "host": socket.gethostname(),
                                  "pid": os.getpid()})
     _reset_peak()
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.thread_time()
     record: dict[str, Any] = {"job": job.id, **job.parameters(), "host": socket.gethostname(), "worker": address,
                               "pid": os.getpid()}
     try:
@@ -67,7 +68,8 @@ def run_job(job: Job) -> dict[str, Any]:
                       result=None)
         if not _expected(exc):
             record["traceback"] = traceback.format_exc(limit=-8)
-    record.update(seconds=round(time.perf_counter() - start, 3), peak_memory=_peak())
+    record.update(seconds=round(time.perf_counter() - start, 3), cpu_seconds=round(time.thread_time() - cpu, 3),
+                  peak_memory=_peak())
     return record
 
 

@@ -2,7 +2,7 @@
 a picture per numeric axis (docs/verification.md, Campaigns).
 
 Exit status: 0 every job done and every check holds, 4 a check is violated
-(or meets a model error), 5 a job is inconclusive, failed or crashed, 1 bad
+(or meets a model error), 5 a job is inconclusive, failed, crashed or timed out, 1 bad
 input (the campaign file, a model, a property file: nothing is run or
 written), 130 interrupted (what is done is written; the same command runs the
 rest).
@@ -163,7 +163,9 @@ def _report(campaign, jobs, out, run) -> int:
     counts = summary(jobs, out.records)
     if run is not None:
         busy = sum(r.get("seconds") or 0 for r in run.written)
-        print(f"{len(run.written)} jobs run in {run.seconds:.1f} s of wall clock ({busy:.1f} s of job time)")
+        cpu = sum(r.get("cpu_seconds") or 0 for r in run.written)
+        print(f"{len(run.written)} jobs run in {run.seconds:.1f} s of wall clock ({busy:.1f} s of job time, "
+              f"{cpu:.1f} s of CPU)")
     for path in draw(jobs, out.records, out.directory):
         print(f"picture: {path}")
     print(f"results: {out.results}")
