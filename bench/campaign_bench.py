@@ -101,6 +101,7 @@ def autogroup() -> str:
 
 
 def main() -> None:
+    """A running cluster started aside, then the rounds."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)

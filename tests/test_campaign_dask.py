@@ -93,15 +93,20 @@ checks:
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "campaign", str(path), "--scheduler", address,
                              "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = []
-    while not any(m["job"] == held.id for m in seen):  # the held job has started: it waits at the gate there
-        seen.append(starts.get(timeout=PATIENCE))
-    victim = next(m["worker"] for m in seen if m["job"] == held.id)
-    name = client.scheduler_info()["workers"][victim]["name"]
-    os.killpg(workers[name].pid, signal.SIGKILL)
-    workers[name].wait()
-    gate.write_text("")  # the job may pass now: on the worker left
-    stdout, stderr = proc.communicate(timeout=PATIENCE)
+    try:
+        seen = []
+        while not any(m["job"] == held.id for m in seen):  # the held job has started: it waits at the gate there
+            seen.append(starts.get(timeout=PATIENCE))
+        victim = next(m["worker"] for m in seen if m["job"] == held.id)
+        name = client.scheduler_info()["workers"][victim]["name"]
+        os.killpg(workers[name].pid, signal.SIGKILL)
+        workers[name].wait()
+        gate.write_text("")  # the job may pass now: on the worker left
+        stdout, stderr = proc.communicate(timeout=PATIENCE)
+    finally:
+        if proc.poll() is None:  # a failed step above: do not leave the command behind
+            proc.kill()
+            proc.communicate()
     assert proc.returncode == 4, stderr  # Cruise's observers are violated at some periods
 
     records = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]

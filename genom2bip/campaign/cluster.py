@@ -72,7 +72,8 @@ def connect(spec: ClusterSpec):
     workers = spec.workers or os.cpu_count() or 1
     with dask.config.set({"distributed.scheduler.allowed-failures": LOCAL_ALLOWED_FAILURES}):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=spec.listen,
-                               scheduler_port=0, dashboard_address=None, silence_logs=logging.CRITICAL)
+                               scheduler_port=0, dashboard_address=None, silence_logs=logging.CRITICAL,
+                               preload=["genom2bip.campaign.session"])  # each worker in a session of its own
     return Client(cluster), cluster
 
 

@@ -76,6 +76,7 @@ def _property_targets(check, model) -> list[str | tuple[str, str]]:
 
 
 def _run_property(model, job, options):
+    """The job's property, read from its files against the model: by the explorer, SPIN or localization."""
     from genom2bip.verify import (
         check_property, check_property_localized, read_properties,
         refuse_unlocalizable, spin_property, state_space,

@@ -189,6 +189,7 @@ class _Reader:
         return out
 
     def model(self, name: str, node: yaml.Node) -> list[ModelSpec]:
+        """A model's parameters; with ``each``, one model per .gen file of the directory (named by its file)."""
         fields = self.mapping(node, f"model {name}", MODEL_KEYS)
         if not fields:
             return []
@@ -298,6 +299,7 @@ class _Reader:
         return out
 
     def axes(self, node: yaml.Node, what: str) -> list[Axis]:
+        """``vary:``: each axis's kind, and each value read by it (a value it cannot read is located)."""
         if not isinstance(node, yaml.MappingNode):
             self.error(node, f"{what}vary: a mapping of axes to lists of values expected (e.g. wcet-scale: [1, 2])")
             return []
@@ -346,6 +348,7 @@ class _Reader:
         return out
 
     def check(self, node, n: int, models, options: dict, axes: list[Axis]) -> CheckSpec | None:
+        """Check ``n``: its kind and the keys of that kind, its model, method, options, timeout and axes."""
         what = f"check {n}"
         keys = CHECK_KEYS + tuple(k for kind in KINDS.values() for k in kind.keys if k not in CHECK_KEYS)
         fields = self.mapping(node, what, tuple(dict.fromkeys(keys)))
@@ -408,6 +411,7 @@ class _Reader:
                                                f"{spec.model} is not timed", "add timed: true to the model")
 
     def campaign(self, root: yaml.Node | None) -> Campaign | None:
+        """The whole file: its name, models, defaults (options, timeout, axes) and checks."""
         if not isinstance(root, yaml.MappingNode):
             self.reporter.error(Span(str(self.path), 1, 1), "a campaign file is a mapping with 'models' and "
                                                             "'checks' (and 'campaign', 'options', 'vary')")

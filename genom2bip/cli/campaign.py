@@ -22,6 +22,7 @@ EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
+    """FILE, the output, --set, --list, --retry-failed, and the cluster's options."""
     parser.add_argument("file", metavar="FILE", help="a campaign file (YAML): models, checks, values to vary over")
     parser.add_argument("-o", "--output", metavar="DIR",
                         help="where results.jsonl, jobs/ and the pictures go (default: out/<campaign name>); "
@@ -56,6 +57,8 @@ def _settings(items: list[str]) -> dict[str, str]:
 
 
 def _cluster(args: argparse.Namespace):
+    """The cluster asked for (:class:`~genom2bip.campaign.cluster.ClusterSpec`); options that do not go together
+    are a usage error."""
     from genom2bip.campaign.cluster import ClusterSpec
 
     if args.workers is not None and args.workers < 1:
