@@ -35,6 +35,7 @@ import yaml
 from genom2bip.campaign.axes import AxisKind, axis_kind
 from genom2bip.campaign.kinds import KINDS, METHODS
 from genom2bip.campaign.params import ModelParams
+from genom2bip.yamlfile import span_of
 from runtime.diagnostics import Reporter, Span
 
 TOP = ("campaign", "doc", "models", "options", "timeout", "vary", "checks")
@@ -118,8 +119,7 @@ class _Reader:
         self.timeout: float | None = None  # the file's, for every check that gives none
 
     def span(self, node: yaml.Node) -> Span:
-        m = node.start_mark
-        return Span(str(self.path), m.line + 1, m.column + 1, node.end_mark.line + 1, node.end_mark.column + 1)
+        return span_of(self.path, node)
 
     def error(self, node: yaml.Node, message: str, hint: str | None = None) -> None:
         self.reporter.error(self.span(node), message, hint)
@@ -443,7 +443,7 @@ def read_campaign(path: str | Path, settings: Mapping[str, str] | None = None,
 
     ``settings``: the values of ``${NAME}`` in paths (the command line's ``--set NAME=VALUE``).
     """
-    from genom2bip.rules import compose_file
+    from genom2bip.yamlfile import compose_file  # bounded: size, nesting, aliases, numbers
 
     path = Path(path)
     reporter = reporter or Reporter()
