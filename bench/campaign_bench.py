@@ -82,11 +82,11 @@ def running_cluster(workers: int, log: Path):
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     address = f"tcp://127.0.0.1:{port}"
-    dask = str(Path(sys.executable).parent / "dask")
+    dask = [sys.executable, "-m", "dask"]
     out = log.open("w")
-    procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+    procs = [subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                               stdout=out, stderr=subprocess.STDOUT, start_new_session=True)]
-    procs += [subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard"],
+    procs += [subprocess.Popen([*dask, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard"],
                                stdout=out, stderr=subprocess.STDOUT, start_new_session=True) for _ in range(workers)]
     with Client(address, timeout=120) as client:
         client.wait_for_workers(workers, timeout=120)

@@ -27,7 +27,7 @@ pytestmark = needs_cc
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT / "tests" / "fixtures"
-DASK = Path(sys.executable).parent / "dask"
+DASK = [sys.executable, "-m", "dask"]  # the dask command of this Python, wherever pip put its scripts
 #: Far past what a loaded machine needs: a hang fails, a slow machine does not.
 PATIENCE = 900
 
@@ -49,11 +49,11 @@ def cluster(tmp_path):
     gate = tmp_path / "gate"
     env = {**os.environ, "GENOM2BIP_TEST_GATE": str(gate)}
     address = f"tcp://127.0.0.1:{free_port()}"
-    processes = [start([str(DASK), "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+    processes = [start([*DASK, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
                         "--no-dashboard"], tmp_path / "scheduler.log", env)]
     workers = {}
     for name in ("a", "b"):
-        workers[name] = start([str(DASK), "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--name", name,
+        workers[name] = start([*DASK, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--name", name,
                                "--no-dashboard"], tmp_path / f"worker-{name}.log", env)
         processes.append(workers[name])
     client = None

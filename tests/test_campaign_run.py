@@ -110,6 +110,12 @@ checks:
         f"externs: importing {FIXTURES / 'broken_externs.py'} failed: RuntimeError: this module is broken on purpose")
     assert done["status"] == "done" and done["verdict"] == "violated"
     assert "crashed" in proc.stdout and "failed" in proc.stdout and "3 jobs: " in proc.stdout
+    # run again: what is done stays done; with --retry-failed the failed and the crashed run again
+    assert "3 already in" in campaign([path, "-o", out, "--workers", "2"], tmp_path).stdout
+    again = campaign([path, "-o", out, "--workers", "2", "--retry-failed"], tmp_path)
+    assert "1 already in" in again.stdout and "2 to run" in again.stdout, again.stderr
+    records = lines(out / "results.jsonl")
+    assert sorted(r["status"] for r in records) == ["crashed", "done", "failed"]  # a line per job, the last run's
 
 
 def test_a_job_past_its_time_limit_is_stopped_and_recorded_and_its_worker_serves_again(tmp_path):

@@ -4,7 +4,9 @@
 Each line is appended and flushed to the disk before the next one, so a
 campaign killed at any moment keeps every result it announced; a line cut by
 the kill is dropped when the directory is opened again (and its job runs
-again).  A lock keeps two campaigns from writing to one directory at once.
+again).  A job's last line is its result: a job run again appends one, and
+the file is rewritten with one line per job when the campaign ends.  A lock
+keeps two campaigns from writing to one directory at once.
 """
 from __future__ import annotations
 
@@ -66,9 +68,18 @@ class Output:
         return out
 
     def close(self) -> None:
+        """Keep one line per job (a job run again with --retry-failed appended a second one), then unlock."""
         if self._lock is not None:
+            self._compact()
             self._lock.close()
             self._lock = None
+
+    def _compact(self) -> None:
+        if not self.results.exists():
+            return
+        lines = self.results.read_text(encoding="utf-8").splitlines(keepends=True)
+        if len(lines) > len(self.records):
+            _replace(self.results, "".join(json.dumps(r) + "\n" for r in self.records.values()))
 
     def _read(self, rewrite: bool = True) -> None:
         """The whole records of ``results.jsonl``; a damaged line is dropped and the file rewritten without it."""
@@ -84,6 +95,7 @@ class Output:
             if not isinstance(record, dict) or not isinstance(record.get("job"), str):
                 self.dropped += 1
                 continue
+            self.records.pop(record["job"], None)  # the last line of a job is its result, in the order written
             self.records[record["job"]] = record
             kept.append(line)
         if self.dropped and rewrite:
@@ -104,6 +116,7 @@ class Output:
             f.write(text)
             f.flush()
             os.fsync(f.fileno())
+        self.records.pop(record["job"], None)
         self.records[record["job"]] = line
         return line
 
