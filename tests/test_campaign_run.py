@@ -45,6 +45,12 @@ def campaign(args, cwd: Path, env=None, **kw) -> subprocess.CompletedProcess:
                           text=True, cwd=cwd, env={**os.environ, **(env or {})}, timeout=PATIENCE, **kw)
 
 
+def interruptible() -> None:
+    """In the child: SIGINT as a terminal's Ctrl-C finds it, even when the tests run where it is ignored (a
+    background job of a shell without job control), which Python would then keep ignoring."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def lines(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines()]
 
@@ -149,7 +155,8 @@ def test_ctrl_c_writes_what_is_done_says_what_is_not_and_the_next_run_does_it(tm
     out = tmp_path / "out"
     env = {**os.environ, "GENOM2BIP_TEST_GATE": str(gate)}
     proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "campaign", str(path), "-o", str(out), "--workers",
-                             "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
+                             "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env,
+                            preexec_fn=interruptible)
     try:
         answers = 0
         for line in proc.stdout:  # the three observers end while the gated job waits in the other worker
