@@ -7,6 +7,13 @@ another worker (a job that keeps killing its workers is given up as crashed:
 job, so each result comes back once.  A worker tells when it starts a job
 (an event on :data:`~genom2bip.campaign.worker.TOPIC`), which the progress
 line counts as running.
+
+Dask counts a worker's death against every job the worker holds, the one it
+runs and those waiting there for their turn, so a job waiting behind one that
+crashes its worker reaches the limit of deaths too.  The client knows which
+jobs started (the events): a job given up by Dask having started no more
+times than the deaths allowed was not the cause, and is submitted again (at
+most :data:`RESUBMITS` times).
 """
 from __future__ import annotations
 
@@ -23,6 +30,8 @@ from genom2bip.campaign.worker import TOPIC, run_job
 
 #: A job whose worker dies is run again; one that has killed this many workers more is recorded as crashed.
 LOCAL_ALLOWED_FAILURES = 2
+#: Times a job given up by Dask without having started as often as its workers died is submitted again.
+RESUBMITS = 3
 #: Seconds between two looks at the running jobs' time limits.
 WATCH_PERIOD = 0.5
 #: Where a local cluster listens unless told otherwise.
@@ -99,6 +108,8 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
     lock = threading.Lock()
     by_id = {job.id: job for job in jobs}
     started_at: dict[str, tuple[float, dict]] = {}
+    starts: dict[str, int] = {}  # per job: times it started in its current submission
+    resubmitted: dict[str, int] = {}
     recorded: set[str] = set()
 
     def keep(job: Job, record: dict[str, Any]) -> None:
@@ -114,12 +125,15 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
         if isinstance(message, dict) and message.get("job") in by_id:
             with lock:
                 started_at[message["job"]] = (time.monotonic(), message)
+                starts[message["job"]] = starts.get(message["job"], 0) + 1
                 display.started(message["job"], message.get("worker", ""))
 
     client.subscribe_topic(TOPIC, started)
-    futures = {client.submit(run_job, job, key=f"genom2bip-{job.id}-{token}", pure=False): job for job in jobs}
-    future_of = {job.id: f for f, job in futures.items()}
-    remaining = dict(futures)
+    # the futures of the jobs not done: one taken is released at once, else Dask would compute it again when the
+    # worker holding its result dies
+    remaining = {client.submit(run_job, job, key=f"genom2bip-{job.id}-{token}", pure=False): job for job in jobs}
+    future_of = {job.id: f for f, job in remaining.items()}
+    futures_done = as_completed(remaining)
     stop = threading.Event()
 
     def watch() -> None:
@@ -130,7 +144,10 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
                 late = [(by_id[j], m) for j, (t, m) in started_at.items() if j not in recorded
                         and by_id[j].timeout is not None and now - t > by_id[j].timeout]
             for job, message in late:
-                client.cancel([future_of[job.id]])
+                with lock:
+                    future = future_of.get(job.id)
+                if future is not None:
+                    client.cancel([future])
                 restarted = _restart(client, message.get("worker", ""))
                 with lock:
                     keep(job, _timed_out(job, message, restarted))
@@ -140,13 +157,26 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
         watchdog.start()
     start = time.perf_counter()
     try:
-        for future in as_completed(futures):
+        for future in futures_done:
             job = remaining.pop(future)
-            if future.status == "cancelled":
-                continue  # stopped past its time limit: recorded as such
-            record = _record(job, future)
             with lock:
-                keep(job, record)
+                del future_of[job.id]
+                again = _bystander(future, starts.get(job.id, 0)) and resubmitted.get(job.id, 0) < RESUBMITS
+                if again:
+                    resubmitted[job.id] = resubmitted.get(job.id, 0) + 1
+                    starts[job.id] = 0
+            record = _record(job, future) if future.status != "cancelled" else None  # cancelled: past its limit
+            future.release()
+            if again:
+                future = client.submit(run_job, job, key=f"genom2bip-{job.id}-{token}-{resubmitted[job.id]}",
+                                       pure=False)
+                with lock:
+                    remaining[future] = job
+                    future_of[job.id] = future
+                futures_done.add(future)
+            elif record is not None:
+                with lock:
+                    keep(job, record)
     except KeyboardInterrupt:
         out.interrupted = True
         out.undone = sorted((j for j in remaining.values() if j.id not in recorded), key=lambda j: j.index)
@@ -161,6 +191,15 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
         except Exception:  # noqa: BLE001 - a client closing after Ctrl-C
             pass
     return out
+
+
+def _bystander(future, starts: int) -> bool:
+    """Whether Dask gave the job up for its workers' deaths (``KilledWorker``) though it started no more times than
+    the deaths it allows: it waited on workers that another job crashed."""
+    if future.status != "error":
+        return False
+    allowed = getattr(future.exception(), "allowed_failures", None)
+    return allowed is not None and starts <= allowed
 
 
 def _restart(client, worker: str) -> str:
