@@ -194,7 +194,7 @@ def test_traceback_on_request_shows_where_an_unexpected_exception_came_from(caps
 def test_verbs_are_one_function_each_listed_by_the_command():
     from genom2bip.cli import check, command
 
-    assert list(command.VERBS) == ["check", "generate", "call", "verify", "graph", "mission"]
+    assert list(command.VERBS) == ["check", "generate", "call", "verify", "graph", "mission", "campaign"]
     assert command.VERBS["check"].run is check.verb_check
 
 

@@ -82,3 +82,16 @@ def test_the_verification_api_never_imports_the_command_line():
         if bad:
             offenders.append(f"{path.relative_to(ROOT)}: {sorted(bad)}")
     assert offenders == []
+
+
+def test_a_campaign_is_a_client_of_the_verification_api():
+    # genom2bip/campaign runs checks through genom2bip.verify: never the command line, never the explorer's, the
+    # compiled search's, localization's or the compositional analysis's modules
+    inside = ("genom2bip.cli", "runtime.explore", "runtime.native", "runtime.localize", "runtime.compositional",
+              "runtime.props", "runtime.engine")
+    offenders = []
+    for path in sorted((ROOT / "genom2bip" / "campaign").rglob("*.py")):
+        bad = {m for m in _imported_modules(path) if any(m == p or m.startswith(p + ".") for p in inside)}
+        if bad:
+            offenders.append(f"{path.relative_to(ROOT)}: {sorted(bad)}")
+    assert offenders == []

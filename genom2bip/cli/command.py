@@ -17,14 +17,14 @@ import traceback
 from pathlib import Path
 from typing import Sequence
 
-from genom2bip.cli import call, check, generate, graph, mission, verify
+from genom2bip.cli import call, campaign, check, generate, graph, mission, verify
 from genom2bip.cli.verbs import DEFAULT_VERB, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, Verb, error, exit_status, version
 from runtime.errors import Genom2bipError
 
 #: Every verb of the command line, in the order ``--help`` lists them.
 VERBS: dict[str, Verb] = {fn.verb.name: fn.verb for fn in (
     check.verb_check, generate.verb_generate, call.verb_call, verify.verb_verify, graph.verb_graph,
-    mission.verb_mission,
+    mission.verb_mission, campaign.verb_campaign,
 )}
 
 

@@ -3,13 +3,16 @@ paths, symbolic time) as ``genom2bip generate`` builds them, or one ``.bip`` fil
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from genom2bip.loading import Diagnostics, InputError, Report, TimeSettings, UsageError
 from runtime.diagnostics import DiagnosticError
+
+if TYPE_CHECKING:
+    from genom2bip.variants import Variant
 
 
 @dataclass
@@ -65,7 +68,8 @@ def open_bip(path: str | Path, root: str | None = None) -> Model:
 
 def build_model(paths: Sequence[str | Path], *, rules: str | Path | None = None, no_rules: bool = False,
                 defines: Mapping[str, str] | None = None, include_dirs: Sequence[str] = (), name: str | None = None,
-                root: str | None = None, time: TimeSettings | None = None, report: Report | None = None) -> Model:
+                root: str | None = None, time: TimeSettings | None = None, report: Report | None = None,
+                variant: Variant | None = None) -> Model:
     """The model of description files or directories, built as ``genom2bip generate`` builds it; or of one ``.bip``.
 
     ``rules``: a rule file (default: ``rules.yaml`` in the directory given;
@@ -77,7 +81,8 @@ def build_model(paths: Sequence[str | Path], *, rules: str | Path | None = None,
     :class:`~genom2bip.loading.InputError` for bad input,
     ``DiagnosticError`` for a ``.bip`` file or a model that does not parse or
     build, :class:`~genom2bip.generate.GenerateError` for a model that cannot
-    be generated.
+    be generated.  ``variant`` (:class:`genom2bip.variants.Variant`) scales every WCET (the default one of
+    ``time`` too) and replaces periods before the model is built: a sweep's point.
     """
     from genom2bip.generate import model_of, system_name
     from genom2bip.loading import read_description, read_rules, time_options
@@ -88,6 +93,12 @@ def build_model(paths: Sequence[str | Path], *, rules: str | Path | None = None,
         raise UsageError(["give either one .bip file or description files, not both"])
     diagnostics = Diagnostics(report)
     description = read_description(paths, defines, include_dirs, diagnostics=diagnostics)
+    if variant is not None and not variant.identity:
+        from genom2bip.variants import apply_variant, scaled
+
+        description = apply_variant(description, variant)
+        if time is not None and time.default_wcet_us:
+            time = replace(time, default_wcet_us=scaled(time.default_wcet_us, variant.wcet_scale))
     found = read_rules(description, paths, rules, no_rules, diagnostics)
     system = name or system_name([str(p) for p in paths])
     package, built_root, _ = model_of(description, system, found,

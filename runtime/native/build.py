@@ -96,10 +96,20 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
 
 
 def _write(path: Path, data: bytes) -> None:
-    """Write atomically: concurrent builds of the same model never see half a file."""
-    partial = path.with_name(f".{path.name}.{os.getpid()}")
-    partial.write_bytes(data)
-    os.replace(partial, path)
+    """Write atomically: concurrent builds of the same model never see half a file.
+
+    Each writer has a temporary file of its own (not one per process: two threads of a campaign's worker, or
+    two hosts sharing the cache, may build the same library at once); the rename is atomic, the last one wins.
+    """
+    fd, partial = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.chmod(partial, 0o644)
+        os.replace(partial, path)
+    except BaseException:
+        Path(partial).unlink(missing_ok=True)
+        raise
 
 
 class Result(ctypes.Structure):

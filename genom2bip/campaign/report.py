@@ -1,0 +1,111 @@
+"""What a person sees of a campaign: a line per job as it ends, a progress line on a terminal (done, running,
+failed, time left by the average), and the summary table at the end."""
+from __future__ import annotations
+
+import sys
+import time
+from collections import Counter
+from typing import Any, TextIO
+
+from genom2bip.campaign.jobs import Job
+
+
+def human_bytes(n: float) -> str:
+    """``98.2 MB``: a memory figure as the table shows it."""
+    for unit in ("B", "KB", "MB"):
+        if n < 1024:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} GB"
+
+
+def outcome(record: dict[str, Any] | None) -> str:
+    """A record's answer in one word: its verdict when done, else its status (failed, crashed); "-" if none."""
+    if record is None:
+        return "-"
+    return record.get("verdict") or record.get("status") or "?"
+
+
+def _states(record: dict[str, Any]) -> str:
+    figures = record.get("figures") or {}
+    return f"{figures['states']:,}" if figures.get("states") else "-"
+
+
+class Display:
+    """The running campaign on a terminal: each job's line on ``out``, a progress line on ``err`` (a terminal)."""
+
+    def __init__(self, total: int, out: TextIO | None = None, err: TextIO | None = None) -> None:
+        self.total, self.out, self.err = total, out or sys.stdout, err or sys.stderr
+        self.tty = getattr(self.err, "isatty", lambda: False)()
+        self.running: dict[str, str] = {}
+        self.done = self.failed = 0
+        self.start = time.monotonic()
+        self.width = 0
+
+    def started(self, job_id: str, worker: str) -> None:
+        self.running[job_id] = worker
+        self._draw()
+
+    def finished(self, job: Job, record: dict[str, Any]) -> None:
+        """A job's line: its answer, what it is, its figures and where it ran."""
+        self.running.pop(job.id, None)
+        self.done += 1
+        self.failed += record.get("status") != "done"
+        self._clear()
+        where = f", {record['host']}" if record.get("host") else ""
+        figures = (f"{_states(record)} states, {record['seconds']:.1f} s{where}" if record.get("seconds") is not None
+                   else "no figures")
+        print(f"{outcome(record):<12} {job.title}  ({figures})", file=self.out, flush=True)
+        if record.get("status") != "done" and record.get("message"):
+            print(f"{'':12} {record['message'].splitlines()[0]}", file=self.out, flush=True)
+        self._draw()
+
+    def line(self) -> str:
+        """``12/25 done, 2 running, 1 failed, about 0:32 left`` (by the average time of the jobs done so far)."""
+        text = f"{self.done}/{self.total} done, {len(self.running)} running, {self.failed} failed"
+        if self.done and self.done < self.total:
+            left = (time.monotonic() - self.start) / self.done * (self.total - self.done)
+            text += f", about {int(left // 60)}:{int(left % 60):02d} left"
+        return text
+
+    def _draw(self) -> None:
+        if self.tty:
+            line = self.line()
+            self.err.write("\r" + line + " " * max(0, self.width - len(line)))
+            self.err.flush()
+            self.width = len(line)
+
+    def _clear(self) -> None:
+        if self.tty and self.width:
+            self.err.write("\r" + " " * self.width + "\r")
+            self.err.flush()
+            self.width = 0
+
+    def close(self) -> None:
+        self._clear()
+
+
+def summary(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | None = None) -> Counter:
+    """The table of every job (model, check, method, target, point, answer, states, seconds, memory, host); the
+    answers counted."""
+    out = out or sys.stdout
+    header = ("model", "check", "method", "target", "point", "answer", "states", "seconds", "memory", "host")
+    rows = []
+    counts: Counter = Counter()
+    for job in sorted(jobs, key=lambda j: j.index):
+        record = records.get(job.id)
+        answer = outcome(record) if record is not None else "not done"
+        counts[answer] += 1
+        seconds = record.get("seconds") if record else None
+        memory = record.get("peak_memory") if record else None
+        point = " ".join(f"{k}={v}" for k, v in job.point) or "-"
+        rows.append((job.model, job.check, job.method, job.target, point, answer,
+                     _states(record) if record else "-", f"{seconds:.2f}" if seconds is not None else "-",
+                     human_bytes(memory) if memory else "-", (record or {}).get("host") or "-"))
+    widths = [max(len(str(r[i])) for r in (header, *rows)) for i in range(len(header))]
+    right = {6, 7, 8}
+    for row in (header, *rows):
+        cells = [str(c).rjust(w) if i in right else str(c).ljust(w) for i, (c, w) in enumerate(zip(row, widths))]
+        print("  ".join(cells).rstrip(), file=out)
+    print(f"{len(jobs)} jobs: " + ", ".join(f"{n} {word}" for word, n in counts.most_common()), file=out)
+    return counts

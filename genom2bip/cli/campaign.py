@@ -1,0 +1,202 @@
+"""``genom2bip campaign FILE``: every job of a campaign file on Dask workers, one JSON line each, a summary table,
+a picture per numeric axis (docs/verification.md, Campaigns).
+
+Exit status: 0 every job done and every check holds, 4 a check is violated
+(or meets a model error), 5 a job is inconclusive, failed, crashed or timed out, 1 bad
+input (the campaign file, a model, a property file: nothing is run or
+written), 130 interrupted (what is done is written; the same command runs the
+rest).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from genom2bip.cli.verbs import (
+    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error, print_diagnostics, verb,
+)
+
+EXIT_INTERRUPTED = 130
+#: A job's answer -> the exit status it asks for.
+EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    """FILE, the output, --set, --list, --retry-failed, and the cluster's options."""
+    parser.add_argument("file", metavar="FILE", help="a campaign file (YAML): models, checks, values to vary over")
+    parser.add_argument("-o", "--output", metavar="DIR",
+                        help="where results.jsonl, jobs/ and the pictures go (default: out/<campaign name>); "
+                             "the jobs whose results are there already are not run again")
+    parser.add_argument("--set", dest="settings", metavar="NAME=VALUE", action="append", default=[],
+                        help="the value of ${NAME} in the campaign file's paths (e.g. --set corpus=DIR)")
+    parser.add_argument("--list", action="store_true", help="list the jobs and run nothing")
+    parser.add_argument("--retry-failed", action="store_true",
+                        help="run again the jobs recorded as failed or crashed (the others done are kept)")
+    cluster = parser.add_argument_group("the Dask cluster (default: a local one, a worker process per core)")
+    cluster.add_argument("--scheduler", metavar="ADDRESS",
+                         help="a running cluster's scheduler, tcp://HOST:PORT or tls://HOST:PORT")
+    cluster.add_argument("--workers", type=int, metavar="N", help="local cluster: N worker processes")
+    cluster.add_argument("--listen", metavar="HOST", default="127.0.0.1",
+                         help="local cluster: the address its scheduler and workers listen on (default: loopback)")
+    cluster.add_argument("--connect-timeout", type=float, default=30, metavar="SECONDS",
+                         help="--scheduler: how long to try to reach it (default 30)")
+    cluster.add_argument("--tls-ca-file", metavar="FILE", help="TLS: the certificate authority of the cluster")
+    cluster.add_argument("--tls-cert", metavar="FILE", help="TLS: this client's certificate")
+    cluster.add_argument("--tls-key", metavar="FILE", help="TLS: this client's private key")
+
+
+def _settings(items: list[str]) -> dict[str, str]:
+    out = {}
+    for item in items:
+        name, eq, value = item.partition("=")
+        if not eq or not name.isidentifier():
+            error(f"--set {item}: NAME=VALUE expected")
+            raise Failure(EXIT_USAGE)
+        out[name] = value
+    return out
+
+
+def _cluster(args: argparse.Namespace):
+    """The cluster asked for (:class:`~genom2bip.campaign.cluster.ClusterSpec`); options that do not go together
+    are a usage error."""
+    from genom2bip.campaign.cluster import ClusterSpec
+
+    if args.workers is not None and args.workers < 1:
+        error("--workers must be >= 1")
+        raise Failure(EXIT_USAGE)
+    if args.scheduler and (args.workers is not None or args.listen != "127.0.0.1"):
+        error("--workers and --listen belong to the local cluster: drop them with --scheduler")
+        raise Failure(EXIT_USAGE)
+    tls = (args.tls_ca_file, args.tls_cert, args.tls_key)
+    if any(tls) and not (all(tls) and args.scheduler):
+        error("TLS takes --scheduler tls://HOST:PORT with --tls-ca-file, --tls-cert and --tls-key together")
+        raise Failure(EXIT_USAGE)
+    if args.connect_timeout <= 0:
+        error("--connect-timeout must be positive")
+        raise Failure(EXIT_USAGE)
+    return ClusterSpec(args.scheduler, args.workers, args.listen, *tls, connect_timeout=args.connect_timeout)
+
+
+@verb("campaign", help="run a campaign of checks (a YAML file) on Dask workers: JSON lines, a table, pictures",
+      arguments=_arguments)
+def verb_campaign(args: argparse.Namespace) -> int:
+    """Read and expand the campaign (nothing runs on an error), run the jobs not done yet, report them all."""
+    from pathlib import Path
+
+    from genom2bip.campaign.jobs import expand
+    from genom2bip.campaign.output import Output
+    from genom2bip.campaign.spec import read_campaign
+
+    settings, spec = _settings(args.settings), _cluster(args)
+    campaign = read_campaign(args.file, settings)
+    expansion = expand(campaign)
+    if expansion.warnings:
+        print_diagnostics(expansion.warnings, None)
+    _warn_models(expansion)
+    jobs = expansion.jobs
+    if args.list:
+        for job in jobs:
+            print(f"{job.id}  {job.title}  ({job.method})")
+        print(f"{len(jobs)} jobs")
+        return EXIT_OK
+    directory = Path(args.output) if args.output else Path("out") / campaign.name
+    done = Output.peek(directory)
+    todo = [j for j in jobs if j.id not in done
+            or (args.retry_failed and done[j.id].get("status") != "done")]
+    client = _connect(spec) if todo else None  # a scheduler out of reach: nothing written
+    try:
+        out = Output.open(directory)
+    except BaseException:
+        _close(client)
+        raise
+    try:
+        if out.dropped:
+            print(f"note: {out.dropped} unfinished line(s) of {out.results} dropped: those jobs run again")
+        todo = [j for j in jobs if j.id not in out.records
+                or (args.retry_failed and out.records[j.id].get("status") != "done")]
+        print(f"campaign {campaign.name}: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {out.results}, "
+              f"{len(todo)} to run", flush=True)
+        run = _run(todo, client, out) if todo and client else None
+        return _report(campaign, jobs, out, run)
+    finally:
+        _close(client)
+        out.close()
+
+
+def _connect(spec):
+    """``(client, cluster)`` of the cluster asked for; a scheduler out of reach is an error (exit 1)."""
+    from genom2bip.campaign.cluster import connect
+
+    try:
+        return connect(spec)
+    except (OSError, TimeoutError) as exc:
+        error(f"cannot reach the Dask scheduler {spec.scheduler}: {exc}")
+        raise Failure(EXIT_ERRORS) from None
+
+
+def _close(client) -> None:
+    if client is not None:
+        client[0].close()
+        if client[1] is not None:
+            client[1].close()
+
+
+def _run(todo, connection, out):
+    """The jobs on the cluster, each record written as it comes."""
+    from genom2bip.campaign.cluster import describe, run
+    from genom2bip.campaign.report import Display
+
+    client, cluster = connection
+    display = Display(len(todo))
+    try:
+        print(describe(client, cluster), flush=True)
+        found = run(todo, client, out.write, display)
+        found.where = describe(client, cluster)
+        return found
+    finally:
+        display.close()
+
+
+def _report(campaign, jobs, out, run) -> int:
+    """The summary table, the pictures, what an interruption left undone; the exit status."""
+    from genom2bip.campaign.pictures import draw
+    from genom2bip.campaign.report import summary
+
+    print()
+    counts = summary(jobs, out.records)
+    if run is not None:
+        busy = sum(r.get("seconds") or 0 for r in run.written)
+        cpu = sum(r.get("cpu_seconds") or 0 for r in run.written)
+        print(f"{len(run.written)} jobs run in {run.seconds:.1f} s of wall clock ({busy:.1f} s of job time, "
+              f"{cpu:.1f} s of CPU)")
+    for path in draw(jobs, out.records, out.directory):
+        print(f"picture: {path}")
+    print(f"results: {out.results}")
+    if run is not None and run.interrupted:
+        print(f"interrupted: {len(run.written)} jobs done in this run and written; {len(run.undone)} not done:",
+              file=sys.stderr)
+        for job in run.undone[:10]:
+            print(f"  {job.title}", file=sys.stderr)
+        if len(run.undone) > 10:
+            print(f"  … and {len(run.undone) - 10} more", file=sys.stderr)
+        print(f"run the same command again to run them (the {len(out.records)} results written are kept)",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return max((EXITS.get(word, EXIT_INCONCLUSIVE) for word in counts), default=EXIT_OK)
+
+
+def _warn_models(expansion) -> None:
+    """The warnings of the models built to name the jobs (codels without WCET), once per model."""
+    from genom2bip.verify.model import untimed_codels
+
+    seen = set()
+    for model in expansion.built.values():
+        if model is None:
+            continue
+        for group in model.warnings:
+            print_diagnostics(group.diagnostics, group.sources)
+        default, codels = untimed_codels(model.package)
+        if codels and model.title not in seen:
+            seen.add(model.title)
+            print(f"genom2bip: warning: {model.title}: codels without wcet take {default / 1000:g} ms: "
+                  f"{', '.join(codels)}", file=sys.stderr)
