@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections import Counter
 import subprocess
 import sys
 import threading
@@ -14,7 +15,7 @@ import time
 
 import pytest
 
-from runkit import ROOT, TICK, build
+from runkit import HELD, ROOT, TICK, build, tick_codels
 from runtime.controller import Controller, VirtualClock
 from runtime.controller.codel_times import merge, table, unwritable, write_json
 from runtime.genom import Throw
@@ -29,42 +30,18 @@ def spin(seconds: float) -> None:
         pass
 
 
-def busy_codels(counted: dict[str, int]):
-    """The tick component's codels, counting their own calls; tickSlow spins, and throws for a negative time."""
-    def bump(name: str) -> None:
-        counted[name] = counted.get(name, 0) + 1
-
-    def tickStart(n):
-        bump("tickStart")
-        n.value = 0
-        return "count"
-
-    def tickCount(n, Count):
-        bump("tickCount")
-        n.value += 1
-        Count.value = n.value
-        return "pause::count"
-
-    def tickSlow(seconds):
-        bump("tickSlow")
-        if seconds < 0:
-            raise Throw("e_slow")
-        spin(seconds)
-        return "ether"
-
-    def tickWork(add, n, total):
-        n.value += add
-        total.value = n.value
-        return "ether"
-
-    return {"tick": {"tickStart": tickStart, "tickCount": tickCount, "tickSlow": tickSlow, "tickWork": tickWork}}
+def slow_or_throw(seconds: float) -> None:
+    """tickSlow's work: spin for ``seconds`` of CPU time, throw e_slow for a negative time."""
+    if seconds < 0:
+        raise Throw("e_slow")
+    spin(seconds)
 
 
 def test_each_codel_is_counted_exactly_and_a_busy_one_takes_at_least_its_cpu_time(tmp_path):
     package, root, interface = build(tmp_path, TICK.replace("yield ether;\n    throw", "yield ether wcet 5 ms;\n"
                                                                                          "    throw"))
-    counted: dict[str, int] = {}
-    c = Controller(package, root, interface, busy_codels(counted), clock=VirtualClock(), times=True)
+    clock, calls = VirtualClock(), []
+    c = Controller(package, root, interface, tick_codels(clock, calls, slow_or_throw), clock=clock, times=True)
     c.start()
     try:
         requests = []
@@ -77,6 +54,7 @@ def test_each_codel_is_counted_exactly_and_a_busy_one_takes_at_least_its_cpu_tim
     assert got["clock"] == "virtual" and got["runs"] == 1
     codels = got["codels"]
     assert set(codels) == {"tick.t.tickStart", "tick.t.tickCount", "tick.Slow.tickSlow"}
+    counted = Counter(name for name, _ in calls)
     assert {name.rsplit(".", 1)[1]: c["calls"] for name, c in codels.items()} == counted
     assert counted["tickSlow"] == 3  # the call that threw is counted too
     slow = codels["tick.Slow.tickSlow"]
@@ -96,23 +74,9 @@ def test_each_codel_is_counted_exactly_and_a_busy_one_takes_at_least_its_cpu_tim
 
 def test_nothing_is_timed_unless_asked(tmp_path):
     package, root, interface = build(tmp_path, TICK)
-    c = Controller(package, root, interface, busy_codels({}), clock=VirtualClock())
+    c = Controller(package, root, interface, tick_codels(), clock=VirtualClock())
     assert c.run(duration=0.05) == "stopped"
     assert c.codel_times() is None and c.binder.times is None
-
-
-HELD = """
-component held {
-  ids { long n; long seen; };
-  task t {
-    period 10 ms;
-    codel <start> heldTick(ids inout n) yield pause::start;
-  };
-  attribute Set(in seen = 0 : "a value") {
-    validate heldCheck(local in seen);
-  };
-};
-"""
 
 
 def test_a_detached_codel_is_timed_once_over_its_whole_call_and_waiting_is_not_cpu_time(tmp_path):
@@ -218,3 +182,19 @@ def test_the_generated_run_writes_the_times_when_it_ends_and_refuses_a_directory
     assert refused.returncode == 1
     assert f"--codel-times {tmp_path}: cannot write it: is a directory" in refused.stderr
     assert "services interface on" not in refused.stdout  # refused before the controller started
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--runs", "0"], "argument --runs: expected an integer above 0, got '0'"),
+    (["--margin", "-1"], "argument --margin: expected a number above 0, got '-1'"),
+    (["--margin", "inf"], "argument --margin: expected a number above 0, got 'inf'"),
+    (["--from", "missing.json"], "--from missing.json: no such file"),
+    (["no/such/mission.yaml"], "no/such/mission.yaml: no such mission file"),
+    (["--lower"], "--lower goes with --write"),
+])
+def test_the_measuring_script_names_a_bad_option_before_it_runs_anything(args, message):
+    before = {p: p.read_text() for p in (ROOT / "descriptions" / "dala").glob("*.gen")}
+    done = _cli([str(ROOT / "bench" / "codel_times.py"), *args])
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.splitlines()[-1] == f"codel_times.py: error: {message}"
+    assert {p: p.read_text() for p in before} == before
