@@ -11,6 +11,82 @@ DALA_CODELS = ROOT / "tests" / "fixtures" / "dala_codels"
 ORIGIN = {"x": 0.0, "y": 0.0, "theta": 0.0}
 
 
+#: A component whose attribute's validate codel the test holds (a device that does not answer) while a 10 ms task runs.
+HELD = """
+component held {
+  ids { long n; long seen; };
+  task t {
+    period 10 ms;
+    codel <start> heldTick(ids inout n) yield pause::start;
+  };
+  attribute Set(in seen = 0 : "a value") {
+    validate heldCheck(local in seen);
+  };
+};
+"""
+
+
+def tick_codels(clock=None, calls=None, slow=None):
+    """Codels of the tick component; ``calls`` collects (codel, time); ``slow(seconds)`` runs in tickSlow."""
+    calls = [] if calls is None else calls
+
+    def now():
+        return clock.now() if clock is not None else time.monotonic()
+
+    def tickStart(n):
+        calls.append(("tickStart", now()))
+        n.value = 0
+        return "count"
+
+    def tickCount(n, Count):
+        calls.append(("tickCount", now()))
+        n.value += 1
+        Count.value = n.value
+        return "pause::count"
+
+    def tickSlow(seconds):
+        calls.append(("tickSlow", now()))
+        if slow is not None:
+            slow(seconds)
+        return "ether"
+
+    def tickWork(add, n, total):
+        n.value += add
+        total.value = n.value
+        return "ether"
+
+    return {"tick": {"tickStart": tickStart, "tickCount": tickCount, "tickSlow": tickSlow, "tickWork": tickWork}}
+
+
+_UNTIMED: list[Path] = []
+
+
+def dala_without_wcets() -> Path:
+    """descriptions/dala (its .gen files, rules and observers) with every ``wcet`` taken out, made once a process.
+
+    For the tests of the timed model's mechanics written on DALA's shape when its codels declared no WCET (each
+    codel then takes ``--default-wcet``); DALA's measured WCETs and what the timed check makes of them are in
+    docs/missions.md and docs/verification.md.
+    """
+    import atexit
+    import re
+    import shutil
+    import tempfile
+
+    if not _UNTIMED:
+        folder = Path(tempfile.mkdtemp(prefix="dala-without-wcets-"))
+        atexit.register(shutil.rmtree, folder, True)
+        target = folder / "dala"
+        shutil.copytree(ROOT / "descriptions" / "dala", target,
+                        ignore=shutil.ignore_patterns("codels", "worlds", "missions", "__pycache__"))
+        for gen in target.glob("*.gen"):
+            text = gen.read_text()
+            gen.write_text(re.sub(r"\s+wcet\s+[0-9.]+\s*(?:ms|us|s)\b", "", text))
+            assert " wcet " not in gen.read_text().split("*/", 1)[-1], gen
+        _UNTIMED.append(target)
+    return _UNTIMED[0]
+
+
 def build(tmp_path: Path, text: str, name: str = "tick"):
     """(package, root, interface) of a GenoM3 description given as text, through the generator's back ends."""
     from genom2bip.back.interface import interface_data

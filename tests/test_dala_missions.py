@@ -200,3 +200,51 @@ def test_live_without_a_display_is_refused_and_writes_nothing(tmp_path):
     assert done.returncode == 1
     assert "--live needs a display (DISPLAY is not set)" in done.stderr
     assert not out.exists()
+
+
+def _counting(counted: dict[str, int], name: str, fn):
+    """``fn``, counting its calls under ``name`` (the codel times' own count is checked against it)."""
+    import functools
+
+    @functools.wraps(fn)
+    def call(*args, **kwargs):
+        counted[name] = counted.get(name, 0) + 1
+        return fn(*args, **kwargs)
+
+    return call
+
+
+def test_shutdown_stops_every_module_and_its_codel_times_hold_every_codel_that_ran(monkeypatch):
+    from runtime.controller.codel_times import declared
+    from runtime.controller.codels import load_codels
+
+    package = dala()
+    names = declared(package.INTERFACE)  # Module.Owner.codel of every codel of the level
+    # the codels package the run imports (it keeps it by its path), each codel counting its calls
+    source = load_codels(CODELS, list(package.INTERFACE["components"]))
+    counted: dict[str, int] = {}
+    for comp, module in source.modules.items():
+        for codel in {n.split(".")[2] for n in names if n.startswith(f"{comp}.")}:
+            monkeypatch.setattr(module, codel, _counting(counted, f"{comp}.{codel}", getattr(module, codel)))
+    mission = read_mission(MISSIONS / "shutdown.yaml")
+    run = run_mission(mission, package, CODELS, mission.world, times=True)
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    assert _report(run, "NDD.GoTo")["status"] == "ok"
+    for activity, stop in (("NDD.GoTo", "NDD.Stop"), ("RFLEX.TrackSpeed", "RFLEX.Stop"),
+                           ("LaserRF.Start", "LaserRF.Stop"), ("Aspect.Run", "Aspect.Stop")):
+        ended = _report(run, activity, 1 if activity == "NDD.GoTo" else 0)
+        assert (ended["status"], ended["by"]) == ("interrupted", stop), activity
+    stopped_at = _report(run, "RFLEX.Stop")["time"]
+    assert all(abs(s.v) < 1e-6 for s in run.world.trajectory if s.t > stopped_at + 0.1)  # the base braked
+    assert _report(run, "POM.Reset")["status"] == "ok"
+    # every codel a request can reach ran, and the times hold each of them with the calls it had
+    times = run.codel_times
+    assert times["clock"] == "virtual"
+    recorded: dict[str, int] = {}
+    for name, figures in times["codels"].items():
+        comp, _, codel = name.split(".")
+        recorded[f"{comp}.{codel}"] = recorded.get(f"{comp}.{codel}", 0) + figures["calls"]
+        assert figures["task"] == names[name].task and 0 <= figures["cpu"]["p99"] <= figures["cpu"]["max"]
+    assert recorded == counted
+    assert times["not_run"] == ["NDD.motion.nddShutdown", "POM.fusion.pomEnd", "RFLEX.servo.rflexClose"]
+    assert set(times["codels"]) | set(times["not_run"]) == set(names)

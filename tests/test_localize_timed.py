@@ -22,11 +22,13 @@ from runtime.localize.timed import observer_seed
 from runtime.native.properties import compiled_check
 from runtime.props import read_property_text
 from tests.nativekit import needs_cc
+from tests.runkit import dala_without_wcets
 
 pytestmark = needs_cc
 
 ROOT = Path(__file__).resolve().parents[1]
-DALA = ROOT / "descriptions" / "dala"
+#: whole DALA with its codels at 0 ms (no WCET declared): the shape these rounds were written on
+DALA = dala_without_wcets()
 CRUISE = ROOT / "tests" / "fixtures" / "timed" / "Cruise.gen"
 CRUISE_OBSERVERS = ROOT / "tests" / "fixtures" / "timed" / "observers.yaml"
 
@@ -173,6 +175,8 @@ def verify(capsys, *argv: str) -> tuple[int, str, str]:
 
 
 def test_the_timed_whole_level_is_verified_by_invariants_and_localization(capsys):
+    """The command of the README's job, on DALA with 0 ms codels (what the same job gives with its measured WCETs
+    is in docs/verification.md, *DALA with its measured WCETs*)."""
     code, out, _ = verify(capsys, str(DALA), "--timed", "--method", "compositional")
     assert code == 0
     lines = out.splitlines()

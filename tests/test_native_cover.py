@@ -16,6 +16,7 @@ from runtime.explore import StateSpace
 from runtime.native import compiled as native
 from tests import enginekit, verifykit
 from tests.nativekit import agree, compiled, models, needs_cc
+from tests.runkit import dala_without_wcets
 from tests.test_native import same_search
 
 pytestmark = needs_cc
@@ -50,7 +51,7 @@ def test_timed_cruise_agrees_state_by_state_and_in_the_search(wcet):
 
 
 def test_timed_ndd_agrees_on_its_first_states_and_counts_as_python():
-    package, root = timed("descriptions/dala/NDD.gen", "NDD")
+    package, root = timed(str(dala_without_wcets() / "NDD.gen"), "NDD")  # 0 ms codels
     space = StateSpace(package, root)
     assert agree(space, compiled(space), limit=1500) == 1500
     result = compiled(StateSpace(package, root)).explore()

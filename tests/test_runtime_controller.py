@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from runkit import DALA_CODELS, ROOT, TICK, build, dala, until
+from runkit import DALA_CODELS, HELD, ROOT, TICK, build, dala, tick_codels, until
 from runtime.controller import Controller, RequestError, VirtualClock
 from runtime.genom import Ref, Throw
 
@@ -14,37 +14,6 @@ from runtime.genom import Ref, Throw
 @pytest.fixture
 def tick(tmp_path):
     return build(tmp_path, TICK)
-
-
-def tick_codels(clock=None, calls=None, slow=None):
-    """Codels of the tick component; ``calls`` collects (codel, time); ``slow(seconds)`` runs in tickSlow."""
-    calls = [] if calls is None else calls
-
-    def now():
-        return clock.now() if clock is not None else time.monotonic()
-
-    def tickStart(n):
-        n.value = 0
-        return "count"
-
-    def tickCount(n, Count):
-        calls.append(("tickCount", now()))
-        n.value += 1
-        Count.value = n.value
-        return "pause::count"
-
-    def tickSlow(seconds):
-        calls.append(("tickSlow", now()))
-        if slow is not None:
-            slow(seconds)
-        return "ether"
-
-    def tickWork(add, n, total):
-        n.value += add
-        total.value = n.value
-        return "ether"
-
-    return {"tick": {"tickStart": tickStart, "tickCount": tickCount, "tickSlow": tickSlow, "tickWork": tickWork}}
 
 
 # --------------------------------------------------------------------------- time
@@ -474,21 +443,6 @@ def test_a_codel_may_run_its_declared_wcet_else_its_task_period_else_the_default
     assert got["tick_tickCount"] == Bound(0.003, "its declared WCET")
     assert got["tick_tickStart"] == got["tick_tickSlow"] == Bound(0.01, "the period of task tick.t; no WCET declared")
     assert got["tick_tickWork"] == Bound(DEFAULT_BOUND, "the default for the control task; no WCET declared")
-
-
-#: A component whose attribute's validate codel the test holds (a device that does not answer) while a 10 ms task runs.
-HELD = """
-component held {
-  ids { long n; long seen; };
-  task t {
-    period 10 ms;
-    codel <start> heldTick(ids inout n) yield pause::start;
-  };
-  attribute Set(in seen = 0 : "a value") {
-    validate heldCheck(local in seen);
-  };
-};
-"""
 
 
 def test_a_stuck_validate_codel_is_reported_detached_and_its_step_fired_once_when_it_returns(tmp_path):

@@ -152,6 +152,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'decay', 'source': 'local', 'direction': 'in', 'path': 'decay'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -179,6 +180,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'Obs', 'source': 'port', 'direction': 'out', 'path': 'Obs'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'Aspect_aspFuse': {
                             'codel': 'aspFuse',
@@ -195,13 +197,15 @@ INTERFACE = {
                                 {'arg': 'last_seq', 'source': 'ids', 'direction': 'inout', 'path': 'last_seq'},
                                 {'arg': 'Obs', 'source': 'port', 'direction': 'out', 'path': 'Obs'},
                             ],
+                            'wcet_us': 3000,
                         },
                         'Aspect_aspWaitScan': {
                             'codel': 'aspWaitScan',
                             'role': 'fsm',
                             'params': [{'arg': 'Scan', 'source': 'port', 'direction': 'in', 'path': 'Scan'}],
+                            'wcet_us': 1000,
                         },
-                        'Aspect_aspStop': {'codel': 'aspStop', 'role': 'fsm', 'params': []},
+                        'Aspect_aspStop': {'codel': 'aspStop', 'role': 'fsm', 'params': [], 'wcet_us': 1000},
                     },
                 },
                 'Stop': {
@@ -245,6 +249,7 @@ INTERFACE = {
                             'params': [
                                 {'arg': 'acquiring', 'source': 'ids', 'direction': 'out', 'path': 'acquiring'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -293,6 +298,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'beams', 'source': 'local', 'direction': 'in', 'path': 'beams'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -329,6 +335,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'ids_device', 'source': 'ids', 'direction': 'out', 'path': 'device'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'LaserRF_lrfConfigure': {
                             'codel': 'lrfConfigure',
@@ -337,6 +344,7 @@ INTERFACE = {
                                 {'arg': 'max_range', 'source': 'ids', 'direction': 'in', 'path': 'max_range'},
                                 {'arg': 'beams', 'source': 'ids', 'direction': 'in', 'path': 'beams'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -358,11 +366,13 @@ INTERFACE = {
                             'params': [
                                 {'arg': 'acquiring', 'source': 'ids', 'direction': 'out', 'path': 'acquiring'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'LaserRF_lrfAcquire': {
                             'codel': 'lrfAcquire',
                             'role': 'fsm',
                             'params': [{'arg': 'Scan', 'source': 'port', 'direction': 'out', 'path': 'Scan'}],
+                            'wcet_us': 10000,
                         },
                         'LaserRF_lrfStopAcquisition': {
                             'codel': 'lrfStopAcquisition',
@@ -370,6 +380,7 @@ INTERFACE = {
                             'params': [
                                 {'arg': 'acquiring', 'source': 'ids', 'direction': 'out', 'path': 'acquiring'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -432,6 +443,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'NDD_nddPublishIdle': {
                             'codel': 'nddPublishIdle',
@@ -445,6 +457,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'NDD_nddShutdown': {
                             'codel': 'nddShutdown',
@@ -485,6 +498,7 @@ INTERFACE = {
                             'params': [
                                 {'arg': 'params', 'source': 'local', 'direction': 'in', 'path': 'params'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -521,6 +535,7 @@ INTERFACE = {
                                     'path': 'max_speed',
                                 },
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -572,6 +587,7 @@ INTERFACE = {
                                     'path': 'pos_source',
                                 },
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -599,6 +615,7 @@ INTERFACE = {
                             'codel': 'nddCheckGoal',
                             'role': 'validate',
                             'params': [{'arg': 'goal', 'source': 'local', 'direction': 'in', 'path': 'goal'}],
+                            'wcet_us': 1000,
                         },
                         'NDD_nddStartGoTo': {
                             'codel': 'nddStartGoTo',
@@ -613,6 +630,7 @@ INTERFACE = {
                                     'path': 'navigating',
                                 },
                             ],
+                            'wcet_us': 1000,
                         },
                         'NDD_nddPlan': {
                             'codel': 'nddPlan',
@@ -625,6 +643,7 @@ INTERFACE = {
                                 {'arg': 'Pos', 'source': 'port', 'direction': 'in', 'path': 'Pos'},
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
+                            'wcet_us': 3000,
                         },
                         'NDD_nddArrived': {
                             'codel': 'nddArrived',
@@ -638,6 +657,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'NDD_nddStopGoTo': {
                             'codel': 'nddStopGoTo',
@@ -651,6 +671,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -672,6 +693,7 @@ INTERFACE = {
                             'params': [
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -718,6 +740,7 @@ INTERFACE = {
                                     'path': 'initialised',
                                 },
                             ],
+                            'wcet_us': 1000,
                         },
                         'POM_pomUpdate': {
                             'codel': 'pomUpdate',
@@ -733,6 +756,7 @@ INTERFACE = {
                                 {'arg': 'estimate', 'source': 'ids', 'direction': 'inout', 'path': 'estimate'},
                                 {'arg': 'Pos', 'source': 'port', 'direction': 'out', 'path': 'Pos'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'POM_pomEnd': {'codel': 'pomEnd', 'role': 'fsm', 'params': []},
                     },
@@ -763,6 +787,7 @@ INTERFACE = {
                             'codel': 'pomWaitOdometry',
                             'role': 'fsm',
                             'params': [{'arg': 'Odo', 'source': 'port', 'direction': 'in', 'path': 'Odo'}],
+                            'wcet_us': 1000,
                         },
                         'POM_pomFix': {
                             'codel': 'pomFix',
@@ -779,6 +804,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'Pos', 'source': 'port', 'direction': 'out', 'path': 'Pos'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -805,6 +831,7 @@ INTERFACE = {
                                     'path': 'initialised',
                                 },
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -834,11 +861,13 @@ INTERFACE = {
                             'codel': 'rflexInitOdometry',
                             'role': 'fsm',
                             'params': [{'arg': 'Odo', 'source': 'port', 'direction': 'out', 'path': 'Odo'}],
+                            'wcet_us': 1000,
                         },
                         'RFLEX_rflexOdometry': {
                             'codel': 'rflexOdometry',
                             'role': 'fsm',
                             'params': [{'arg': 'Odo', 'source': 'port', 'direction': 'out', 'path': 'Odo'}],
+                            'wcet_us': 6000,
                         },
                         'RFLEX_rflexClose': {'codel': 'rflexClose', 'role': 'fsm', 'params': []},
                     },
@@ -878,6 +907,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'ids_device', 'source': 'ids', 'direction': 'out', 'path': 'device'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -920,6 +950,7 @@ INTERFACE = {
                             'codel': 'rflexStartTracking',
                             'role': 'fsm',
                             'params': [{'arg': 'mode', 'source': 'ids', 'direction': 'out', 'path': 'mode'}],
+                            'wcet_us': 1000,
                         },
                         'RFLEX_rflexTrack': {
                             'codel': 'rflexTrack',
@@ -934,6 +965,7 @@ INTERFACE = {
                                 },
                                 {'arg': 'command', 'source': 'ids', 'direction': 'out', 'path': 'command'},
                             ],
+                            'wcet_us': 1000,
                         },
                         'RFLEX_rflexBrake': {
                             'codel': 'rflexBrake',
@@ -942,6 +974,7 @@ INTERFACE = {
                                 {'arg': 'mode', 'source': 'ids', 'direction': 'out', 'path': 'mode'},
                                 {'arg': 'command', 'source': 'ids', 'direction': 'out', 'path': 'command'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },
@@ -963,6 +996,7 @@ INTERFACE = {
                             'params': [
                                 {'arg': 'command', 'source': 'ids', 'direction': 'out', 'path': 'command'},
                             ],
+                            'wcet_us': 1000,
                         },
                     },
                 },

@@ -139,7 +139,7 @@ def Aspect_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -152,7 +152,7 @@ def Aspect_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -165,7 +165,7 @@ def Aspect_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -173,7 +173,7 @@ def Aspect_Requests() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '6', 'column': '11'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '9', 'column': '11'},
             ),
         ],
     )
@@ -219,7 +219,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '37', 'column': '14'},
                     ),
                 ],
             ),
@@ -232,7 +232,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -244,7 +244,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -260,7 +260,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -272,7 +272,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -284,7 +284,7 @@ def Aspect_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -292,7 +292,7 @@ def Aspect_SetParams_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
             ),
         ],
     )
@@ -323,7 +323,7 @@ def Aspect_SetParams_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -334,7 +334,7 @@ def Aspect_SetParams_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -342,7 +342,7 @@ def Aspect_SetParams_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
             ),
         ],
     )
@@ -386,7 +386,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -398,7 +398,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -414,7 +414,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -426,7 +426,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -438,7 +438,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -449,7 +449,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -460,7 +460,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -471,7 +471,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -483,7 +483,7 @@ def Aspect_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -491,7 +491,7 @@ def Aspect_Run_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
             ),
         ],
     )
@@ -543,7 +543,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -555,7 +555,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '19'},
                     ),
                 ],
             ),
@@ -568,7 +568,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '67'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '67'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -582,7 +582,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -595,7 +595,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
                     ),
                 ],
             ),
@@ -608,7 +608,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '47', 'column': '13'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -622,7 +622,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '26'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '47', 'column': '26'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -640,7 +640,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -653,7 +653,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '18'},
                     ),
                 ],
             ),
@@ -666,7 +666,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '50'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '50'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -680,7 +680,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '63'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '63'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -694,7 +694,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '69'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -708,7 +708,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '69'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -730,7 +730,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -743,7 +743,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '49', 'column': '18'},
                     ),
                 ],
             ),
@@ -756,7 +756,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '34'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '49', 'column': '34'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -770,7 +770,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '34'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '49', 'column': '34'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -784,7 +784,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '49', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -796,7 +796,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -807,7 +807,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -818,7 +818,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -829,7 +829,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -840,7 +840,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -852,7 +852,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -864,7 +864,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -876,7 +876,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -888,7 +888,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -900,7 +900,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -908,7 +908,7 @@ def Aspect_Run_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
             ),
         ],
     )
@@ -950,7 +950,7 @@ def Aspect_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -962,7 +962,7 @@ def Aspect_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -978,7 +978,7 @@ def Aspect_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -990,7 +990,7 @@ def Aspect_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -1002,7 +1002,7 @@ def Aspect_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -1010,7 +1010,7 @@ def Aspect_Stop_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
             ),
         ],
     )
@@ -1041,7 +1041,7 @@ def Aspect_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -1052,7 +1052,7 @@ def Aspect_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -1060,7 +1060,7 @@ def Aspect_Stop_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
             ),
         ],
     )
@@ -1088,7 +1088,7 @@ def LaserRF_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1101,7 +1101,7 @@ def LaserRF_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1114,7 +1114,7 @@ def LaserRF_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1127,7 +1127,7 @@ def LaserRF_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -1135,7 +1135,7 @@ def LaserRF_Requests() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '6', 'column': '11'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '9', 'column': '11'},
             ),
         ],
     )
@@ -1161,7 +1161,7 @@ def LaserRF_acquisition_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '19'},
                     ),
                 ],
             ),
@@ -1174,7 +1174,7 @@ def LaserRF_acquisition_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '52'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '52'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1188,7 +1188,7 @@ def LaserRF_acquisition_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1197,7 +1197,7 @@ def LaserRF_acquisition_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '29', 'column': '8'},
             ),
         ],
     )
@@ -1243,7 +1243,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '39', 'column': '14'},
                     ),
                 ],
             ),
@@ -1256,7 +1256,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1268,7 +1268,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1284,7 +1284,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1296,7 +1296,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1308,7 +1308,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1316,7 +1316,7 @@ def LaserRF_SetConfig_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
             ),
         ],
     )
@@ -1347,7 +1347,7 @@ def LaserRF_SetConfig_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1358,7 +1358,7 @@ def LaserRF_SetConfig_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -1366,7 +1366,7 @@ def LaserRF_SetConfig_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
             ),
         ],
     )
@@ -1409,7 +1409,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1421,7 +1421,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1437,7 +1437,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1449,7 +1449,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1461,7 +1461,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1472,7 +1472,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1483,7 +1483,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1494,7 +1494,7 @@ def LaserRF_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1502,7 +1502,7 @@ def LaserRF_Init_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
             ),
         ],
     )
@@ -1544,7 +1544,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1556,7 +1556,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '46', 'column': '19'},
                     ),
                 ],
             ),
@@ -1569,7 +1569,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '60'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '46', 'column': '60'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1583,7 +1583,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '46', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1596,7 +1596,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '47', 'column': '23'},
                     ),
                 ],
             ),
@@ -1609,7 +1609,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '74'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '47', 'column': '74'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1623,7 +1623,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '74'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '47', 'column': '74'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1637,7 +1637,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '47', 'column': '23'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1649,7 +1649,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1660,7 +1660,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1671,7 +1671,7 @@ def LaserRF_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -1679,7 +1679,7 @@ def LaserRF_Init_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
             ),
         ],
     )
@@ -1724,7 +1724,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1735,7 +1735,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1747,7 +1747,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1763,7 +1763,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1775,7 +1775,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1787,7 +1787,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1798,7 +1798,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1809,7 +1809,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1820,7 +1820,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1832,7 +1832,7 @@ def LaserRF_Start_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1840,7 +1840,7 @@ def LaserRF_Start_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
             ),
         ],
     )
@@ -1888,7 +1888,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -1900,7 +1900,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '56', 'column': '19'},
                     ),
                 ],
             ),
@@ -1913,7 +1913,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '64'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '56', 'column': '64'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1927,7 +1927,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '56', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1940,7 +1940,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '21'},
                     ),
                 ],
             ),
@@ -1953,7 +1953,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '53'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '53'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1967,7 +1967,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '69'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1981,7 +1981,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '69'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -1999,7 +1999,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '21'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2012,7 +2012,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '58', 'column': '18'},
                     ),
                 ],
             ),
@@ -2025,7 +2025,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '62'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '58', 'column': '62'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2039,7 +2039,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '62'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '58', 'column': '62'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2053,7 +2053,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '58', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2065,7 +2065,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2076,7 +2076,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2087,7 +2087,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2098,7 +2098,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2110,7 +2110,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2122,7 +2122,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2134,7 +2134,7 @@ def LaserRF_Start_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -2142,7 +2142,7 @@ def LaserRF_Start_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
             ),
         ],
     )
@@ -2184,7 +2184,7 @@ def LaserRF_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2196,7 +2196,7 @@ def LaserRF_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2212,7 +2212,7 @@ def LaserRF_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2224,7 +2224,7 @@ def LaserRF_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2236,7 +2236,7 @@ def LaserRF_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2244,7 +2244,7 @@ def LaserRF_Stop_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
             ),
         ],
     )
@@ -2275,7 +2275,7 @@ def LaserRF_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2286,7 +2286,7 @@ def LaserRF_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -2294,7 +2294,7 @@ def LaserRF_Stop_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
             ),
         ],
     )
@@ -2323,7 +2323,7 @@ def NDD_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2336,7 +2336,7 @@ def NDD_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2349,7 +2349,7 @@ def NDD_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -2362,7 +2362,7 @@ def NDD_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -2375,7 +2375,7 @@ def NDD_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -2383,7 +2383,7 @@ def NDD_Requests() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '13', 'column': '11'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '18', 'column': '11'},
             ),
         ],
     )
@@ -2413,7 +2413,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '53', 'column': '19'},
                     ),
                 ],
             ),
@@ -2426,7 +2426,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '53', 'column': '69'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2440,7 +2440,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '53', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2453,7 +2453,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '21'},
                     ),
                 ],
             ),
@@ -2466,7 +2466,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '50', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '55', 'column': '13'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2480,7 +2480,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '21'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -2492,7 +2492,7 @@ def NDD_motion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '8'},
                     ),
                 ],
             ),
@@ -2500,7 +2500,7 @@ def NDD_motion_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '8'},
             ),
         ],
     )
@@ -2547,7 +2547,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '57', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '62', 'column': '14'},
                     ),
                 ],
             ),
@@ -2560,7 +2560,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2572,7 +2572,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2588,7 +2588,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2600,7 +2600,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2612,7 +2612,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2623,7 +2623,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2634,7 +2634,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2645,7 +2645,7 @@ def NDD_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2653,7 +2653,7 @@ def NDD_SetParams_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
             ),
         ],
     )
@@ -2684,7 +2684,7 @@ def NDD_SetParams_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2695,7 +2695,7 @@ def NDD_SetParams_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -2703,7 +2703,7 @@ def NDD_SetParams_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
             ),
         ],
     )
@@ -2750,7 +2750,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '63', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '68', 'column': '14'},
                     ),
                 ],
             ),
@@ -2763,7 +2763,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2775,7 +2775,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2791,7 +2791,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2803,7 +2803,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2815,7 +2815,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2826,7 +2826,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2837,7 +2837,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2848,7 +2848,7 @@ def NDD_SetSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2856,7 +2856,7 @@ def NDD_SetSpeed_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
             ),
         ],
     )
@@ -2887,7 +2887,7 @@ def NDD_SetSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2898,7 +2898,7 @@ def NDD_SetSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -2906,7 +2906,7 @@ def NDD_SetSpeed_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
             ),
         ],
     )
@@ -2949,7 +2949,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -2961,7 +2961,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -2977,7 +2977,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -2989,7 +2989,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3001,7 +3001,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3012,7 +3012,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3023,7 +3023,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3034,7 +3034,7 @@ def NDD_SetDataSource_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3042,7 +3042,7 @@ def NDD_SetDataSource_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
             ),
         ],
     )
@@ -3074,7 +3074,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3086,7 +3086,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '19'},
                     ),
                 ],
             ),
@@ -3099,7 +3099,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '71', 'column': '82'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '76', 'column': '82'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3113,7 +3113,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '71', 'column': '82'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '76', 'column': '82'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3127,7 +3127,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3139,7 +3139,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3150,7 +3150,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3161,7 +3161,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -3169,7 +3169,7 @@ def NDD_SetDataSource_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
             ),
         ],
     )
@@ -3218,7 +3218,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '16'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '16'},
                     ),
                 ],
             ),
@@ -3229,7 +3229,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3242,7 +3242,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3254,7 +3254,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3270,7 +3270,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3282,7 +3282,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3294,7 +3294,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3305,7 +3305,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3316,7 +3316,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3327,7 +3327,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3339,7 +3339,7 @@ def NDD_GoTo_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3347,7 +3347,7 @@ def NDD_GoTo_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
             ),
         ],
     )
@@ -3398,7 +3398,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3410,7 +3410,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '19'},
                     ),
                 ],
             ),
@@ -3423,7 +3423,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '82', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '13'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3437,7 +3437,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3450,7 +3450,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '88', 'column': '18'},
                     ),
                 ],
             ),
@@ -3463,7 +3463,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '90', 'column': '13'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3477,7 +3477,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '26'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '90', 'column': '26'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3495,7 +3495,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '88', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3508,7 +3508,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '21'},
                     ),
                 ],
             ),
@@ -3521,7 +3521,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '74'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '74'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3535,7 +3535,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '74'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '74'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3549,7 +3549,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '21'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3562,7 +3562,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '92', 'column': '18'},
                     ),
                 ],
             ),
@@ -3575,7 +3575,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '72'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '92', 'column': '72'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3589,7 +3589,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '72'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '92', 'column': '72'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3603,7 +3603,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '92', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3615,7 +3615,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3626,7 +3626,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3637,7 +3637,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3648,7 +3648,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3660,7 +3660,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3672,7 +3672,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3684,7 +3684,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3696,7 +3696,7 @@ def NDD_GoTo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -3704,7 +3704,7 @@ def NDD_GoTo_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
             ),
         ],
     )
@@ -3746,7 +3746,7 @@ def NDD_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3758,7 +3758,7 @@ def NDD_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3774,7 +3774,7 @@ def NDD_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3786,7 +3786,7 @@ def NDD_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3798,7 +3798,7 @@ def NDD_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3806,7 +3806,7 @@ def NDD_Stop_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
             ),
         ],
     )
@@ -3838,7 +3838,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3850,7 +3850,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '99', 'column': '19'},
                     ),
                 ],
             ),
@@ -3863,7 +3863,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '49'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '99', 'column': '49'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3877,7 +3877,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '49'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '99', 'column': '49'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3891,7 +3891,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '99', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -3903,7 +3903,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3914,7 +3914,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3925,7 +3925,7 @@ def NDD_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -3933,7 +3933,7 @@ def NDD_Stop_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
             ),
         ],
     )
@@ -3956,7 +3956,7 @@ def POM_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -3969,7 +3969,7 @@ def POM_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -3977,7 +3977,7 @@ def POM_Requests() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/POM.gen', 'line': '7', 'column': '11'},
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '12', 'column': '11'},
             ),
         ],
     )
@@ -4007,7 +4007,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '34', 'column': '19'},
                     ),
                 ],
             ),
@@ -4020,7 +4020,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '58'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '34', 'column': '58'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4034,7 +4034,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '34', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4047,7 +4047,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '20'},
                     ),
                 ],
             ),
@@ -4060,7 +4060,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '31', 'column': '50'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '36', 'column': '50'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4074,7 +4074,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '20'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4086,7 +4086,7 @@ def POM_fusion_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -4094,7 +4094,7 @@ def POM_fusion_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '8'},
             ),
         ],
     )
@@ -4138,7 +4138,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4150,7 +4150,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4166,7 +4166,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4178,7 +4178,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4190,7 +4190,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4201,7 +4201,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4212,7 +4212,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4223,7 +4223,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4235,7 +4235,7 @@ def POM_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4243,7 +4243,7 @@ def POM_Run_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
             ),
         ],
     )
@@ -4288,7 +4288,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4300,7 +4300,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '43', 'column': '19'},
                     ),
                 ],
             ),
@@ -4313,7 +4313,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '54'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '43', 'column': '54'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4327,7 +4327,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '68'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '43', 'column': '68'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4345,7 +4345,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '43', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4358,7 +4358,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '17'},
                     ),
                 ],
             ),
@@ -4371,7 +4371,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '65'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '45', 'column': '65'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4385,7 +4385,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '65'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '45', 'column': '65'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4399,7 +4399,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '17'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4411,7 +4411,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4422,7 +4422,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4433,7 +4433,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4444,7 +4444,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4456,7 +4456,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4468,7 +4468,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4480,7 +4480,7 @@ def POM_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -4488,7 +4488,7 @@ def POM_Run_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
             ),
         ],
     )
@@ -4530,7 +4530,7 @@ def POM_Reset_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4542,7 +4542,7 @@ def POM_Reset_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4558,7 +4558,7 @@ def POM_Reset_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4570,7 +4570,7 @@ def POM_Reset_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4582,7 +4582,7 @@ def POM_Reset_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4590,7 +4590,7 @@ def POM_Reset_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
             ),
         ],
     )
@@ -4622,7 +4622,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4634,7 +4634,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '52', 'column': '19'},
                     ),
                 ],
             ),
@@ -4647,7 +4647,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '55'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '52', 'column': '55'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4661,7 +4661,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '55'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '52', 'column': '55'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4675,7 +4675,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '52', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4687,7 +4687,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4698,7 +4698,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4709,7 +4709,7 @@ def POM_Reset_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -4717,7 +4717,7 @@ def POM_Reset_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
             ),
         ],
     )
@@ -4745,7 +4745,7 @@ def RFLEX_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -4758,7 +4758,7 @@ def RFLEX_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -4771,7 +4771,7 @@ def RFLEX_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -4784,7 +4784,7 @@ def RFLEX_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -4792,7 +4792,7 @@ def RFLEX_Requests() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '7', 'column': '11'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '12', 'column': '11'},
             ),
         ],
     )
@@ -4822,7 +4822,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '19'},
                     ),
                 ],
             ),
@@ -4835,7 +4835,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '57'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '57'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4849,7 +4849,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4862,7 +4862,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '38', 'column': '22'},
                     ),
                 ],
             ),
@@ -4875,7 +4875,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '56'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '38', 'column': '56'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4889,7 +4889,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '38', 'column': '22'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -4901,7 +4901,7 @@ def RFLEX_servo_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '8'},
                     ),
                 ],
             ),
@@ -4909,7 +4909,7 @@ def RFLEX_servo_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '8'},
             ),
         ],
     )
@@ -4952,7 +4952,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -4964,7 +4964,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -4980,7 +4980,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -4992,7 +4992,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5004,7 +5004,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5015,7 +5015,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5026,7 +5026,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5037,7 +5037,7 @@ def RFLEX_Init_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5045,7 +5045,7 @@ def RFLEX_Init_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
             ),
         ],
     )
@@ -5077,7 +5077,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5089,7 +5089,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '19'},
                     ),
                 ],
             ),
@@ -5102,7 +5102,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '68'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '68'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5116,7 +5116,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '68'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '68'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5130,7 +5130,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5142,7 +5142,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5153,7 +5153,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5164,7 +5164,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -5172,7 +5172,7 @@ def RFLEX_Init_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
             ),
         ],
     )
@@ -5214,7 +5214,7 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5226,7 +5226,7 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5242,7 +5242,7 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5254,7 +5254,7 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5266,7 +5266,7 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5274,7 +5274,7 @@ def RFLEX_SetAcceleration_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
             ),
         ],
     )
@@ -5305,7 +5305,7 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5316,7 +5316,7 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -5324,7 +5324,7 @@ def RFLEX_SetAcceleration_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
             ),
         ],
     )
@@ -5369,7 +5369,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5380,7 +5380,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5392,7 +5392,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5408,7 +5408,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5420,7 +5420,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5432,7 +5432,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5443,7 +5443,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5454,7 +5454,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5465,7 +5465,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5477,7 +5477,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5485,7 +5485,7 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
             ),
         ],
     )
@@ -5533,7 +5533,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5545,7 +5545,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '56', 'column': '19'},
                     ),
                 ],
             ),
@@ -5558,7 +5558,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '58'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '56', 'column': '58'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5572,7 +5572,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '56', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5585,7 +5585,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '57', 'column': '19'},
                     ),
                 ],
             ),
@@ -5598,7 +5598,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '13'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5612,7 +5612,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '27'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '27'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5626,7 +5626,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '53', 'column': '27'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '27'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5644,7 +5644,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '57', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5657,7 +5657,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '59', 'column': '18'},
                     ),
                 ],
             ),
@@ -5670,7 +5670,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '66'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '59', 'column': '66'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5684,7 +5684,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '66'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '59', 'column': '66'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5698,7 +5698,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '59', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5710,7 +5710,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5721,7 +5721,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5732,7 +5732,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5743,7 +5743,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5755,7 +5755,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5767,7 +5767,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5779,7 +5779,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -5787,7 +5787,7 @@ def RFLEX_TrackSpeed_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
             ),
         ],
     )
@@ -5829,7 +5829,7 @@ def RFLEX_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5841,7 +5841,7 @@ def RFLEX_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5857,7 +5857,7 @@ def RFLEX_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5869,7 +5869,7 @@ def RFLEX_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5881,7 +5881,7 @@ def RFLEX_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5889,7 +5889,7 @@ def RFLEX_Stop_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
             ),
         ],
     )
@@ -5921,7 +5921,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5933,7 +5933,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '66', 'column': '19'},
                     ),
                 ],
             ),
@@ -5946,7 +5946,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '52'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '66', 'column': '52'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5960,7 +5960,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '52'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '66', 'column': '52'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5974,7 +5974,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '66', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5986,7 +5986,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -5997,7 +5997,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -6008,7 +6008,7 @@ def RFLEX_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -6016,7 +6016,7 @@ def RFLEX_Stop_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
             ),
         ],
     )
@@ -6519,7 +6519,7 @@ def Aspect_Run_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -6531,7 +6531,7 @@ def Aspect_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -6543,7 +6543,7 @@ def Aspect_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -6555,7 +6555,7 @@ def Aspect_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -6567,7 +6567,7 @@ def Aspect_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -6602,7 +6602,7 @@ def Aspect_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.SetParams:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '37', 'column': '14'},
                     ),
                 ],
                 comment='the validate codel aspCheckParams refused the parameters',
@@ -6615,7 +6615,7 @@ def Aspect_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.SetParams:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -6627,7 +6627,7 @@ def Aspect_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.SetParams:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -6639,7 +6639,7 @@ def Aspect_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.SetParams:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -6651,7 +6651,7 @@ def Aspect_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.SetParams:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -6676,7 +6676,7 @@ def Aspect_Stop_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -6688,7 +6688,7 @@ def Aspect_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Stop:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -6700,7 +6700,7 @@ def Aspect_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Stop:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -6712,7 +6712,7 @@ def Aspect_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Stop:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -6738,7 +6738,7 @@ def Aspect_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.control:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '6', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '9', 'column': '11'},
                     ),
                 ],
             ),
@@ -6750,7 +6750,7 @@ def Aspect_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.control:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '6', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '9', 'column': '11'},
                     ),
                 ],
             ),
@@ -6774,7 +6774,7 @@ def Aspect_map_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '28', 'column': '8'},
                     ),
                 ],
             ),
@@ -6785,7 +6785,7 @@ def Aspect_map_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '28', 'column': '8'},
                     ),
                 ],
             ),
@@ -6815,7 +6815,7 @@ def LaserRF_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -6827,7 +6827,7 @@ def LaserRF_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -6839,7 +6839,7 @@ def LaserRF_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -6851,7 +6851,7 @@ def LaserRF_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -6886,7 +6886,7 @@ def LaserRF_SetConfig_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.SetConfig:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '39', 'column': '14'},
                     ),
                 ],
                 comment='the validate codel lrfCheckConfig refused the parameters',
@@ -6899,7 +6899,7 @@ def LaserRF_SetConfig_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.SetConfig:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -6911,7 +6911,7 @@ def LaserRF_SetConfig_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.SetConfig:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -6923,7 +6923,7 @@ def LaserRF_SetConfig_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.SetConfig:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -6935,7 +6935,7 @@ def LaserRF_SetConfig_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.SetConfig:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -6960,7 +6960,7 @@ def LaserRF_Start_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -6972,7 +6972,7 @@ def LaserRF_Start_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -6984,7 +6984,7 @@ def LaserRF_Start_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -6996,7 +6996,7 @@ def LaserRF_Start_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -7008,7 +7008,7 @@ def LaserRF_Start_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -7046,7 +7046,7 @@ def LaserRF_Stop_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -7058,7 +7058,7 @@ def LaserRF_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Stop:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -7070,7 +7070,7 @@ def LaserRF_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Stop:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -7082,7 +7082,7 @@ def LaserRF_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Stop:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -7111,7 +7111,7 @@ def LaserRF_acquisition_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '19'},
                     ),
                 ],
             ),
@@ -7122,7 +7122,7 @@ def LaserRF_acquisition_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -7133,7 +7133,7 @@ def LaserRF_acquisition_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -7161,7 +7161,7 @@ def LaserRF_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.control:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '6', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '9', 'column': '11'},
                     ),
                 ],
             ),
@@ -7173,7 +7173,7 @@ def LaserRF_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.control:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '6', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '9', 'column': '11'},
                     ),
                 ],
             ),
@@ -7197,7 +7197,7 @@ def NDD_GoTo_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -7208,7 +7208,7 @@ def NDD_GoTo_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -7219,7 +7219,7 @@ def NDD_GoTo_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -7231,7 +7231,7 @@ def NDD_GoTo_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '16'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '85', 'column': '16'},
                     ),
                 ],
                 comment='the validate codel nddCheckGoal refused the parameters',
@@ -7244,7 +7244,7 @@ def NDD_GoTo_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -7256,7 +7256,7 @@ def NDD_GoTo_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -7268,7 +7268,7 @@ def NDD_GoTo_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -7280,7 +7280,7 @@ def NDD_GoTo_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -7322,7 +7322,7 @@ def NDD_SetDataSource_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetDataSource:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -7334,7 +7334,7 @@ def NDD_SetDataSource_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetDataSource:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -7346,7 +7346,7 @@ def NDD_SetDataSource_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetDataSource:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -7358,7 +7358,7 @@ def NDD_SetDataSource_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetDataSource:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -7388,7 +7388,7 @@ def NDD_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetParams:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '57', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '62', 'column': '14'},
                     ),
                 ],
                 comment='the validate codel nddCheckParams refused the parameters',
@@ -7401,7 +7401,7 @@ def NDD_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetParams:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -7413,7 +7413,7 @@ def NDD_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetParams:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -7425,7 +7425,7 @@ def NDD_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetParams:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -7437,7 +7437,7 @@ def NDD_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetParams:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -7466,7 +7466,7 @@ def NDD_SetSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetSpeed:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '63', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '68', 'column': '14'},
                     ),
                 ],
                 comment='the validate codel nddCheckSpeed refused the parameters',
@@ -7479,7 +7479,7 @@ def NDD_SetSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetSpeed:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -7491,7 +7491,7 @@ def NDD_SetSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetSpeed:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -7503,7 +7503,7 @@ def NDD_SetSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetSpeed:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -7515,7 +7515,7 @@ def NDD_SetSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetSpeed:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -7543,7 +7543,7 @@ def NDD_Stop_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -7555,7 +7555,7 @@ def NDD_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.Stop:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -7567,7 +7567,7 @@ def NDD_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.Stop:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -7579,7 +7579,7 @@ def NDD_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.Stop:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -7606,7 +7606,7 @@ def NDD_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.control:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '13', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '18', 'column': '11'},
                     ),
                 ],
             ),
@@ -7635,7 +7635,7 @@ def NDD_motion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '53', 'column': '19'},
                     ),
                 ],
             ),
@@ -7646,7 +7646,7 @@ def NDD_motion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '21'},
                     ),
                 ],
             ),
@@ -7657,7 +7657,7 @@ def NDD_motion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '8'},
                     ),
                 ],
             ),
@@ -7672,7 +7672,7 @@ def NDD_motion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '8'},
                     ),
                 ],
             ),
@@ -7703,7 +7703,7 @@ def POM_Reset_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -7715,7 +7715,7 @@ def POM_Reset_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Reset:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -7727,7 +7727,7 @@ def POM_Reset_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Reset:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -7739,7 +7739,7 @@ def POM_Reset_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Reset:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -7768,7 +7768,7 @@ def POM_Run_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -7780,7 +7780,7 @@ def POM_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -7792,7 +7792,7 @@ def POM_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -7804,7 +7804,7 @@ def POM_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -7816,7 +7816,7 @@ def POM_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -7846,7 +7846,7 @@ def POM_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.control:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '7', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '12', 'column': '11'},
                     ),
                 ],
             ),
@@ -7875,7 +7875,7 @@ def POM_fusion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '34', 'column': '19'},
                     ),
                 ],
             ),
@@ -7886,7 +7886,7 @@ def POM_fusion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '20'},
                     ),
                 ],
             ),
@@ -7901,7 +7901,7 @@ def POM_fusion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -7912,7 +7912,7 @@ def POM_fusion_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -7944,7 +7944,7 @@ def RFLEX_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Init:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -7956,7 +7956,7 @@ def RFLEX_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Init:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -7968,7 +7968,7 @@ def RFLEX_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Init:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -7980,7 +7980,7 @@ def RFLEX_Init_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Init:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -8010,7 +8010,7 @@ def RFLEX_SetAcceleration_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -8022,7 +8022,7 @@ def RFLEX_SetAcceleration_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -8034,7 +8034,7 @@ def RFLEX_SetAcceleration_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -8046,7 +8046,7 @@ def RFLEX_SetAcceleration_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -8071,7 +8071,7 @@ def RFLEX_Stop_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -8083,7 +8083,7 @@ def RFLEX_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Stop:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -8095,7 +8095,7 @@ def RFLEX_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Stop:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -8107,7 +8107,7 @@ def RFLEX_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Stop:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -8136,7 +8136,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -8148,7 +8148,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -8160,7 +8160,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -8172,7 +8172,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -8184,7 +8184,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
             ),
@@ -8216,7 +8216,7 @@ def RFLEX_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.control:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '7', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '12', 'column': '11'},
                     ),
                 ],
             ),
@@ -8245,7 +8245,7 @@ def RFLEX_servo_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '19'},
                     ),
                 ],
             ),
@@ -8256,7 +8256,7 @@ def RFLEX_servo_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '38', 'column': '22'},
                     ),
                 ],
             ),
@@ -8267,7 +8267,7 @@ def RFLEX_servo_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '8'},
                     ),
                 ],
             ),
@@ -8282,7 +8282,7 @@ def RFLEX_servo_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '8'},
                     ),
                 ],
             ),
@@ -8323,7 +8323,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '42', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '19'},
                     ),
                 ],
                 comment='codel aspReset of state start',
@@ -8340,7 +8340,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:exec_fuse'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '43', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
                     ),
                 ],
                 comment='codel aspFuse of state fuse',
@@ -8353,7 +8353,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:exec_wait'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '45', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '18'},
                     ),
                 ],
                 comment='codel aspWaitScan of state wait',
@@ -8366,7 +8366,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:exec_stop'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '46', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '49', 'column': '18'},
                     ),
                 ],
                 comment='codel aspStop of state stop',
@@ -8379,7 +8379,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Stop:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
                 comment='Stop interrupts Run (Aspect.Stop.interrupts)',
@@ -8392,7 +8392,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.map:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '28', 'column': '8'},
                     ),
                 ],
                 comment='a period starts: paused activities wake up',
@@ -8405,7 +8405,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.map:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '25', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '28', 'column': '8'},
                     ),
                 ],
             ),
@@ -8417,7 +8417,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.SetParams:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '31', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '34', 'column': '13'},
                     ),
                 ],
             ),
@@ -8429,7 +8429,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Run:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '38', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
                     ),
                 ],
             ),
@@ -8441,7 +8441,7 @@ def Aspect_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Aspect.Stop:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '50', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '53', 'column': '12'},
                     ),
                 ],
             ),
@@ -8522,7 +8522,7 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '46', 'column': '19'},
                     ),
                 ],
             ),
@@ -8536,7 +8536,7 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '47', 'column': '23'},
                     ),
                 ],
             ),
@@ -8547,7 +8547,7 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '56', 'column': '19'},
                     ),
                 ],
             ),
@@ -8562,7 +8562,7 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '21'},
                     ),
                 ],
             ),
@@ -8573,7 +8573,7 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '58', 'column': '18'},
                     ),
                 ],
             ),
@@ -8584,7 +8584,7 @@ def LaserRF_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -8596,7 +8596,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.acquisition:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
                 comment='a period starts: paused activities wake up',
@@ -8609,7 +8609,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.SetConfig:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '36', 'column': '13'},
                     ),
                 ],
             ),
@@ -8621,7 +8621,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '40', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '12'},
                     ),
                 ],
             ),
@@ -8637,7 +8637,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
                 comment='LaserRF.Start.after: LaserRF.Start only after LaserRF.Init completed',
@@ -8655,7 +8655,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('rule', arguments={'name': 'LaserRF.Start.after'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '48', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
                 comment='rule LaserRF.Start.after: refuse the request unless LaserRF.Start only after LaserRF.Init completed',
@@ -8668,7 +8668,7 @@ def LaserRF_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Stop:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
             ),
@@ -8722,7 +8722,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '53', 'column': '19'},
                     ),
                 ],
             ),
@@ -8733,7 +8733,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '21'},
                     ),
                 ],
             ),
@@ -8744,7 +8744,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '19'},
                     ),
                 ],
             ),
@@ -8759,7 +8759,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '88', 'column': '18'},
                     ),
                 ],
             ),
@@ -8774,7 +8774,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '21'},
                     ),
                 ],
             ),
@@ -8789,7 +8789,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '92', 'column': '18'},
                     ),
                 ],
             ),
@@ -8800,7 +8800,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -8817,7 +8817,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -8828,7 +8828,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -8839,7 +8839,7 @@ def NDD_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
             ),
@@ -8854,7 +8854,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetDataSource:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '70', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '19'},
                     ),
                 ],
                 comment='codel nddSetDataSource of state start',
@@ -8871,7 +8871,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.Stop:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '94', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '99', 'column': '19'},
                     ),
                 ],
                 comment='codel nddStop of state start',
@@ -8884,7 +8884,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.motion:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '8'},
                     ),
                 ],
                 comment='a period starts: paused activities wake up',
@@ -8897,7 +8897,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.control:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '13', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '18', 'column': '11'},
                     ),
                 ],
             ),
@@ -8909,7 +8909,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetParams:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '59', 'column': '13'},
                     ),
                 ],
             ),
@@ -8921,7 +8921,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetSpeed:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '61', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '66', 'column': '13'},
                     ),
                 ],
             ),
@@ -8933,7 +8933,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.SetDataSource:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '67', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -8952,7 +8952,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('rule', arguments={'name': 'NDD.GoTo.after'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
                 comment='rule NDD.GoTo.after: refuse the request unless NDD.GoTo only after NDD.SetParams, NDD.SetSpeed, NDD.SetDataSource completed',
@@ -8965,7 +8965,7 @@ def NDD_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.Stop:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
             ),
@@ -9043,7 +9043,7 @@ def POM_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
             ),
@@ -9055,7 +9055,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.fusion:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '34', 'column': '19'},
                     ),
                 ],
                 comment='codel pomInitTask of state start',
@@ -9068,7 +9068,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.fusion:exec_update'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '30', 'column': '20'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '20'},
                     ),
                 ],
                 comment='codel pomUpdate of state update',
@@ -9081,7 +9081,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '38', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '43', 'column': '19'},
                     ),
                 ],
                 comment='codel pomWaitOdometry of state start',
@@ -9098,7 +9098,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:exec_fix'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '39', 'column': '17'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '17'},
                     ),
                 ],
                 comment='codel pomFix of state fix',
@@ -9111,7 +9111,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Reset:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '47', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '52', 'column': '19'},
                     ),
                 ],
                 comment='codel pomReset of state start',
@@ -9124,7 +9124,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Reset:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                 ],
                 comment='Reset interrupts Run (POM.Reset.interrupts)',
@@ -9137,7 +9137,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.fusion:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
                 comment='a period starts: paused activities wake up',
@@ -9150,7 +9150,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.fusion:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '24', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -9162,7 +9162,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.control:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '7', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '12', 'column': '11'},
                     ),
                 ],
             ),
@@ -9174,7 +9174,7 @@ def POM_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Run:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '35', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '40', 'column': '12'},
                     ),
                 ],
             ),
@@ -9252,7 +9252,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '19'},
                     ),
                 ],
             ),
@@ -9263,7 +9263,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '38', 'column': '22'},
                     ),
                 ],
             ),
@@ -9274,7 +9274,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '19'},
                     ),
                 ],
             ),
@@ -9285,7 +9285,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '56', 'column': '19'},
                     ),
                 ],
             ),
@@ -9296,7 +9296,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '57', 'column': '19'},
                     ),
                 ],
             ),
@@ -9307,7 +9307,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '59', 'column': '18'},
                     ),
                 ],
             ),
@@ -9318,7 +9318,7 @@ def RFLEX_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -9330,7 +9330,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Stop:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '61', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '66', 'column': '19'},
                     ),
                 ],
                 comment='codel rflexStop of state start',
@@ -9343,7 +9343,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.servo:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '8'},
                     ),
                 ],
                 comment='a period starts: paused activities wake up',
@@ -9356,7 +9356,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.control:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '7', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '12', 'column': '11'},
                     ),
                 ],
             ),
@@ -9368,7 +9368,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Init:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '42', 'column': '12'},
                     ),
                 ],
             ),
@@ -9383,7 +9383,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.SetAcceleration:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '44', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '49', 'column': '13'},
                     ),
                 ],
             ),
@@ -9399,7 +9399,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
                 comment='RFLEX.TrackSpeed.after: RFLEX.TrackSpeed only after RFLEX.Init completed',
@@ -9417,7 +9417,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('rule', arguments={'name': 'RFLEX.TrackSpeed.after'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '46', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
                     ),
                 ],
                 comment='rule RFLEX.TrackSpeed.after: refuse the request unless RFLEX.TrackSpeed only after RFLEX.Init completed',
@@ -9430,7 +9430,7 @@ def RFLEX_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Stop:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
             ),
@@ -9497,7 +9497,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.acquisition:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '30', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '33', 'column': '19'},
                     ),
                 ],
                 comment='codel lrfInitTask of state start',
@@ -9510,7 +9510,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '43', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '46', 'column': '19'},
                     ),
                 ],
                 comment='codel lrfOpen of state start',
@@ -9523,7 +9523,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Init:exec_configure'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '44', 'column': '23'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '47', 'column': '23'},
                     ),
                 ],
                 comment='codel lrfConfigure of state configure',
@@ -9536,7 +9536,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '53', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '56', 'column': '19'},
                     ),
                 ],
                 comment='codel lrfStartAcquisition of state start',
@@ -9549,7 +9549,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:exec_acquire'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '54', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '57', 'column': '21'},
                     ),
                 ],
                 comment='codel lrfAcquire of state acquire',
@@ -9562,7 +9562,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Start:exec_stop'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '58', 'column': '18'},
                     ),
                 ],
                 comment='codel lrfStopAcquisition of state stop',
@@ -9575,7 +9575,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.motion:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '53', 'column': '19'},
                     ),
                 ],
                 comment='codel nddInit of state start',
@@ -9588,7 +9588,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.motion:exec_publish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '49', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '54', 'column': '21'},
                     ),
                 ],
                 comment='codel nddPublishIdle of state publish',
@@ -9601,7 +9601,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '81', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '19'},
                     ),
                 ],
                 comment='codel nddStartGoTo of state start',
@@ -9614,7 +9614,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:exec_plan'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '83', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '88', 'column': '18'},
                     ),
                 ],
                 comment='codel nddPlan of state plan',
@@ -9627,7 +9627,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:exec_arrived'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '86', 'column': '21'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '21'},
                     ),
                 ],
                 comment='codel nddArrived of state arrived',
@@ -9640,7 +9640,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:exec_stop'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '87', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '92', 'column': '18'},
                     ),
                 ],
                 comment='codel nddStopGoTo of state stop',
@@ -9653,7 +9653,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.servo:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '37', 'column': '19'},
                     ),
                 ],
                 comment='codel rflexInitOdometry of state start',
@@ -9666,7 +9666,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.servo:exec_odometry'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '33', 'column': '22'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '38', 'column': '22'},
                     ),
                 ],
                 comment='codel rflexOdometry of state odometry',
@@ -9679,7 +9679,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Init:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '40', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '19'},
                     ),
                 ],
                 comment='codel rflexOpen of state start',
@@ -9692,7 +9692,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '56', 'column': '19'},
                     ),
                 ],
                 comment='codel rflexStartTracking of state start',
@@ -9705,7 +9705,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_track'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '52', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '57', 'column': '19'},
                     ),
                 ],
                 comment='codel rflexTrack of state track',
@@ -9718,7 +9718,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:exec_stop'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '54', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '59', 'column': '18'},
                     ),
                 ],
                 comment='codel rflexBrake of state stop',
@@ -9731,7 +9731,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.Stop:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '59', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '62', 'column': '12'},
                     ),
                 ],
                 comment='Stop interrupts Start, NDD.GoTo (LaserRF.Stop.interrupts, laser-stop-stops-navigation)',
@@ -9744,7 +9744,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.Stop:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '91', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '96', 'column': '12'},
                     ),
                 ],
                 comment='Stop interrupts GoTo (NDD.Stop.interrupts)',
@@ -9757,7 +9757,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.Stop:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '58', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '63', 'column': '12'},
                     ),
                 ],
                 comment='Stop interrupts TrackSpeed, NDD.GoTo (RFLEX.Stop.interrupts, base-stop-stops-navigation)',
@@ -9770,7 +9770,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'LaserRF.acquisition:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '26', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '29', 'column': '8'},
                     ),
                 ],
             ),
@@ -9782,7 +9782,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.motion:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '43', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '48', 'column': '8'},
                     ),
                 ],
             ),
@@ -9794,7 +9794,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'RFLEX.servo:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '27', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '32', 'column': '8'},
                     ),
                 ],
             ),
@@ -9812,7 +9812,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'NDD.GoTo:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                     Annotation('wait', arguments={'rules': 'goto-waits-for-base'}),
                 ],
@@ -9830,7 +9830,7 @@ def DALA() -> CompoundType:
                     Annotation('rule', arguments={'name': 'goto-after-pom-run'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
                 comment='rule goto-after-pom-run: refuse the request unless NDD.GoTo only after POM.Run completed',
@@ -9848,7 +9848,7 @@ def DALA() -> CompoundType:
                     Annotation('rule', arguments={'name': 'goto-needs-laser-and-map'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '75', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
                     ),
                 ],
                 comment='rule goto-needs-laser-and-map: refuse the request unless NDD.GoTo only while LaserRF.Start, Aspect.Run run',
@@ -9861,7 +9861,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'POM.Reset:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '44', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/POM.gen', 'line': '49', 'column': '12'},
                     ),
                     Annotation('wait', arguments={'rules': 'no-reset-while-navigating'}),
                 ],
@@ -10100,7 +10100,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'aspCheckParams', 'yields': 'ok', 'throws': 'Aspect::e_bad_params'},
+                        arguments={'codel': 'aspCheckParams', 'yields': 'ok', 'throws': 'Aspect::e_bad_params', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10110,7 +10110,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'aspFuse', 'yields': 'pause::fuse,wait', 'throws': 'Aspect::e_no_scan'},
+                        arguments={'codel': 'aspFuse', 'yields': 'pause::fuse,wait', 'throws': 'Aspect::e_no_scan', 'wcet_us': '3000'},
                     ),
                 ],
             ),
@@ -10120,7 +10120,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'aspReset', 'yields': 'fuse', 'throws': 'Aspect::e_no_scan'},
+                        arguments={'codel': 'aspReset', 'yields': 'fuse', 'throws': 'Aspect::e_no_scan', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10130,7 +10130,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'aspStop', 'yields': 'ether', 'throws': 'Aspect::e_no_scan'},
+                        arguments={'codel': 'aspStop', 'yields': 'ether', 'throws': 'Aspect::e_no_scan', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10140,7 +10140,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'aspWaitScan', 'yields': 'pause::wait,fuse,ether', 'throws': 'Aspect::e_no_scan'},
+                        arguments={'codel': 'aspWaitScan', 'yields': 'pause::wait,fuse,ether', 'throws': 'Aspect::e_no_scan', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10150,7 +10150,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfAcquire', 'yields': 'pause::acquire,ether', 'throws': 'LaserRF::e_device'},
+                        arguments={'codel': 'lrfAcquire', 'yields': 'pause::acquire,ether', 'throws': 'LaserRF::e_device', 'wcet_us': '10000'},
                     ),
                 ],
             ),
@@ -10160,7 +10160,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfCheckConfig', 'yields': 'ok', 'throws': 'LaserRF::e_bad_config'},
+                        arguments={'codel': 'lrfCheckConfig', 'yields': 'ok', 'throws': 'LaserRF::e_bad_config', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10170,7 +10170,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfConfigure', 'yields': 'ether', 'throws': 'LaserRF::e_device'},
+                        arguments={'codel': 'lrfConfigure', 'yields': 'ether', 'throws': 'LaserRF::e_device', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10180,7 +10180,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfInitTask', 'yields': 'ether', 'throws': ''},
+                        arguments={'codel': 'lrfInitTask', 'yields': 'ether', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10190,7 +10190,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfOpen', 'yields': 'configure', 'throws': 'LaserRF::e_device'},
+                        arguments={'codel': 'lrfOpen', 'yields': 'configure', 'throws': 'LaserRF::e_device', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10200,7 +10200,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfStartAcquisition', 'yields': 'acquire', 'throws': 'LaserRF::e_device'},
+                        arguments={'codel': 'lrfStartAcquisition', 'yields': 'acquire', 'throws': 'LaserRF::e_device', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10210,7 +10210,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'lrfStopAcquisition', 'yields': 'ether', 'throws': 'LaserRF::e_device'},
+                        arguments={'codel': 'lrfStopAcquisition', 'yields': 'ether', 'throws': 'LaserRF::e_device', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10220,7 +10220,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddArrived', 'yields': 'ether', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
+                        arguments={'codel': 'nddArrived', 'yields': 'ether', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10230,7 +10230,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddCheckGoal', 'yields': 'ok', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
+                        arguments={'codel': 'nddCheckGoal', 'yields': 'ok', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10240,7 +10240,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddCheckParams', 'yields': 'ok', 'throws': 'NDD::e_bad_params'},
+                        arguments={'codel': 'nddCheckParams', 'yields': 'ok', 'throws': 'NDD::e_bad_params', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10250,7 +10250,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddCheckSpeed', 'yields': 'ok', 'throws': 'NDD::e_bad_params'},
+                        arguments={'codel': 'nddCheckSpeed', 'yields': 'ok', 'throws': 'NDD::e_bad_params', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10260,7 +10260,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddInit', 'yields': 'publish', 'throws': ''},
+                        arguments={'codel': 'nddInit', 'yields': 'publish', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10270,7 +10270,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddPlan', 'yields': 'pause::plan,arrived', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
+                        arguments={'codel': 'nddPlan', 'yields': 'pause::plan,arrived', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '3000'},
                     ),
                 ],
             ),
@@ -10280,7 +10280,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddPublishIdle', 'yields': 'pause::publish', 'throws': ''},
+                        arguments={'codel': 'nddPublishIdle', 'yields': 'pause::publish', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10290,7 +10290,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddSetDataSource', 'yields': 'ether', 'throws': 'NDD::e_no_data_source'},
+                        arguments={'codel': 'nddSetDataSource', 'yields': 'ether', 'throws': 'NDD::e_no_data_source', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10300,7 +10300,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddStartGoTo', 'yields': 'plan', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
+                        arguments={'codel': 'nddStartGoTo', 'yields': 'plan', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10310,7 +10310,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddStop', 'yields': 'ether', 'throws': ''},
+                        arguments={'codel': 'nddStop', 'yields': 'ether', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10320,7 +10320,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddStopGoTo', 'yields': 'ether', 'throws': 'NDD::e_no_goal,NDD::e_blocked'},
+                        arguments={'codel': 'nddStopGoTo', 'yields': 'ether', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10330,7 +10330,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'pomFix', 'yields': 'ether', 'throws': 'POM::e_no_odometry'},
+                        arguments={'codel': 'pomFix', 'yields': 'ether', 'throws': 'POM::e_no_odometry', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10340,7 +10340,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'pomInitTask', 'yields': 'update', 'throws': ''},
+                        arguments={'codel': 'pomInitTask', 'yields': 'update', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10350,7 +10350,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'pomReset', 'yields': 'ether', 'throws': ''},
+                        arguments={'codel': 'pomReset', 'yields': 'ether', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10360,7 +10360,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'pomUpdate', 'yields': 'pause::update', 'throws': ''},
+                        arguments={'codel': 'pomUpdate', 'yields': 'pause::update', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10370,7 +10370,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'pomWaitOdometry', 'yields': 'pause::start,fix', 'throws': 'POM::e_no_odometry'},
+                        arguments={'codel': 'pomWaitOdometry', 'yields': 'pause::start,fix', 'throws': 'POM::e_no_odometry', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10380,7 +10380,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexBrake', 'yields': 'ether', 'throws': 'RFLEX::e_emergency_stop'},
+                        arguments={'codel': 'rflexBrake', 'yields': 'ether', 'throws': 'RFLEX::e_emergency_stop', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10390,7 +10390,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexInitOdometry', 'yields': 'odometry', 'throws': ''},
+                        arguments={'codel': 'rflexInitOdometry', 'yields': 'odometry', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10400,7 +10400,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexOdometry', 'yields': 'pause::odometry', 'throws': ''},
+                        arguments={'codel': 'rflexOdometry', 'yields': 'pause::odometry', 'throws': '', 'wcet_us': '6000'},
                     ),
                 ],
             ),
@@ -10410,7 +10410,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexOpen', 'yields': 'ether', 'throws': 'RFLEX::e_base'},
+                        arguments={'codel': 'rflexOpen', 'yields': 'ether', 'throws': 'RFLEX::e_base', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10420,7 +10420,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexStartTracking', 'yields': 'track', 'throws': 'RFLEX::e_emergency_stop'},
+                        arguments={'codel': 'rflexStartTracking', 'yields': 'track', 'throws': 'RFLEX::e_emergency_stop', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10430,7 +10430,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexStop', 'yields': 'ether', 'throws': ''},
+                        arguments={'codel': 'rflexStop', 'yields': 'ether', 'throws': '', 'wcet_us': '1000'},
                     ),
                 ],
             ),
@@ -10440,7 +10440,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'rflexTrack', 'yields': 'pause::track,ether', 'throws': 'RFLEX::e_emergency_stop'},
+                        arguments={'codel': 'rflexTrack', 'yields': 'pause::track,ether', 'throws': 'RFLEX::e_emergency_stop', 'wcet_us': '1000'},
                     ),
                 ],
             ),

@@ -3,7 +3,9 @@
 Starts the generated package's controller (``--package``, default
 ``gen/<system>``) with its codels and services interface, loads the world
 (ir-sim YAML), sends the mission's requests through the client, then prints
-the report and writes the trajectory picture and the trace (``--out``).
+the report and writes the trajectory picture and the trace (``--out``);
+``--codel-times FILE`` records how long each codel ran, writes it to FILE and
+prints it after the report.
 Exit status 0 when every expectation of the mission is met, 1 otherwise.
 """
 from __future__ import annotations
@@ -28,6 +30,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--realtime", action="store_true",
                         help="run the controller in real time (default: as fast as it can, periods kept)")
     parser.add_argument("--quiet", action="store_true", help="print only the report")
+    parser.add_argument("--codel-times", metavar="FILE",
+                        help="record how long each codel runs (calls; longest, p99 and mean CPU and wall time), "
+                             "write it to FILE (JSON) and print it after the report")
 
 
 @verb("mission", help="run a mission (requests, waits, expectations) on the controller in a simulated world",
@@ -38,6 +43,7 @@ def verb_mission(args: argparse.Namespace) -> int:
     from genom2bip.mission.session import load_package, run_mission, write_trace
     from genom2bip.mission.spec import read_mission
     from genom2bip.mission.world import check_world
+    from runtime.controller.codel_times import unwritable, write_json
 
     mission = read_mission(args.mission)
     world = Path(args.world) if args.world else mission.world
@@ -46,6 +52,10 @@ def verb_mission(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     if world is not None:
         check_world(world)
+    why = unwritable(args.codel_times) if args.codel_times else None
+    if why:
+        error(f"--codel-times {args.codel_times}: cannot write it: {why}")
+        return EXIT_ERRORS
     if args.live and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         error("--live needs a display (DISPLAY is not set); the run is headless without it")
         return EXIT_ERRORS
@@ -55,7 +65,7 @@ def verb_mission(args: argparse.Namespace) -> int:
         error(str(exc))
         return EXIT_ERRORS
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
-                      log=None if args.quiet else print)
+                      log=None if args.quiet else print, times=bool(args.codel_times))
     print(report.text(run))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -66,5 +76,13 @@ def verb_mission(args: argparse.Namespace) -> int:
         png = out / f"{mission.name}.png"
         picture.draw(run, png)
         written.insert(0, str(png))
+    if run.codel_times is not None:
+        try:
+            write_json(args.codel_times, run.codel_times)
+        except OSError as exc:
+            print("  wrote " + ", ".join(written))
+            error(f"--codel-times {args.codel_times}: cannot write it: {exc.strerror or exc}")
+            return EXIT_ERRORS
+        written.append(args.codel_times)
     print("  wrote " + ", ".join(written))
     return EXIT_OK if run.ok else EXIT_ERRORS

@@ -6,6 +6,7 @@ from itertools import pairwise
 from typing import Any
 
 from genom2bip.mission.session import Run
+from runtime.controller.codel_times import table
 
 GOAL_SERVICE = "NDD.GoTo"
 
@@ -101,4 +102,8 @@ def text(run: Run) -> str:
         lines.append(f"  controller: {run.error}")
     failed = sum(1 for o in run.outcomes if not o.ok)
     lines.append("  every expectation met" if not failed and not run.error else f"  {failed} step(s) not as expected")
+    if run.codel_times is not None:
+        lines.append(f"  codel times ({run.codel_times['clock']} clock; cpu: the codel thread's CPU time, "
+                     "wall: wall time):")
+        lines += ["    " + line for line in table(run.codel_times)]
     return "\n".join(lines)

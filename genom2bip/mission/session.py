@@ -22,6 +22,11 @@ from genom2bip.mission.spec import Mission
 from runtime.errors import Genom2bipError
 
 
+#: The controller's events a run keeps (and its trace holds): reports, period overruns, codel errors and codels
+#: past their bound (runtime.controller.stuck; real time only).
+EVENTS = ("report", "overrun", "codel_error", "codel_overrun")
+
+
 class WorldError(Genom2bipError):
     """The world file passed the checks, and the simulator refused it still."""
 
@@ -38,6 +43,7 @@ class Run:
     sim_time: float = 0.0
     wall_time: float = 0.0
     error: str | None = None
+    codel_times: dict[str, Any] | None = None  # how long each codel ran (runtime.controller.codel_times), if asked
 
     @property
     def ok(self) -> bool:
@@ -68,8 +74,11 @@ def world_module(controller) -> Any:
 
 
 def run_mission(mission: Mission, package, codels: str | None, world: Path | None, *, realtime: bool = False,
-                live: bool = False, log=None) -> Run:
-    """Start the controller and its server, load the world, run the mission's steps, stop everything."""
+                live: bool = False, log=None, times: bool = False) -> Run:
+    """Start the controller and its server, load the world, run the mission's steps, stop everything.
+
+    ``times``: record how long each codel runs (``Run.codel_times``).
+    """
     from runtime.controller import Controller
     from runtime.controller.timing import VirtualClock
     from runtime.services.client import Client
@@ -78,14 +87,14 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
 
     codels = find_codels(package.INTERFACE, codels, str(Path(package.__file__).parent))
     controller = Controller(package.package(), package.ROOT, package.INTERFACE, codels,
-                            clock=None if realtime or live else VirtualClock())
+                            clock=None if realtime or live else VirtualClock(), times=times)
     sim_world = world_module(controller)
     try:
         session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
     except Exception as exc:  # noqa: BLE001 - the simulator's own complaint, about the user's file
         raise WorldError(f"{world}: the simulator cannot load this world: {type(exc).__name__}: {exc}") from None
     events: list[dict[str, Any]] = []
-    controller.subscribe(lambda e: events.append(e) if e["event"] in ("report", "overrun", "codel_error") else None)
+    controller.subscribe(lambda e: events.append(e) if e["event"] in EVENTS else None)
     started = time.perf_counter()
     controller.start()
     server = ServiceServer(controller).start()
@@ -95,7 +104,7 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
         server.stop()
         controller.stop()
     run = Run(mission, world, outcomes, events, session, sim_time=controller.clock.now() - controller.started_at,
-              wall_time=time.perf_counter() - started, error=controller.error)
+              wall_time=time.perf_counter() - started, error=controller.error, codel_times=controller.codel_times())
     if session is not None:
         session.close()
     return run

@@ -15,6 +15,9 @@ Each call is a :class:`CodelCall`, which the watchdog reads
 engine going on without it in another thread; when the codel returns, its
 outcome waits in the call, and the controller fires the step again with
 :attr:`Binder.replay` holding it, so that the codel is not called twice.
+With :attr:`Binder.times` set, every call's CPU and wall time from that same
+start is recorded under ``Module.Owner.codel``
+(runtime.controller.codel_times).
 """
 from __future__ import annotations
 
@@ -25,6 +28,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from runtime.codels import UNDECLARED, CodelSpec
+from runtime.controller.codel_times import CodelTimes
 from runtime.controller.codels import CodelSource
 from runtime.controller.data import Data, clone, get_path, path_steps, set_path
 from runtime.controller.schema import problems
@@ -92,8 +96,9 @@ class CodelCall:
     scope: Scope | None
     locals: dict[str, Any] | None
     holders: list[tuple[Arg, Any]]
-    started: float
+    started: float  # time.monotonic() when the call began (the watchdog's and the wall time's start)
     thread: threading.Thread
+    cpu_started: float = 0.0  # time.thread_time() of the calling thread when the call began
     reported: bool = False  # the watchdog has said it runs past its bound
     detached: bool = False
     done: bool = False
@@ -167,12 +172,15 @@ class Binder:
         self.call: CodelCall | None = None  # the codel the engine thread is calling (the watchdog reads it)
         self.replay: dict[str, CodelCall] = {}  # extern -> a detached call whose step is fired again
         self.missing: list[str] = []
+        self.times: CodelTimes | None = None  # set: every call's CPU and wall time is recorded there
         self._externs: dict[str, Callable[[], int]] | None = None
         # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
         self._anywhere: dict[str, tuple[str, list[Arg]]] = {}
+        self._home: dict[str, str] = {}  # extern name -> the first service or task that has it, ``Module.Owner``
         for scope in list(self.services.values()) + list(self.tasks.values()):
             for extern, args in scope.codels.items():
                 self._anywhere.setdefault(extern, (scope.component, args))
+                self._home.setdefault(extern, scope.label)
 
     def externs(self) -> dict[str, Callable[[], int]]:
         """One callable per codel extern of the model (made once)."""
@@ -216,12 +224,17 @@ class Binder:
                 args = self._anywhere.get(extern, (component, []))[1]
             kwargs, holders = self._arguments(comp, args)
             record = CodelCall(spec.codel, extern, comp, scope, self.locals, holders, time.monotonic(),
-                               threading.current_thread())
+                               threading.current_thread(), time.thread_time())
             self.call = record
             try:
                 outcome: tuple[str, Any] = ("return", fn(**kwargs))
             except BaseException as err:  # noqa: BLE001 - the codel's bug (even SystemExit), reported with its name
                 outcome = ("raise", err)
+            times = self.times
+            if times is not None:  # in the codel's own thread, detached or not: its thread time is its own
+                cpu, wall = time.thread_time() - record.cpu_started, time.monotonic() - record.started
+                owner = scope.label if scope is not None and extern in scope.codels else self._home.get(extern, comp)
+                times.record(f"{owner}.{spec.codel}", cpu, wall)
             if not record.finish(outcome):
                 raise CodelDetached(record)  # the engine went on in another thread: the outcome waits there
             return self._conclude(spec, record)

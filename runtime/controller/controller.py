@@ -16,6 +16,7 @@ from typing import Any, Callable
 from runtime.codels import codel_specs
 from runtime.controller.binding import Binder
 from runtime.controller.choice import Choice
+from runtime.controller.codel_times import CodelTimes
 from runtime.controller.codels import load_codels
 from runtime.controller.data import Data, PosterValue
 from runtime.controller.intake import checked_inputs, request_locals
@@ -39,17 +40,20 @@ class Controller(Running):
     possible); ``seed`` makes the choice among ready interactions random
     (default: the engine's order); ``keep`` bounds how many ended requests
     are remembered; ``max_queued`` how many requests may wait to be taken
-    (beyond, :meth:`submit` answers 429: memory and latency stay bounded).
+    (beyond, :meth:`submit` answers 429: memory and latency stay bounded);
+    ``times`` records how long each codel runs (:meth:`codel_times`).
     """
 
     def __init__(self, package: Package, root: str, interface: dict[str, Any], codels: Any = None, *,
-                 clock: Any = None, seed: int | None = None, keep: int = 10_000, max_queued: int = 1000) -> None:
+                 clock: Any = None, seed: int | None = None, keep: int = 10_000, max_queued: int = 1000,
+                 times: bool = False) -> None:
         self.interface = interface
         self.types: dict[str, dict[str, Any]] = interface.get("types", {})
         comps = interface["components"]
         self.data = Data(interface)
         self.codels = load_codels(codels, list(comps))
         self.binder = Binder(interface, self.data, self.codels, codel_specs(package), on_poster=self._poster_written)
+        self.binder.times = CodelTimes(interface) if times else None
         externs: dict[str, Callable] = dict(self.binder.externs())
         externs["request_pending"] = self._pending
         externs["take_request"] = self._take
@@ -189,6 +193,11 @@ class Controller(Running):
     def _poster_written(self, component: str, port: str, value: PosterValue) -> None:
         if self.reports.listeners:
             self.reports.emit({"event": "poster", **value.as_json()})
+
+    def codel_times(self) -> dict[str, Any] | None:
+        """How long each codel ran so far (runtime.controller.codel_times), None unless made with ``times``."""
+        times = self.binder.times
+        return times.as_json("virtual" if self.clock.virtual else "real") if times is not None else None
 
     # -- what the server shows ------------------------------------------------------------------------------
     def summary(self) -> dict[str, Any]:

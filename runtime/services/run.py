@@ -53,6 +53,9 @@ def add_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--seed", type=int, help="choose among ready interactions at random with this seed "
                                               "(default: the least recently fired)")
     run.add_argument("--quiet", action="store_true", help="print only the start and the end")
+    run.add_argument("--codel-times", metavar="FILE",
+                     help="record how long each codel runs (calls; longest, p99 and mean CPU and wall time), write "
+                          "it to FILE (JSON) when the run ends and print it with the last lines")
     run.add_argument("--on-violation", metavar="OBSERVER=C.S", action="append", default=[],
                      help="when OBSERVER (its instance path) is violated, request service S of component C "
                           "(e.g. a Stop that interrupts the faulty activity)")
@@ -126,6 +129,7 @@ def exit_now(controller, prog: str, sig: int = signal.SIGINT) -> None:
 def _build(package: Package, root: str, interface: dict[str, Any], args, origin: str | None):
     """The controller and its server as the options say; :class:`UsageError` for what cannot be used."""
     from runtime.controller import Controller
+    from runtime.controller.codel_times import unwritable
     from runtime.controller.recovery import RecoveryError, on_violation
     from runtime.engine import EngineError
     from runtime.services.server import ServiceServer
@@ -134,12 +138,15 @@ def _build(package: Package, root: str, interface: dict[str, Any], args, origin:
     if any(a.name == "timed" for a in package.annotations):
         raise UsageError("this model is timed (generated with --timed) for verification: its timers wait for "
                          "ticks; generate it with --monitor to run it with its observers")
+    why = unwritable(args.codel_times) if args.codel_times else None
+    if why:
+        raise UsageError(f"--codel-times {args.codel_times}: cannot write it: {why}")
     codels = find_codels(interface, args.codels, origin)
     dotted = args.codels and all(part.isidentifier() for part in args.codels.split("."))
     if args.codels and not Path(args.codels).is_dir() and not dotted:
         raise UsageError(f"--codels {args.codels}: no such directory")
     try:
-        controller = Controller(package, root, interface, codels, seed=args.seed)
+        controller = Controller(package, root, interface, codels, seed=args.seed, times=bool(args.codel_times))
         for item in args.connect:
             left, _, right = item.partition("=")
             component, _, port_name = left.partition(".")
@@ -207,11 +214,27 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
     undo()
     for line in _summary(controller, console):
         console.line(line)
+    status = 0
+    if args.codel_times and not _write_times(controller, args.codel_times, prog, console):
+        status = 1
     console.close(LAST_WORDS)
     if controller.error:
         print(f"{prog}: {controller.error}", file=sys.stderr)
         return 2
-    return 0
+    return status
+
+
+def _write_times(controller, path: str, prog: str, console) -> bool:
+    """Write the codel times of the run to ``path``; False (and said why) when it cannot be written."""
+    from runtime.controller.codel_times import write_json
+
+    try:
+        write_json(path, controller.codel_times())
+    except OSError as exc:
+        print(f"{prog}: error: --codel-times {path}: cannot write it: {exc.strerror or exc}", file=sys.stderr)
+        return False
+    console.line(f"wrote {path}")
+    return True
 
 
 def _summary(controller, console) -> list[str]:
@@ -221,4 +244,10 @@ def _summary(controller, console) -> list[str]:
     dropped = f"; {console.dropped} output lines dropped (the output was not read)" if console.dropped else ""
     lines = [f"stopped after {controller.steps} steps; requests: {done}{dropped}"]
     lines += [f"still running, abandoned: {what}" for what in controller.abandoned_codels()]
+    times = controller.codel_times()
+    if times is not None:
+        from runtime.controller.codel_times import table
+
+        lines.append("codel times (cpu: the codel thread's CPU time, wall: wall time):")
+        lines += ["  " + line for line in table(times)]
     return lines
