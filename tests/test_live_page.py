@@ -107,6 +107,20 @@ def test_a_request_sent_from_its_form_reaches_ok_and_a_refused_one_shows_its_rul
     assert page.errors == []
 
 
+def test_a_failed_request_shows_its_exception_and_codel_and_its_service_turns_failed(browser, ctl):
+    _, server, client = ctl
+    page = open_page(browser, server.url + "/live/")
+    ready(page)
+    navigation_ready(client)
+    ndd_settings(client)
+    rid = send_from_form(page, "NDD.GoTo", {"goal.x": "13", "goal.y": "0", "goal.theta": "0"})  # the stub throws
+    row = wait(page, f'#request-{rid}[data-status="failed"]')
+    assert "NDD::e_blocked in nddPlan" in row.inner_text()
+    assert client.wait(rid, timeout=10)["exception"] == "NDD::e_blocked"
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"][data-state="failed"]')
+    assert page.errors == []
+
+
 def test_a_bad_input_in_the_form_is_refused_with_the_servers_message(browser, ctl):
     _, server, client = ctl
     page = open_page(browser, server.url + "/live/")
@@ -233,3 +247,38 @@ def test_a_screenshot_is_written(browser, ctl, tmp_path: Path):
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
     assert width == 1500 and height >= 1100
+
+
+def test_a_mission_with_view_shows_the_world_and_the_robots_pose(browser, tmp_path: Path):
+    """``genom2bip mission --view``: the page draws the mission's world and the pose posters as the robot starts."""
+    import signal
+    import subprocess
+    import sys
+
+    from runkit import ROOT
+
+    mission = tmp_path / "look.yaml"
+    mission.write_text(f"mission: look\nworld: {ROOT / 'descriptions/dala/worlds/corridor.yaml'}\nsteps:\n"
+                       "  - send: RFLEX.Init\n    expect: ok\n  - send: RFLEX.TrackSpeed\n    until: started\n"
+                       "  - send: POM.Run\n    with: {origin: {x: 1.0, y: 2.0, theta: 0.0}}\n    expect: ok\n"
+                       "  - wait: 600\n")  # the test ends the run once it has seen the page
+    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "mission", str(mission), "--view", "--quiet",
+                             "--out", str(tmp_path / "out")], cwd=ROOT, stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("live view: http://127.0.0.1:"), line
+        page = open_page(browser, line.split()[2])
+        wait(page, "#mission-panel:not([hidden])")
+        assert page.inner_text("#mission-name") == "look"
+        pose = wait(page, '#pose:has-text("POM.Pos estimate: x 1.00, y 2.00")')
+        assert "RFLEX.Odo" not in pose.inner_text()  # odometry's own frame: not drawn over the world
+        scene = page.evaluate("live.scene")
+        assert scene["bounds"] == [0.0, 0.0, 16.0, 4.0] and scene["goals"] == []
+        assert scene["pose"] == {"poster": "POM.Pos", "path": "estimate"}
+        assert {o["kind"] for o in scene["obstacles"]} == {"polygon", "line"} and len(scene["obstacles"]) == 4
+        assert page.errors == []
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+        proc.stdout.close()

@@ -4,6 +4,7 @@ Starts the generated package's controller (``--package``, default
 ``gen/<system>``) with its codels and services interface, loads the world
 (ir-sim YAML), sends the mission's requests through the client, then prints
 the report and writes the trajectory picture and the trace (``--out``).
+``--view`` serves the live page meanwhile, the robot drawn over the world.
 Exit status 0 when every expectation of the mission is met, 1 otherwise.
 """
 from __future__ import annotations
@@ -27,6 +28,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="show the simulation in a window as it runs, in real time (needs a display)")
     parser.add_argument("--realtime", action="store_true",
                         help="run the controller in real time (default: as fast as it can, periods kept)")
+    parser.add_argument("--view", action="store_true",
+                        help="serve the live page (the level, requests, posters, the robot over the world) while "
+                             "the mission runs, in real time; its address is printed")
+    parser.add_argument("--port", type=int, default=0, help="the port of --view's page (default: a free one)")
     parser.add_argument("--quiet", action="store_true", help="print only the report")
 
 
@@ -55,7 +60,7 @@ def verb_mission(args: argparse.Namespace) -> int:
         error(str(exc))
         return EXIT_ERRORS
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
-                      log=None if args.quiet else print)
+                      log=None if args.quiet else print, view=args.port if args.view else None)
     print(report.text(run))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

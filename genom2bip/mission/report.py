@@ -6,8 +6,7 @@ from itertools import pairwise
 from typing import Any
 
 from genom2bip.mission.session import Run
-
-GOAL_SERVICE = "NDD.GoTo"
+from genom2bip.mission.spec import GOAL_SERVICE
 
 
 def distance_driven(run: Run) -> float:

@@ -4,7 +4,7 @@
 // Events are queued as they arrive and applied together at most every FLUSH_MS.
 "use strict";
 
-const FLUSH_MS = 50;            // apply queued events at most 20 times a second
+const FLUSH_MS = 66;            // apply queued events at most 15 times a second (the page must keep 10)
 const TASKS_MS = 1000;          // how often the task table and plot are read
 const HISTORY = 240;            // samples kept per plotted value
 const MAX_PLOTS = 6;            // numeric fields plotted per poster
@@ -19,8 +19,29 @@ const live = window.live = {
   token: sessionStorage.getItem(TOKEN_KEY), system: null, components: {}, openapi: null, types: {},
   services: {}, requests: new Map(), posters: {}, poses: [], scene: null, mine: new Set(),
   queue: [], stats: {events: 0, updates: 0, rate: 0, window: []}, tasks: {}, taskHistory: [],
-  stopped: false, streamOpen: false,
+  stopped: false, streamOpen: false, seen: new Set(), dirty: new Set(), overruns: new Map(),
 };
+
+// What is off the screen is not drawn (it costs the browser's CPU, on the controller's machine perhaps): it is
+// marked dirty and drawn when it scrolls into view.
+const watcher = new IntersectionObserver((entries) => {
+  for (const entry of entries) {
+    if (entry.isIntersecting) live.seen.add(entry.target); else live.seen.delete(entry.target);
+  }
+});
+
+function visible(el) {
+  if (live.seen.has(el)) { live.dirty.delete(el); return true; }
+  live.dirty.add(el);
+  return false;
+}
+
+function redraw(el) {
+  live.dirty.delete(el);
+  if (el.id === "world") drawWorld();
+  else if (el.id === "tasks-plot") plotTasks();
+  else if (el.id.startsWith("poster-")) drawPoster(el.id.slice("poster-".length));
+}
 
 // ---- talking to the server --------------------------------------------------------------------------------
 
@@ -133,6 +154,11 @@ async function load() {
   if (live.scene) {
     $("mission-panel").hidden = false;
     $("mission-name").textContent = live.scene.name || "";
+    const pose = live.scene.pose;  // the pose the robot navigates by, in the world's frame
+    if (pose) live.poses = live.poses.filter((p) => p.poster === pose.poster && p.path === pose.path);
+    const [x0, y0, x1, y1] = live.scene.bounds;
+    const canvas = $("world");
+    canvas.height = Math.round(Math.min(480, Math.max(120, (canvas.width - 20) * (y1 - y0) / (x1 - x0) + 20)));
   }
   paintStates();
 }
@@ -204,14 +230,19 @@ function flush() {
     const events = live.queue;
     live.queue = [];
     const changed = new Set();
-    for (const e of events) apply(e, changed);
+    let states = false;
+    for (const e of events) {
+      apply(e, changed);
+      states = states || e.event === "service" || e.event === "report";
+    }
     live.stats.events += events.length;
     live.stats.updates += 1;
     w.push(now);
     for (const key of changed) drawPoster(key);
     if (changed.size && live.scene) drawWorld();
-    paintStates();
+    if (states) paintStates();
   }
+  for (const el of live.dirty) if (live.seen.has(el)) redraw(el);
   live.stats.rate = w.length;
   $("rate").textContent = `${w.length} updates/s`;
 }
@@ -607,7 +638,9 @@ async function buildPosters() {
       card.querySelector("h3").textContent = key;
       box.append(card);
       live.posters[key] = {card, value: undefined, seq: 0, history: {}, paths: null};
-      for (const path of poseIn(port.schema, "", [])) live.poses.push({poster: key, path, trail: []});
+      watcher.observe(card);
+      for (const path of poseIn(port.schema, "", [])) live.poses.push({poster: key, path, trail: []});  // kept if
+      // the scene names none
       const answer = await json(`/components/${c}/ports/${port.name}`);
       if (answer.written) posterValue(c, port.name, answer.value, answer.seq);
       if (answer.failure) card.classList.add("stale");
@@ -649,7 +682,7 @@ function shortJson(value) {
 
 function drawPoster(key) {
   const poster = live.posters[key];
-  if (!poster) return;
+  if (!poster || !visible(poster.card)) return;
   poster.card.querySelector("pre").textContent =
     poster.value === undefined ? "(not written yet)" : `#${poster.seq} ${shortJson(poster.value)}`;
   const plots = poster.card.querySelector(".plots");
@@ -694,6 +727,10 @@ function sparkline(canvas, points) {
 // ---- monitoring --------------------------------------------------------------------------------------------------
 
 function alert(e) {
+  if (e.event === "overrun" || e.event === "codel_overrun") {
+    overrun(e);
+    return;
+  }
   const list = $("alerts");
   const li = document.createElement("li");
   li.className = e.event;
@@ -724,6 +761,24 @@ function alert(e) {
   list.prepend(li);
   while (list.children.length > MAX_ALERTS) list.lastElementChild.remove();
   $("alert-count").textContent = `${list.children.length} shown`;
+}
+
+function overrun(e) {
+  // One line per task (or codel) that overran, with the count and the last message: they can come every period.
+  const key = `${e.event}:${e.task || e.codel || ""}`;
+  let li = live.overruns.get(key);
+  if (!li) {
+    li = document.createElement("li");
+    li.className = e.event;
+    li.dataset.kind = e.event;
+    li.innerHTML = "<b></b> <span></span>";
+    live.overruns.set(key, li);
+    li.count = 0;
+  }
+  li.count += 1;
+  li.querySelector("b").textContent = `${e.event.replace("_", " ")} ×${li.count}`;
+  li.querySelector("span").textContent = `last: ${e.message || JSON.stringify(e)}`;
+  $("overruns").prepend(li);
 }
 
 async function readTasks() {
@@ -765,6 +820,7 @@ const COLOURS = ["#2a62b8", "#d9480f", "#2f9e44", "#7048e8", "#c2255c", "#0b7285
 
 function plotTasks() {
   const canvas = $("tasks-plot");
+  if (!visible(canvas)) return;
   const ctx = canvas.getContext("2d");
   const h = live.taskHistory;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
@@ -805,6 +861,7 @@ function plotTasks() {
 function drawWorld() {
   const scene = live.scene;
   const canvas = $("world");
+  if (!visible(canvas)) return;
   const ctx = canvas.getContext("2d");
   const [x0, y0, x1, y1] = scene.bounds;
   const scale = Math.min((canvas.width - 20) / (x1 - x0), (canvas.height - 20) / (y1 - y0));
@@ -851,4 +908,6 @@ function drawWorld() {
   $("pose").textContent = lines.join(" · ");
 }
 
+watcher.observe($("world"));
+watcher.observe($("tasks-plot"));
 boot();
