@@ -6,8 +6,9 @@ Each run is ``genom2bip mission descriptions/dala/missions/corridor.yaml --view`
 time: tasks of 25 to 100 ms).  With the page open, headless Chromium (another process, as an operator's browser
 is) shows ``/live/`` for the whole mission.  The bench reads ``GET /tasks`` once a second in both cases (the same
 load with the page closed or open) and prints, per task, the periods run, the periods missed, the overruns and the
-lateness at the mission's end; with the page open, the page's own count of updates per second (events applied
-to the page), read once a second from ``window.live.stats``.
+lateness at the mission's end, and the CPU time of the mission's process and of the browser; with the page open,
+the page's own count of updates per second (events applied to the page), read once a second from
+``window.live.stats``.  With ``--runs N`` the order alternates (closed then open, open then closed...).
 """
 from __future__ import annotations
 
@@ -156,9 +157,12 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=1, help="runs of each (default 1)")
     parser.add_argument("--screenshot", type=Path, help="a full-page screenshot of the first open run")
     args = parser.parse_args()
-    for i in range(args.runs):
-        show("closed", one_run(False, None))
-        show("open", one_run(True, args.screenshot if i == 0 else None))
+    for i in range(args.runs):  # the order alternates, so that a change of the machine's load favours neither
+        for page_open in ((False, True) if i % 2 == 0 else (True, False)):
+            if page_open:
+                show("open", one_run(True, args.screenshot if i == 0 else None))
+            else:
+                show("closed", one_run(False, None))
 
 
 if __name__ == "__main__":

@@ -152,3 +152,41 @@ def test_the_page_is_not_served_to_a_foreign_host_or_origin(guarded):
     assert status == 403 and "is not this server" in json.loads(body)["error"]
     status, _, body = get(guarded, "/live/", {"Origin": "http://evil.example"})
     assert status == 403 and "cross-site request" in json.loads(body)["error"]
+
+
+def test_mission_view_on_a_taken_port_stops_before_the_run_and_writes_nothing(tmp_path):
+    import socket
+    import subprocess
+    import sys
+
+    from runkit import ROOT
+
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen()
+    port = taken.getsockname()[1]
+    try:
+        done = subprocess.run([sys.executable, "-m", "genom2bip", "mission", "descriptions/dala/missions/corridor.yaml",
+                               "--view", "--port", str(port), "--out", str(tmp_path / "out")],
+                              cwd=ROOT, capture_output=True, text=True, timeout=600)
+    finally:
+        taken.close()
+    assert done.returncode == 1, done.stderr
+    assert f"--port {port}: cannot serve the live page there: Address already in use" in done.stderr
+    assert "Traceback" not in done.stderr and "live view:" not in done.stdout
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("port", ["-1", "65536", "http"])
+def test_mission_view_refuses_a_port_that_is_not_one(port, tmp_path):
+    import subprocess
+    import sys
+
+    from runkit import ROOT
+
+    done = subprocess.run([sys.executable, "-m", "genom2bip", "mission", "descriptions/dala/missions/corridor.yaml",
+                           "--view", "--port", port, "--out", str(tmp_path / "out")],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 2
+    assert f"argument --port: {port!r} is not a port (a number from 0 to 65535; 0: a free one)" in done.stderr
+    assert not (tmp_path / "out").exists()

@@ -16,6 +16,13 @@ from pathlib import Path
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, error, verb
 
 
+def _port(text: str) -> int:
+    """A TCP port, 0 for a free one."""
+    if not text.isdigit() or int(text) > 65535:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port (a number from 0 to 65535; 0: a free one)")
+    return int(text)
+
+
 def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("mission", metavar="MISSION", help="the mission file (YAML; docs/missions.md)")
     parser.add_argument("--world", metavar="WORLD", help="the world file (ir-sim YAML); default: the mission's")
@@ -31,7 +38,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--view", action="store_true",
                         help="serve the live page (the level, requests, posters, the robot over the world) while "
                              "the mission runs, in real time; its address is printed")
-    parser.add_argument("--port", type=int, default=0, help="the port of --view's page (default: a free one)")
+    parser.add_argument("--port", type=_port, default=0, help="the port of --view's page (default: a free one)")
     parser.add_argument("--quiet", action="store_true", help="print only the report")
 
 

@@ -27,6 +27,10 @@ class WorldError(Genom2bipError):
     """The world file passed the checks, and the simulator refused it still."""
 
 
+class ViewError(Genom2bipError):
+    """``--view``'s page cannot be served (its port is taken)."""
+
+
 @dataclass
 class Run:
     """What a mission run leaves: the outcomes, the controller's reports, the world's record, times."""
@@ -112,12 +116,18 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
         session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
     except Exception as exc:  # noqa: BLE001 - the simulator's own complaint, about the user's file
         raise WorldError(f"{world}: the simulator cannot load this world: {type(exc).__name__}: {exc}") from None
+    shown = scene(mission, session, package.INTERFACE) if view is not None and session is not None else None
+    try:
+        server = ServiceServer(controller, port=view or 0, scene=shown)  # bound here: a port taken stops the run now
+    except OSError as exc:
+        if session is not None:
+            session.close()
+        raise ViewError(f"--port {view}: cannot serve the live page there: {exc.strerror or exc}") from None
     events: list[dict[str, Any]] = []
     controller.subscribe(lambda e: events.append(e) if e["event"] in ("report", "overrun", "codel_error") else None)
     started = time.perf_counter()
     controller.start()
-    shown = scene(mission, session, package.INTERFACE) if view is not None and session is not None else None
-    server = ServiceServer(controller, port=view or 0, scene=shown).start()
+    server.start()
     if view is not None:
         print(f"live view: {server.url}/live/ (for as long as the mission runs)", flush=True)
     try:

@@ -819,6 +819,7 @@ async function readTasks() {
 const COLOURS = ["#2a62b8", "#d9480f", "#2f9e44", "#7048e8", "#c2255c", "#0b7285", "#e67700", "#5c940d"];
 
 function plotTasks() {
+  // Each task's lateness p99 (a line) and the periods it missed since the reading before (a bar), per reading.
   const canvas = $("tasks-plot");
   if (!visible(canvas)) return;
   const ctx = canvas.getContext("2d");
@@ -826,33 +827,47 @@ function plotTasks() {
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   if (h.length < 2) return;
   const names = h[h.length - 1][1].map((x) => x.task);
-  let top = 1;
-  for (const [, tasks] of h) for (const x of tasks) top = Math.max(top, (x.lateness_ms || {}).max || 0);
+  const find = (tasks, name) => tasks.find((k) => k.task === name) || {};
+  let top = 1, most = 1;
+  h.forEach(([, tasks], j) => {
+    for (const x of tasks) {
+      top = Math.max(top, (x.lateness_ms || {}).p99 || 0);
+      if (j) most = Math.max(most, x.missed - (find(h[j - 1][1], x.task).missed || 0));
+    }
+  });
+  const left = 44, bottom = canvas.height - 16, height = canvas.height - 40;
   const t0 = h[0][0], t1 = h[h.length - 1][0];
-  const X = (t) => 40 + ((t - t0) / Math.max(t1 - t0, 1e-6)) * (canvas.width - 50);
-  const Y = (v) => canvas.height - 20 - (v / top) * (canvas.height - 30);
-  ctx.fillStyle = "#556";
+  const X = (t) => left + ((t - t0) / Math.max(t1 - t0, 1e-6)) * (canvas.width - left - 8);
+  const Y = (v) => bottom - (v / top) * height;
   ctx.font = "10px sans-serif";
-  ctx.fillText(`${top.toFixed(1)} ms`, 2, 12);
-  ctx.fillText("0", 28, canvas.height - 20);
+  ctx.fillStyle = "#556";
+  ctx.fillText(`p99 ${top.toFixed(1)} ms`, 0, Y(top) + 4);
+  ctx.fillText("0", left - 10, bottom);
+  ctx.fillText(`bars: missed (most ${most} per reading)`, left, canvas.height - 3);
+  let x = left;
   names.forEach((name, i) => {
-    ctx.strokeStyle = COLOURS[i % COLOURS.length];
-    ctx.fillStyle = ctx.strokeStyle;
+    const colour = COLOURS[i % COLOURS.length];
+    ctx.strokeStyle = ctx.fillStyle = colour;
+    const label = `${name} (${find(h[h.length - 1][1], name).missed || 0} missed)`;
+    ctx.fillText(label, x, 10);
+    x += ctx.measureText(label).width + 12;
+    const width = Math.max(1, (canvas.width - left) / h.length / names.length);
+    h.forEach(([t, tasks], j) => {
+      if (!j) return;
+      const missed = (find(tasks, name).missed || 0) - (find(h[j - 1][1], name).missed || 0);
+      if (missed > 0) {
+        const bar = (missed / most) * height * 0.5;
+        ctx.globalAlpha = 0.45;
+        ctx.fillRect(X(t) - width * (names.length - i), bottom - bar, width, bar);
+        ctx.globalAlpha = 1;
+      }
+    });
     ctx.beginPath();
     h.forEach(([t, tasks], j) => {
-      const x = tasks.find((k) => k.task === name);
-      const v = x && x.lateness_ms ? x.lateness_ms.max || 0 : 0;
+      const v = (find(tasks, name).lateness_ms || {}).p99 || 0;
       if (j) ctx.lineTo(X(t), Y(v)); else ctx.moveTo(X(t), Y(v));
     });
     ctx.stroke();
-    let before = null;
-    for (const [t, tasks] of h) {  // a missed period is a mark where the count grew
-      const x = tasks.find((k) => k.task === name);
-      if (x && before !== null && x.missed > before) ctx.fillRect(X(t) - 2, canvas.height - 16, 4, 8);
-      before = x ? x.missed : before;
-    }
-    const last = h[h.length - 1][1].find((k) => k.task === name);
-    ctx.fillText(`${name} (missed ${last ? last.missed : 0})`, 44 + (i % 3) * 170, canvas.height - 2 - 0 * i);
   });
 }
 
