@@ -14,7 +14,12 @@ const MAX_ALERTS = 100;
 const STATES = ["idle", "queued", "validating", "running", "ok", "rejected", "failed", "interrupted"];
 const TOKEN_KEY = "genom2bip-token";
 
+const PLOT_MS = 200;            // a poster's plots are redrawn at most 5 times a second (its value at every update)
 const $ = (id) => document.getElementById(id);
+
+function setText(el, text) {  // a text set to what it already says would still make the browser lay out and paint
+  if (el.textContent !== text) el.textContent = text;
+}
 const live = window.live = {
   token: sessionStorage.getItem(TOKEN_KEY), system: null, components: {}, openapi: null, types: {},
   services: {}, requests: new Map(), posters: {}, poses: [], scene: null, mine: new Set(),
@@ -242,9 +247,9 @@ function flush() {
     if (changed.size && live.scene) drawWorld();
     if (states) paintStates();
   }
-  for (const el of live.dirty) if (live.seen.has(el)) redraw(el);
+  for (const el of [...live.dirty]) if (live.seen.has(el)) redraw(el);
   live.stats.rate = w.length;
-  $("rate").textContent = `${w.length} updates/s`;
+  setText($("rate"), `${w.length} updates/s`);
 }
 
 function apply(e, changed) {
@@ -683,8 +688,14 @@ function shortJson(value) {
 function drawPoster(key) {
   const poster = live.posters[key];
   if (!poster || !visible(poster.card)) return;
-  poster.card.querySelector("pre").textContent =
-    poster.value === undefined ? "(not written yet)" : `#${poster.seq} ${shortJson(poster.value)}`;
+  setText(poster.card.querySelector("pre"),
+          poster.value === undefined ? "(not written yet)" : `#${poster.seq} ${shortJson(poster.value)}`);
+  const now = performance.now();
+  if (now - (poster.plotted || 0) < PLOT_MS) {
+    live.dirty.add(poster.card);  // drawn at a later update
+    return;
+  }
+  poster.plotted = now;
   const plots = poster.card.querySelector(".plots");
   for (const path of poster.paths || []) {
     let canvas = plots.querySelector(`canvas[data-path="${CSS.escape(path)}"]`);
@@ -700,7 +711,7 @@ function drawPoster(key) {
     }
     const h = poster.history[path] || [];
     const last = h.length ? h[h.length - 1][1] : undefined;
-    canvas.nextSibling.textContent = `${path} ${typeof last === "number" ? last.toFixed(3) : ""}`;
+    setText(canvas.nextSibling, `${path} ${typeof last === "number" ? last.toFixed(3) : ""}`);
     sparkline(canvas, h);
   }
 }
@@ -811,7 +822,7 @@ async function readTasks() {
   plotTasks();
   try {
     const summary = await json("/");
-    $("uptime").textContent = `up ${summary.uptime.toFixed(1)} s, ${summary.steps} steps`;
+    setText($("uptime"), `up ${summary.uptime.toFixed(1)} s, ${summary.steps} steps`);
     if (summary.status !== "running") setBadge("status", summary.status, summary.status);
   } catch (err) { /* the table says enough */ }
 }
@@ -920,7 +931,7 @@ function drawWorld() {
     }
   });
   ctx.lineWidth = 1;
-  $("pose").textContent = lines.join(" · ");
+  setText($("pose"), lines.join(" · "));
 }
 
 watcher.observe($("world"));
