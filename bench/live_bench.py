@@ -157,6 +157,10 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=1, help="runs of each (default 1)")
     parser.add_argument("--screenshot", type=Path, help="a full-page screenshot of the first open run")
     args = parser.parse_args()
+    from browserkit import chromium_path
+
+    if chromium_path() is None:
+        raise SystemExit("no Chromium: apt-get install chromium (or GENOM2BIP_CHROMIUM=/path/to/chromium)")
     for i in range(args.runs):  # the order alternates, so that a change of the machine's load favours neither
         for page_open in ((False, True) if i % 2 == 0 else (True, False)):
             if page_open:

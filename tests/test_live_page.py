@@ -14,6 +14,7 @@ import pytest
 
 from browserkit import SAFETY_MS, launch, needs_chromium, open_page
 from runkit import navigation_ready, ndd_settings, serving_dala
+from runtime.services.client import Client
 
 pytestmark = needs_chromium
 sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright is in the test extra: pip install -e .[test]")
@@ -41,6 +42,17 @@ def ready(page):
     """The page has drawn the level and its event stream is open."""
     wait(page, 'rect.svc-bg[data-service="NDD.GoTo"]')
     wait(page, '#stream[data-status="open"]')
+
+
+def live_page(browser, server, navigation: bool = False):
+    """The page of ``server``, ready; ``navigation``: with everything a GoTo needs done first."""
+    page = open_page(browser, server.url + "/live/")
+    ready(page)
+    if navigation:
+        client = Client(server.url, timeout=10)
+        navigation_ready(client)
+        ndd_settings(client)
+    return page
 
 
 def recent(server) -> list:
@@ -78,8 +90,7 @@ def test_the_page_loads_with_the_level_the_services_and_the_posters(browser, ctl
 
 def test_a_module_opens_as_a_compound_with_its_services_coloured(browser, ctl):
     _, server, client = ctl
-    page = open_page(browser, server.url + "/live/")
-    ready(page)
+    page = live_page(browser, server)
     page.click('#level g.node.module:has(title:text-is("NDD"))')
     wait(page, '#module g.node[data-service="NDD.GoTo"]')
     assert page.inner_text("#module-name") == "NDD"
@@ -90,8 +101,7 @@ def test_a_module_opens_as_a_compound_with_its_services_coloured(browser, ctl):
 
 def test_a_request_sent_from_its_form_reaches_ok_and_a_refused_one_shows_its_rule(browser, ctl):
     _, server, client = ctl
-    page = open_page(browser, server.url + "/live/")
-    ready(page)
+    page = live_page(browser, server)
     rid = send_from_form(page, "NDD.SetSpeed", {"max_speed.v": "0.25", "max_speed.w": "0.5"})
     row = wait(page, f'#request-{rid}[data-status="ok"]')
     assert "NDD.SetSpeed" in row.inner_text()
@@ -109,10 +119,7 @@ def test_a_request_sent_from_its_form_reaches_ok_and_a_refused_one_shows_its_rul
 
 def test_a_failed_request_shows_its_exception_and_codel_and_its_service_turns_failed(browser, ctl):
     _, server, client = ctl
-    page = open_page(browser, server.url + "/live/")
-    ready(page)
-    navigation_ready(client)
-    ndd_settings(client)
+    page = live_page(browser, server, navigation=True)
     rid = send_from_form(page, "NDD.GoTo", {"goal.x": "13", "goal.y": "0", "goal.theta": "0"})  # the stub throws
     row = wait(page, f'#request-{rid}[data-status="failed"]')
     assert "NDD::e_blocked in nddPlan" in row.inner_text()
@@ -123,8 +130,7 @@ def test_a_failed_request_shows_its_exception_and_codel_and_its_service_turns_fa
 
 def test_a_bad_input_in_the_form_is_refused_with_the_servers_message(browser, ctl):
     _, server, client = ctl
-    page = open_page(browser, server.url + "/live/")
-    ready(page)
+    page = live_page(browser, server)
     before = recent(server)
     page.select_option("#service-select", "Aspect.SetParams")
     wait(page, '#service-form[data-service="Aspect.SetParams"]')
@@ -139,10 +145,7 @@ def test_a_bad_input_in_the_form_is_refused_with_the_servers_message(browser, ct
 
 def test_a_services_state_changes_on_the_page_as_the_controller_runs_it(browser, ctl):
     _, server, client = ctl
-    page = open_page(browser, server.url + "/live/")
-    ready(page)
-    navigation_ready(client)
-    ndd_settings(client)
+    page = live_page(browser, server, navigation=True)
     assert page.get_attribute('rect.svc-bg[data-service="NDD.GoTo"]', "data-state") in ("idle", "rejected")
     goto = client.send("NDD", "GoTo", goal={"x": 1000.0, "y": 0.0, "theta": 0.0})
     wait(page, 'rect.svc-bg[data-service="NDD.GoTo"][data-state="running"]')
@@ -235,8 +238,7 @@ def test_the_page_refuses_to_work_with_a_wrong_token_and_works_with_the_right_on
 
 def test_a_screenshot_is_written(browser, ctl, tmp_path: Path):
     _, server, client = ctl
-    page = open_page(browser, server.url + "/live/")
-    ready(page)
+    page = live_page(browser, server)
     navigation_ready(client)
     wait(page, 'rect.svc-bg[data-service="LaserRF.Start"][data-state="running"]')
     shot = tmp_path / "live.png"

@@ -82,7 +82,8 @@ $("login-form").addEventListener("submit", (event) => {
   event.preventDefault();
   live.token = $("token").value;
   sessionStorage.setItem(TOKEN_KEY, live.token);
-  boot();
+  if (live.booted) location.reload();  // refused after it had started (the server's token changed): start afresh
+  else boot();
 });
 
 function problem(text) {
@@ -118,6 +119,7 @@ async function boot() {
   $("system").textContent = summary.system || "controller";
   document.title = `${summary.system} live`;
   setBadge("status", summary.status, summary.status);
+  live.booted = true;  // from here a token asked again reloads the page rather than building it twice
   try {
     await load();
   } catch (err) {
