@@ -5,7 +5,8 @@ Starts the generated package's controller (``--package``, default
 (ir-sim YAML), sends the mission's requests through the client, then prints
 the report and writes the trajectory picture and the trace (``--out``);
 ``--codel-times FILE`` records how long each codel ran, writes it to FILE and
-prints it after the report.
+prints it after the report.  ``--view`` serves the live page meanwhile, the
+robot drawn over the world.
 Exit status 0 when every expectation of the mission is met, 1 otherwise.
 """
 from __future__ import annotations
@@ -15,6 +16,13 @@ import os
 from pathlib import Path
 
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, error, verb
+
+
+def _port(text: str) -> int:
+    """A TCP port, 0 for a free one."""
+    if not text.isdigit() or int(text) > 65535:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port (a number from 0 to 65535; 0: a free one)")
+    return int(text)
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
@@ -29,6 +37,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="show the simulation in a window as it runs, in real time (needs a display)")
     parser.add_argument("--realtime", action="store_true",
                         help="run the controller in real time (default: as fast as it can, periods kept)")
+    parser.add_argument("--view", action="store_true",
+                        help="serve the live page (the level, requests, posters, the robot over the world) while "
+                             "the mission runs, in real time; its address is printed")
+    parser.add_argument("--port", type=_port, default=0, help="the port of --view's page (default: a free one)")
     parser.add_argument("--quiet", action="store_true", help="print only the report")
     parser.add_argument("--codel-times", metavar="FILE",
                         help="record how long each codel runs (calls; longest, p99 and mean CPU and wall time), "
@@ -65,7 +77,8 @@ def verb_mission(args: argparse.Namespace) -> int:
         error(str(exc))
         return EXIT_ERRORS
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
-                      log=None if args.quiet else print, times=bool(args.codel_times))
+                      log=None if args.quiet else print, times=bool(args.codel_times),
+                      view=args.port if args.view else None)
     print(report.text(run))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

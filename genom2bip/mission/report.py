@@ -6,9 +6,8 @@ from itertools import pairwise
 from typing import Any
 
 from genom2bip.mission.session import Run
+from genom2bip.mission.spec import GOAL_SERVICE
 from runtime.controller.codel_times import table
-
-GOAL_SERVICE = "NDD.GoTo"
 
 
 def distance_driven(run: Run) -> float:

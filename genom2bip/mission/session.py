@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from genom2bip.mission.runner import Outcome, Runner
+from genom2bip.mission.spec import GOAL_SERVICE, POSE_POSTER
 from genom2bip.mission.spec import Mission
 from runtime.errors import Genom2bipError
 
@@ -29,6 +30,10 @@ EVENTS = ("report", "overrun", "codel_error", "codel_overrun")
 
 class WorldError(Genom2bipError):
     """The world file passed the checks, and the simulator refused it still."""
+
+
+class ViewError(Genom2bipError):
+    """``--view``'s page cannot be served (its port is taken)."""
 
 
 @dataclass
@@ -73,11 +78,36 @@ def world_module(controller) -> Any:
     return None
 
 
+def navigation_pose(interface: dict[str, Any]) -> dict[str, str] | None:
+    """:data:`POSE_POSTER` when the controller has it, else None (the page then draws every poster with a pose)."""
+    component, port = POSE_POSTER["poster"].split(".")
+    spec = interface["components"].get(component, {}).get("ports", {}).get(port)
+    return dict(POSE_POSTER) if spec is not None and spec["direction"] == "out" else None
+
+
+def scene(mission: Mission, session, interface: dict[str, Any]) -> dict[str, Any]:
+    """What the live page draws of the mission (``/scene``): the world's bounds and obstacles, the goals sent,
+    the pose poster the robot navigates by."""
+    obstacles = []
+    for g in session.obstacles():
+        if g.geom_type == "Polygon":
+            obstacles.append({"kind": "polygon", "points": [[round(x, 3), round(y, 3)] for x, y in g.exterior.coords]})
+        else:
+            for part in getattr(g, "geoms", [g]):
+                obstacles.append({"kind": "line", "points": [[round(x, 3), round(y, 3)] for x, y in part.coords]})
+    goals = list({(float(goal["x"]), float(goal["y"])): None for step in mission.steps
+                  if step.kind == "send" and step.target == GOAL_SERVICE
+                  and isinstance(goal := step.inputs.get("goal"), dict) and {"x", "y"} <= set(goal)})
+    return {"name": mission.name, "bounds": list(session.bounds()), "obstacles": obstacles,
+            "goals": [{"x": x, "y": y} for x, y in goals], "pose": navigation_pose(interface)}
+
+
 def run_mission(mission: Mission, package, codels: str | None, world: Path | None, *, realtime: bool = False,
-                live: bool = False, log=None, times: bool = False) -> Run:
+                live: bool = False, log=None, times: bool = False, view: int | None = None) -> Run:
     """Start the controller and its server, load the world, run the mission's steps, stop everything.
 
     ``times``: record how long each codel runs (``Run.codel_times``).
+    ``view``: serve the live page on this port (0: a free one) with the world as its scene, in real time.
     """
     from runtime.controller import Controller
     from runtime.controller.timing import VirtualClock
@@ -87,17 +117,26 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
 
     codels = find_codels(package.INTERFACE, codels, str(Path(package.__file__).parent))
     controller = Controller(package.package(), package.ROOT, package.INTERFACE, codels,
-                            clock=None if realtime or live else VirtualClock(), times=times)
+                            clock=None if realtime or live or view is not None else VirtualClock(), times=times)
     sim_world = world_module(controller)
     try:
         session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
     except Exception as exc:  # noqa: BLE001 - the simulator's own complaint, about the user's file
         raise WorldError(f"{world}: the simulator cannot load this world: {type(exc).__name__}: {exc}") from None
+    shown = scene(mission, session, package.INTERFACE) if view is not None and session is not None else None
+    try:
+        server = ServiceServer(controller, port=view or 0, scene=shown)  # bound here: a port taken stops the run now
+    except OSError as exc:
+        if session is not None:
+            session.close()
+        raise ViewError(f"--port {view}: cannot serve the live page there: {exc.strerror or exc}") from None
     events: list[dict[str, Any]] = []
     controller.subscribe(lambda e: events.append(e) if e["event"] in EVENTS else None)
     started = time.perf_counter()
     controller.start()
-    server = ServiceServer(controller).start()
+    server.start()
+    if view is not None:
+        print(f"live view: {server.url}/live/ (for as long as the mission runs)", flush=True)
     try:
         outcomes = Runner(Client(server.url, timeout=30), log).run(mission)
     finally:

@@ -34,6 +34,11 @@ MAX_SECONDS = 86_400.0
 EXPECT_KEYS = ("status", "rule", "exception", "by", "reason")
 UNTIL = ("queued", "started", "final")
 DEFAULT_TIMEOUT = 120.0
+#: The service whose ``goal`` input is a goal of the drive: the report's goals, the live page's stars.
+GOAL_SERVICE = "NDD.GoTo"
+#: The poster the live page draws over the world: POM's fused estimate, in the world's frame (RFLEX.Odo is in the
+#: odometry's own frame, and Aspect.Obs's origin is the map's).
+POSE_POSTER = {"poster": "POM.Pos", "path": "estimate"}
 
 
 @dataclass

@@ -3,7 +3,8 @@
 Each step that fires a service's port ends in a report: ``started``,
 ``ok`` with the outputs, ``failed`` or ``rejected`` with the codel's failure,
 ``interrupted`` naming who interrupted; a request held by a wait rule gets one
-``held`` report (docs/runtime.md).  Reports and other events go to every
+``held`` report (docs/runtime.md).  The service's own state (validating,
+running, idle after an outcome) goes out as ``service`` events.  Reports and other events go to every
 listener; a listener's bug does not stop the controller.
 """
 from __future__ import annotations
@@ -92,6 +93,16 @@ class Reports:
             elif status == "started":
                 req.status = "running"
             self.emit({"event": "report", **report})
+            if status in FINAL:
+                self.service_state(req, "idle", outcome=status)
+            elif status == "started":
+                self.service_state(req, "running")
+
+    def service_state(self, req: Request, state: str, **fields: Any) -> None:
+        """A ``service`` event: ``req``'s service is now validating it, running it, or idle after it (``outcome``)."""
+        step, time = self.stamp()
+        self.emit({"event": "service", "service": req.label, "state": state, "request": req.id, "step": step,
+                   "time": time, **fields})
 
     def emit(self, event: dict[str, Any]) -> None:
         for listener in self.listeners:
@@ -161,7 +172,9 @@ class Reports:
         kind = info.kind or ""
         if failure is not None and (kind == "trigger" or kind.startswith("exec_")):
             req.failure = failure
-        if kind == "refuse":
+        if kind == "trigger":
+            self.service_state(req, "validating")
+        elif kind == "refuse":
             rule = (info.rule or {}).get("name", "a rule")
             self.report(req, "rejected", reason="rule", rule=rule, status_of=status_of(info.reads, state),
                         message=f"{req.label} refused by rule {rule}")

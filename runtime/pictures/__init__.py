@@ -8,7 +8,7 @@ level and one module, ``automaton`` one atom, ``sequence`` a trace, and
 from runtime.pictures.architecture import functional_level, module
 from runtime.pictures.automaton import automaton
 from runtime.pictures.outline import outline
-from runtime.pictures.render import PictureError, layout_command, render
+from runtime.pictures.render import PictureError, layout, layout_command, render
 from runtime.pictures.sequence import sequence
 from runtime.pictures.structure import Structure, structure
 
@@ -17,6 +17,7 @@ __all__ = [
     "Structure",
     "automaton",
     "functional_level",
+    "layout",
     "layout_command",
     "module",
     "outline",

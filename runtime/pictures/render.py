@@ -42,6 +42,28 @@ def layout_command() -> list[str] | None:
     return [found] if found else None
 
 
+def layout(text: str, fmt: str, *, fixed_positions: bool = False, what: str = "the picture") -> bytes:
+    """DOT ``text`` laid out and rendered as ``fmt`` (``svg``, ``png``) by :func:`layout_command`'s engine.
+
+    ``what`` names the picture in errors (the file being written, the page asking).
+    """
+    command = layout_command()
+    if command is None:
+        raise PictureError(f"{what}: no Graphviz layout engine found: `pip install graphviz-pure` "
+                           "(installed with genom2bip) or the Debian package graphviz; "
+                           "a .dot file needs neither")
+    command += ["-Kneato", "-n2"] if fixed_positions else []
+    try:
+        done = subprocess.run([*command, f"-T{fmt}"], input=text.encode("utf-8"), capture_output=True, timeout=120)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        raise PictureError(f"{what}: the layout engine {command[0]} failed: {exc}") from None
+    if done.returncode != 0 or not done.stdout:
+        detail = done.stderr.decode("utf-8", "replace").strip().splitlines()
+        raise PictureError(f"{what}: the layout engine {Path(command[0]).name} failed"
+                           + (f": {detail[-1]}" if detail else f" (exit {done.returncode})"))
+    return done.stdout
+
+
 def render(text: str, path: str | Path, *, fixed_positions: bool = False) -> Path:
     """Write ``text`` (DOT) to ``path`` in the format its suffix names; atomic: a failure leaves no file.
 
@@ -55,22 +77,7 @@ def render(text: str, path: str | Path, *, fixed_positions: bool = False) -> Pat
     if suffix in (".dot", ".gv"):
         data = text.encode("utf-8")
     else:
-        command = layout_command()
-        if command is None:
-            raise PictureError(f"{path}: no Graphviz layout engine found: `pip install graphviz-pure` "
-                               "(installed with genom2bip) or the Debian package graphviz; "
-                               "a .dot file needs neither")
-        command += ["-Kneato", "-n2"] if fixed_positions else []
-        try:
-            done = subprocess.run([*command, f"-T{suffix[1:]}"], input=text.encode("utf-8"),
-                                  capture_output=True, timeout=120)
-        except (OSError, subprocess.TimeoutExpired) as exc:
-            raise PictureError(f"{path}: the layout engine {command[0]} failed: {exc}") from None
-        if done.returncode != 0 or not done.stdout:
-            detail = done.stderr.decode("utf-8", "replace").strip().splitlines()
-            raise PictureError(f"{path}: the layout engine {Path(command[0]).name} failed"
-                               + (f": {detail[-1]}" if detail else f" (exit {done.returncode})"))
-        data = done.stdout
+        data = layout(text, suffix[1:], fixed_positions=fixed_positions, what=str(path))
     _write_atomically(path, data)
     return path
 

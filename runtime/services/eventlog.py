@@ -28,7 +28,7 @@ FINALS = 10_000
 BATCH_BYTES = 64 * 1024
 #: At the shutdown, a stream with more events than this left to send sends only what ends requests.
 CLOSE_SLACK = 100
-KINDS = ("report", "poster", "overrun", "codel_error", "controller", "observer", "codel_overrun")
+KINDS = ("report", "poster", "overrun", "codel_error", "controller", "observer", "codel_overrun", "service")
 _INDEX = {kind: i for i, kind in enumerate(KINDS)}
 
 
@@ -56,7 +56,7 @@ class Entry:
     @property
     def ends_a_request(self) -> bool:
         """What a stream must get even at the shutdown: final reports and the controller's last word."""
-        return self.kind not in ("poster", "report") or self.final
+        return self.kind not in ("poster", "report", "service") or self.final
 
 
 class EventLog:

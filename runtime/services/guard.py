@@ -13,6 +13,9 @@ An ASGI middleware in front of the application (docs/runtime.md, "Security"):
 * with a token (``--token-file`` or ``GENOM2BIP_TOKEN``), every request
   carries ``Authorization: Bearer TOKEN`` (compared as UTF-8 bytes, so that
   any token the operator can type works);
+* the live page's own files (``/live/``, and ``/`` asked for by a browser)
+  need no token: a browser cannot add one to a navigation, and they hold no
+  data; what the page shows comes from the other routes, behind the token;
 * each of these headers appears at most once: with two, which one a check
   read and which one a proxy or the application would read could differ.
 """
@@ -48,6 +51,15 @@ def host_name(header: str) -> str:
     if header.startswith("["):
         return header[1:].split("]", 1)[0]
     return header.rsplit(":", 1)[0] if header.count(":") == 1 else header
+
+
+def is_page(method: str, path: str, accept: str) -> bool:
+    """A request for the page's files, or a browser opening ``/``: served without the token (no data in them)."""
+    if method not in ("GET", "HEAD"):
+        return False
+    if path == "/":
+        return accept.split(",", 1)[0].strip().lower() == "text/html"
+    return path == "/live" or (path.startswith("/live/") and "/" not in path[len("/live/"):])
 
 
 class Guard:
@@ -90,7 +102,8 @@ class Guard:
         if origin is not None and origin.decode("latin-1") != f"http://{host}":
             return 403, (f"cross-site request from Origin {origin.decode('latin-1')!r} refused: only pages of "
                          f"http://{host} may call this interface")
-        if self.token is not None:
+        if self.token is not None and not is_page(scope["method"], scope.get("path", ""),
+                                                   raw.get(b"accept", b"").decode("latin-1")):
             given = raw.get(b"authorization", b"")
             scheme, _, value = given.partition(b" ")
             if scheme.lower() != b"bearer" or not hmac.compare_digest(value.strip(), self.token):

@@ -88,13 +88,28 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
             "responses": {"200": {"description": "request", "content": _json("Request")},
                           "400": _error("not a request id"), "404": _error("no such request")}}},
         "/events": {"get": {
-            "summary": "server-sent events: report, poster, overrun, codel_error, controller",
+            "summary": "server-sent events: report, service, poster, overrun, codel_error, codel_overrun, observer, "
+                       "controller",
             "parameters": [{"name": "types", "in": "query", "schema": {"type": "string"},
                             "description": "comma-separated event types (default: all)"}],
             "responses": {"200": {"description": "an event stream", "content": {"text/event-stream": {}}},
                           "400": _error("an unknown event type")}}},
         "/tasks": {"get": {"summary": "periods, lateness and overruns of every task",
                            "responses": {"200": {"description": "list"}}}},
+        "/live/": {"get": {"summary": "the live page (HTML; its files need no token, its data does)",
+                           "responses": {"200": {"description": "the page", "content": {"text/html": {}}}}}},
+        "/pictures/level.svg": {"get": {
+            "summary": "the functional level as `genom2bip graph` draws it, for the live page",
+            "responses": {"200": {"description": "SVG", "content": {"image/svg+xml": {}}},
+                          "503": _error("no Graphviz layout engine")}}},
+        "/pictures/modules/{module}.svg": {"get": {
+            "summary": "one module as a compound (Fig. 7), for the live page",
+            "parameters": [{"name": "module", "in": "path", "required": True, "schema": {"type": "string"}}],
+            "responses": {"200": {"description": "SVG", "content": {"image/svg+xml": {}}},
+                          "404": _error("no such module"), "503": _error("no Graphviz layout engine")}}},
+        "/scene": {"get": {"summary": "the world of a mission run with --view, for the live page",
+                           "responses": {"200": {"description": "bounds, obstacles, goals"},
+                                         "404": _error("no mission")}}},
     }
     for cname, comp in interface["components"].items():
         for pname, port in comp["ports"].items():

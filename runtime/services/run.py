@@ -191,7 +191,8 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
     if controller.binder.missing:
         print(f"warning: {len(controller.binder.missing)} codel(s) missing, their services will fail: "
               f"{', '.join(controller.binder.missing)}", file=sys.stderr)
-    print(f"services interface on {server.url}/ (OpenAPI: {server.url}/openapi.json); Ctrl-C stops", flush=True)
+    print(f"services interface on {server.url}/ (OpenAPI: {server.url}/openapi.json, live page: {server.url}/live/); "
+          "Ctrl-C stops", flush=True)
     console = Console(sys.stdout, prog=prog)
     if not args.quiet:
         def show(event: dict[str, Any]) -> None:

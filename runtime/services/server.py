@@ -14,6 +14,9 @@ Routes (docs/runtime.md has the shapes; ``/openapi.json`` describes them):
                                                codel errors, observers
     GET  /tasks                                periods, lateness and overruns of every task
     GET  /openapi.json                         OpenAPI 3.1 description
+    GET  /live/                                the live page (a browser opening / is sent there)
+    GET  /pictures/level.svg, /pictures/modules/{m}.svg   the model's pictures, for the page
+    GET  /scene                                the world of a mission run with --view
 
 The engine runs in its own thread; it tells the event loop about reports
 through ``loop.call_soon_threadsafe``, the only crossing between the two
@@ -75,17 +78,22 @@ async def on_crash(request: HttpRequest, exc: Exception) -> Response:
     return error(500, f"internal error: {type(exc).__name__}: {exc}")
 
 
-def create_app(controller: Controller, token: str | None = None, loopback: bool = True) -> Starlette:
+def create_app(controller: Controller, token: str | None = None, loopback: bool = True,
+               scene: dict | None = None) -> Starlette:
     """The ASGI application serving ``controller``, behind its :class:`~runtime.services.guard.Guard`.
 
     Its routes (runtime.services.routes) find the controller and the event
-    hub in ``app.state``; every error becomes a JSON answer.
+    hub in ``app.state``; every error becomes a JSON answer.  ``scene``: the
+    world a mission shows on the live page (``/scene``), if any.
     """
     app = Starlette(routes=routes(), middleware=[Middleware(Guard, token=token, loopback=loopback)],
                     exception_handlers={RequestError: on_request_error, HTTPException: on_http_error,
                                         Exception: on_crash})
     app.state.controller = controller
     app.state.hub = Hub()
+    app.state.scene = scene
+    app.state.structure = None  # the live page's pictures: derived from the model on first use, then kept
+    app.state.pictures = {}
     return app
 
 
@@ -214,13 +222,13 @@ class ServiceServer:
 
     def __init__(self, controller: Controller, port: int = 0, host: str = "127.0.0.1",
                  token: str | None = None, read_timeout: float = READ_TIMEOUT,
-                 max_connections: int = MAX_CONNECTIONS) -> None:
+                 max_connections: int = MAX_CONNECTIONS, scene: dict | None = None) -> None:
         loopback = is_loopback(host)
         if not loopback and not token:
             raise ValueError(f"listening on {host} lets other machines command the robot: give a token "
                              f"(--token-file or {TOKEN_ENV}) that every client must send")
         self.controller = controller
-        self.app = create_app(controller, token, loopback)
+        self.app = create_app(controller, token, loopback, scene)
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
         self.socket = socket.socket(family, socket.SOCK_STREAM)
         self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

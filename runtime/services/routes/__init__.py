@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from starlette.routing import Route
 
-from runtime.services.routes import components, events, requests, system
+from runtime.services.routes import components, events, live, requests, system
 
 
 def routes() -> list[Route]:
@@ -21,4 +21,10 @@ def routes() -> list[Route]:
         Route("/requests/{id}", requests.request_one),
         Route("/events", events.events),
         Route("/tasks", system.tasks),
+        Route("/live", live.to_page),
+        Route("/live/", live.page_file),
+        Route("/live/{name}", live.page_file),
+        Route("/pictures/level.svg", live.level_picture),
+        Route("/pictures/modules/{module}.svg", live.module_picture),
+        Route("/scene", live.scene),
     ]

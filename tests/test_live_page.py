@@ -1,0 +1,286 @@
+"""The live page in a real browser: headless Chromium from Debian, driven by Playwright (docs/live.md).
+
+Every wait is for something the page shows (a selector), with a safety net
+far above a loaded machine's times; nothing sleeps.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from browserkit import SAFETY_MS, launch, needs_chromium, open_page
+from runkit import navigation_ready, ndd_settings, serving_dala
+from runtime.services.client import Client
+
+pytestmark = needs_chromium
+sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright is in the test extra: pip install -e .[test]")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as playwright:
+        browser = launch(playwright)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture
+def ctl():
+    with serving_dala() as running:
+        yield running
+
+
+def wait(page, selector: str):
+    return page.wait_for_selector(selector, timeout=SAFETY_MS)
+
+
+def ready(page):
+    """The page has drawn the level and its event stream is open."""
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"]')
+    wait(page, '#stream[data-status="open"]')
+
+
+def live_page(browser, server, navigation: bool = False):
+    """The page of ``server``, ready; ``navigation``: with everything a GoTo needs done first."""
+    page = open_page(browser, server.url + "/live/")
+    ready(page)
+    if navigation:
+        client = Client(server.url, timeout=10)
+        navigation_ready(client)
+        ndd_settings(client)
+    return page
+
+
+def recent(server) -> list:
+    """GET /requests, as any client reads it."""
+    with urllib.request.urlopen(server.url + "/requests") as answer:
+        return json.loads(answer.read())
+
+
+def send_from_form(page, service: str, fields: dict[str, str] | None = None) -> int:
+    """Choose ``service`` in the form, fill ``fields`` (input name -> text), send; the request id the page got."""
+    page.select_option("#service-select", service)
+    wait(page, f'#service-form[data-service="{service}"]')
+    for name, value in (fields or {}).items():
+        page.fill(f'#service-form [name="{name}"]', value)
+    page.click("#service-form button[type=submit]")
+    result = wait(page, "#send-result[data-request]")
+    return int(result.get_attribute("data-request"))
+
+
+def test_the_page_loads_with_the_level_the_services_and_the_posters(browser, ctl):
+    _, server, _ = ctl
+    page = open_page(browser, server.url + "/")  # a browser opening / is sent to the page
+    ready(page)
+    assert page.url == server.url + "/live/"
+    assert page.inner_text("#system") == "dala"
+    drawn = page.eval_on_selector_all("rect.svc-bg", "els => els.map(e => e.dataset.service)")
+    assert {"NDD.GoTo", "NDD.Stop", "POM.Run", "RFLEX.TrackSpeed", "LaserRF.Start", "Aspect.Run"} <= set(drawn)
+    options = page.eval_on_selector_all("#service-select option", "els => els.map(e => e.value)")
+    assert "NDD.SetSpeed" in options and "POM.Run" in options
+    for poster in ("NDD.Speed", "POM.Pos", "RFLEX.Odo", "LaserRF.Scan", "Aspect.Obs"):
+        assert page.query_selector(f'[id="poster-{poster}"]') is not None
+    wait(page, '#tasks tbody tr[data-task="RFLEX.servo"]')
+    assert page.errors == []
+
+
+def test_a_module_opens_as_a_compound_with_its_services_coloured(browser, ctl):
+    _, server, client = ctl
+    page = live_page(browser, server)
+    page.click('#level g.node.module:has(title:text-is("NDD"))')
+    wait(page, '#module g.node[data-service="NDD.GoTo"]')
+    assert page.inner_text("#module-name") == "NDD"
+    atoms = page.eval_on_selector_all("#module g.node[data-service]", "els => els.map(e => e.dataset.service)")
+    assert atoms.count("NDD.GoTo") == 2  # its controller and its activity
+    assert page.errors == []
+
+
+def test_a_request_sent_from_its_form_reaches_ok_and_a_refused_one_shows_its_rule(browser, ctl):
+    _, server, client = ctl
+    page = live_page(browser, server)
+    rid = send_from_form(page, "NDD.SetSpeed", {"max_speed.v": "0.25", "max_speed.w": "0.5"})
+    row = wait(page, f'#request-{rid}[data-status="ok"]')
+    assert "NDD.SetSpeed" in row.inner_text()
+    final = client.wait(rid, timeout=10)
+    assert final["status"] == "ok"
+    assert client.request(rid)["inputs"]["max_speed"] == {"v": 0.25, "w": 0.5}  # what the form sent
+    navigation_ready(client)
+    refused = send_from_form(page, "NDD.GoTo", {"goal.x": "1", "goal.y": "0", "goal.theta": "0"})
+    row = wait(page, f'#request-{refused}[data-status="rejected"]')
+    rule = client.wait(refused, timeout=10)["rule"]
+    assert rule == "NDD.GoTo.after"  # SetParams and SetDataSource have not run
+    assert f"by rule {rule}" in row.inner_text()
+    assert page.errors == []
+
+
+def test_a_failed_request_shows_its_exception_and_codel_and_its_service_turns_failed(browser, ctl):
+    _, server, client = ctl
+    page = live_page(browser, server, navigation=True)
+    rid = send_from_form(page, "NDD.GoTo", {"goal.x": "13", "goal.y": "0", "goal.theta": "0"})  # the stub throws
+    row = wait(page, f'#request-{rid}[data-status="failed"]')
+    assert "NDD::e_blocked in nddPlan" in row.inner_text()
+    assert client.wait(rid, timeout=10)["exception"] == "NDD::e_blocked"
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"][data-state="failed"]')
+    assert page.errors == []
+
+
+def test_a_bad_input_in_the_form_is_refused_with_the_servers_message(browser, ctl):
+    _, server, client = ctl
+    page = live_page(browser, server)
+    before = recent(server)
+    page.select_option("#service-select", "Aspect.SetParams")
+    wait(page, '#service-form[data-service="Aspect.SetParams"]')
+    page.evaluate("document.querySelector('#service-form [name=\"resolution\"]').type = 'text'")
+    page.fill('#service-form [name="resolution"]', "fast")
+    page.click("#service-form button[type=submit]")
+    result = wait(page, '#send-result[data-status="error"]')
+    assert "refused (422)" in result.inner_text() and "resolution" in result.inner_text()
+    assert recent(server) == before  # nothing was queued
+    assert page.errors == []
+
+
+def test_a_services_state_changes_on_the_page_as_the_controller_runs_it(browser, ctl):
+    _, server, client = ctl
+    page = live_page(browser, server, navigation=True)
+    assert page.get_attribute('rect.svc-bg[data-service="NDD.GoTo"]', "data-state") in ("idle", "rejected")
+    goto = client.send("NDD", "GoTo", goal={"x": 1000.0, "y": 0.0, "theta": 0.0})
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"][data-state="running"]')
+    wait(page, f'#request-{goto}[data-status="started"]')
+    stop = client.call("NDD", "Stop", timeout=10)
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"][data-state="interrupted"]')
+    row = wait(page, f'#request-{goto}[data-status="interrupted"]')
+    assert f"by NDD.Stop (request {stop['request']})" in row.inner_text()
+    assert "queued" in row.inner_text() and "started" in row.inner_text()  # the intermediate reports too
+    assert page.errors == []
+
+
+def test_an_observer_violation_appears_with_the_events_that_led_to_it(browser, watched_server):
+    server, client = watched_server
+    page = open_page(browser, server.url + "/live/")
+    wait(page, '#stream[data-status="open"]')
+    client.send("watched", "Slow", seconds=0.03)  # the next beat takes 30 ms of a 10 ms period
+    alert = wait(page, '#alerts li[data-observer="watched.loop.overrun"]')
+    text = alert.inner_text()
+    assert "observer watched.loop.overrun violated: period overran after" in text
+    assert "watched.loop:period @" in text and " ms" in text
+    assert page.errors == []
+
+
+@pytest.fixture
+def watched_server(tmp_path: Path):
+    """The monitored ``watched`` component of tests/test_monitor.py, in real time, with its server."""
+    from runtime.controller import Controller
+    from runtime.services.client import Client
+    from runtime.services.server import ServiceServer
+    from test_monitor import WATCHED, codels
+
+    from genom2bip.back.interface import interface_data
+    from genom2bip.build.timed import TimeOptions
+    from genom2bip.generate import model_of
+    from genom2bip.parser import parse_paths
+
+    path = tmp_path / "watched.gen"
+    path.write_text(WATCHED)
+    description = parse_paths([path])
+    package, root, _ = model_of(description, "watched", None, TimeOptions(ticks=False))
+    controller = Controller(package, root, interface_data(description, "watched", str(path)), codels([]))
+    controller.start()
+    server = ServiceServer(controller).start()
+    try:
+        yield server, Client(server.url, timeout=10)
+    finally:
+        server.stop()
+        controller.stop()
+
+
+@pytest.fixture
+def guarded(tmp_path: Path):
+    """DALA behind a token."""
+    from runtime.controller import Controller
+    from runtime.services.server import ServiceServer
+    from runkit import DALA_CODELS, dala
+
+    pkg = dala()
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
+    controller.start()
+    server = ServiceServer(controller, token="s3cret-token").start()
+    try:
+        yield server
+    finally:
+        server.stop()
+        controller.stop()
+
+
+def test_the_page_refuses_to_work_with_a_wrong_token_and_works_with_the_right_one(browser, guarded):
+    page = open_page(browser, guarded.url + "/live/")
+    wait(page, "#login:not([hidden])")
+    assert page.is_hidden("#main")
+    page.fill("#token", "not-the-token")
+    page.click("#login-form button")
+    why = wait(page, '#login-why:has-text("Refused")')
+    assert "a wrong token" in why.inner_text()
+    assert page.is_hidden("#main")
+    assert page.query_selector("#level svg") is None and page.query_selector("#requests li") is None
+    assert page.evaluate("sessionStorage.getItem('genom2bip-token')") is None  # a refused token is not kept
+    page.fill("#token", "s3cret-token")
+    page.click("#login-form button")
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"]')
+    wait(page, '#stream[data-status="open"]')
+    page.reload()  # asked once: the tab keeps it
+    wait(page, 'rect.svc-bg[data-service="NDD.GoTo"]')
+    assert page.is_hidden("#login")
+    assert page.errors == []
+
+
+def test_a_screenshot_is_written(browser, ctl, tmp_path: Path):
+    _, server, client = ctl
+    page = live_page(browser, server)
+    navigation_ready(client)
+    wait(page, 'rect.svc-bg[data-service="LaserRF.Start"][data-state="running"]')
+    shot = tmp_path / "live.png"
+    with contextlib.suppress(FileNotFoundError):
+        shot.unlink()
+    page.screenshot(path=str(shot), full_page=True)
+    data = shot.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    assert width == 1500 and height >= 1100
+
+
+def test_a_mission_with_view_shows_the_world_and_the_robots_pose(browser, tmp_path: Path):
+    """``genom2bip mission --view``: the page draws the mission's world and the pose posters as the robot starts."""
+    import signal
+    import subprocess
+    import sys
+
+    from runkit import ROOT
+
+    mission = tmp_path / "look.yaml"
+    mission.write_text(f"mission: look\nworld: {ROOT / 'descriptions/dala/worlds/corridor.yaml'}\nsteps:\n"
+                       "  - send: RFLEX.Init\n    expect: ok\n  - send: RFLEX.TrackSpeed\n    until: started\n"
+                       "  - send: POM.Run\n    with: {origin: {x: 1.0, y: 2.0, theta: 0.0}}\n    expect: ok\n"
+                       "  - wait: 600\n")  # the test ends the run once it has seen the page
+    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "mission", str(mission), "--view", "--quiet",
+                             "--out", str(tmp_path / "out")], cwd=ROOT, stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("live view: http://127.0.0.1:"), line
+        page = open_page(browser, line.split()[2])
+        wait(page, "#mission-panel:not([hidden])")
+        assert page.inner_text("#mission-name") == "look"
+        pose = wait(page, '#pose:has-text("POM.Pos estimate: x 1.00, y 2.00")')
+        assert "RFLEX.Odo" not in pose.inner_text()  # odometry's own frame: not drawn over the world
+        scene = page.evaluate("live.scene")
+        assert scene["bounds"] == [0.0, 0.0, 16.0, 4.0] and scene["goals"] == []
+        assert scene["pose"] == {"poster": "POM.Pos", "path": "estimate"}
+        assert {o["kind"] for o in scene["obstacles"]} == {"polygon", "line"} and len(scene["obstacles"]) == 4
+        assert page.errors == []
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+        proc.stdout.close()
