@@ -105,7 +105,12 @@ def nddPlan(goal, params, max_speed, Obs, Pos, Speed):
     points = memory.update(_memory, Obs, Pos, SIDE, MEMORY, 2 * dmax)
     setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"], dmax=dmax,
                         vmax=max_speed["v"], wmax=max_speed["w"], cell=cell)
-    decision = nd.decide(points, (target["x"], target["y"]), setting)
+    kept = odometry.between(here, _memory.heading_for) if _memory.heading_for else None
+    decision = nd.decide(points, (target["x"], target["y"]), setting, (kept["x"], kept["y"]) if kept else None)
+    _memory.heading_for = None
+    if decision is not None and not decision.area.goal_region:
+        x, y = decision.area.target
+        _memory.heading_for = odometry.compose(here, {"x": x, "y": y, "theta": 0.0})
     why = blocked(_progress, distance, decision is not None, Pos["stamp"])
     if decision is None or why:
         Speed.value = dict(STILL)

@@ -24,9 +24,10 @@ class Memory:
     poses: list[tuple[float, dict]] = field(default_factory=list)  # (stamp, pose), oldest first
     seq: int | None = None  # the last map's sweep placed
     resolution: float = 0.0
+    heading_for: dict | None = None  # the point ND last headed for through a valley (world frame)
 
     def clear(self) -> None:
-        self.cells, self.poses, self.seq, self.resolution = {}, [], None, 0.0
+        self.cells, self.poses, self.seq, self.resolution, self.heading_for = {}, [], None, 0.0, None
 
 
 def _between(t0: float, a: dict, t1: float, b: dict, t: float) -> dict:

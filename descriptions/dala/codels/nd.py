@@ -43,6 +43,7 @@ from dataclasses import dataclass
 TWO_PI = 2 * math.pi
 SITUATIONS = ("HSGR", "HSWR", "HSNR", "LS1", "LS2")
 CREEP = 0.2  # the least speed factor in low safety: the robot keeps moving away from what is near
+KEEP = math.radians(30)  # the valley still leading where the robot headed counts as this much nearer the goal
 
 
 @dataclass(frozen=True)
@@ -146,7 +147,11 @@ def gaps(d: list[float], p: Params) -> list[int]:
 
 
 def reachable(target: tuple[float, float], s: Sectors, p: Params) -> bool:
-    """The navigability test: the robot fits all the way to ``target`` between the obstacles on each side of it."""
+    """The navigability test: the robot fits all the way to ``target`` between the obstacles on each side of it.
+
+    Two obstacles both beside the robot (less than R ahead of it) do not count
+    as a pair: it already stands between them.
+    """
     length = math.hypot(*target)
     if length < 1e-9:
         return True
@@ -161,13 +166,17 @@ def reachable(target: tuple[float, float], s: Sectors, p: Params) -> bool:
             continue
         if math.hypot(x - target[0], y - target[1]) < p.radius:
             return False  # the point to reach is inside an obstacle's reach
-        (left if across > 0 else right).append((x, y))
+        (left if across > 0 else right).append((x, y, along < p.radius))
     limit = (2 * p.radius) ** 2
-    return not any((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 < limit for a in left for b in right)
+    return not any((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 < limit and not (a[2] and b[2])
+                   for a in left for b in right)
 
 
 def clear(goal: tuple[float, float], s: Sectors, margin: float) -> bool:
-    """Does the straight way to the goal keep ``margin`` from every obstacle (the goal's surroundings included)?"""
+    """Does the straight way to the goal keep ``margin`` from every obstacle ahead (the goal's surroundings included)?
+
+    What is beside or behind the robot does not count: it is already there.
+    """
     length = math.hypot(*goal)
     if length < 1e-9:
         return True
@@ -175,7 +184,7 @@ def clear(goal: tuple[float, float], s: Sectors, margin: float) -> bool:
     for point in s.points:
         if point is not None:
             along, across = point[0] * ux + point[1] * uy, -point[0] * uy + point[1] * ux
-            if -margin < along < length + margin and abs(across) < margin:
+            if 0 < along < length + margin and abs(across) < margin:
                 return False
     return True
 
@@ -206,8 +215,16 @@ def _pass_point(inside: int, outside: int, s: Sectors, p: Params) -> tuple[float
     return reach * math.cos(a), reach * math.sin(a)
 
 
-def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params) -> Area | None:
-    """The goal's region when the goal is in sight and reachable, else the reachable valley nearest the goal."""
+def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params,
+                      keep: tuple[float, float] | None = None) -> Area | None:
+    """The goal's region when the goal is in sight and reachable, else the reachable valley nearest the goal.
+
+    ``keep``, the point the robot headed for at the last step, favours the
+    valley that still leads there (within KEEP of its direction): it counts as
+    KEEP nearer the goal than it is.  In clutter two valleys on either side of
+    the goal are often about as near to it, and a robot that turns to one
+    whenever the other is nearer by a sector goes nowhere.
+    """
     n, d = len(s), s.d
     g_angle = math.atan2(goal[1], goal[0])
     g = sector_of(g_angle, n)
@@ -223,11 +240,17 @@ def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params) -> Area 
             if d[outside] < d[inside]:  # the nearness rises when leaving the region here: a rising gap
                 edge = angle_of(inside, n) + wrap(angle_of(outside, n) - angle_of(inside, n)) / 2
                 candidates.append((abs(wrap(edge - g_angle)), first, last, inside, outside))
-    for _, first, last, inside, outside in sorted(candidates):
+    areas = []
+    for off, first, last, inside, outside in sorted(candidates):
         target = _pass_point(inside, outside, s, p)
         if reachable(target, s, p):
-            return Area(first, last, inside, outside, target)
-    return None
+            areas.append(Area(first, last, inside, outside, target))
+    if keep is not None and areas:
+        towards = math.atan2(keep[1], keep[0])
+        off, kept = min((abs(wrap(math.atan2(a.target[1], a.target[0]) - towards)), i) for i, a in enumerate(areas))
+        if off <= KEEP:
+            return areas[kept]
+    return areas[0] if areas else None
 
 
 def _towards_area(area: Area, n: int) -> int:
@@ -254,11 +277,12 @@ def _high_safety(area: Area, s: Sectors, goal_angle: float, p: Params) -> tuple[
     return "HSNR", wrap(middle)
 
 
-def decide(points: list[tuple[float, float]], goal: tuple[float, float], p: Params) -> Decision | None:
+def decide(points: list[tuple[float, float]], goal: tuple[float, float], p: Params,
+           keep: tuple[float, float] | None = None) -> Decision | None:
     """The ND step: the situation, the motion direction and the speeds; None when no area is reachable."""
     n = p.sectors
     s = sectorise(points, n, p.cell, p.dmax)
-    area = free_walking_area(s, goal, p)
+    area = free_walking_area(s, goal, p, keep)
     if area is None:
         return None
     g_angle = math.atan2(goal[1], goal[0])
@@ -303,7 +327,8 @@ def speeds(direction: float, near: list[tuple[float, float]], distance: float, s
     c = min((_depth(r, p) for r, a in near if abs(wrap(a - steer)) < math.pi / 2), default=1.0)
     c = max(CREEP, c)
     room = max(0.0, min(1.0, ahead(s, p) / p.security))
-    w = p.wmax * (c if room > 0 else 1.0) * max(-1.0, min(1.0, steer / (math.pi / 4)))
+    turn = max(c, abs(steer) / (math.pi / 2)) if room > 0 else 1.0  # arcs as at full speed; in place at full rate
+    w = p.wmax * turn * max(-1.0, min(1.0, steer / (math.pi / 4)))
     v = max(0.0, p.vmax * c * math.cos(steer))
     bend = abs(math.sin(steer))
     if bend > 1e-9:  # the arc the robot drives on must not pass beyond the goal: radius v/w <= distance / (2 sin)

@@ -29,7 +29,7 @@ from genom2bip.mission.worlds.clearance import shortest_path
 from genom2bip.mission.worlds.difficulty import Difficulty, measure
 
 CELL = 0.15  # m: one cell of the obstacle grid
-CLEARANCE = 0.4  # m: NDD's robot_radius in the shipped missions (0.35) and half a cell of Aspect's map (0.05)
+CLEARANCE = 0.45  # m: NDD's robot_radius in the shipped missions (0.35) and a cell of Aspect's map (0.1)
 ATTEMPTS = 60  # draws of one seed before it is declared infeasible
 FAMILIES = ("cellular", "doorway", "corridor", "u_trap")
 MIX = ("cellular", "doorway", "cellular", "corridor")  # the benchmark's families, seed by seed
