@@ -219,6 +219,10 @@ def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params,
                       keep: tuple[float, float] | None = None) -> Area | None:
     """The goal's region when the goal is in sight and reachable, else the reachable valley nearest the goal.
 
+    When the straight way to a goal in sight passes nearer an obstacle than
+    R + Ds/2 and the goal's region has a rising gap the robot can pass, that
+    gap is the free walking area: the robot rounds the obstacle with room to
+    spare instead of brushing it (the goal's region stays its way otherwise).
     ``keep``, the point the robot headed for at the last step, favours the
     valley that still leads there (within KEEP of its direction): it counts as
     KEEP nearer the goal than it is.  In clutter two valleys on either side of
@@ -230,8 +234,9 @@ def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params,
     g = sector_of(g_angle, n)
     runs = regions(d, p)
     home = next(r for r in runs if (g - r[0]) % n < _run(*r, n))
-    if math.hypot(*goal) <= d[g] and reachable(goal, s, p) and clear(goal, s, p.radius + p.security / 2):
-        return Area(home[0], home[1], g, -1, goal)
+    goal_area = Area(home[0], home[1], g, -1, goal) if math.hypot(*goal) <= d[g] and reachable(goal, s, p) else None
+    if goal_area is not None and clear(goal, s, p.radius + p.security / 2):
+        return goal_area
     candidates = []
     for first, last in runs:
         if _run(first, last, n) == n:
@@ -245,6 +250,8 @@ def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params,
         target = _pass_point(inside, outside, s, p)
         if reachable(target, s, p):
             areas.append(Area(first, last, inside, outside, target))
+    if goal_area is not None:
+        return next((a for a in areas if (a.first, a.last) == home), goal_area)
     if keep is not None and areas:
         towards = math.atan2(keep[1], keep[0])
         off, kept = min((abs(wrap(math.atan2(a.target[1], a.target[0]) - towards)), i) for i, a in enumerate(areas))
