@@ -43,7 +43,8 @@ from dataclasses import dataclass
 TWO_PI = 2 * math.pi
 SITUATIONS = ("HSGR", "HSWR", "HSNR", "LS1", "LS2")
 CREEP = 0.2  # the least speed factor in low safety: the robot keeps moving away from what is near
-KEEP = math.radians(30)  # the valley still leading where the robot headed counts as this much nearer the goal
+KEEP = math.radians(30)  # a valley whose direction is this near the one the robot headed for still leads there
+LOYALTY = math.radians(60)  # and it counts as this much nearer the goal than it is
 
 
 @dataclass(frozen=True)
@@ -225,7 +226,7 @@ def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params,
     spare instead of brushing it (the goal's region stays its way otherwise).
     ``keep``, the point the robot headed for at the last step, favours the
     valley that still leads there (within KEEP of its direction): it counts as
-    KEEP nearer the goal than it is.  In clutter two valleys on either side of
+    LOYALTY nearer the goal than it is.  In clutter two valleys on either side of
     the goal are often about as near to it, and a robot that turns to one
     whenever the other is nearer by a sector goes nowhere.
     """
@@ -249,15 +250,15 @@ def free_walking_area(s: Sectors, goal: tuple[float, float], p: Params,
     for off, first, last, inside, outside in sorted(candidates):
         target = _pass_point(inside, outside, s, p)
         if reachable(target, s, p):
-            areas.append(Area(first, last, inside, outside, target))
+            areas.append((off, Area(first, last, inside, outside, target)))
     if goal_area is not None:
-        return next((a for a in areas if (a.first, a.last) == home), goal_area)
+        return next((a for _, a in areas if (a.first, a.last) == home), goal_area)
     if keep is not None and areas:
         towards = math.atan2(keep[1], keep[0])
-        off, kept = min((abs(wrap(math.atan2(a.target[1], a.target[0]) - towards)), i) for i, a in enumerate(areas))
-        if off <= KEEP:
-            return areas[kept]
-    return areas[0] if areas else None
+        ranked = [(off - LOYALTY if abs(wrap(math.atan2(a.target[1], a.target[0]) - towards)) <= KEEP else off, i)
+                  for i, (off, a) in enumerate(areas)]
+        return areas[min(ranked)[1]][1]
+    return areas[0][1] if areas else None
 
 
 def _towards_area(area: Area, n: int) -> int:
