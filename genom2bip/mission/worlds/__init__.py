@@ -6,6 +6,7 @@ a path with the robot's clearance joins its start to its goal (clearance.py:
 a grid search), measures its difficulty along that path (difficulty.py) and
 writes it as an ir-sim world file (world_file.py).
 """
+from genom2bip.mission.worlds import mission_file, world_file
 from genom2bip.mission.worlds.families import FAMILIES, GridWorld, generate
 
 __all__ = ["FAMILIES", "GridWorld", "generate"]

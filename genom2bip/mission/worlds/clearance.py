@@ -51,13 +51,29 @@ def _graph(free: np.ndarray, fine: float) -> sparse.csr_matrix:
 
 
 def visible(a: tuple[float, float], b: tuple[float, float], free: np.ndarray, fine: float) -> bool:
-    """Does the segment a-b stay on free cells (sampled every half fine cell)?"""
-    steps = max(2, int(math.dist(a, b) / (fine / 2)) + 1)
-    t = np.linspace(0.0, 1.0, steps)
-    xs, ys = a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t
-    j = np.clip((ys / fine).astype(int), 0, free.shape[0] - 1)
-    i = np.clip((xs / fine).astype(int), 0, free.shape[1] - 1)
-    return bool(free[j, i].all())
+    """Does the segment a-b stay on free cells: every cell it passes through, corners included (a grid traversal)?"""
+    rows, cols = free.shape
+    i, j = int(a[0] / fine), int(a[1] / fine)
+    ti, tj = int(b[0] / fine), int(b[1] / fine)
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    si, sj = (1 if dx > 0 else -1), (1 if dy > 0 else -1)
+    # the distance along the segment (as a fraction of it) to the next vertical and horizontal cell border
+    tx = ((i + (si > 0)) * fine - a[0]) / dx if dx else math.inf
+    ty = ((j + (sj > 0)) * fine - a[1]) / dy if dy else math.inf
+    step_x, step_y = (fine / abs(dx) if dx else math.inf), (fine / abs(dy) if dy else math.inf)
+    while True:
+        if not (0 <= i < cols and 0 <= j < rows and free[j, i]):
+            return False
+        if (i, j) == (ti, tj) or min(tx, ty) > 1:
+            return True
+        if abs(tx - ty) < 1e-9:  # through a corner: both cells beside it count
+            if not (0 <= i + si < cols and free[j, i + si]) or not (0 <= j + sj < rows and free[j + sj, i]):
+                return False
+            i, j, tx, ty = i + si, j + sj, tx + step_x, ty + step_y
+        elif tx < ty:
+            i, tx = i + si, tx + step_x
+        else:
+            j, ty = j + sj, ty + step_y
 
 
 def _pulled(points: list[tuple[float, float]], free: np.ndarray, fine: float) -> list[tuple[float, float]]:
