@@ -9,6 +9,7 @@ import shapely
 import yaml
 
 from genom2bip.mission.spec import read_mission
+from genom2bip.mission.world import check_world
 from genom2bip.mission.worlds import FAMILIES, generate, mission_file, world_file
 from genom2bip.mission.worlds.clearance import distances, shortest_path
 from genom2bip.mission.worlds.difficulty import measure
@@ -92,6 +93,7 @@ def test_the_world_file_loads_in_the_simulator(tmp_path):
     w = generate(1, "cellular")
     path = tmp_path / "w.yaml"
     path.write_text(world_file.text(w, ROBOT))
+    check_world(path)  # what `genom2bip mission` checks before the controller starts
     codels = load_codels(str(ROOT / "descriptions/dala/codels"), ["RFLEX"])
     sim = codels.modules["RFLEX"].world.load(path)
     assert sim.pose() == pytest.approx({"x": w.start[0], "y": w.start[1], "theta": w.start[2]}, abs=1e-3)

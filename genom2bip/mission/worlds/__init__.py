@@ -9,4 +9,4 @@ writes it as an ir-sim world file (world_file.py).
 from genom2bip.mission.worlds import mission_file, world_file
 from genom2bip.mission.worlds.families import FAMILIES, GridWorld, generate
 
-__all__ = ["FAMILIES", "GridWorld", "generate"]
+__all__ = ["FAMILIES", "GridWorld", "generate", "mission_file", "world_file"]
