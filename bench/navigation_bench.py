@@ -8,7 +8,7 @@ by default, seed by seed; ``--family u_trap`` for U-shaped traps), kept only whe
 clearance exists.  Its mission is descriptions/dala/missions/doorway.yaml's bring-up, POM anchored at the
 start and one GoTo to the goal, run as ``genom2bip mission`` runs it: the generated package, the codels,
 ir-sim, the services client, on the virtual clock.  The GoTo's timeout is the time NDD's progress rule
-allows the distance (each 0.2 m closer within 12 s), plus 30 s: a GoTo still running then is a mission
+allows the distance (NDD.PROGRESS closer within NDD.PROGRESS_TIMEOUT), plus 30 s: a GoTo still running then is a mission
 timeout, a failure of its own.
 
 Prints, and writes to ``--out`` (summary.txt, results.jsonl, navigation.png, the worlds and missions):
