@@ -172,7 +172,6 @@ def plot(rows: list[dict], path: Path) -> None:
         ax.axhline(1.0, color="0.7", linewidth=0.8)
         ax.set_xlabel(LABELS[m])
         ax.set_ylabel("path length / shortest")
-        ax.legend(fontsize=7, loc="upper left")
     ax = fig.add_subplot(2, 3, 6)
     families = sorted({r["family"] for r in rows})
     rates = [100 * sum(r["outcome"] == "reached" for r in rows if r["family"] == f) /
@@ -186,7 +185,9 @@ def plot(rows: list[dict], path: Path) -> None:
     n, ok = len(rows), len(reached)
     fig.suptitle(f"DALA navigation on {n} generated worlds: {ok} reached ({100 * ok / max(n, 1):.0f} %), "
                  f"collisions in {sum(1 for r in rows if r['collisions'])} worlds", fontsize=11)
-    fig.tight_layout()
+    handles, labels = fig.axes[0].get_legend_handles_labels()  # one legend for the panels: none hides a mark
+    fig.legend(handles, labels, loc="upper right", fontsize=8, ncol=len(labels))
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     fig.savefig(path)
 
 
