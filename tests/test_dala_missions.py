@@ -150,8 +150,22 @@ def _goto_seconds(run, index: int) -> float:
     return _report(run, "NDD.GoTo", index)["time"] - started
 
 
-def test_doorway_goto_goes_through_the_door_to_the_far_room():
-    run = _run(MISSIONS / "doorway.yaml")
+def _with_map_cells(mission: Path, resolution: float, folder: Path) -> Path:
+    """The mission with Aspect's cells set to ``resolution`` m before its map runs, written under ``folder``."""
+    spec = yaml.safe_load(mission.read_text())
+    spec["world"] = str((mission.parent / spec["world"]).resolve())
+    run = next(i for i, s in enumerate(spec["steps"]) if s.get("send") == "Aspect.Run")
+    spec["steps"].insert(run, {"send": "Aspect.SetParams", "with": {"resolution": resolution, "decay": 0.6},
+                               "expect": "ok"})
+    path = folder / f"{mission.stem}_{resolution:g}.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    return path
+
+
+@pytest.mark.parametrize("resolution", [None, 0.15], ids=["default_map", "cells_of_0.15m"])
+def test_doorway_goto_goes_through_the_door_to_the_far_room(resolution, tmp_path):
+    mission = MISSIONS / "doorway.yaml"
+    run = _run(mission if resolution is None else _with_map_cells(mission, resolution, tmp_path))
     assert run.ok, [o.problem for o in run.outcomes if not o.ok]
     assert _report(run, "NDD.GoTo")["status"] == "ok"
     world = run.world
