@@ -192,6 +192,7 @@ def plot(rows: list[dict], path: Path) -> None:
 
 
 def main() -> None:
+    """Run the seeds' worlds (in --workers processes), print and write the summary, the rows and the plot."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--worlds", type=int, default=100, help="how many seeds (default 100)")
     parser.add_argument("--first", type=int, default=0, help="the first seed (default 0)")

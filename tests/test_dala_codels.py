@@ -66,6 +66,7 @@ def test_the_pose_of_a_sweep_is_interpolated_between_poses_and_extrapolated_a_li
 
 
 def test_ndd_remembers_what_left_the_laser_s_field_in_the_world_frame_for_a_while():
+    """A return placed at the sweep's pose comes back in the robot's new frame, until it is too old or too far."""
     m = memory.Memory()
     seen = memory.update(m, _map([(1.0, 0.0)], seq=1, stamp=0.0), _pos(0.0, 0.0, 0.0, 0.0), 64, keep=2.0, reach=6.4)
     assert seen == [pytest.approx((1.05, 0.05))]
@@ -183,6 +184,7 @@ def test_ndd_gives_up_within_its_bound_whatever_the_robot_does():
 
 
 def test_ndd_throws_e_blocked_with_its_reason_and_stops_the_robot():
+    """Enclosed, GoTo's step sets the speed to zero and throws e_blocked whose detail says where and why."""
     ring = [(1.0 * math.cos(a / 60 * 2 * math.pi), 1.0 * math.sin(a / 60 * 2 * math.pi)) for a in range(60)]
     obs = {"resolution": 0.1, "origin": {"x": 0.0, "y": 0.0, "theta": 0.0}, "cells": [0] * (64 * 64), "seq": 1,
            "stamp": 0.0}

@@ -179,6 +179,7 @@ def test_doorway_goto_goes_through_the_door_to_the_far_room(resolution, tmp_path
 
 
 def test_u_trap_goto_ends_in_e_blocked_with_its_reason_within_its_bound():
+    """A U open towards the robot is a local minimum: GoTo fails with its reason within NDD's bound, unharmed."""
     from runtime.controller.codels import load_codels
 
     ndd = load_codels(CODELS, ["NDD"]).modules["NDD"]

@@ -86,6 +86,7 @@ def test_hsnr_goes_through_the_middle_of_a_doorway():
 
 
 def test_a_wall_reaching_the_map_disc_s_edge_ends_in_gaps_and_the_robot_goes_round_it():
+    """A doorway as Aspect's map shows it: ND heads past the end of what it sees of the wall, then through the door."""
     # The robot 3.14 m before a wall whose door starts 1.35 m to its left; the goal 8 m straight on.
     # As Aspect's map gives it: cells of 0.1 m within a 6.4 m square.  The wall's far parts lie past
     # dmax (3.2 m): they are not counted, so the wall's visible part ends in gaps, and ND heads past

@@ -102,6 +102,7 @@ def test_the_world_file_loads_in_the_simulator(tmp_path):
 
 
 def test_the_mission_of_a_world_is_the_template_s_bring_up_and_one_goto(tmp_path):
+    """The generated mission keeps the template's bring-up, anchors POM at the start and sends one GoTo to the goal."""
     w = generate(4, "corridor")
     template = ROOT / "descriptions/dala/missions/doorway.yaml"
     path = tmp_path / "m.yaml"
