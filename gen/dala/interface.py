@@ -645,7 +645,7 @@ INTERFACE = {
                                 {'arg': 'Pos', 'source': 'port', 'direction': 'in', 'path': 'Pos'},
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
-                            'wcet_us': 3000,
+                            'wcet_us': 6000,
                         },
                         'NDD_nddArrived': {
                             'codel': 'nddArrived',
