@@ -15,18 +15,13 @@ _package = _codels.modules["NDD"].__package__
 nd = importlib.import_module(f"{_package}.nd")
 grid = importlib.import_module(f"{_package}.grid")
 odometry = importlib.import_module(f"{_package}.odometry")
+memory = importlib.import_module(f"{_package}.memory")
 RFLEX, POM, LaserRF, NDD, Aspect = (_codels.modules[c] for c in ("RFLEX", "POM", "LaserRF", "NDD", "Aspect"))
 
 P = nd.Params(radius=0.35, security=0.3, dmax=3.2, vmax=0.5, wmax=1.0, cell=0.1)
 
 
-def wall(x0, y0, x1, y1, step=0.05):
-    """Points along a segment, as the obstacle grid gives them."""
-    n = max(1, int(math.hypot(x1 - x0, y1 - y0) / step))
-    return [(x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n) for i in range(n + 1)]
-
-
-# -- nearness diagram ------------------------------------------------------------------------------------
+# -- nearness diagram (the situations: tests/test_dala_nd.py) -------------------------------------------------
 
 
 def test_a_cell_fills_every_sector_it_covers():
@@ -39,59 +34,53 @@ def test_gaps_are_where_nearness_jumps_by_more_than_the_diameter():
     d = [math.inf] * 144
     for k in range(60, 80):
         d[k] = 1.0
-    pnd = nd.nearness(d, P)
-    assert nd.gaps(pnd, P) == [59, 79]
-    valleys = nd.valleys(pnd, P)
-    # the free region around the obstacle rises at both ends: two valleys, one per rising gap
-    assert {(v.rising, v.other) for v in valleys} == {(80, 59), (59, 80)}
+    d[70] = 1.5  # a step of 0.5 m: less than 2R, no gap
+    d[75] = 2.0  # a step of 1 m: more than 2R, a gap on each side
+    assert nd.gaps(d, P) == [59, 74, 75, 79]
+    assert nd.regions(d, P) == [(60, 74), (75, 75), (76, 79), (80, 59)]
 
 
-def test_free_space_goes_straight_to_the_goal():
-    got = nd.decide([], (3.0, 1.0), P)
-    assert got.situation == "HSGR"
-    assert got.direction == pytest.approx(math.atan2(1, 3))
-    assert got.v > 0
+# -- NDD's memory of what the laser saw ---------------------------------------------------------------------
 
 
-def test_a_goal_nearer_than_the_obstacles_behind_it_is_in_the_free_walking_area():
-    got = nd.decide(wall(2.5, -2, 2.5, 2), (1.5, 0.2), P)
-    assert got.situation == "HSGR" and got.direction == pytest.approx(math.atan2(0.2, 1.5))
+def _map(points, seq, stamp, size=0.1):
+    cells = [0] * (64 * 64)
+    for x, y in points:
+        cells[grid.cell_of(x, y, size, 64)] = grid.OCCUPIED
+    return {"resolution": size, "origin": {"x": 0.0, "y": 0.0, "theta": 0.0}, "cells": cells, "seq": seq,
+            "stamp": stamp}
 
 
-def test_a_wall_with_an_opening_on_the_left_leads_through_the_opening():
-    points = wall(1.5, -3, 1.5, 0.6) + wall(1.5, 1.8, 1.5, 3)  # the wall x = 1.5, open for 0.6 < y < 1.8
-    got = nd.decide(points, (4.0, 0.0), P)
-    assert got is not None and got.direction > 0.2  # towards the opening, not into the wall ahead
-    assert got.situation in ("HSNR", "HSWR", "HSGR")
+def _pos(x, y, theta, stamp):
+    return {"estimate": {"x": x, "y": y, "theta": theta}, "covariance": [0.0] * 3, "stamp": stamp}
 
 
-def test_wide_and_narrow_free_walking_areas():
-    wide = nd.decide(wall(1.0, -3, 1.0, 0.0) + wall(1.0, 0.0, 3.0, 0.0), (3.0, -1.0), P)
-    assert wide.situation == "HSWR"
-    # a slot 1.2 m wide between two walls ahead; the goal beyond it, off the slot's axis
-    slot = wall(0.8, 0.6, 3.0, 0.6) + wall(0.8, -0.6, 3.0, -0.6)
-    narrow = nd.decide(slot, (5.0, 1.5), P)
-    assert narrow.situation == "HSNR"
-    assert abs(narrow.direction) < math.radians(12)  # down the middle of the slot
+def test_the_pose_of_a_sweep_is_interpolated_between_poses_and_extrapolated_a_little_past_them():
+    poses = [(1.0, {"x": 0.0, "y": 0.0, "theta": 0.0}), (1.1, {"x": 0.1, "y": 0.0, "theta": 0.2})]
+    assert memory.pose_at(poses, 1.05) == pytest.approx({"x": 0.05, "y": 0.0, "theta": 0.1})
+    assert memory.pose_at(poses, 1.15) == pytest.approx({"x": 0.15, "y": 0.0, "theta": 0.3})
+    assert memory.pose_at(poses, 5.0) == pytest.approx({"x": 0.3, "y": 0.0, "theta": 0.6})  # 0.2 s at most
+    assert memory.pose_at(poses, 0.0) == poses[0][1]
+    across = [(0.0, {"x": 0.0, "y": 0.0, "theta": 3.1}), (1.0, {"x": 0.0, "y": 0.0, "theta": -3.1})]
+    assert abs(memory.pose_at(across, 0.5)["theta"]) == pytest.approx(math.pi)  # the short way round
 
 
-def test_low_safety_on_one_side_turns_away_from_the_obstacle():
-    got = nd.decide(wall(0.0, -0.55, 2.0, -0.55), (3.0, 0.0), P)  # a wall 0.55 m on the right
-    assert got.situation == "LS1"
-    assert got.direction > 0  # away from it, to the left
-    assert 0 < got.v < P.vmax
-
-
-def test_low_safety_on_both_sides_keeps_to_the_middle():
-    corridor = wall(-0.5, 0.55, 3.0, 0.55) + wall(-0.5, -0.6, 3.0, -0.6)
-    got = nd.decide(corridor, (2.5, 0.0), P)
-    assert got.situation == "LS2"
-    assert abs(got.direction) < 0.3
-
-
-def test_enclosed_robot_has_no_free_walking_area():
-    ring = [(1.0 * math.cos(a / 100 * 2 * math.pi), 1.0 * math.sin(a / 100 * 2 * math.pi)) for a in range(100)]
-    assert nd.decide(ring, (3.0, 0.0), P) is None
+def test_ndd_remembers_what_left_the_laser_s_field_in_the_world_frame_for_a_while():
+    """A return placed at the sweep's pose comes back in the robot's new frame, until it is too old or too far."""
+    m = memory.Memory()
+    seen = memory.update(m, _map([(1.0, 0.0)], seq=1, stamp=0.0), _pos(0.0, 0.0, 0.0, 0.0), 64, keep=2.0, reach=6.4)
+    assert seen == [pytest.approx((1.05, 0.05))]
+    # the robot turned round and moved 0.5 m: the obstacle is now 1.55 m behind it, no sweep shows it any more
+    later = memory.update(m, _map([], seq=2, stamp=1.0), _pos(-0.5, 0.0, math.pi, 1.0), 64, keep=2.0, reach=6.4)
+    assert later == [pytest.approx((-1.55, -0.05))]
+    assert memory.update(m, _map([], seq=3, stamp=2.5), _pos(-0.5, 0.0, math.pi, 2.5), 64, keep=2.0, reach=6.4) == []
+    # a sweep is placed at the pose the robot had when it was taken, not at the latest one
+    m = memory.Memory()
+    memory.update(m, None, _pos(0.0, 0.0, 0.0, 0.0), 64, keep=2.0, reach=6.4)
+    memory.update(m, None, _pos(1.0, 0.0, 0.0, 0.2), 64, keep=2.0, reach=6.4)
+    seen = memory.update(m, _map([(1.0, 0.0)], seq=1, stamp=0.1), _pos(1.0, 0.0, 0.0, 0.2), 64, keep=2.0, reach=6.4)
+    assert seen == [pytest.approx((0.55, 0.05))]  # taken 0.5 m back: the obstacle is at 1.55 m in the world
+    assert memory.update(m, None, _pos(9.0, 0.0, 0.0, 0.3), 64, keep=2.0, reach=6.4) == []  # out of reach: gone
 
 
 # -- Aspect's grid, LaserRF's sweep ---------------------------------------------------------------------------
@@ -107,11 +96,13 @@ def test_a_beam_marks_the_cell_of_its_end_and_old_cells_decay():
 
 
 def test_aspect_builds_its_map_with_the_setparams_cell_size_and_decay():
-    scan = {"angle_min": 0.0, "angle_step": math.pi / 2, "range_max": 5.0, "ranges": [1.0, 5.0], "seq": 1}
+    scan = {"angle_min": 0.0, "angle_step": math.pi / 2, "range_max": 5.0, "ranges": [1.0, 5.0], "seq": 1,
+            "stamp": 0.5}
     obs, last = Ref(None), Ref(0)
     assert Aspect.aspReset(0.0, obs) == "fuse"  # before SetParams: 0.1 m cells
     Aspect.aspFuse(scan, 0.0, 0.0, last, obs)
     assert obs.value["resolution"] == 0.1 and grid.points(obs.value["cells"], 0.1, 64) == [(1.05, 0.05)]
+    assert obs.value["stamp"] == 0.5  # the sweep's: where NDD places it
     Aspect.aspFuse({**scan, "seq": 2}, 0.25, 0.0, last, obs)  # SetParams(resolution=0.25, decay=0): a new map
     assert obs.value["resolution"] == 0.25 and grid.points(obs.value["cells"], 0.25, 64) == [(1.125, 0.125)]
     assert last.value == 2
@@ -169,3 +160,50 @@ def test_ndd_blocked_after_no_way_or_no_progress():
     NDD.blocked(progress, 5.0, True, 0.0)
     assert NDD.blocked(progress, 4.9, True, NDD.PROGRESS_TIMEOUT - 1) is None
     assert "no progress" in NDD.blocked(progress, 4.9, True, NDD.PROGRESS_TIMEOUT + 0.1)
+
+
+def test_ndd_gives_up_within_its_bound_whatever_the_robot_does():
+    """A GoTo starting d m from its goal ends within (d / PROGRESS + 1) * PROGRESS_TIMEOUT s."""
+    start = 6.0
+    bound = (start / NDD.PROGRESS + 1) * NDD.PROGRESS_TIMEOUT
+    step = 0.1  # NDD's period
+
+    def creeping(t: float) -> float:  # just enough progress, just in time, every time
+        return start - (NDD.PROGRESS + 0.01) * math.floor(t / (NDD.PROGRESS_TIMEOUT - 0.1))
+
+    def wandering(t: float) -> float:
+        return start + 0.5 * math.sin(t)
+
+    for distance in (creeping, wandering):
+        progress = {"best": math.inf, "since": None, "no_way_since": None}
+        t = 0.0
+        while NDD.blocked(progress, max(distance(t), 0.2), True, t) is None:
+            t += step
+            assert t <= bound, distance
+    assert t < 2 * NDD.PROGRESS_TIMEOUT  # the wandering robot gives up at once
+
+
+def test_ndd_throws_e_blocked_with_its_reason_and_stops_the_robot():
+    """Enclosed, GoTo's step sets the speed to zero and throws e_blocked whose detail says where and why."""
+    ring = [(1.0 * math.cos(a / 60 * 2 * math.pi), 1.0 * math.sin(a / 60 * 2 * math.pi)) for a in range(60)]
+    obs = {"resolution": 0.1, "origin": {"x": 0.0, "y": 0.0, "theta": 0.0}, "cells": [0] * (64 * 64), "seq": 1,
+           "stamp": 0.0}
+    for x, y in ring:
+        obs["cells"][grid.cell_of(x, y, 0.1, 64)] = grid.OCCUPIED
+    params = {"robot_radius": 0.35, "security_distance": 0.3, "goal_tolerance": 0.15}
+    speed = Ref({"v": 0.3, "w": 0.0})
+    NDD.nddStartGoTo({"x": 5.0, "y": 0.0, "theta": 0.0}, Ref(None), Ref(False))
+    t, thrown = 0.0, None
+    while thrown is None and t < 10:
+        pos = {"estimate": {"x": 0.0, "y": 0.0, "theta": 0.0}, "covariance": [0.0] * 3, "stamp": t}
+        try:
+            assert NDD.nddPlan({"x": 5.0, "y": 0.0, "theta": 0.0}, params, {"v": 0.5, "w": 1.0}, obs, pos,
+                               speed) == "pause::plan"
+        except Throw as err:
+            thrown = err
+        t += 0.1
+    assert thrown is not None and thrown.name == "e_blocked"
+    assert thrown.detail["reason"] == f"no navigable gap towards the goal for {NDD.NO_WAY_TIMEOUT:g} s"
+    assert thrown.detail["where"] == {"x": 0.0, "y": 0.0, "theta": 0.0}
+    assert NDD.NO_WAY_TIMEOUT < t < NDD.NO_WAY_TIMEOUT + 0.5
+    assert speed.value == {"v": 0.0, "w": 0.0}

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+from genom2bip.mission import report
 from genom2bip.mission.session import run_mission
 from genom2bip.mission.spec import read_mission
 from tests.runkit import ROOT, dala
@@ -138,6 +139,65 @@ def test_dead_end_goto_fails_with_e_blocked_then_a_new_goto_is_served():
     end = run.world.trajectory[-1]
     assert math.hypot(end.x - 2.0, end.y - 6.5) < 0.3
     assert run.world.collisions == 0
+
+
+def _goto_seconds(run, index: int) -> float:
+    """Robot seconds from the index-th GoTo's start to its final report."""
+    outs = [o for o in run.outcomes if o.step.kind == "send" and o.step.target == "NDD.GoTo"]
+    rid = outs[index].request
+    started = next(e["time"] for e in run.events if e["event"] == "report" and e["request"] == rid
+                   and e["status"] == "started")
+    return _report(run, "NDD.GoTo", index)["time"] - started
+
+
+def _with_map_cells(mission: Path, resolution: float, folder: Path) -> Path:
+    """The mission with Aspect's cells set to ``resolution`` m before its map runs, written under ``folder``."""
+    spec = yaml.safe_load(mission.read_text())
+    spec["world"] = str((mission.parent / spec["world"]).resolve())
+    run = next(i for i, s in enumerate(spec["steps"]) if s.get("send") == "Aspect.Run")
+    spec["steps"].insert(run, {"send": "Aspect.SetParams", "with": {"resolution": resolution, "decay": 0.6},
+                               "expect": "ok"})
+    path = folder / f"{mission.stem}_{resolution:g}.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    return path
+
+
+@pytest.mark.parametrize("resolution", [None, 0.15], ids=["default_map", "cells_of_0.15m"])
+def test_doorway_goto_goes_through_the_door_to_the_far_room(resolution, tmp_path):
+    mission = MISSIONS / "doorway.yaml"
+    run = _run(mission if resolution is None else _with_map_cells(mission, resolution, tmp_path))
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    assert _report(run, "NDD.GoTo")["status"] == "ok"
+    world = run.world
+    end = world.trajectory[-1]
+    assert math.hypot(end.x - 11.0, end.y - 3.0) < 0.3 and world.collisions == 0
+    crossing = next(s for a, s in pairwise(world.trajectory) if a.x < 6.0 <= s.x)
+    assert 4.35 + 0.3 < crossing.y < 6.25 - 0.3  # through the door, clear of its edges
+    from shapely.geometry import Point
+
+    assert min(g.distance(Point(s.x, s.y)) for s in world.trajectory for g in world.obstacles()) > 0.3
+
+
+def test_u_trap_goto_ends_in_e_blocked_with_its_reason_within_its_bound():
+    """A U open towards the robot is a local minimum: GoTo fails with its reason within NDD's bound, unharmed."""
+    from runtime.controller.codels import load_codels
+
+    ndd = load_codels(CODELS, ["NDD"]).modules["NDD"]
+    run = _run(MISSIONS / "u_trap.yaml")
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    blocked = _report(run, "NDD.GoTo", 0)
+    assert blocked["status"] == "failed" and blocked["exception"] == "NDD::e_blocked"
+    reasons = (f"no navigable gap towards the goal for {ndd.NO_WAY_TIMEOUT:g} s",
+               f"no progress of {ndd.PROGRESS:g} m towards the goal in {ndd.PROGRESS_TIMEOUT:g} s")
+    assert blocked["detail"]["reason"].startswith(reasons), blocked["detail"]
+    distance = math.dist((2.0, 5.0), (11.0, 5.0))
+    bound = (distance / ndd.PROGRESS + 1) * ndd.PROGRESS_TIMEOUT + ndd.NO_WAY_TIMEOUT
+    assert _goto_seconds(run, 0) <= bound  # robot time: the virtual clock's, whatever the machine's speed
+    assert read_mission(MISSIONS / "u_trap.yaml").steps[-2].timeout >= bound  # the mission waits that long
+    where = blocked["detail"]["where"]
+    assert where["x"] < 8.0 and run.world.collisions == 0  # before the U's bottom, touching nothing
+    assert blocked["detail"]["reason"] in report.text(run)  # the report says why
+    assert _report(run, "NDD.GoTo", 1)["status"] == "ok"  # and the next GoTo is served
 
 
 def test_the_trace_has_every_report_and_the_path_in_time_order(corridor, tmp_path):

@@ -39,8 +39,9 @@ INTERFACE = {
                     'maxItems': 4096,
                 },
                 'seq': {'type': 'integer', 'minimum': 0, 'maximum': 4294967295},
+                'stamp': {'type': 'number'},
             },
-            'required': ['resolution', 'origin', 'cells', 'seq'],
+            'required': ['resolution', 'origin', 'cells', 'seq', 'stamp'],
             'additionalProperties': False,
         },
         'dala::odometry': {
@@ -81,8 +82,9 @@ INTERFACE = {
                 'range_max': {'type': 'number'},
                 'ranges': {'type': 'array', 'items': {'type': 'number'}, 'maxItems': 361},
                 'seq': {'type': 'integer', 'minimum': 0, 'maximum': 4294967295},
+                'stamp': {'type': 'number'},
             },
-            'required': ['angle_min', 'angle_step', 'range_max', 'ranges', 'seq'],
+            'required': ['angle_min', 'angle_step', 'range_max', 'ranges', 'seq', 'stamp'],
             'additionalProperties': False,
         },
         'dala::twist': {
@@ -643,7 +645,7 @@ INTERFACE = {
                                 {'arg': 'Pos', 'source': 'port', 'direction': 'in', 'path': 'Pos'},
                                 {'arg': 'Speed', 'source': 'port', 'direction': 'out', 'path': 'Speed'},
                             ],
-                            'wcet_us': 3000,
+                            'wcet_us': 6000,
                         },
                         'NDD_nddArrived': {
                             'codel': 'nddArrived',
@@ -702,7 +704,13 @@ INTERFACE = {
                 'NDD::e_bad_params': {'type': 'object', 'properties': {'value': {'type': 'number'}}},
                 'NDD::e_no_data_source': {'type': 'object', 'properties': {}},
                 'NDD::e_no_goal': {'type': 'object', 'properties': {}},
-                'NDD::e_blocked': {'type': 'object', 'properties': {'where': {'$ref': 'dala::pose'}}},
+                'NDD::e_blocked': {
+                    'type': 'object',
+                    'properties': {
+                        'where': {'$ref': 'dala::pose'},
+                        'reason': {'type': 'string', 'maxLength': 128},
+                    },
+                },
             },
         },
         'POM': {

@@ -10270,7 +10270,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'nddPlan', 'yields': 'pause::plan,arrived', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '3000'},
+                        arguments={'codel': 'nddPlan', 'yields': 'pause::plan,arrived', 'throws': 'NDD::e_no_goal,NDD::e_blocked', 'wcet_us': '6000'},
                     ),
                 ],
             ),

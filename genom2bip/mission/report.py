@@ -36,7 +36,8 @@ def goals(run: Run) -> list[dict[str, Any]]:
             within = f", {gap:.2f} m from it (GoTo ends within goal_tolerance)" if gap is not None else ""
             why = f"reached{when}{within}"
         elif status == "failed":
-            where = (r.get("detail") or {}).get("where") or {}
+            detail = r.get("detail") or {}
+            where = detail.get("where") or {}
             at = f" at ({where.get('x', 0):.2f}, {where.get('y', 0):.2f})" if where else ""
             why = f"not reached: {r.get('exception')}{at}"
         elif status == "rejected":
@@ -45,7 +46,9 @@ def goals(run: Run) -> list[dict[str, Any]]:
             why = f"not reached: interrupted by {r.get('by')}"
         else:
             why = f"not reached: {status}"
-        out.append({"goal": goal, "status": status, "why": why, "distance_left": gap, "request": o.request})
+        reason = (r.get("detail") or {}).get("reason") if status == "failed" else None
+        out.append({"goal": goal, "status": status, "why": why, "distance_left": gap, "request": o.request,
+                    "reason": reason})
     return out
 
 
@@ -72,7 +75,8 @@ def text(run: Run) -> str:
     for g in goals(run):
         gx, gy = g["goal"].get("x", 0), g["goal"].get("y", 0)
         left = f", {g['distance_left']:.2f} m from it" if g["distance_left"] is not None and g["status"] != "ok" else ""
-        lines.append(f"  goal ({gx:g}, {gy:g}): {g['why']}{left}")
+        reason = f": {g['reason']}" if g["reason"] else ""
+        lines.append(f"  goal ({gx:g}, {gy:g}): {g['why']}{left}{reason}")
     if run.world is not None:
         collisions = run.world.collisions
         lines.append(f"  driven {distance_driven(run):.2f} m in {run.sim_time:.1f} s of robot time "

@@ -27,7 +27,7 @@ def parameters(resolution: float, decay: float) -> tuple[float, float]:
 
 def _empty(resolution: float):
     return {"resolution": resolution, "origin": {"x": 0.0, "y": 0.0, "theta": 0.0}, "cells": [0] * (SIDE * SIDE),
-            "seq": 0}
+            "seq": 0, "stamp": 0.0}
 
 
 def aspReset(resolution, Obs):
@@ -45,7 +45,7 @@ def aspFuse(Scan, resolution, decay, last_seq, Obs):
         previous = _empty(size)
     cells = grid.fuse(Scan, previous["cells"], size, SIDE, keep)
     last_seq.value = _seen["seq"] = Scan["seq"]
-    Obs.value = {**previous, "cells": cells, "seq": Scan["seq"]}
+    Obs.value = {**previous, "cells": cells, "seq": Scan["seq"], "stamp": Scan["stamp"]}
     return "pause::fuse"
 
 

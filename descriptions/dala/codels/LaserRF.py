@@ -44,7 +44,8 @@ def sweep(raw: dict, beams: int, max_range: float) -> dict:
 
 def lrfAcquire(Scan):
     seq = Scan.value["seq"] + 1 if Scan.value else 0
-    Scan.value = {**sweep(world.sim().scan(), _config["beams"], _config["max_range"]), "seq": seq}
+    sim = world.sim()
+    Scan.value = {**sweep(sim.scan(), _config["beams"], _config["max_range"]), "seq": seq, "stamp": round(sim.t, 6)}
     return "pause::acquire"
 
 

@@ -1,22 +1,33 @@
 """NDD: nearness-diagram navigation (nd.py) towards the goal over Aspect's map Obs, from POM's position Pos.
 
-GoTo fails with e_blocked when no gap leads towards the goal for
-NO_WAY_TIMEOUT seconds, or when the robot has not got PROGRESS metres
-closer to the goal for PROGRESS_TIMEOUT seconds (simulated time, from the
-Pos stamps): a dead end, a goal inside an obstacle or behind a wall.
+GoTo fails with e_blocked, its ``reason`` saying which, when no gap leads
+towards the goal for NO_WAY_TIMEOUT seconds, or when the robot has not got
+PROGRESS metres closer to the goal for PROGRESS_TIMEOUT seconds (simulated
+time, from the Pos stamps): a dead end, a goal inside an obstacle or behind a
+wall, a trap that holds a reactive method.  A GoTo that starts d metres from
+its goal therefore ends within (d / PROGRESS + 1) * PROGRESS_TIMEOUT seconds.
+
+ND sees the obstacles of Aspect's map within the disc inscribed in it: the
+square map holds every return the laser gave within that radius, and only
+some beyond it (towards its corners), so the range of ND's information,
+``dmax``, is the disc's radius.  Each sweep's returns are remembered in the
+world frame for MEMORY seconds (memory.py): what the robot passed, out of
+the laser's 180 degrees, still counts.
 """
 import math
 
 from runtime.genom import Throw
 
-from . import grid, nd, odometry
+from . import memory, nd, odometry
 
 STILL = {"v": 0.0, "w": 0.0}
 SIDE = 64  # dala::map_cells
 NO_WAY_TIMEOUT = 3.0  # s
 PROGRESS = 0.2  # m
-PROGRESS_TIMEOUT = 12.0  # s
+PROGRESS_TIMEOUT = 20.0  # s: in clutter ND may hesitate between two ways of about the same worth that long
+MEMORY = 10.0  # s an obstacle out of sight is remembered
 _progress = {"best": math.inf, "since": None, "no_way_since": None, "situation": None}
+_memory = memory.Memory()
 
 
 def nddInit(navigating, Speed):
@@ -60,6 +71,7 @@ def nddStartGoTo(local_goal, ids_goal, navigating):
     ids_goal.value = dict(local_goal)
     navigating.value = True
     _progress.update(best=math.inf, since=None, no_way_since=None)
+    _memory.clear()  # POM may have been anchored anew since the last GoTo
     return "plan"
 
 
@@ -74,7 +86,8 @@ def blocked(progress: dict, distance: float, way: bool, now: float) -> str | Non
     if progress["no_way_since"] is not None and now - progress["no_way_since"] > NO_WAY_TIMEOUT:
         return f"no navigable gap towards the goal for {NO_WAY_TIMEOUT:g} s"
     if now - progress["since"] > PROGRESS_TIMEOUT:
-        return f"no progress of {PROGRESS:g} m towards the goal in {PROGRESS_TIMEOUT:g} s"
+        return (f"no progress of {PROGRESS:g} m towards the goal in {PROGRESS_TIMEOUT:g} s: a local minimum "
+                "(a trap, or a way round that the local map does not show)")
     return None
 
 
@@ -87,11 +100,17 @@ def nddPlan(goal, params, max_speed, Obs, Pos, Speed):
     distance = math.hypot(target["x"], target["y"])
     if distance <= params["goal_tolerance"]:
         return "arrived"
-    points = grid.points(Obs["cells"], Obs["resolution"], SIDE) if Obs else []
     cell = Obs["resolution"] if Obs else 0.1
-    setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"], dmax=SIDE / 2 * cell,
+    dmax = SIDE / 2 * cell
+    points = memory.update(_memory, Obs, Pos, SIDE, MEMORY, 2 * dmax)
+    setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"], dmax=dmax,
                         vmax=max_speed["v"], wmax=max_speed["w"], cell=cell)
-    decision = nd.decide(points, (target["x"], target["y"]), setting)
+    kept = odometry.between(here, _memory.heading_for) if _memory.heading_for else None
+    decision = nd.decide(points, (target["x"], target["y"]), setting, (kept["x"], kept["y"]) if kept else None)
+    _memory.heading_for = None
+    if decision is not None and not decision.area.goal_region:
+        x, y = decision.area.target
+        _memory.heading_for = odometry.compose(here, {"x": x, "y": y, "theta": 0.0})
     why = blocked(_progress, distance, decision is not None, Pos["stamp"])
     if decision is None or why:
         Speed.value = dict(STILL)
@@ -99,7 +118,7 @@ def nddPlan(goal, params, max_speed, Obs, Pos, Speed):
         Speed.value = {"v": decision.v, "w": decision.w}
         _progress["situation"] = decision.situation
     if why:
-        raise Throw("e_blocked", where=dict(here))
+        raise Throw("e_blocked", where=dict(here), reason=why)
     return "pause::plan"
 
 

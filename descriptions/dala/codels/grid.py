@@ -34,11 +34,11 @@ def fuse(scan: dict, previous: list[int] | None, resolution: float, side: int, d
     return cells
 
 
-def points(cells: list[int], resolution: float, side: int) -> list[tuple[float, float]]:
-    """Centres of the occupied cells, robot frame."""
+def points(cells: list[int], resolution: float, side: int, threshold: int = THRESHOLD) -> list[tuple[float, float]]:
+    """Centres of the cells at least ``threshold`` (default: the obstacles; OCCUPIED: the last sweep's), robot frame."""
     out = []
     for c, value in enumerate(cells):
-        if value >= THRESHOLD:
+        if value >= threshold:
             i, j = c % side, c // side
             out.append(((i - side // 2 + 0.5) * resolution, (j - side // 2 + 0.5) * resolution))
     return out
