@@ -51,6 +51,8 @@ def at(sc: CScope, what: str) -> CScope:
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
 MAX_GUARDED = 10
+#: Past this many words, the closures of compound priorities are computed as guard combinations are met.
+MAX_REACH_WORDS = 1 << 16
 #: Ports of a connector: its interactions are masks of 32 bits.
 MAX_PARAMS = 32
 #: Ports of a flat connector up to which its largest interactions are a table rather than computed.
@@ -492,25 +494,25 @@ class CGen(StepEmitter):
             return
         pr: support.Priorities = self.prio
         nr = len(pr.rules)
-        if len(pr.guards) > MAX_GUARDED:
-            names = ", ".join(self.flat.priorities[r].name for r, _ in pr.guards[:3])
-            raise Unsupported(f"compound priorities of {self.flat.root}: {len(pr.guards)} guarded ones ({names}, ...); "
-                              f"the compiled tables take at most {MAX_GUARDED}")
         words = (nr + 63) // 64
-        rows, cyc = [], []
-        for key in range(1 << len(pr.guards)):
-            bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
-            try:
-                reach = pr._reach(bits)
-                cyc.append("0")
-            except ModelError:
-                reach = [0] * nr
-                cyc.append("1")
-            rows.append("{" + ", ".join(_words(r, words) for r in reach) + "}")
         self.w(f"#define NRULES {nr}")
         self.w(f"#define NRW {words}")
-        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}][NRW] = {{{', '.join(rows)}}};")
-        self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
+        self.dynamic_reach = len(pr.guards) > MAX_GUARDED or (nr * words << len(pr.guards)) > MAX_REACH_WORDS
+        if self.dynamic_reach:
+            self.gen_reach_cache(pr, words)
+        else:
+            rows, cyc = [], []
+            for key in range(1 << len(pr.guards)):
+                bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
+                try:
+                    reach = pr._reach(bits)
+                    cyc.append("0")
+                except ModelError:
+                    reach = [0] * nr
+                    cyc.append("1")
+                rows.append("{" + ", ".join(_words(r, words) for r in reach) + "}")
+            self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}][NRW] = {{{', '.join(rows)}}};")
+            self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
         # guard functions of compound priorities, reading exported data from the state
         for k, (r, _) in enumerate(pr.guards):
             fp = self.flat.priorities[r]
@@ -588,12 +590,80 @@ class CGen(StepEmitter):
                     self.gen_compound_priorities()
             w("return n;")
 
+    def gen_reach_cache(self, pr, words: int) -> None:
+        """Rule closures computed when a combination of guards is first met, kept per thread (many guards).
+
+        ``reach_of(key)`` returns the closure of the rules active under the guard
+        values ``key`` (``NGW`` words), or NULL when they form a cycle; the static
+        table of every combination would be exponential in the guards.
+        """
+        nr, ng = len(pr.rules), len(pr.guards)
+        gw = max(1, (ng + 63) // 64)
+        edges = ", ".join(_words(sum(1 << y for y in pr.edges[r]), words) for r in range(nr))
+        guarded = sum(1 << r for r, _ in pr.guards)
+        w = self.w
+        w(f"#define NGW {gw}")
+        w(f"static const uint64_t PEDGE[NRULES][NRW] = {{{edges}}};")
+        w(f"static const uint64_t PFIXED[NRW] = {_words(((1 << nr) - 1) & ~guarded, words)};")
+        w(f"static const int PGRULE[{max(1, ng)}] = {{{', '.join(str(r) for r, _ in pr.guards) or '0'}}};")
+        w("typedef struct { uint64_t key[NGW]; uint8_t cyc; uint64_t reach[NRULES][NRW]; } PReach;")
+        w("static TL PReach **PCACHE; static TL uint64_t PCAP, PUSED;")
+        with w.block("static PReach *reach_compute(const uint64_t *key)"):
+            w("PReach *e = (PReach *)calloc(1, sizeof(PReach));")
+            w("if (!e) fail(E_FULL, 0);")
+            w("memcpy(e->key, key, sizeof(e->key));")
+            w("uint64_t active[NRW];")
+            w("for (int x = 0; x < NRW; x++) active[x] = PFIXED[x];")
+            w(f"for (int k = 0; k < {ng}; k++) if (key[k >> 6] >> (k & 63) & 1) "
+              "active[PGRULE[k] >> 6] |= UINT64_C(1) << (PGRULE[k] & 63);")
+            with w.block("for (int r = 0; r < NRULES; r++)"):
+                w("if (!(active[r >> 6] >> (r & 63) & 1)) continue;")
+                w("uint64_t *seen = e->reach[r], todo[NRW] = {0};")
+                w("seen[r >> 6] |= UINT64_C(1) << (r & 63); todo[r >> 6] |= UINT64_C(1) << (r & 63);")
+                with w.block("for (int more = 1; more;)"):
+                    w("more = 0;")
+                    with w.block("for (int y = 0; y < NRULES; y++)"):
+                        w("if (!(todo[y >> 6] >> (y & 63) & 1)) continue;")
+                        w("todo[y >> 6] &= ~(UINT64_C(1) << (y & 63));")
+                        with w.block("for (int x = 0; x < NRW; x++)"):
+                            w("uint64_t next = PEDGE[y][x] & active[x];")
+                            w("if (x == (r >> 6) && (next >> (r & 63) & 1)) e->cyc = 1;")
+                            w("next &= ~seen[x]; seen[x] |= next; todo[x] |= next; more |= next != 0;")
+            w("return e;")
+        with w.block("static PReach *reach_of(const uint64_t *key)"):
+            w("uint64_t h = 1469598103934665603ull;")
+            w("for (int x = 0; x < NGW; x++) h = (h ^ key[x]) * 1099511628211ull;")
+            with w.block("if (PUSED * 2 >= PCAP)"):
+                w("uint64_t cap = PCAP ? PCAP * 2 : 64;")
+                w("PReach **t = (PReach **)calloc(cap, sizeof(PReach *));")
+                w("if (!t) fail(E_FULL, 0);")
+                w("for (uint64_t i = 0; i < PCAP; i++) if (PCACHE[i]) {")
+                w("    uint64_t g = 1469598103934665603ull;")
+                w("    for (int x = 0; x < NGW; x++) g = (g ^ PCACHE[i]->key[x]) * 1099511628211ull;")
+                w("    uint64_t j = g & (cap - 1); while (t[j]) j = (j + 1) & (cap - 1); t[j] = PCACHE[i]; }")
+                w("free(PCACHE); PCACHE = t; PCAP = cap;")
+            w("uint64_t j = h & (PCAP - 1);")
+            with w.block("while (PCACHE[j])"):
+                w("if (!memcmp(PCACHE[j]->key, key, sizeof(PCACHE[j]->key))) return PCACHE[j];")
+                w("j = (j + 1) & (PCAP - 1);")
+            w("PCACHE[j] = reach_compute(key); PUSED++;")
+            w("return PCACHE[j];")
+
     def gen_compound_priorities(self) -> None:
         """Drop the interactions low in a compound priority whose high side (reached through the rules) is enabled."""
         w = self.w
-        key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(self.prio.guards))) or "0"
-        w(f"int key = {key};")
-        w.if_then("PCYC[key]", f"fail({E_CYCLE}, -1)")
+        if self.dynamic_reach:
+            w("uint64_t key[NGW] = {0};")
+            for k in range(len(self.prio.guards)):
+                w(f"if (pg{k}(s)) key[{k >> 6}] |= UINT64_C({1 << (k & 63)});")
+            w("const PReach *pr = reach_of(key);")
+            w.if_then("pr->cyc", f"fail({E_CYCLE}, -1)")
+            reach = "pr->reach[r][x]"
+        else:
+            key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(self.prio.guards))) or "0"
+            w(f"int key = {key};")
+            w.if_then("PCYC[key]", f"fail({E_CYCLE}, -1)")
+            reach = "PREACH[key][r][x]"
         w("uint64_t high[NRW] = {0}, blocked[NRW] = {0};")
         w("int any = 0;")
         w("for (int i = 0; i < n; i++) HIT[isrc[i]](imask[i], high);")
@@ -602,7 +672,7 @@ class CGen(StepEmitter):
             w("int b = 0;")
             w("for (int r = 0; r < NRULES; r++)")
             w("    for (int x = 0; x < NRW; x++)")
-            w("        if (PREACH[key][r][x] & high[x]) { blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }")
+            w(f"        if ({reach} & high[x]) {{ blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }}")
             with w.block("if (b)"):
                 w("int k = 0;")
                 with w.block("for (int i = 0; i < n; i++)"):
