@@ -137,6 +137,8 @@ class TimeSettings:
     tick_us: int | None = None  # None: the gcd of every period, WCET and observer bound
     default_wcet_us: int | None = None  # None: the builder's default (0, with a warning naming the codels)
     observers: str | Path | None = None  # latency observers (YAML); None: observers.yaml in the directory given
+    platform: str | Path | None = None  # the computer (YAML, genom2bip/platform.py); None: a core per task
+    client: str | Path | None = None  # a mission whose steps are the environment; None: any request, once per period
 
 
 def observers_file(paths: Sequence[str | Path], observers: str | Path | None = None) -> Path | None:
@@ -165,4 +167,40 @@ def time_options(description: Description, paths: Sequence[str | Path], settings
         latencies = load_observers(path, description, reporter)
         (diagnostics or Diagnostics()).reporter(reporter)
     default = DEFAULT_WCET_US if settings.default_wcet_us is None else settings.default_wcet_us
-    return TimeOptions(settings.tick_us, default, latencies, ticks=settings.ticks)
+    return TimeOptions(settings.tick_us, default, latencies, ticks=settings.ticks,
+                       platform=_platform(description, settings.platform, diagnostics),
+                       client=_client(description, settings.client, diagnostics))
+
+
+def _platform(description: Description, path: str | Path | None, diagnostics: Diagnostics | None):
+    """The platform file read and checked against the description (None when none is given)."""
+    from genom2bip.platform import load_platform
+
+    if path is None:
+        return None
+    if not Path(path).is_file():
+        raise InputError([f"{path}: no such platform file"])
+    reporter = Reporter()
+    platform = load_platform(Path(path), description, reporter)
+    (diagnostics or Diagnostics()).reporter(reporter)
+    return platform
+
+
+def _client(description: Description, path: str | Path | None, diagnostics: Diagnostics | None):
+    """A mission file as the environment, every service it sends checked against the description."""
+    from genom2bip.build.client import check
+    from genom2bip.mission.spec import read_mission
+
+    if path is None:
+        return None
+    if not Path(path).is_file():
+        raise InputError([f"{path}: no such mission file"])
+    reporter = Reporter()
+    try:
+        mission = read_mission(path, reporter)
+    except DiagnosticError:
+        mission = None
+    if mission is not None:
+        check(mission, description, reporter)
+    (diagnostics or Diagnostics()).reporter(reporter)
+    return mission

@@ -27,8 +27,11 @@ import math
 from dataclasses import dataclass, field
 from functools import reduce
 
+from genom2bip import ir
 from genom2bip.build import library
-from genom2bip.build.assembly import End, Wire
+from genom2bip.build.assembly import End, Path, Rank, Wire
+from genom2bip.mission.spec import Mission
+from genom2bip.platform import Platform
 from genom2bip.build.names import ident
 from runtime.diagnostics import NOWHERE, Reporter, Span
 from runtime.model import (
@@ -61,6 +64,8 @@ ERROR = "ERROR"
 DEFAULT_WCET_US = 0
 #: Port type of a scheduler's ``exec``: the connector tells it how many ticks the codel takes.
 COST = "Cost"
+#: A service's reports: on a platform, time does not pass while one can be given.
+REPORTS = ("start", "finish", "fail", "interrupted", "reject")
 
 
 @dataclass
@@ -82,6 +87,8 @@ class TimeOptions:
     default_wcet_us: int = DEFAULT_WCET_US
     latencies: list[LatencySpec] = field(default_factory=list)
     ticks: bool = True  # False: observers only, for a controller that measures real time
+    platform: Platform | None = None  # None: a core per task, codels take their WCET (genom2bip.platform)
+    client: Mission | None = None  # a mission whose steps are the environment (genom2bip.build.client)
 
 
 @dataclass
@@ -164,7 +171,7 @@ def timer_type() -> AtomType:
     """
     base = library.timer_type()
     base.params.append(DataParam("int", "ticks"))
-    base.data.append(DataDecl("int", "t"))
+    base.data.append(DataDecl("int", "t", annotations=[library.CLOCK]))
     base.ports.append(PortDecl(library.PORT, "tick", exported=True))
     base.initial = InitialTransition(["WAIT"], [Assign(Var("t"), Var("ticks"))])
     t_ready = Binary(">=", Var("t"), Var("ticks"))
@@ -235,7 +242,7 @@ def _observer_type(name: str, kind: str, opening: str, closing: str, bound: str,
         name=name,
         annotations=[Annotation("observer", {"kind": kind, "open": opening, "close": closing, "bound": bound})],
         params=[DataParam("int", bound)],
-        data=[DataDecl("int", "c")],
+        data=[DataDecl("int", "c", annotations=[library.CLOCK])],
         ports=[PortDecl(library.PORT, n, exported=True) for n in (opening, closing, "tick")],
         places=["IDLE", watching, ERROR],
         initial=InitialTransition(["IDLE"], restart),
@@ -308,12 +315,63 @@ def _codel_of(level, wire: Wire) -> tuple[str, int | None]:
     return codel.name, round(codel.wcet.seconds * 1e6) if codel.wcet is not None else None
 
 
+def _constants(level, options: TimeOptions, execs, timers) -> list[int]:
+    """Every duration of the model in µs: the tick divides them all (periods, WCETs, bounds, the platform's)."""
+    out = [inst.args[0].value for inst in timers.values()]
+    out += [wcet for _, _, wcet in execs if wcet is not None]
+    out += [spec.within_us for spec in options.latencies]
+    if any(wcet is None for _, _, wcet in execs):
+        out.append(options.default_wcet_us)
+    platform = options.platform
+    if platform is not None:
+        out += [us for span in platform.execution.values() for us in (span.best_us, span.worst_us)]
+        out += [us for t in platform.tasks.values() if t.delay for us in (t.delay.best_us, t.delay.worst_us)]
+        out += [round(t.delay.seconds * 1e6) for _, t in level.task_of.values() if t is not None and t.delay]
+        if isinstance(platform.best, int):
+            out.append(platform.best)
+    return out
+
+
+def arm_requests(level, watch) -> None:
+    """The default environment is not Zeno: a service of a periodic task is requested at most once per period.
+
+    The acceptor's port of such a service is armed when its task's period
+    opens and disarmed by the request it lets through (docs/verification.md,
+    *The environment*).
+    """
+    armed: dict[Path, dict[tuple[str, ...], list[str]]] = {}  # acceptor -> task -> services
+    for (component, service), parts in level.services.items():
+        if parts.service.kind != ir.ServiceKind.ACTIVITY or parts.task + ("timer",) not in level.asm.atoms:
+            continue
+        acceptor = (ident(component), "requests")
+        armed.setdefault(acceptor, {}).setdefault(parts.task, []).append(ident(service))
+    for acceptor, tasks in armed.items():
+        inst = level.asm.atoms[acceptor]
+        t = level.atom_types[inst.type]
+        flags = {s: f"armed_{s}" for services in tasks.values() for s in services}
+        t.data = list(t.data) + [DataDecl("bool", f) for f in flags.values()]
+        t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action)
+                                      + [Assign(Var(f), Const(True)) for f in flags.values()])
+        for tr in t.transitions:
+            if tr.port in flags:
+                tr.guard = Binary("&&", tr.guard, Var(flags[tr.port])) if tr.guard is not None else Var(flags[tr.port])
+                tr.action = list(tr.action) + [Assign(Var(flags[tr.port]), Const(False))]
+        for task, services in tasks.items():
+            port = f"arm_{task[-1]}"
+            t.ports = list(t.ports) + [PortDecl(library.PORT, port, exported=True)]
+            t.transitions = list(t.transitions) + [
+                Transition(port, ["READY"], ["READY"], action=[Assign(Var(flags[s]), Const(True)) for s in services])]
+            opening = next(w for w in level.asm.wires if w.label == f"{level.task_labels[task]}:period")
+            watch(opening, End(acceptor, port))
+
+
 def apply(level, options: TimeOptions) -> Timing:
     """Add time to ``level`` (a FunctionalLevel whose wires are all built); returns what was chosen.
 
     With ``options.ticks`` false only the observers are added (no tick, no
     clock moves): the model a controller runs, whose monitor measures real
     time instead (runtime/controller/monitor.py); bounds are then in µs.
+    With ``options.platform`` the tasks run on its cores (genom2bip.build.platform).
     """
     execs: list[tuple[Wire, str, int | None]] = []
     for task, wires in level.task_execs.items():
@@ -321,11 +379,7 @@ def apply(level, options: TimeOptions) -> Timing:
             execs.append((w, *_codel_of(level, w)))
     timers = {path: inst for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
     untimed = sorted({f"{w.label.split('.')[0]}.{name}" for w, name, wcet in execs if wcet is None})
-    constants = [inst.args[0].value for inst in timers.values()]
-    constants += [wcet for _, _, wcet in execs if wcet is not None]
-    constants += [spec.within_us for spec in options.latencies]
-    if untimed:
-        constants.append(options.default_wcet_us)
+    constants = _constants(level, options, execs, timers)
     tick = options.tick_us or reduce(math.gcd, [c for c in constants if c > 0], 0) or options.default_wcet_us or 1
     if not options.ticks:
         tick, untimed = 1, []
@@ -333,25 +387,39 @@ def apply(level, options: TimeOptions) -> Timing:
 
     ticking: list[End] = []
     costs: dict[str, int] = {}
-    if options.ticks:
-        level.atom_types["Timer"] = timer_type()
-        level.atom_types["Scheduler"] = scheduler_type()
-        if "IdleScheduler" in level.atom_types:
-            level.atom_types["IdleScheduler"] = library.idle_scheduler_type(scheduler_type())
-        for path, inst in timers.items():
-            inst.args.append(Const(periods[path]))
-            ticking.append(End(path, "tick"))
-        ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
-        for w, name, wcet in execs:
-            cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
-            w.type = level._connector(exec_type(w.type, cost))
-            costs[w.label] = cost
-
+    urgent: list[Wire] = []
     observers: list[Observer] = []
     extra: dict[int, tuple[Wire, list[End]]] = {}
 
     def watch(wire: Wire, end: End) -> None:
         extra.setdefault(id(wire), (wire, []))[1].append(end)
+
+    if options.ticks:
+        level.atom_types["Timer"] = timer_type()
+        for path, inst in timers.items():
+            inst.args.append(Const(periods[path]))
+            ticking.append(End(path, "tick"))
+        if options.platform is None:
+            level.atom_types["Scheduler"] = scheduler_type()
+            for w, name, wcet in execs:
+                cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
+                w.type = level._connector(exec_type(w.type, cost))
+                costs[w.label] = cost
+        else:
+            from genom2bip.build import platform
+            level.atom_types.pop("Scheduler", None)
+            urgent = platform.apply(level, options.platform, tick, options.default_wcet_us)
+            urgent += [w for w in level.asm.wires if w.label and w.label.rsplit(":", 1)[1] in REPORTS]
+        if "IdleScheduler" in level.atom_types:
+            level.atom_types["IdleScheduler"] = library.idle_scheduler_type(scheduler_type())
+        ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
+        if options.client is not None:
+            from genom2bip.build import client
+            added = client.apply(level, options.client, tick, watch)
+            ticking.append(End(added.atom, "tick"))
+            urgent += added.urgent
+        else:
+            arm_requests(level, watch)
 
     if timers:
         level.atom_types["PeriodObserver"] = overrun_type()
@@ -386,6 +454,9 @@ def apply(level, options: TimeOptions) -> Timing:
         wire.ends = list(wire.ends)[:at] + ends + list(wire.ends)[at:]
         wire.type = level._connector(ctype)
     if options.ticks:
-        level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
-                            comment="time passes by one tick for every timed atom at once"))
+        passing = level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
+                                      comment="time passes by one tick for every timed atom at once"))
+        for w in urgent:
+            level.asm.rank(Rank(f"tick_after_{'_'.join(w.owner)}_{w.name}", passing, w, owner=(),
+                                comment="time passes only when nothing urgent can happen"))
     return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks)

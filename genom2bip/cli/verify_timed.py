@@ -27,6 +27,12 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
                       help="WCET of a codel that declares none (default: 0, with a warning naming it)")
     time.add_argument("--observers", metavar="FILE",
                       help="latency observers (YAML); default: observers.yaml in the directory given")
+    time.add_argument("--client", metavar="MISSION",
+                      help="a mission file whose steps are the environment: its requests in order, each once the "
+                           "previous one is accepted, started or over (default: any request, once per period)")
+    time.add_argument("--platform", metavar="FILE",
+                      help="the computer: cores, scheduling policy, codel execution intervals, task offsets (YAML; "
+                           "docs/verification.md, Platform); default: a core per task, codels take their WCET")
     if not verify:
         time.add_argument("--monitor", action="store_true",
                           help="add the observers without ticks: the controller measures them in real time "
@@ -37,7 +43,7 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
 
 
 def _duration(text: str | None, option: str) -> int | None:
-    from genom2bip.observers import parse_duration
+    from genom2bip.durations import parse_duration
 
     if text is None:
         return None
@@ -59,6 +65,10 @@ def time_settings(args: argparse.Namespace):
     if timed and getattr(args, "engine", "explore") == "spin":
         error("the observers of --timed are checked by our explorer: drop --engine spin")
         raise Failure(EXIT_USAGE)
+    for option in ("platform", "client"):
+        if getattr(args, option, None) and not timed:
+            error(f"--{option} needs --timed")
+            raise Failure(EXIT_USAGE)
     if not (timed or monitor):
         if getattr(args, "schedulability", False) or getattr(args, "observers", None):
             error("--schedulability and --observers need --timed" + ("" if hasattr(args, "schedulability")
@@ -70,7 +80,8 @@ def time_settings(args: argparse.Namespace):
         error("--tick must be positive")
         raise Failure(EXIT_USAGE)
     return TimeSettings(ticks=timed, tick_us=tick, default_wcet_us=_duration(args.default_wcet, "default-wcet"),
-                        observers=args.observers)
+                        observers=args.observers, platform=getattr(args, "platform", None),
+                        client=getattr(args, "client", None))
 
 
 def warn_untimed(package) -> None:
