@@ -1,0 +1,140 @@
+"""Difference-bound matrices over integer clocks: the sets of clock values a zone explorer keeps per state.
+
+A zone over clocks ``x1 .. xn`` is ``M[i][j]``: ``xi - xj <= M[i][j]``, with
+``x0 = 0``.  Time here is discrete (a model's tick), so every bound is an
+integer and a strict ``x < c`` is ``x <= c - 1``: the integer points of a zone
+are exactly the clock values the tick semantics reaches (closed constraints,
+as digitization wants).  Entries are floats so that ``inf`` absorbs sums;
+integers below 2**53 are exact.  Every function takes and returns canonical
+matrices (all bounds tight), and never changes its argument.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+INF = np.inf
+
+
+def zero(n: int) -> np.ndarray:
+    """Every clock at 0."""
+    return np.zeros((n + 1, n + 1))
+
+
+def close(m: np.ndarray) -> np.ndarray:
+    """Floyd–Warshall: the tightest bounds (canonical form); an empty zone has a negative diagonal."""
+    m = m.copy()
+    for k in range(m.shape[0]):
+        np.minimum(m, m[:, k:k + 1] + m[k:k + 1, :], out=m)
+    return m
+
+
+def empty(m: np.ndarray) -> bool:
+    return bool((np.diagonal(m) < 0).any())
+
+
+def constrain(m: np.ndarray, i: int, j: int, c: float) -> np.ndarray | None:
+    """``xi - xj <= c`` added (incremental closure, O(n^2)); None when nothing is left."""
+    if m[i, j] <= c:
+        return m
+    if m[j, i] + c < 0:
+        return None
+    out = m.copy()
+    # every path a -> i -> j -> b may now be shorter
+    np.minimum(out, m[:, i:i + 1] + c + m[j:j + 1, :], out=out)
+    return out
+
+
+def constrain_all(m: np.ndarray, bounds) -> np.ndarray | None:
+    """Several ``(i, j, c)`` at once; None when the zone is empty."""
+    for i, j, c in bounds:
+        m = constrain(m, i, j, c)
+        if m is None:
+            return None
+    return m
+
+
+def up(m: np.ndarray) -> np.ndarray:
+    """Time passes: no clock has an upper bound any more (differences stay)."""
+    out = m.copy()
+    out[1:, 0] = INF
+    return out
+
+
+def reset(m: np.ndarray, i: int, v: float) -> np.ndarray:
+    """``xi := v``."""
+    out = m.copy()
+    out[i, :] = v + m[0, :]
+    out[:, i] = m[:, 0] - v
+    out[i, i] = 0
+    return out
+
+
+def free(m: np.ndarray, i: int) -> np.ndarray:
+    """``xi`` forgotten: any value >= 0 (a clock no guard reads before its next reset)."""
+    out = m.copy()
+    out[i, :] = INF
+    out[:, i] = m[:, 0]
+    out[i, i] = 0
+    return out
+
+
+def includes(big: np.ndarray, small: np.ndarray) -> bool:
+    return bool((big >= small).all())
+
+
+def upper(m: np.ndarray, i: int) -> float:
+    """The largest value ``xi`` takes in the zone (inf when unbounded)."""
+    return float(m[i, 0])
+
+
+def lower(m: np.ndarray, i: int) -> float:
+    return float(-m[0, i])
+
+
+def extrapolate(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
+    """Extra_M: bounds past the largest constant a clock is compared with are forgotten (finitely many zones).
+
+    ``ceiling[i]`` is that constant for clock ``i`` (``ceiling[0] = 0``); a clock compared with nothing has
+    ceiling -1 and is then free of bounds above and below.
+    """
+    out = m.copy()
+    rows = ceiling[:, None]
+    cols = ceiling[None, :]
+    out[out > rows] = INF
+    low = out < -cols
+    out[low] = np.broadcast_to(-cols, out.shape)[low]
+    np.fill_diagonal(out, 0)
+    return close(out)
+
+
+def subtract(m: np.ndarray, other: np.ndarray) -> list[np.ndarray]:
+    """``m`` minus ``other`` as disjoint zones (integer complements: ``not (xi - xj <= c)`` is ``xj - xi <= -c-1``)."""
+    out = []
+    rest = m
+    n = m.shape[0]
+    for i in range(n):
+        for j in range(n):
+            if i == j or other[i, j] == INF or rest[i, j] <= other[i, j]:
+                continue
+            piece = constrain(rest, j, i, -other[i, j] - 1)
+            if piece is not None:
+                out.append(piece)
+            rest = constrain(rest, i, j, other[i, j])
+            if rest is None:
+                return out
+    return out
+
+
+def point(m: np.ndarray) -> list[int]:
+    """One integer valuation of a non-empty canonical zone (each clock as low as it can be, in order)."""
+    z = m
+    values = []
+    for i in range(1, m.shape[0]):
+        v = lower(z, i)
+        z = constrain_all(z, [(i, 0, v), (0, i, -v)])
+        values.append(int(v))
+    return values
+
+
+def key(m: np.ndarray) -> bytes:
+    return m.tobytes()

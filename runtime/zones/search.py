@@ -1,0 +1,341 @@
+"""Symbolic-time exploration: the erased model's discrete states, each with zones of clock values.
+
+A symbolic state is ``(D, Z)``: a state of the erased model (runtime/zones/model.py)
+and a zone of the clocks (runtime/zones/dbm.py).  Its successors come from the
+engine's successors of ``D`` (the compiled step when it compiles): for each
+interaction, ``Z`` meets the clock guards of the transitions it fires and the
+priorities the engine no longer applies (EDF, urgency), the clocks it resets
+are set, the clocks no guard reads any more are forgotten, and time passes as
+far as every timed atom's tick allows and no urgent interaction is enabled.
+Zones of one discrete state that another includes are not kept.
+
+What the tick semantics reaches, this reaches: every bound is an integer, so a
+zone's integer points are the clock values of the discrete-time states it
+stands for (docs/verification.md, *Clock zones*).
+"""
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from runtime.engine.errors import ModelError
+from runtime.engine.support import _matches, matches_low, rule_edges, top_connectors
+from runtime.explore.progress import Progress, null_progress
+from runtime.explore.space import StateSpace
+from runtime.zones import dbm
+from runtime.zones.model import Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
+
+
+@dataclass
+class Node:
+    """A stored symbolic state: its discrete state, zone, and how it was reached (for traces)."""
+
+    state: tuple
+    zone: np.ndarray
+    parent: int
+    via: int  # interaction index of the erased engine, -1 for an initial state
+    guard: list  # the bounds the step added to its parent's zone (before resets)
+
+
+@dataclass
+class ZoneResult:
+    states: int  # symbolic states kept
+    discrete: int  # distinct discrete states
+    transitions: int
+    seconds: float
+    complete: bool
+    stopped: str = ""
+    violations: dict[int, int] = field(default_factory=dict)  # observer atom -> node of its first violation
+    maxima: dict[int, tuple[float, int]] = field(default_factory=dict)  # clock -> (largest value, node)
+
+
+class ZoneExplorer:
+    """Explores a timed model with zones; ``watch`` clocks get their largest value while their atom watches."""
+
+    def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None) -> None:
+        self.model: TimedModel = analyse(package, root)
+        self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
+        from runtime.native.compiled import compile_space
+
+        self.compiled, self.note = compile_space(self.space, externs)
+        flat = self.space.engine.flat
+        self.flat = flat
+        self.n = len(self.model.clocks)
+        original = {fc.path: fc.id for fc in self.model.flat.connectors}
+        self.connector_id = {fc.id: original[fc.path] for fc in flat.connectors}
+        self.atom_index = {fa.name: fa.index for fa in flat.atoms}
+        self.watch = watch or {}
+        self.ceiling = np.array([float(c) if c else np.inf for c in self.model.ceilings])
+        self.ceiling[0] = 0
+        self._inter: dict[int, tuple] = {}
+        self._succ: dict[tuple, list] = {}
+        self.nodes: list[Node] = []
+        tops = {}
+        for c, srcs in top_connectors(self.space.engine.sources).items():
+            tops[self.connector_id[c]] = set(srcs)
+        tick = next(fc.id for fc in self.model.flat.connectors if fc.label == "tick")
+        tops[tick] = {-1}
+        self.edges = rule_edges([(r.low, r.high) for r in self.model.rules], tops)
+        self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
+
+    # -- the discrete side ------------------------------------------------------------------------
+    def successors(self, state: tuple) -> list[tuple[int, tuple]]:
+        got = self._succ.get(state)
+        if got is None:
+            if self.compiled is not None:
+                got = self.compiled.successors(state)
+            else:
+                got = self._python_successors(state)
+            self._succ[state] = got
+        return got
+
+    def _python_successors(self, state: tuple) -> list[tuple[int, tuple]]:
+        space = self.space
+        return [(inter.index, nxt) for inter, nxt, _ in space._fire_all(state)]
+
+    def interaction(self, index: int) -> tuple:
+        """``(parts in the original model's connector ids, [(atom, port)])`` of an interaction of the erased engine."""
+        got = self._inter.get(index)
+        if got is None:
+            inter = self.space.interaction(index)
+            parts = tuple((self.connector_id[c], m) for c, m in inter.parts)
+            ports = []
+            for p in inter.ports:
+                atom, _, port = p.rpartition(".")
+                ports.append((self.atom_index[atom], port))
+            got = self._inter[index] = (parts, ports, inter.label)
+        return got
+
+    def place_bit(self, state: tuple, atom: int) -> int:
+        return int(state[self.flat.atoms[atom].offset])
+
+    # -- clock constraints ------------------------------------------------------------------------
+    def bounds(self, atoms: list[Atom], atom: int, state: tuple) -> list[tuple[int, int, float]]:
+        fa = self.flat.atoms[atom]
+        out = []
+        for a in atoms:
+            v = value(a.rhs, fa, state)
+            k = a.clock
+            if a.op in ("<", "<="):
+                out.append((k, 0, v - 1 if a.op == "<" else v))
+            elif a.op in (">", ">="):
+                out.append((0, k, -(v + 1) if a.op == ">" else -v))
+            else:
+                out += [(k, 0, v), (0, k, -v)]
+        return out
+
+    @staticmethod
+    def diagonal_bounds(ds: list[Diagonal]) -> list[tuple[int, int, float]]:
+        out = []
+        for d in ds:
+            if d.op in ("<", "<="):
+                out.append((d.i, d.j, d.k - 1 if d.op == "<" else d.k))
+            elif d.op in (">", ">="):
+                out.append((d.j, d.i, -(d.k + 1) if d.op == ">" else -d.k))
+            else:
+                out += [(d.i, d.j, d.k), (d.j, d.i, -d.k)]
+        return out
+
+    def guard(self, index: int, state: tuple) -> tuple[list, list]:
+        """The clock bounds an interaction needs at ``state`` and the clock resets it makes."""
+        _, ports, _ = self.interaction(index)
+        need, resets = [], []
+        for atom, port in ports:
+            step = self.model.steps.get((atom, port, self.place_bit(state, atom)))
+            if step is None:
+                continue
+            need += self.bounds(step.atoms, atom, state)
+            fa = self.flat.atoms[atom]
+            resets += [(k, value(e, fa, state)) for k, e in step.resets]
+        return need, resets
+
+    # -- priorities ------------------------------------------------------------------------------
+    def blocking(self, zone: np.ndarray, state: tuple, enabled: list[int]) -> dict[int, list]:
+        """Per compound priority, where it blocks its low side: bound lists (one zone each) added to ``zone``.
+
+        BIP's semantics (runtime.engine.support.Priorities): a rule ``L < H`` whose guard holds blocks L
+        while an interaction matching H is enabled, or while a rule reachable from it (its high side
+        overlapping the next one's low side) blocks; here "enabled" and "holds" are regions of the zone.
+        """
+        highs = {}
+        for r, rule in enumerate(self.model.rules):
+            highs[r] = [h for h in enabled if _matches(self.interaction(h)[0], rule.high)]
+        memo: dict[tuple, list] = {}
+
+        def region(r: int, acc: tuple, path: tuple) -> list:
+            """Where rule ``r`` blocks, given the guards ``acc`` of the rules that led to it."""
+            got = memo.get((r, acc))
+            if got is not None:
+                return got
+            rule = self.model.rules[r]
+            if isinstance(rule.guard, list):
+                acc = tuple(sorted(set(acc) | set(self.diagonal_bounds(rule.guard))))
+                if dbm.constrain_all(zone, list(acc)) is None:
+                    memo[(r, acc)] = []
+                    return []  # this chain of rules is never active at once
+            elif rule.guard is not None and not _holds(rule.guard, state):
+                return []
+            if r in path:
+                raise ModelError("priority cycle between compound priorities "
+                                 + ", ".join(self.model.rules[x].name for x in path))
+            out = [list(acc) + self.guard(h, state)[0] for h in highs[r]]
+            for r2 in self.edges[r]:
+                out += region(r2, acc, path + (r,))
+            out = [b for b in out if not b or dbm.constrain_all(zone, b) is not None]
+            if any(not b for b in out):
+                out = [[]]  # blocked everywhere
+            memo[(r, acc)] = out
+            return out
+
+        return {r: region(r, (), ()) for r in range(len(self.model.rules))}
+
+    def allowed(self, zone: np.ndarray, index: int, blocks: dict[int, list]) -> list[tuple[np.ndarray, list]]:
+        """Where the interaction may fire within ``zone``: as pieces (zone, bounds added) the priorities leave."""
+        parts = self.interaction(index)[0]
+        pieces = [zone]
+        for r, rule in enumerate(self.model.rules):
+            if not blocks[r] or not matches_low(parts, rule.low):
+                continue
+            for b in blocks[r]:
+                if not b:
+                    return []
+                block = dbm.constrain_all(zone, b)
+                pieces = [q for p in pieces for q in dbm.subtract(p, block)]
+                if not pieces:
+                    return []
+        return pieces
+
+    def passing(self, state: tuple, zone: np.ndarray, blocks: dict[int, list]) -> tuple[list, list] | None:
+        """Where time may pass at ``state``: bounds before a tick and after it; None when it cannot pass at all."""
+        before, after = [], []
+        for atom in self.model.timed_atoms:
+            place = self.model.places[(atom, self.place_bit(state, atom))]
+            if not place.ticks:
+                return None
+            fa = self.flat.atoms[atom]
+            if place.discrete is not None and not value(place.discrete, fa, state):
+                return None
+            for k, j, c in self.bounds(place.atoms, atom, state):
+                if j != 0:
+                    raise Unsupported(f"atom {fa.name}: time is bounded from below in one of its places")
+                before.append((k, 0, c))
+                after.append((k, 0, c + 1))
+        if any(not b for r in self.tick_rules for b in blocks[r]):
+            return None  # something urgent can happen now: no time passes
+        reach = dbm.constrain_all(dbm.up(zone), before)
+        for r in self.tick_rules:
+            for b in blocks[r]:
+                if reach is None or dbm.constrain_all(reach, b) is None:
+                    continue  # time never passes from where this holds (an invariant stops it first)
+                lower = [(j, c) for i, j, c in b if i == 0]
+                if len(b) != 1 or not lower:
+                    raise Unsupported(f"priority {self.model.rules[r].name}: time waits for a clock condition that "
+                                      "is not one lower bound")
+                k, c = lower[0]
+                before.append((k, 0, -c - 1))  # blocked from x >= -c on: time passes while x <= -c - 1
+                after.append((k, 0, -c))
+        return before, after
+
+    def elapse(self, zone: np.ndarray, state: tuple) -> list[np.ndarray]:
+        enabled = sorted({i for i, _ in self.successors(state)})
+        limits = self.passing(state, zone, self.blocking(zone, state, enabled))
+        if limits is None:
+            return [zone]
+        before, after = limits
+        start = dbm.constrain_all(zone, before)
+        if start is None:
+            return [zone]
+        grown = dbm.constrain_all(dbm.up(start), after)
+        return [grown] + dbm.subtract(zone, grown)
+
+    def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
+        """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
+        for k, (atom, _) in enumerate(self.model.clocks, 1):
+            if k not in self.model.places[(atom, self.place_bit(state, atom))].active:
+                zone = dbm.free(zone, k)
+        return zone
+
+    # -- the search -------------------------------------------------------------------------------
+    def explore(self, max_states: int | None = None, progress: Progress | None = None,
+                stop_at_violation: bool = False) -> ZoneResult:
+        """Breadth-first over symbolic states; observers checked and watched clocks maximised on the way."""
+        progress = progress or null_progress()
+        start = time.perf_counter()
+        passed: dict[tuple, list[int]] = {}
+        waiting: deque[int] = deque()
+        result = ZoneResult(0, 0, 0, 0.0, True)
+
+        def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list) -> None:
+            zone = dbm.extrapolate(zone, self.ceiling) if np.isfinite(self.ceiling).any() else zone
+            kept = passed.setdefault(state, [])
+            for k in kept:
+                if dbm.includes(self.nodes[k].zone, zone):
+                    return
+            kept[:] = [k for k in kept if not dbm.includes(zone, self.nodes[k].zone)]
+            self.nodes.append(Node(state, zone, parent, via, guard))
+            kept.append(len(self.nodes) - 1)
+            waiting.append(len(self.nodes) - 1)
+
+        for sid in self.space.initial_ids:
+            state = self.space.state(sid)
+            zone = dbm.zero(self.n)
+            for k, v in self.model.initial.items():
+                zone = dbm.reset(zone, k, v)
+            zone = self.forget(zone, state)
+            for z in self.elapse(zone, state):
+                add(state, z, -1, -1, [])
+        while waiting:
+            k = waiting.popleft()
+            node = self.nodes[k]
+            if node.zone is None:
+                continue
+            self.check(k, result)
+            if result.violations and stop_at_violation:
+                result.complete, result.stopped = False, "violated"
+                break
+            succ = self.successors(node.state)
+            enabled = sorted({i for i, _ in succ})
+            blocks = self.blocking(node.zone, node.state, enabled)
+            for index, nxt in succ:
+                need, resets = self.guard(index, node.state)
+                met = dbm.constrain_all(node.zone, need)
+                if met is None:
+                    continue
+                for piece in self.allowed(met, index, blocks):
+                    zone = piece
+                    for c, v in resets:
+                        zone = dbm.reset(zone, c, v)
+                    zone = self.forget(zone, nxt)
+                    result.transitions += 1
+                    for z in self.elapse(zone, nxt):
+                        add(nxt, z, k, index, need)
+            if max_states is not None and len(self.nodes) >= max_states:
+                result.complete, result.stopped = False, "max-states"
+                break
+            progress.tick(len(self.nodes), result.transitions, len(waiting), lambda: 0)
+        progress.done()
+        result.states = len(self.nodes)
+        result.discrete = len(passed)
+        result.seconds = time.perf_counter() - start
+        return result
+
+    def check(self, k: int, result: ZoneResult) -> None:
+        """Observers in error and the largest values of watched clocks at node ``k``."""
+        node = self.nodes[k]
+        for atom, (watching, clock, bound) in self.model.observers.items():
+            fa = self.flat.atoms[atom]
+            if self.place_bit(node.state, atom) != fa.place_mask([watching]):
+                continue
+            if dbm.upper(node.zone, clock) > value(bound, fa, node.state) and atom not in result.violations:
+                result.violations[atom] = k
+        for clock, place in self.watch.items():
+            atom = self.model.clocks[clock - 1][0]
+            fa = self.flat.atoms[atom]
+            if self.place_bit(node.state, atom) != fa.place_mask([place]):
+                continue
+            top = dbm.upper(node.zone, clock)
+            if clock not in result.maxima or top > result.maxima[clock][0]:
+                result.maxima[clock] = (top, k)
