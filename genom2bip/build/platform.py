@@ -137,18 +137,23 @@ def lock_type() -> AtomType:
 
 
 def delayed_timer_type(timer: AtomType) -> AtomType:
-    """``timer`` whose first period opens at a tick in ``[first_lo, first_hi]`` (the task's ``delay``)."""
+    """``timer`` whose first period opens at a tick in ``[first_lo, first_hi]`` (the task's ``delay``).
+
+    The first opening is port ``first``, not ``trigger``: its connector is not above the grants (a period
+    opening at an instant is, so that EDF chooses among every task released then), which would make it
+    urgent through the priorities and take the earliest offset only.
+    """
     t = Var("t")
     out = AtomType(
         name="DelayedTimer",
         annotations=list(timer.annotations),
         params=list(timer.params) + [DataParam("int", "first_lo"), DataParam("int", "first_hi")],
         data=list(timer.data),
-        ports=list(timer.ports),
+        ports=list(timer.ports) + [PortDecl(library.PORT, "first", exported=True)],
         places=["START"] + list(timer.places),
         initial=InitialTransition(["START"], [Assign(t, Const(0))]),
         transitions=[
-            Transition("trigger", ["START"], ["PERIOD"], guard=Binary(">=", t, Var("first_lo")),
+            Transition("first", ["START"], ["PERIOD"], guard=Binary(">=", t, Var("first_lo")),
                        action=[Assign(t, Const(0))]),
             Transition("tick", ["START"], ["START"], guard=Binary("<", t, Var("first_hi")),
                        action=[Assign(t, Binary("+", t, Const(1)))]),
@@ -492,6 +497,11 @@ class PlatformBuilder:
                 level.atom_types["DelayedTimer"] = delayed_timer_type(level.atom_types[timer.type])
             timer.type = "DelayedTimer"
             timer.args += [Const(delay.best_us // self.tick), Const(-(-delay.worst_us // self.tick))]
+            regular = next(w for w in self.asm.wires if w.label == f"{info.label}:period")
+            ends = [End(e.atom, "first") if e == End(path + ("timer",), "trigger") else e for e in regular.ends]
+            self.asm.wire(Wire(regular.type, ends, "first_period", regular.owner, regular.label,
+                               comment=f"the first period opens after the task's delay, {delay}",
+                               annotations=list(regular.annotations)))
 
     def policy(self) -> None:
         """The scheduling policy as priorities between the grants of the tasks that wait for a core.
@@ -500,7 +510,9 @@ class PlatformBuilder:
         that instant: the policy chooses among all the tasks released then.
         """
         tasks = [i for i in self.tasks.values() if i.path in self.grants]
-        openings = [w for i in tasks if i.timer for w in self.asm.wires if w.label == f"{i.label}:period"]
+        firsts = {id(w) for w in self.asm.wires if any(isinstance(e, End) and e.port == "first" for e in w.ends)}
+        openings = [w for i in tasks if i.timer for w in self.asm.wires
+                    if w.label == f"{i.label}:period" and id(w) not in firsts]
         for i in tasks:
             for w in openings:
                 self.asm.rank(Rank(f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}", self.grants[i.path],

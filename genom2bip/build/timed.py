@@ -89,6 +89,8 @@ class TimeOptions:
     ticks: bool = True  # False: observers only, for a controller that measures real time
     platform: Platform | None = None  # None: a core per task, codels take their WCET (genom2bip.platform)
     client: Mission | None = None  # a mission whose steps are the environment (genom2bip.build.client)
+    responses: bool = False  # a response-time observer per periodic task and per service
+    response_cap_us: int | None = None  # response times stop counting there (default: 10 x the longest period)
 
 
 @dataclass
@@ -97,7 +99,7 @@ class Observer:
 
     name: str  # what reports call it
     atom: str  # instance path, e.g. NDD.motion.overrun
-    kind: str  # "overrun" or "latency"
+    kind: str  # "overrun", "latency" or "response"
     bound_ticks: int
     text: str  # the property in words
 
@@ -260,6 +262,33 @@ def latency_type() -> AtomType:
     return _observer_type("LatencyObserver", "latency", "cause", "effect", "bound", "WAIT", either_order=True)
 
 
+def response_type() -> AtomType:
+    """Clock ``c`` counts from ``open`` to ``close`` (a period to its end, a request to its final report).
+
+    It has no ERROR: its largest value over the reachable states is the response
+    time (``verify --response-times``).  ``c`` stops at ``cap`` (a finite model):
+    reaching it means "at least cap".  Every place takes every port.
+    """
+    c = Var("c")
+    return AtomType(
+        name="ResponseObserver",
+        annotations=[Annotation("observer", {"kind": "response", "open": "open", "close": "close", "bound": "cap"})],
+        params=[DataParam("int", "cap")],
+        data=[DataDecl("int", "c", annotations=[library.CLOCK])],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("open", "close", "tick")],
+        places=["IDLE", "WATCH"],
+        initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
+        transitions=[
+            Transition("open", ["IDLE"], ["WATCH"], action=[Assign(c, Const(0))]),
+            Transition("open", ["WATCH"], ["WATCH"]),
+            Transition("close", ["WATCH"], ["IDLE"]),
+            Transition("close", ["IDLE"], ["IDLE"]),
+            Transition("tick", ["IDLE"], ["IDLE"]),
+            Transition("tick", ["WATCH"], ["WATCH"], action=[_capped("c", "cap")]),
+        ],
+    )
+
+
 def observed(ctype: ConnectorType, extra: int) -> tuple[ConnectorType, int]:
     """``ctype`` with ``extra`` more ports that take part in every interaction (observer ports, always ready).
 
@@ -361,8 +390,41 @@ def arm_requests(level, watch) -> None:
             t.ports = list(t.ports) + [PortDecl(library.PORT, port, exported=True)]
             t.transitions = list(t.transitions) + [
                 Transition(port, ["READY"], ["READY"], action=[Assign(Var(flags[s]), Const(True)) for s in services])]
-            opening = next(w for w in level.asm.wires if w.label == f"{level.task_labels[task]}:period")
-            watch(opening, End(acceptor, port))
+            for opening in (w for w in level.asm.wires if w.label == f"{level.task_labels[task]}:period"):
+                watch(opening, End(acceptor, port))
+
+
+#: Service reports that end a request.
+FINALS = ("finish", "fail", "interrupted", "reject")
+
+
+def add_responses(level, options: TimeOptions, tick: int, periods, watch, ticking: list, observers: list) -> None:
+    """A response observer per task (its period opening to its end) and per service (a request to its report)."""
+    cap = max(1, -(-(options.response_cap_us or 10 * max([inst.args[0].value for inst in
+                                                           level.asm.atoms.values() if inst.type == "Timer"]
+                                                          or [1_000_000])) // tick))
+    level.atom_types["ResponseObserver"] = response_type()
+    level.docs.setdefault("ResponseObserver", "Response time: the ticks from an opening to its closing.")
+
+    def observe(path, label: str, opens: list, closes: list, what: str) -> None:
+        atom = level.asm.atom(path + ("response",), "ResponseObserver", [Const(cap)])
+        for w in opens:
+            watch(w, End(atom, "open"))
+        for w in closes:
+            watch(w, End(atom, "close"))
+        ticking.append(End(atom, "tick"))
+        observers.append(Observer(f"{label}:response", ".".join(atom), "response", cap, what))
+
+    for path, label in level.task_labels.items():
+        opens = [w for w in level.asm.wires if w.label == f"{label}:period"]
+        closes = [w for w in level.asm.wires if w.label == f"{label}:sleep"]
+        if opens and path + ("timer",) in level.asm.atoms:
+            observe(path, label, opens, closes, f"from a release of {label} to the end of its cycle")
+    for parts in level.services.values():
+        opens = [w for w in level.asm.wires if w.label == f"{parts.label}:trigger"]
+        closes = [w for w in level.asm.wires if w.label in {f"{parts.label}:{p}" for p in FINALS}]
+        if opens and closes and parts.fsm.states:
+            observe(parts.path, parts.label, opens, closes, f"from a request of {parts.label} to its final report")
 
 
 def apply(level, options: TimeOptions) -> Timing:
@@ -449,6 +511,8 @@ def apply(level, options: TimeOptions) -> Timing:
         ticking.append(End(atom, "tick"))
         observers.append(Observer(spec.name, ".".join(atom), "latency", bound,
                                   f"after {spec.begin}, {spec.end} within {spec.within_us / 1000:g} ms"))
+    if options.responses:
+        add_responses(level, options, tick, periods, watch, ticking, observers)
     for wire, ends in extra.values():
         ctype, at = observed(wire.type, len(ends))
         wire.ends = list(wire.ends)[:at] + ends + list(wire.ends)[at:]
