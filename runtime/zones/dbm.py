@@ -20,6 +20,14 @@ def zero(n: int) -> np.ndarray:
     return np.zeros((n + 1, n + 1))
 
 
+def free_all(n: int) -> np.ndarray:
+    """Every clock any value >= 0: the universe."""
+    m = np.full((n + 1, n + 1), INF)
+    m[0, :] = 0
+    np.fill_diagonal(m, 0)
+    return m
+
+
 def close(m: np.ndarray) -> np.ndarray:
     """Floyd–Warshall: the tightest bounds (canonical form); an empty zone has a negative diagonal."""
     m = m.copy()
@@ -109,17 +117,25 @@ def extrapolate(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
 
 def subtract(m: np.ndarray, other: np.ndarray) -> list[np.ndarray]:
     """``m`` minus ``other`` as disjoint zones (integer complements: ``not (xi - xj <= c)`` is ``xj - xi <= -c-1``)."""
+    return [z for z, _ in subtract_bounds(m, other)]
+
+
+def subtract_bounds(m: np.ndarray, other: np.ndarray) -> list[tuple[np.ndarray, list]]:
+    """:func:`subtract`, each piece with the bounds ``(i, j, c)`` that cut it out of ``m`` (for traces)."""
     out = []
     rest = m
+    kept: list = []
     n = m.shape[0]
     for i in range(n):
         for j in range(n):
             if i == j or other[i, j] == INF or rest[i, j] <= other[i, j]:
                 continue
-            piece = constrain(rest, j, i, -other[i, j] - 1)
+            cut = (j, i, -other[i, j] - 1)
+            piece = constrain(rest, *cut)
             if piece is not None:
-                out.append(piece)
+                out.append((piece, kept + [cut]))
             rest = constrain(rest, i, j, other[i, j])
+            kept = kept + [(i, j, other[i, j])]
             if rest is None:
                 return out
     return out

@@ -103,6 +103,7 @@ class TimedModel:
     rules: list[Rule]  # priorities applied on zones
     observers: dict[int, tuple[str, int, Expr]]  # observer atom -> (watching place, clock, bound): ERROR past it
     ceilings: list[int]  # per zone index (0 first): the largest constant each clock is compared with
+    measures: dict[int, tuple[str, int]] = field(default_factory=dict)  # response observer -> (watching place, clock)
 
     def discrete_reads(self) -> set[tuple[str, str]]:
         """``(atom, variable)`` the clock side reads (bounds such as ``hi``): the erased model must keep them."""
@@ -272,6 +273,7 @@ def analyse(package: Package, root: str) -> TimedModel:
     steps: dict[tuple[int, str, int], Step] = {}
     places: dict[tuple[int, int], Place] = {}
     observers: dict[int, tuple[str, int, Expr]] = {}
+    measures: dict[int, tuple[str, int]] = {}
     initial: dict[int, int] = {}
     ceilings = [0] * (len(clocks) + 1)
     erased_types = {}
@@ -279,6 +281,8 @@ def analyse(package: Package, root: str) -> TimedModel:
         mine = per_atom[fa.index]
         t = fa.type
         observer = any(a.name == "observer" for a in t.annotations)
+        if any(a.name == "observer" and a.arguments.get("kind") == "response" for a in t.annotations):
+            measures[fa.index] = ("WATCH", mine["c"])
         for s in t.initial.action if t.initial else []:
             if isinstance(s, Assign) and isinstance(s.target, Var) and s.target.name in mine:
                 initial[mine[s.target.name]] = int(_value(s.value, fa, None))
@@ -297,6 +301,12 @@ def analyse(package: Package, root: str) -> TimedModel:
                 if v is not None:
                     ceilings[a.clock] = max(ceilings[a.clock], int(v) + 1)
             if tr.port == TICK and fa.index in timed_atoms:
+                for st in tr.action:  # a capped clock (``if (c < k) c = c + 1``) tells values apart up to k only
+                    if isinstance(st, If) and isinstance(st.cond, Binary) and isinstance(st.cond.left, Var) \
+                            and st.cond.left.name in mine:
+                        v = _static(st.cond.right, fa)
+                        if v is not None:
+                            ceilings[mine[st.cond.left.name]] = max(ceilings[mine[st.cond.left.name]], int(v))
                 place = places[(fa.index, bit)]
                 place.ticks = True
                 place.atoms, place.discrete = atoms, rest
@@ -315,10 +325,11 @@ def analyse(package: Package, root: str) -> TimedModel:
                 continue
             steps[(fa.index, tr.port or "", bit)] = Step(atoms, _resets(tr.action, mine, where))
         erased_types[t.name] = t
-    for atom, (watching, clock, _) in observers.items():  # the zone explorer reads an observer's clock there
+    for atom, (watching, clock, *_) in list(observers.items()) + list(measures.items()):  # read there by queries
         places[(atom, 1 << flat.atoms[atom].places.index(watching))].atoms_read.add(clock)
     _activity(flat, places, steps, per_atom)
-    model = TimedModel(flat, package, root, clocks, initial, steps, places, timed_atoms, [], [], observers, ceilings)
+    model = TimedModel(flat, package, root, clocks, initial, steps, places, timed_atoms, [], [], observers, ceilings,
+                       measures)
     model.erased, model.urgent, model.rules = _erase(package, flat, model, per_atom, tick[0])
     return model
 

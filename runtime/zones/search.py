@@ -38,6 +38,8 @@ class Node:
     parent: int
     via: int  # interaction index of the erased engine, -1 for an initial state
     guard: list  # the bounds the step added to its parent's zone (before resets)
+    grown: bool  # time may have passed after the step (else the zone is where it cannot)
+    covered: bool = False  # a larger zone of the same discrete state came later
 
 
 @dataclass
@@ -72,6 +74,9 @@ class ZoneExplorer:
         self.ceiling[0] = 0
         self._inter: dict[int, tuple] = {}
         self._succ: dict[tuple, list] = {}
+        self._rules: dict[int, tuple[list[int], list[int]]] = {}
+        self._blocks: dict[tuple, Blocking] = {}
+        self._guards: dict[tuple, tuple] = {}
         self.nodes: list[Node] = []
         tops = {}
         for c, srcs in top_connectors(self.space.engine.sources).items():
@@ -141,6 +146,12 @@ class ZoneExplorer:
 
     def guard(self, index: int, state: tuple) -> tuple[list, list]:
         """The clock bounds an interaction needs at ``state`` and the clock resets it makes."""
+        got = self._guards.get((index, state))
+        if got is None:
+            got = self._guards[(index, state)] = self._guard(index, state)
+        return got
+
+    def _guard(self, index: int, state: tuple) -> tuple[list, list]:
         _, ports, _ = self.interaction(index)
         need, resets = [], []
         for atom, port in ports:
@@ -153,62 +164,39 @@ class ZoneExplorer:
         return need, resets
 
     # -- priorities ------------------------------------------------------------------------------
-    def blocking(self, zone: np.ndarray, state: tuple, enabled: list[int]) -> dict[int, list]:
-        """Per compound priority, where it blocks its low side: bound lists (one zone each) added to ``zone``.
+    def rules_of(self, index: int) -> tuple[list[int], list[int]]:
+        """The compound priorities an interaction is low in, and those it is high in."""
+        got = self._rules.get(index)
+        if got is None:
+            parts = self.interaction(index)[0]
+            got = self._rules[index] = (
+                [r for r, rule in enumerate(self.model.rules) if matches_low(parts, rule.low)],
+                [r for r, rule in enumerate(self.model.rules) if _matches(parts, rule.high)])
+        return got
 
-        BIP's semantics (runtime.engine.support.Priorities): a rule ``L < H`` whose guard holds blocks L
-        while an interaction matching H is enabled, or while a rule reachable from it (its high side
-        overlapping the next one's low side) blocks; here "enabled" and "holds" are regions of the zone.
-        """
-        highs = {}
-        for r, rule in enumerate(self.model.rules):
-            highs[r] = [h for h in enabled if _matches(self.interaction(h)[0], rule.high)]
-        memo: dict[tuple, list] = {}
+    def blocking(self, state: tuple, enabled: list[int]) -> "Blocking":
+        """Where each compound priority blocks its low side at ``state`` (computed as asked, kept per state)."""
+        got = self._blocks.get(state)
+        if got is None:
+            got = self._blocks[state] = Blocking(self, state, enabled)
+        return got
 
-        def region(r: int, acc: tuple, path: tuple) -> list:
-            """Where rule ``r`` blocks, given the guards ``acc`` of the rules that led to it."""
-            got = memo.get((r, acc))
-            if got is not None:
-                return got
-            rule = self.model.rules[r]
-            if isinstance(rule.guard, list):
-                acc = tuple(sorted(set(acc) | set(self.diagonal_bounds(rule.guard))))
-                if dbm.constrain_all(zone, list(acc)) is None:
-                    memo[(r, acc)] = []
-                    return []  # this chain of rules is never active at once
-            elif rule.guard is not None and not _holds(rule.guard, state):
-                return []
-            if r in path:
-                raise ModelError("priority cycle between compound priorities "
-                                 + ", ".join(self.model.rules[x].name for x in path))
-            out = [list(acc) + self.guard(h, state)[0] for h in highs[r]]
-            for r2 in self.edges[r]:
-                out += region(r2, acc, path + (r,))
-            out = [b for b in out if not b or dbm.constrain_all(zone, b) is not None]
-            if any(not b for b in out):
-                out = [[]]  # blocked everywhere
-            memo[(r, acc)] = out
-            return out
-
-        return {r: region(r, (), ()) for r in range(len(self.model.rules))}
-
-    def allowed(self, zone: np.ndarray, index: int, blocks: dict[int, list]) -> list[tuple[np.ndarray, list]]:
-        """Where the interaction may fire within ``zone``: as pieces (zone, bounds added) the priorities leave."""
-        parts = self.interaction(index)[0]
-        pieces = [zone]
-        for r, rule in enumerate(self.model.rules):
-            if not blocks[r] or not matches_low(parts, rule.low):
-                continue
-            for b in blocks[r]:
+    def allowed(self, zone: np.ndarray, index: int, blocks: "Blocking") -> list[tuple[np.ndarray, list]]:
+        """Where the interaction may fire within ``zone``: the zones the priorities leave, each with its bounds."""
+        pieces = [(zone, [])]
+        for r in self.rules_of(index)[0]:
+            for b in blocks.region(r):
                 if not b:
                     return []
                 block = dbm.constrain_all(zone, b)
-                pieces = [q for p in pieces for q in dbm.subtract(p, block)]
+                if block is None:
+                    continue
+                pieces = [(q, cut + more) for p, cut in pieces for q, more in dbm.subtract_bounds(p, block)]
                 if not pieces:
                     return []
         return pieces
 
-    def passing(self, state: tuple, zone: np.ndarray, blocks: dict[int, list]) -> tuple[list, list] | None:
+    def passing(self, state: tuple, zone: np.ndarray, blocks: "Blocking") -> tuple[list, list] | None:
         """Where time may pass at ``state``: bounds before a tick and after it; None when it cannot pass at all."""
         before, after = [], []
         for atom in self.model.timed_atoms:
@@ -223,11 +211,11 @@ class ZoneExplorer:
                     raise Unsupported(f"atom {fa.name}: time is bounded from below in one of its places")
                 before.append((k, 0, c))
                 after.append((k, 0, c + 1))
-        if any(not b for r in self.tick_rules for b in blocks[r]):
+        if any(not b for r in self.tick_rules for b in blocks.region(r)):
             return None  # something urgent can happen now: no time passes
         reach = dbm.constrain_all(dbm.up(zone), before)
         for r in self.tick_rules:
-            for b in blocks[r]:
+            for b in blocks.region(r):
                 if reach is None or dbm.constrain_all(reach, b) is None:
                     continue  # time never passes from where this holds (an invariant stops it first)
                 lower = [(j, c) for i, j, c in b if i == 0]
@@ -239,17 +227,21 @@ class ZoneExplorer:
                 after.append((k, 0, -c))
         return before, after
 
-    def elapse(self, zone: np.ndarray, state: tuple) -> list[np.ndarray]:
-        enabled = sorted({i for i, _ in self.successors(state)})
-        limits = self.passing(state, zone, self.blocking(zone, state, enabled))
+    def elapse(self, zone: np.ndarray, state: tuple) -> list[tuple[np.ndarray, bool]]:
+        """The zone after time passes at ``state``, as far as it can: pieces, True for the one where it may have."""
+        limits = self.limits(state, zone)
         if limits is None:
-            return [zone]
+            return [(zone, False)]
         before, after = limits
         start = dbm.constrain_all(zone, before)
         if start is None:
-            return [zone]
+            return [(zone, False)]
         grown = dbm.constrain_all(dbm.up(start), after)
-        return [grown] + dbm.subtract(zone, grown)
+        return [(grown, True)] + [(z, False) for z in dbm.subtract(zone, grown)]
+
+    def limits(self, state: tuple, zone: np.ndarray) -> tuple[list, list] | None:
+        enabled = sorted({i for i, _ in self.successors(state)})
+        return self.passing(state, zone, self.blocking(state, enabled))
 
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
@@ -268,14 +260,17 @@ class ZoneExplorer:
         waiting: deque[int] = deque()
         result = ZoneResult(0, 0, 0, 0.0, True)
 
-        def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list) -> None:
+        def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> None:
             zone = dbm.extrapolate(zone, self.ceiling) if np.isfinite(self.ceiling).any() else zone
             kept = passed.setdefault(state, [])
             for k in kept:
                 if dbm.includes(self.nodes[k].zone, zone):
                     return
-            kept[:] = [k for k in kept if not dbm.includes(zone, self.nodes[k].zone)]
-            self.nodes.append(Node(state, zone, parent, via, guard))
+            for k in kept:
+                if dbm.includes(zone, self.nodes[k].zone):
+                    self.nodes[k].covered = True  # a larger zone came: this one need not be expanded
+            kept[:] = [k for k in kept if not self.nodes[k].covered]
+            self.nodes.append(Node(state, zone, parent, via, guard, grown))
             kept.append(len(self.nodes) - 1)
             waiting.append(len(self.nodes) - 1)
 
@@ -285,12 +280,12 @@ class ZoneExplorer:
             for k, v in self.model.initial.items():
                 zone = dbm.reset(zone, k, v)
             zone = self.forget(zone, state)
-            for z in self.elapse(zone, state):
-                add(state, z, -1, -1, [])
+            for z, grown in self.elapse(zone, state):
+                add(state, z, -1, -1, [], grown)
         while waiting:
             k = waiting.popleft()
             node = self.nodes[k]
-            if node.zone is None:
+            if node.covered:
                 continue
             self.check(k, result)
             if result.violations and stop_at_violation:
@@ -298,20 +293,20 @@ class ZoneExplorer:
                 break
             succ = self.successors(node.state)
             enabled = sorted({i for i, _ in succ})
-            blocks = self.blocking(node.zone, node.state, enabled)
+            blocks = self.blocking(node.state, enabled)
             for index, nxt in succ:
                 need, resets = self.guard(index, node.state)
                 met = dbm.constrain_all(node.zone, need)
                 if met is None:
                     continue
-                for piece in self.allowed(met, index, blocks):
+                for piece, cut in self.allowed(met, index, blocks):
                     zone = piece
                     for c, v in resets:
                         zone = dbm.reset(zone, c, v)
                     zone = self.forget(zone, nxt)
                     result.transitions += 1
-                    for z in self.elapse(zone, nxt):
-                        add(nxt, z, k, index, need)
+                    for z, grown in self.elapse(zone, nxt):
+                        add(nxt, z, k, index, need + cut, grown)
             if max_states is not None and len(self.nodes) >= max_states:
                 result.complete, result.stopped = False, "max-states"
                 break
@@ -331,11 +326,68 @@ class ZoneExplorer:
                 continue
             if dbm.upper(node.zone, clock) > value(bound, fa, node.state) and atom not in result.violations:
                 result.violations[atom] = k
-        for clock, place in self.watch.items():
-            atom = self.model.clocks[clock - 1][0]
+        for atom, (place, clock) in self.model.measures.items():
             fa = self.flat.atoms[atom]
             if self.place_bit(node.state, atom) != fa.place_mask([place]):
                 continue
             top = dbm.upper(node.zone, clock)
             if clock not in result.maxima or top > result.maxima[clock][0]:
                 result.maxima[clock] = (top, k)
+
+
+class Blocking:
+    """Where the compound priorities block at one discrete state, as lists of clock bounds (one zone each).
+
+    BIP's semantics (runtime.engine.support.Priorities): a rule ``L < H`` whose guard holds blocks L
+    while an interaction matching H is enabled, or while a rule reachable from it (its high side
+    overlapping the next one's low side) blocks.  A rule's guard over clocks and the clock guards of
+    H make that a region of clock values; chains whose guards contradict each other are dropped.
+    ``[[]]`` is "everywhere".
+    """
+
+    def __init__(self, explorer: ZoneExplorer, state: tuple, enabled: list[int]) -> None:
+        self.x, self.state = explorer, state
+        self.highs: dict[int, list[int]] = {}
+        for h in enabled:
+            for r in explorer.rules_of(h)[1]:
+                self.highs.setdefault(r, []).append(h)
+        self.memo: dict[tuple, list] = {}
+        self.universe = dbm.free_all(explorer.n)
+
+    def region(self, r: int) -> list:
+        return self._region(r, (), ())
+
+    def _region(self, r: int, acc: tuple, path: tuple) -> list:
+        got = self.memo.get((r, acc))
+        if got is not None:
+            return got
+        x = self.x
+        rule = x.model.rules[r]
+        key = (r, acc)
+        if isinstance(rule.guard, list):
+            acc = tuple(sorted(set(acc) | set(x.diagonal_bounds(rule.guard))))
+            if dbm.constrain_all(self.universe, list(acc)) is None:
+                self.memo[key] = []
+                return []  # this chain of rules is never active at once
+        elif rule.guard is not None and not _holds(rule.guard, self.state):
+            self.memo[key] = []
+            return []
+        if r in path:
+            raise ModelError("priority cycle between compound priorities "
+                             + ", ".join(x.model.rules[y].name for y in path + (r,)))
+        out = []
+        for h in self.highs.get(r, ()):
+            need = list(acc) + x.guard(h, self.state)[0]
+            if not need:
+                self.memo[key] = [[]]
+                return [[]]  # blocked everywhere: nothing down the chain can say more
+            out.append(need)
+        for r2 in x.edges[r]:
+            for b in self._region(r2, acc, path + (r,)):
+                if not b:
+                    self.memo[key] = [[]]
+                    return [[]]
+                out.append(b)
+        out = [b for b in out if dbm.constrain_all(self.universe, b) is not None]
+        self.memo[key] = out
+        return out
