@@ -29,7 +29,8 @@ import yaml
 
 from genom2bip import ir, rules
 from genom2bip.durations import parse_duration
-from genom2bip.rules import _suggest, compose_file
+from genom2bip.rules import _suggest
+from genom2bip.yamlfile import compose_file
 from runtime.diagnostics import Reporter, Span
 
 POLICIES = ("edf", "fixed-priority")

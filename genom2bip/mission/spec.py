@@ -94,10 +94,6 @@ class _Reader:
         """Seconds, as a number (``0.5``) or a duration (``10 ms``), at most a day."""
         if isinstance(node, yaml.ScalarNode) and parse_duration(node.value) is not None:
             return parse_duration(node.value) / 1e6
-        if isinstance(node, yaml.ScalarNode) and any(c.isalpha() for c in node.value.strip(".")) \
-                and not node.value.strip().lstrip(".").lower().startswith(("inf", "nan")):
-            self.error(node, f"{what}: a duration (10 ms) or a number of seconds expected, got {node.value!r}")
-            return None
         return self.number(node, what)
 
     def expect(self, node: yaml.Node) -> dict[str, str] | None:
