@@ -40,6 +40,7 @@ class Node:
     guard: list  # the bounds the step added to its parent's zone (before resets)
     grown: bool  # time may have passed after the step (else the zone is where it cannot)
     covered: bool = False  # a larger zone of the same discrete state came later
+    by: int = -1  # the node whose zone covers this one
 
 
 @dataclass
@@ -78,12 +79,14 @@ class ZoneExplorer:
         self._blocks: dict[tuple, Blocking] = {}
         self._guards: dict[tuple, tuple] = {}
         self.nodes: list[Node] = []
+        self.out: list[list[tuple[int, Node]]] = []  # per node: (node that holds the successor, the step into it)
         tops = {}
         for c, srcs in top_connectors(self.space.engine.sources).items():
             tops[self.connector_id[c]] = set(srcs)
         tick = next(fc.id for fc in self.model.flat.connectors if fc.label == "tick")
         tops[tick] = {-1}
-        self.edges = rule_edges([(r.low, r.high) for r in self.model.rules], tops)
+        self._feasible: dict[tuple, bool] = {}
+        self.edges = self.useful_edges(rule_edges([(r.low, r.high) for r in self.model.rules], tops))
         self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
 
     # -- the discrete side ------------------------------------------------------------------------
@@ -164,6 +167,48 @@ class ZoneExplorer:
         return need, resets
 
     # -- priorities ------------------------------------------------------------------------------
+    def feasible(self, bounds: tuple) -> bool:
+        """Some clock values meet every bound (any discrete state): chains of priorities that can hold at once."""
+        got = self._feasible.get(bounds)
+        if got is None:
+            got = self._feasible[bounds] = dbm.constrain_all(dbm.free_all(self.n), list(bounds)) is not None
+        return got
+
+    def useful_edges(self, edges: list[list[int]]) -> list[list[int]]:
+        """The chains of priorities that can say more than a single rule: ``r -> r2`` is dropped when the two
+        guards never hold together, or when a rule from r's low side to r2's high side already holds
+        wherever both do (EDF's ``a < b < c`` next to ``a < c``; ``tick < a < b`` next to ``tick < b``)."""
+        rules = self.model.rules
+
+        def bounds(rule) -> tuple | None:
+            if rule.guard is None:
+                return ()
+            return tuple(self.diagonal_bounds(rule.guard)) if isinstance(rule.guard, list) else None
+
+        out = []
+        for r, targets in enumerate(edges):
+            kept = []
+            for r2 in targets:
+                g1, g2 = bounds(rules[r]), bounds(rules[r2])
+                if g1 is not None and g2 is not None:
+                    both = tuple(sorted(set(g1) | set(g2)))
+                    if not self.feasible(both):
+                        continue
+                    implied = False
+                    for r3 in rules:
+                        g3 = bounds(r3)
+                        if r3.low != rules[r].low or r3.high != rules[r2].high or g3 is None:
+                            continue
+                        zone = dbm.constrain_all(dbm.free_all(self.n), list(both))
+                        if all(zone[i, j] <= c for i, j, c in g3):
+                            implied = True
+                            break
+                    if implied:
+                        continue
+                kept.append(r2)
+            out.append(kept)
+        return out
+
     def rules_of(self, index: int) -> tuple[list[int], list[int]]:
         """The compound priorities an interaction is low in, and those it is high in."""
         got = self._rules.get(index)
@@ -232,8 +277,10 @@ class ZoneExplorer:
         limits = self.limits(state, zone)
         if limits is None:
             return [(zone, False)]
-        before, after = limits
-        start = dbm.constrain_all(zone, before)
+        # A tick needs x <= c - 1 before it (``before``), so after any number of them x <= c (``after``): from the
+        # points that meet ``after``, time reaches exactly up(Z & after) & after, as a dense-time invariant would.
+        _, after = limits
+        start = dbm.constrain_all(zone, after)
         if start is None:
             return [(zone, False)]
         grown = dbm.constrain_all(dbm.up(start), after)
@@ -263,14 +310,21 @@ class ZoneExplorer:
         def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> None:
             zone = dbm.extrapolate(zone, self.ceiling) if np.isfinite(self.ceiling).any() else zone
             kept = passed.setdefault(state, [])
+            step = Node(state, zone, parent, via, guard, grown)
             for k in kept:
                 if dbm.includes(self.nodes[k].zone, zone):
+                    if parent >= 0:
+                        self.out[parent].append((k, step))
                     return
             for k in kept:
                 if dbm.includes(zone, self.nodes[k].zone):
                     self.nodes[k].covered = True  # a larger zone came: this one need not be expanded
+                    self.nodes[k].by = len(self.nodes)
             kept[:] = [k for k in kept if not self.nodes[k].covered]
-            self.nodes.append(Node(state, zone, parent, via, guard, grown))
+            self.nodes.append(step)
+            self.out.append([])
+            if parent >= 0:
+                self.out[parent].append((len(self.nodes) - 1, step))
             kept.append(len(self.nodes) - 1)
             waiting.append(len(self.nodes) - 1)
 
@@ -352,7 +406,6 @@ class Blocking:
             for r in explorer.rules_of(h)[1]:
                 self.highs.setdefault(r, []).append(h)
         self.memo: dict[tuple, list] = {}
-        self.universe = dbm.free_all(explorer.n)
 
     def region(self, r: int) -> list:
         return self._region(r, (), ())
@@ -366,7 +419,7 @@ class Blocking:
         key = (r, acc)
         if isinstance(rule.guard, list):
             acc = tuple(sorted(set(acc) | set(x.diagonal_bounds(rule.guard))))
-            if dbm.constrain_all(self.universe, list(acc)) is None:
+            if not x.feasible(acc):
                 self.memo[key] = []
                 return []  # this chain of rules is never active at once
         elif rule.guard is not None and not _holds(rule.guard, self.state):
@@ -388,6 +441,52 @@ class Blocking:
                     self.memo[key] = [[]]
                     return [[]]
                 out.append(b)
-        out = [b for b in out if dbm.constrain_all(self.universe, b) is not None]
+        out = [b for b in out if x.feasible(tuple(sorted(set(b))))]
         self.memo[key] = out
         return out
+
+
+def lasso(z: ZoneExplorer, watching) -> tuple[list[Node], int] | None:
+    """A reachable cycle of symbolic states that all satisfy ``watching(node)``, in which time passes.
+
+    Returns the steps from an initial state to the cycle's entry, then once round the cycle (back to a zone
+    the entry's covers), and the index of the entry in that list; None when every such run ends.  Nodes
+    covered by a larger zone of their discrete state stand for that one (their runs are among its runs).
+    """
+    import networkx as nx
+
+    def rep(k: int) -> int:
+        while z.nodes[k].covered and z.nodes[k].by >= 0:
+            k = z.nodes[k].by
+        return k
+
+    graph = nx.DiGraph()
+    for k, edges in enumerate(z.out):
+        if not watching(z.nodes[k]):
+            continue
+        for target, step in edges:
+            t = rep(target)
+            if watching(z.nodes[t]):
+                a = rep(k)
+                if not graph.has_edge(a, t) or step.grown:
+                    graph.add_edge(a, t, step=step)
+    for component in nx.strongly_connected_components(graph):
+        if len(component) == 1:
+            (u,) = component
+            if not graph.has_edge(u, u):
+                continue
+        sub = graph.subgraph(component)
+        passing = [(a, b) for a, b, d in sub.edges(data=True) if d["step"].grown]
+        if not passing:
+            continue  # a cycle in zero time: no request waits for ever on it
+        a, b = passing[0]
+        back = nx.shortest_path(sub, b, a) if a != b else [a]
+        loop = [sub.edges[a, b]["step"]] + [sub.edges[x, y]["step"] for x, y in zip(back, back[1:])]
+        prefix = []
+        k = a
+        while k >= 0:
+            prefix.append(z.nodes[k])
+            k = z.nodes[k].parent
+        prefix = prefix[::-1]
+        return prefix + loop, len(prefix) - 1
+    return None

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from runtime.explore.space import StateSpace, Step
-from runtime.zones.search import ZoneExplorer
+from runtime.zones.search import Node, ZoneExplorer
 
 
 class ConcretizeError(Exception):
@@ -27,17 +27,18 @@ class TimedStep:
     step: Step
 
 
-def _path(z: ZoneExplorer, node: int) -> list[int]:
+def path_to(z: ZoneExplorer, node: int) -> list[Node]:
+    """The stored symbolic states from an initial one to ``node``, along parent links."""
     out = []
     while node >= 0:
-        out.append(node)
+        out.append(z.nodes[node])
         node = z.nodes[node].parent
     return out[::-1]
 
 
-def times(z: ZoneExplorer, node: int, goal: list[tuple[int, int, float]]) -> tuple[list[int], int]:
-    """Integer step times along the path to ``node`` (the first 0), and the time where ``goal`` holds after it."""
-    path = _path(z, node)
+def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]) -> tuple[list[int], int]:
+    """Integer times of the steps of ``path`` (each record: the step into it, the first one initial) and the time
+    after the last step where ``goal`` holds."""
     k = len(path)
     end, zero = k, k + 1  # time variables: one per step, the goal's time, the constant 0
     edges: list[tuple[int, int, float]] = []  # (w, u, d): u - w <= d
@@ -64,19 +65,15 @@ def times(z: ZoneExplorer, node: int, goal: list[tuple[int, int, float]]) -> tup
             le(tj, at, c + vj)
 
     for step in range(k):
-        n = z.nodes[path[step]]
+        n = path[step]
         if step:
             le(step - 1, step, 0)  # time goes forward
-            parent = z.nodes[path[step - 1]]
             for i, j, c in n.guard:
                 bound(i, j, c, step)
-            for c, v in z.guard(n.via, parent.state)[1]:
+            for c, v in z.guard(n.via, path[step - 1].state)[1]:
                 origin[c] = (step, v)
         nxt = step + 1 if step + 1 < k else end
-        if not n.grown:
-            le(nxt, step, 0)
-            continue
-        limits = z.limits(n.state, n.zone)
+        limits = z.limits(n.state, n.zone) if n.grown else None
         if limits is None:
             le(nxt, step, 0)
             continue
@@ -104,11 +101,11 @@ def _shortest(n: int, edges: list[tuple[int, int, float]]) -> list[float]:
     raise ConcretizeError("the path's clock bounds have no solution")
 
 
-def replay(z: ZoneExplorer, node: int, goal: list[tuple[int, int, float]], space: StateSpace) -> tuple[list[TimedStep],
-                                                                                                     tuple]:
-    """The path to ``node`` on the tick model ``space``: steps with the ticks before each, and the last state."""
-    at, end = times(z, node, goal)
-    path = _path(z, node)
+def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]],
+           space: StateSpace) -> tuple[list[TimedStep], tuple]:
+    """``path`` (:func:`path_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
+    before each, and the last state."""
+    at, end = times(z, path, goal)
     engine = space.engine
     state = space.state(space.initial_ids[0])
     ticks_before, out = 0, []
@@ -138,7 +135,7 @@ def replay(z: ZoneExplorer, node: int, goal: list[tuple[int, int, float]], space
         return s
 
     for step in range(1, len(path)):
-        n = z.nodes[path[step]]
+        n = path[step]
         wait = at[step] - at[step - 1]
         state = tick(state, wait)
         _, ports, label = z.interaction(n.via)
