@@ -139,6 +139,8 @@ class TimeSettings:
     observers: str | Path | None = None  # latency observers (YAML); None: observers.yaml in the directory given
     platform: str | Path | None = None  # the computer (YAML, genom2bip/platform.py); None: a core per task
     client: str | Path | None = None  # a mission whose steps are the environment; None: any request, once per period
+    responses: bool = False  # response-time observers (a task's release to its end, a request to its report)
+    exceptions: bool = True  # False: codels never throw (their declared yields only)
 
 
 def observers_file(paths: Sequence[str | Path], observers: str | Path | None = None) -> Path | None:
@@ -167,9 +169,14 @@ def time_options(description: Description, paths: Sequence[str | Path], settings
         latencies = load_observers(path, description, reporter)
         (diagnostics or Diagnostics()).reporter(reporter)
     default = DEFAULT_WCET_US if settings.default_wcet_us is None else settings.default_wcet_us
-    return TimeOptions(settings.tick_us, default, latencies, ticks=settings.ticks,
-                       platform=_platform(description, settings.platform, diagnostics),
-                       client=_client(description, settings.client, diagnostics))
+    platform = _platform(description, settings.platform, diagnostics)
+    if settings.responses and platform is None:
+        from genom2bip.platform import dedicated
+
+        platform = dedicated(description)
+    return TimeOptions(settings.tick_us, default, latencies, ticks=settings.ticks, platform=platform,
+                       client=_client(description, settings.client, diagnostics), responses=settings.responses,
+                       exceptions=settings.exceptions)
 
 
 def _platform(description: Description, path: str | Path | None, diagnostics: Diagnostics | None):

@@ -72,8 +72,16 @@ class Platform:
 
     def describe(self) -> str:
         """One line for reports: ``2 cores, cooperative EDF``."""
+        if not self.path:
+            return "a core per task, codels taking their WCET (no --platform)"
         policy = "cooperative EDF" if self.policy == "edf" else "fixed priority (non-preemptive at codel boundaries)"
         return f"{self.cores} core{'s' if self.cores != 1 else ''}, {policy}"
+
+
+def dedicated(description: ir.Description) -> Platform:
+    """Today's timed model as a platform: a core for every task, codels taking exactly their WCET."""
+    cores = sum(len(c.tasks) for c in description.components) or 1
+    return Platform(cores=min(cores, MAX_CORES), policy="edf", best="wcet", path="")
 
 
 def codel_owners(component: ir.Component) -> dict[str, list[ir.Codel]]:

@@ -90,6 +90,7 @@ class TimeOptions:
     platform: Platform | None = None  # None: a core per task, codels take their WCET (genom2bip.platform)
     client: Mission | None = None  # a mission whose steps are the environment (genom2bip.build.client)
     responses: bool = False  # a response-time observer per periodic task and per service
+    exceptions: bool = True  # False: codels take their declared yields only (they never throw)
     response_cap_us: int | None = None  # response times stop counting there (default: 10 x the longest period)
 
 
@@ -114,6 +115,8 @@ class Timing:
     default_wcet_us: int
     costs: dict[str, int]  # exec label -> ticks
     ticks: bool = True
+    platform: str = ""  # the platform in words, when the tasks run on one
+    client: str = ""  # the mission that is the environment, when one is
 
     def annotation(self) -> Annotation:
         """``@timed(tick_us=...)`` (or ``@monitored`` without ticks) on the package: a ``.bip`` knows its resolution."""
@@ -122,6 +125,10 @@ class Timing:
             return Annotation("monitored", args)
         if self.untimed_codels:
             args.update(untimed=",".join(self.untimed_codels), default_wcet_us=str(self.default_wcet_us))
+        if self.platform:
+            args["platform"] = self.platform
+        if self.client:
+            args["client"] = self.client
         return Annotation("timed", args)
 
 
@@ -398,33 +405,98 @@ def arm_requests(level, watch) -> None:
 FINALS = ("finish", "fail", "interrupted", "reject")
 
 
+def pending_type() -> AtomType:
+    """Whether a request is waiting for its final report, without a clock: for a service that can run for ever.
+
+    An activity whose codels can go round a cycle (``pause::`` back to an
+    earlier state) may never report: its response time has no bound, which a
+    cycle of the model shows (a lasso), not a clock counting to a cap.
+    """
+    return AtomType(
+        name="PendingObserver",
+        annotations=[Annotation("observer", {"kind": "pending", "open": "open", "close": "close"})],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("open", "close")],
+        places=["IDLE", "WATCH"],
+        initial=InitialTransition(["IDLE"]),
+        transitions=[
+            Transition("open", ["IDLE"], ["WATCH"]),
+            Transition("open", ["WATCH"], ["WATCH"]),
+            Transition("close", ["WATCH"], ["IDLE"]),
+            Transition("close", ["IDLE"], ["IDLE"]),
+        ],
+    )
+
+
+def _loops(fsm) -> bool:
+    """The activity's codels can go round a cycle: a state reachable again from itself."""
+    edges = {s: {y.state for y in fsm.codel_of[s].yields if y.state in fsm.codel_of} for s in fsm.states}
+
+    def reach(a: str) -> set[str]:
+        seen, todo = set(), [a]
+        while todo:
+            for b in edges.get(todo.pop(), ()):
+                if b not in seen:
+                    seen.add(b)
+                    todo.append(b)
+        return seen
+
+    return any(s in reach(s) for s in fsm.states)
+
+
+def _longest(fsm) -> int:
+    """Codel steps on the longest run of an activity without a cycle."""
+    memo: dict[str, int] = {}
+
+    def depth(s: str) -> int:
+        if s not in memo:
+            memo[s] = 1 + max([depth(y.state) for y in fsm.codel_of[s].yields if y.state in fsm.codel_of] or [0])
+        return memo[s]
+
+    return max([depth(s) for s in fsm.states] or [0])
+
+
 def add_responses(level, options: TimeOptions, tick: int, periods, watch, ticking: list, observers: list) -> None:
-    """A response observer per task (its period opening to its end) and per service (a request to its report)."""
-    cap = max(1, -(-(options.response_cap_us or 10 * max([inst.args[0].value for inst in
-                                                           level.asm.atoms.values() if inst.type == "Timer"]
-                                                          or [1_000_000])) // tick))
+    """A response observer per periodic task (release to end of cycle) and per service (request to final report).
+
+    Clocks stop counting at a cap, past which a response time is reported as
+    "more than the cap": a task's is 4 periods (an overrun long before); a
+    service's, twice the periods its longest run of codels can take.  A
+    service whose codels can cycle gets a :func:`pending_type` observer instead.
+    """
     level.atom_types["ResponseObserver"] = response_type()
     level.docs.setdefault("ResponseObserver", "Response time: the ticks from an opening to its closing.")
+    timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
 
-    def observe(path, label: str, opens: list, closes: list, what: str) -> None:
-        atom = level.asm.atom(path + ("response",), "ResponseObserver", [Const(cap)])
+    def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None) -> None:
+        if options.response_cap_us is not None:
+            cap = max(1, -(-options.response_cap_us // tick))
+        kind, args = ("response", [Const(cap)]) if cap is not None else ("pending", [])
+        if cap is None and "PendingObserver" not in level.atom_types:
+            level.atom_types["PendingObserver"] = pending_type()
+            level.docs["PendingObserver"] = "A request waiting for its report (a service that may never end)."
+        atom = level.asm.atom(path + ("response",), "ResponseObserver" if cap is not None else "PendingObserver",
+                              args)
         for w in opens:
             watch(w, End(atom, "open"))
         for w in closes:
             watch(w, End(atom, "close"))
-        ticking.append(End(atom, "tick"))
-        observers.append(Observer(f"{label}:response", ".".join(atom), "response", cap, what))
+        if cap is not None:
+            ticking.append(End(atom, "tick"))
+        observers.append(Observer(f"{label}:response", ".".join(atom), kind, cap or 0, what))
 
     for path, label in level.task_labels.items():
         opens = [w for w in level.asm.wires if w.label == f"{label}:period"]
         closes = [w for w in level.asm.wires if w.label == f"{label}:sleep"]
-        if opens and path + ("timer",) in level.asm.atoms:
-            observe(path, label, opens, closes, f"from a release of {label} to the end of its cycle")
+        if opens and path in timers:
+            observe(path, label, opens, closes, f"from a release of {label} to the end of its cycle", 4 * timers[path])
     for parts in level.services.values():
         opens = [w for w in level.asm.wires if w.label == f"{parts.label}:trigger"]
         closes = [w for w in level.asm.wires if w.label in {f"{parts.label}:{p}" for p in FINALS}]
-        if opens and closes and parts.fsm.states:
-            observe(parts.path, parts.label, opens, closes, f"from a request of {parts.label} to its final report")
+        if not (opens and closes and parts.fsm.states):
+            continue
+        period = timers.get(parts.task, max(timers.values(), default=1))
+        cap = None if _loops(parts.fsm) else 2 * (_longest(parts.fsm) + 2) * period
+        observe(parts.path, parts.label, opens, closes, f"from a request of {parts.label} to its final report", cap)
 
 
 def apply(level, options: TimeOptions) -> Timing:
@@ -456,6 +528,11 @@ def apply(level, options: TimeOptions) -> Timing:
     def watch(wire: Wire, end: End) -> None:
         extra.setdefault(id(wire), (wire, []))[1].append(end)
 
+    if not options.exceptions:  # the codels' outcomes are their yields: exploration never makes one throw
+        for f in level.externs.values():
+            for a in f.annotations:
+                if a.name == "codel":
+                    a.arguments["throws"] = ""
     if options.ticks:
         level.atom_types["Timer"] = timer_type()
         for path, inst in timers.items():
@@ -523,4 +600,6 @@ def apply(level, options: TimeOptions) -> Timing:
         for w in urgent:
             level.asm.rank(Rank(f"tick_after_{'_'.join(w.owner)}_{w.name}", passing, w, owner=(),
                                 comment="time passes only when nothing urgent can happen"))
-    return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks)
+    return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks,
+                  options.platform.describe() if options.platform is not None else "",
+                  options.client.name if options.client is not None else "")

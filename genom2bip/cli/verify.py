@@ -187,8 +187,19 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         print(exc.render(), file=sys.stderr)
         return EXIT_ERRORS
     observers = _observer_kinds(args)
-    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers)
+    responses = bool(getattr(args, "response_times", False))
+    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers or responses)
     load_externs(args.externs)
+    if (observers or responses) and _zones(model, args):
+        from genom2bip.cli.verify_timed import check_timing_zones
+        if args.method == "explore":
+            print(f"model {model.title}")
+        _platform_line(model)
+        worst = check_timing_zones(model, observers, responses, options, listener)
+        if not (deadlock or properties or args.aut or args.dot or args.promela):
+            return max(compositional, worst)
+        observers, responses = set(), False
+        compositional = max(compositional, worst)
     try:
         space = state_space(model, options, properties, keep_edges=bool(properties or args.aut or args.dot))
     except (ExploreError, EngineError) as exc:
@@ -208,6 +219,35 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         from genom2bip.cli.verify_timed import check_observers
         worst = max(worst, check_observers(model, observers, space, options, listener))
     return worst
+
+
+def _zones(model, args) -> bool:
+    """Time by clock zones: asked for, or by default on a platform model the zone explorer takes."""
+    choice = getattr(args, "time_search", None)
+    if choice == "ticks" or (choice is None and not _platform_of(model)):
+        return False
+    from genom2bip.verify.zones import ZonesUnsupported, explorer
+    try:
+        explorer(model)
+    except ZonesUnsupported as exc:
+        note = f"clock zones do not take this model ({exc}): exploring tick by tick"
+        if choice == "zones":
+            error(note)
+            raise Failure(EXIT_USAGE) from None
+        print(f"note: {note}")
+        return False
+    return True
+
+
+def _platform_of(model) -> str | None:
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    return ann.arguments.get("platform") if ann is not None else None
+
+
+def _platform_line(model) -> None:
+    platform = _platform_of(model)
+    if platform:
+        print(f"platform: {platform}")
 
 
 def _observer_kinds(args) -> set[str]:

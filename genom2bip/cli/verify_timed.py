@@ -40,6 +40,14 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
     if verify:
         time.add_argument("--schedulability", action="store_true",
                           help="check the period observers: is an overrun of each periodic task reachable?")
+        time.add_argument("--response-times", action="store_true",
+                          help="the largest response time of each periodic task (release to end of cycle) and of "
+                               "each service (request to final report), each with a trace that reaches it")
+        time.add_argument("--no-exceptions", action="store_true",
+                          help="codels take their declared yields only: no exception is explored (timing as the "
+                               "GenoM3 templates model it)")
+        time.add_argument("--time-search", choices=("zones", "ticks"),
+                          help="explore time with clock zones (default on a platform) or tick by tick")
 
 
 def _duration(text: str | None, option: str) -> int | None:
@@ -65,9 +73,9 @@ def time_settings(args: argparse.Namespace):
     if timed and getattr(args, "engine", "explore") == "spin":
         error("the observers of --timed are checked by our explorer: drop --engine spin")
         raise Failure(EXIT_USAGE)
-    for option in ("platform", "client"):
+    for option in ("platform", "client", "response_times", "time_search", "no_exceptions"):
         if getattr(args, option, None) and not timed:
-            error(f"--{option} needs --timed")
+            error(f"--{option.replace('_', '-')} needs --timed")
             raise Failure(EXIT_USAGE)
     if not (timed or monitor):
         if getattr(args, "schedulability", False) or getattr(args, "observers", None):
@@ -81,7 +89,8 @@ def time_settings(args: argparse.Namespace):
         raise Failure(EXIT_USAGE)
     return TimeSettings(ticks=timed, tick_us=tick, default_wcet_us=_duration(args.default_wcet, "default-wcet"),
                         observers=args.observers, platform=getattr(args, "platform", None),
-                        client=getattr(args, "client", None))
+                        client=getattr(args, "client", None), responses=bool(getattr(args, "response_times", False)),
+                        exceptions=not getattr(args, "no_exceptions", False))
 
 
 def warn_untimed(package) -> None:
@@ -156,3 +165,66 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
             print(f"{found.subject}: inconclusive ({found.message})")
             worst = max(worst, EXIT_VIOLATED if found.verdict is Verdict.ERROR else EXIT_INCONCLUSIVE)
     return worst
+
+
+def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
+    """The observers of ``kinds`` and, with ``responses``, the response times, by one zone exploration; printed as
+    the tick explorer prints verdicts, the response times as a table with a trace each; the worst exit status."""
+    from genom2bip.verify import Verdict, tick_us
+    from genom2bip.verify.zones import ResponseResult, check_timing
+
+    tick = tick_us(model.package)
+    if tick:
+        print(f"time: one tick is {tick / 1000:g} ms; explored with clock zones")
+    results = check_timing(model, kinds, responses, options, listener)
+    worst = EXIT_OK
+    for found in results:
+        if isinstance(found, ResponseResult):
+            continue
+        what = "overrun" if found.kind == "overrun" else "violation"
+        if found.verdict is Verdict.HOLDS:
+            print(f"{found.subject}: no {what} reachable ({found.method}, {found.figures.states:,} symbolic "
+                  f"states, {found.figures.seconds:.2f} s)")
+        elif found.verdict is Verdict.VIOLATED:
+            print(f"{found.subject}: {what} reachable" + (f" ({len(found.trace)} steps):" if found.trace else
+                                                          f" ({found.message})"))
+            if found.trace is not None:
+                timed_trace(found.trace)
+            worst = EXIT_VIOLATED
+        else:
+            print(f"{found.subject}: inconclusive ({found.limit or found.message})")
+            worst = max(worst, EXIT_INCONCLUSIVE)
+    times = [r for r in results if isinstance(r, ResponseResult)]
+    if times:
+        print(f"response times ({times[0].method}, {times[0].figures.states:,} symbolic states, "
+              f"{times[0].figures.seconds:.2f} s):")
+        width = max(len(r.observer.rsplit(".", 1)[0]) for r in times)
+        for r in times:
+            owner = r.observer.rsplit(".", 1)[0]
+            period = f"  (period {r.ms(r.period_ticks):g} ms)" if r.period_ticks else ""
+            print(f"  {owner:<{width}}  {_response_value(r)}{period}")
+        for r in times:
+            owner = r.observer.rsplit(".", 1)[0]
+            if r.trace is not None:
+                print(f"{owner}: {_response_value(r)} ({len(r.trace)} steps):")
+                timed_trace(r.trace)
+                if r.trace.loop is not None:
+                    print(f"    ... and back to the state after step {r.trace.loop}, forever")
+            elif r.message and r.verdict is not Verdict.INCONCLUSIVE:
+                print(f"{owner}: {r.message}")
+        if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
+            worst = max(worst, EXIT_INCONCLUSIVE)
+    return worst
+
+
+def _response_value(r) -> str:
+    """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms``."""
+    from genom2bip.verify import Verdict
+
+    if r.verdict is Verdict.INCONCLUSIVE:
+        return f"inconclusive ({r.limit})"
+    if r.unbounded:
+        return "no bound: a request can wait for ever"
+    if r.value_ticks is None:
+        return r.message if r.message == "never requested" else f"more than {r.ms(r.cap_ticks):g} ms"
+    return f"{r.value_ms:g} ms"
