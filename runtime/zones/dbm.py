@@ -10,9 +10,74 @@ matrices (all bounds tight), and never changes its argument.
 """
 from __future__ import annotations
 
+import ctypes
+from functools import cache
+from pathlib import Path
+
 import numpy as np
 
 INF = np.inf
+
+
+@cache
+def _c():
+    """dbm.c compiled and loaded (the C cache of runtime/native), or None without a compiler."""
+    from runtime.native.build import BuildError, build, compiler
+
+    cc = compiler()
+    if cc is None:
+        return None
+    try:
+        lib = ctypes.CDLL(str(build((Path(__file__).with_name("dbm.c")).read_text(), cc, what="zone DBM")))
+    except (BuildError, OSError):
+        return None
+    ptr, i32, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+    for name, res, args in (("z_close", None, [ptr, i32]), ("z_constrain", i32, [ptr, i32, i32, i32, dbl]),
+                            ("z_extrapolate", i32, [ptr, i32, ptr]), ("z_includes", i32, [ptr, ptr, i32]),
+                            ("z_free", None, [ptr, ptr, i32, ptr, i32])):
+        fn = getattr(lib, name)
+        fn.restype, fn.argtypes = res, args
+    return lib
+
+
+def use_c(on: bool) -> None:
+    """Choose the C operations (the default where a compiler is) or the numpy ones (the reference, for tests)."""
+    global close, constrain, extrapolate, includes, free_many
+    lib = _c() if on else None
+    if lib is None:
+        close, constrain, extrapolate, includes, free_many = close_np, constrain_np, extrapolate_np, includes_np, \
+            free_many_np
+        return
+
+    def close_c(m: np.ndarray) -> np.ndarray:
+        out = np.array(m, order="C")
+        lib.z_close(out.ctypes.data, out.shape[0])
+        return out
+
+    def constrain_c(m: np.ndarray, i: int, j: int, c: float) -> np.ndarray | None:
+        if m[i, j] <= c:
+            return m
+        out = m.copy()
+        return out if lib.z_constrain(out.ctypes.data, out.shape[0], i, j, c) else None
+
+    def extrapolate_c(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
+        out = m.copy()
+        return out if lib.z_extrapolate(out.ctypes.data, out.shape[0], _doubles(ceiling).ctypes.data) else m
+
+    def includes_c(big: np.ndarray, small: np.ndarray) -> bool:
+        return bool(lib.z_includes(big.ctypes.data, small.ctypes.data, big.size))
+
+    def free_many_c(m: np.ndarray, clocks: list[int]) -> np.ndarray:
+        out = m.copy()
+        idx = (ctypes.c_int * len(clocks))(*clocks)
+        lib.z_free(out.ctypes.data, m.ctypes.data, out.shape[0], idx, len(clocks))
+        return out
+
+    close, constrain, extrapolate, includes, free_many = close_c, constrain_c, extrapolate_c, includes_c, free_many_c
+
+
+def _doubles(a: np.ndarray) -> np.ndarray:
+    return a if a.dtype == np.float64 and a.flags.c_contiguous else np.ascontiguousarray(a, dtype=np.float64)
 
 
 def zero(n: int) -> np.ndarray:
@@ -28,7 +93,7 @@ def free_all(n: int) -> np.ndarray:
     return m
 
 
-def close(m: np.ndarray) -> np.ndarray:
+def close_np(m: np.ndarray) -> np.ndarray:
     """Floyd–Warshall: the tightest bounds (canonical form); an empty zone has a negative diagonal."""
     m = m.copy()
     for k in range(m.shape[0]):
@@ -40,7 +105,7 @@ def empty(m: np.ndarray) -> bool:
     return bool((np.diagonal(m) < 0).any())
 
 
-def constrain(m: np.ndarray, i: int, j: int, c: float) -> np.ndarray | None:
+def constrain_np(m: np.ndarray, i: int, j: int, c: float) -> np.ndarray | None:
     """``xi - xj <= c`` added (incremental closure, O(n^2)); None when nothing is left."""
     if m[i, j] <= c:
         return m
@@ -86,7 +151,17 @@ def free(m: np.ndarray, i: int) -> np.ndarray:
     return out
 
 
-def includes(big: np.ndarray, small: np.ndarray) -> bool:
+def free_many_np(m: np.ndarray, clocks: list[int]) -> np.ndarray:
+    """:func:`free` of several clocks at once."""
+    out = m.copy()
+    out[clocks, :] = INF
+    out[:, clocks] = m[:, [0]]
+    out[np.ix_(clocks, clocks)] = INF
+    out[clocks, clocks] = 0
+    return out
+
+
+def includes_np(big: np.ndarray, small: np.ndarray) -> bool:
     return bool((big >= small).all())
 
 
@@ -99,20 +174,25 @@ def lower(m: np.ndarray, i: int) -> float:
     return float(-m[0, i])
 
 
-def extrapolate(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
+def extrapolate_np(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
     """Extra_M: bounds past the largest constant a clock is compared with are forgotten (finitely many zones).
 
     ``ceiling[i]`` is that constant for clock ``i`` (``ceiling[0] = 0``); a clock compared with nothing has
-    ceiling -1 and is then free of bounds above and below.
+    ceiling -1 and is then free of bounds above and below.  On integers, every value above ``M`` is alike:
+    ``x <= v`` with ``v > M`` becomes no bound, ``x >= v`` with ``v > M + 1`` becomes ``x >= M + 1``.
     """
-    out = m.copy()
     rows = ceiling[:, None]
-    cols = ceiling[None, :]
-    out[out > rows] = INF
-    low = out < -cols
+    cols = ceiling[None, :] + 1
+    above = (m > rows) & (m != INF)
+    low = (m < -cols) & ~(m > rows)
+    np.fill_diagonal(above, False)
+    np.fill_diagonal(low, False)
+    if not above.any() and not low.any():
+        return m
+    out = m.copy()
+    out[above] = INF
     out[low] = np.broadcast_to(-cols, out.shape)[low]
-    np.fill_diagonal(out, 0)
-    return close(out)
+    return close_np(out)
 
 
 def subtract(m: np.ndarray, other: np.ndarray) -> list[np.ndarray]:
@@ -154,3 +234,7 @@ def point(m: np.ndarray) -> list[int]:
 
 def key(m: np.ndarray) -> bytes:
     return m.tobytes()
+
+
+close, constrain, extrapolate, includes, free_many = close_np, constrain_np, extrapolate_np, includes_np, free_many_np
+use_c(True)

@@ -276,6 +276,7 @@ def analyse(package: Package, root: str) -> TimedModel:
     measures: dict[int, tuple[str, int]] = {}
     initial: dict[int, int] = {}
     ceilings = [0] * (len(clocks) + 1)
+    dynamic: set[int] = set()
     erased_types = {}
     for fa in flat.atoms:
         mine = per_atom[fa.index]
@@ -300,6 +301,8 @@ def analyse(package: Package, root: str) -> TimedModel:
                 v = _static(a.rhs, fa)
                 if v is not None:
                     ceilings[a.clock] = max(ceilings[a.clock], int(v) + 1)
+                else:
+                    dynamic.add(a.clock)  # compared with data: no ceiling is known, never extrapolated
             if tr.port == TICK and fa.index in timed_atoms:
                 for st in tr.action:  # a capped clock (``if (c < k) c = c + 1``) tells values apart up to k only
                     if isinstance(st, If) and isinstance(st.cond, Binary) and isinstance(st.cond.left, Var) \
@@ -328,6 +331,8 @@ def analyse(package: Package, root: str) -> TimedModel:
     for atom, (watching, clock, *_) in list(observers.items()) + list(measures.items()):  # read there by queries
         places[(atom, 1 << flat.atoms[atom].places.index(watching))].atoms_read.add(clock)
     _activity(flat, places, steps, per_atom)
+    for k in dynamic:
+        ceilings[k] = 0  # 0: no ceiling (the explorer never extrapolates that clock's bounds)
     model = TimedModel(flat, package, root, clocks, initial, steps, places, timed_atoms, [], [], observers, ceilings,
                        measures)
     model.erased, model.urgent, model.rules = _erase(package, flat, model, per_atom, tick[0])

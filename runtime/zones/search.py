@@ -78,6 +78,8 @@ class ZoneExplorer:
         self._rules: dict[int, tuple[list[int], list[int]]] = {}
         self._blocks: dict[tuple, Blocking] = {}
         self._guards: dict[tuple, tuple] = {}
+        self._passing: dict[tuple, tuple | None] = {}
+        self._idle: dict[tuple, list[int]] = {}
         self.nodes: list[Node] = []
         self.out: list[list[tuple[int, Node]]] = []  # per node: (node that holds the successor, the step into it)
         tops = {}
@@ -241,8 +243,16 @@ class ZoneExplorer:
                     return []
         return pieces
 
-    def passing(self, state: tuple, zone: np.ndarray, blocks: "Blocking") -> tuple[list, list] | None:
-        """Where time may pass at ``state``: bounds before a tick and after it; None when it cannot pass at all."""
+    def passing(self, state: tuple, blocks: "Blocking") -> tuple[list, list, list] | None:
+        """Where time may pass at ``state``, whatever the zone: the invariants' bounds before a tick and after it,
+        and the urgent priorities' regions ``(bounds, clock, lower bound)`` that stop time once reached; None when
+        time cannot pass at all (kept per state)."""
+        if state in self._passing:
+            return self._passing[state]
+        got = self._passing[state] = self._passing_at(state, blocks)
+        return got
+
+    def _passing_at(self, state: tuple, blocks: "Blocking") -> tuple[list, list, list] | None:
         before, after = [], []
         for atom in self.model.timed_atoms:
             place = self.model.places[(atom, self.place_bit(state, atom))]
@@ -258,18 +268,36 @@ class ZoneExplorer:
                 after.append((k, 0, c + 1))
         if any(not b for r in self.tick_rules for b in blocks.region(r)):
             return None  # something urgent can happen now: no time passes
-        reach = dbm.constrain_all(dbm.up(zone), before)
+        waits = []
         for r in self.tick_rules:
             for b in blocks.region(r):
-                if reach is None or dbm.constrain_all(reach, b) is None:
-                    continue  # time never passes from where this holds (an invariant stops it first)
                 lower = [(j, c) for i, j, c in b if i == 0]
-                if len(b) != 1 or not lower:
-                    raise Unsupported(f"priority {self.model.rules[r].name}: time waits for a clock condition that "
-                                      "is not one lower bound")
-                k, c = lower[0]
-                before.append((k, 0, -c - 1))  # blocked from x >= -c on: time passes while x <= -c - 1
-                after.append((k, 0, -c))
+                waits.append((b, r, lower[0] if len(b) == 1 and lower else None))
+        return before, after, waits
+
+    def limits(self, state: tuple, zone: np.ndarray) -> tuple[list, list] | None:
+        """Bounds before a tick and after it at ``state`` from ``zone``: invariants, and urgent priorities that
+        ``zone`` can reach as time passes; None when time cannot pass at all."""
+        fixed = self._passing.get(state, False)
+        if fixed is False:
+            enabled = sorted({i for i, _ in self.successors(state)})
+            fixed = self.passing(state, self.blocking(state, enabled))
+        if fixed is None:
+            return None
+        before, after, waits = fixed
+        if not waits:
+            return before, after
+        before, after = list(before), list(after)
+        reach = dbm.constrain_all(dbm.up(zone), before)
+        for b, r, lower in waits:
+            if reach is None or dbm.constrain_all(reach, b) is None:
+                continue  # time never passes from where this holds (an invariant stops it first)
+            if lower is None:
+                raise Unsupported(f"priority {self.model.rules[r].name}: time waits for a clock condition that "
+                                  "is not one lower bound")
+            k, c = lower
+            before.append((k, 0, -c - 1))  # blocked from x >= -c on: time passes while x <= -c - 1
+            after.append((k, 0, -c))
         return before, after
 
     def elapse(self, zone: np.ndarray, state: tuple) -> list[tuple[np.ndarray, bool]]:
@@ -286,16 +314,13 @@ class ZoneExplorer:
         grown = dbm.constrain_all(dbm.up(start), after)
         return [(grown, True)] + [(z, False) for z in dbm.subtract(zone, grown)]
 
-    def limits(self, state: tuple, zone: np.ndarray) -> tuple[list, list] | None:
-        enabled = sorted({i for i, _ in self.successors(state)})
-        return self.passing(state, zone, self.blocking(state, enabled))
-
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
-        for k, (atom, _) in enumerate(self.model.clocks, 1):
-            if k not in self.model.places[(atom, self.place_bit(state, atom))].active:
-                zone = dbm.free(zone, k)
-        return zone
+        idle = self._idle.get(state)
+        if idle is None:
+            idle = self._idle[state] = [k for k, (atom, _) in enumerate(self.model.clocks, 1)
+                                        if k not in self.model.places[(atom, self.place_bit(state, atom))].active]
+        return dbm.free_many(zone, idle) if idle else zone
 
     # -- the search -------------------------------------------------------------------------------
     def explore(self, max_states: int | None = None, progress: Progress | None = None,
@@ -311,15 +336,16 @@ class ZoneExplorer:
             zone = dbm.extrapolate(zone, self.ceiling) if np.isfinite(self.ceiling).any() else zone
             kept = passed.setdefault(state, [])
             step = Node(state, zone, parent, via, guard, grown)
-            for k in kept:
-                if dbm.includes(self.nodes[k].zone, zone):
+            if kept:
+                stack = np.stack([self.nodes[k].zone for k in kept])
+                bigger = np.flatnonzero((stack >= zone).all(axis=(1, 2)))
+                if len(bigger):
                     if parent >= 0:
-                        self.out[parent].append((k, step))
+                        self.out[parent].append((kept[bigger[0]], step))
                     return
-            for k in kept:
-                if dbm.includes(zone, self.nodes[k].zone):
-                    self.nodes[k].covered = True  # a larger zone came: this one need not be expanded
-                    self.nodes[k].by = len(self.nodes)
+                for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):
+                    self.nodes[kept[i]].covered = True  # a larger zone came: this one need not be expanded
+                    self.nodes[kept[i]].by = len(self.nodes)
             kept[:] = [k for k in kept if not self.nodes[k].covered]
             self.nodes.append(step)
             self.out.append([])
