@@ -122,16 +122,10 @@ def run(paths, include, platform, client, exceptions, max_states, queue) -> None
         out["states"] = r.figures.states
         if isinstance(r, ResponseResult):
             if r.kind == "task":
-                out["responses"][r.observer] = "inf" if r.unbounded else r.value_ms
+                out["responses"][r.owner] = "inf" if r.unbounded else r.value_ms
         else:
-            out["verdicts"][r.observer] = r.verdict.value
+            out["verdicts"][r.observer.rsplit(".", 1)[0]] = r.verdict.value
     queue.put(out)
-
-
-def task_of(observer: str) -> str:
-    """``robloco.track`` from an observer's name (the task's instance path, as the report prints it)."""
-    parts = observer.split(".")
-    return ".".join(parts[-2:]) if len(parts) >= 2 else observer
 
 
 def main() -> None:
@@ -177,16 +171,15 @@ def main() -> None:
 
 
 def _track_ok(got: dict) -> bool:
-    return any(task_of(o) == "robloco.track" and v == "holds" for o, v in got["verdicts"].items())
+    return any(o == "robloco.track" and v == "holds" for o, v in got["verdicts"].items())
 
 
 def show(nc: int, got: dict) -> None:
-    track = next((v for o, v in got["verdicts"].items() if task_of(o) == "robloco.track"), "?")
+    track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
     print(f"\nnc = {nc}: track keeps its period: {track}; {got.get('states', 0):,} symbolic states, "
           f"{got['seconds']:.1f} s, {got['mb']:.0f} MB")
     print(f"  {'task':16} {'genom2bip':>10} {'published (nc=4)':>17}")
-    for observer, value in sorted(got["responses"].items()):
-        task = task_of(observer)
+    for task, value in sorted(got["responses"].items()):
         shown = "unbounded" if value == "inf" else ("> cap" if value is None else f"{value:g} ms")
         print(f"  {task:16} {shown:>10} {PUBLISHED.get(task, '-'):>14} ms")
 

@@ -129,6 +129,10 @@ class Timing:
             args["platform"] = self.platform
         if self.client:
             args["client"] = self.client
+        served = [f"{o.atom}={o.name.rsplit(':', 1)[0]}" for o in self.observers
+                  if o.kind in ("response", "pending") and "." not in o.atom]
+        if served:
+            args["responses"] = ",".join(served)  # service observers sit at the root: whose response each one is
         return Annotation("timed", args)
 
 
@@ -468,14 +472,14 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
     timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
 
     def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None) -> None:
+        """``path``: the observer's (a service's at the root: its trigger may join other modules' atoms)."""
         if options.response_cap_us is not None:
             cap = max(1, -(-options.response_cap_us // tick))
         kind, args = ("response", [Const(cap)]) if cap is not None else ("pending", [])
         if cap is None and "PendingObserver" not in level.atom_types:
             level.atom_types["PendingObserver"] = pending_type()
             level.docs["PendingObserver"] = "A request waiting for its report (a service that may never end)."
-        atom = level.asm.atom(path + ("response",), "ResponseObserver" if cap is not None else "PendingObserver",
-                              args)
+        atom = level.asm.atom(path, "ResponseObserver" if cap is not None else "PendingObserver", args)
         for w in opens:
             watch(w, End(atom, "open"))
         for w in closes:
@@ -488,7 +492,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
         opens = [w for w in level.asm.wires if w.label == f"{label}:period"]
         closes = [w for w in level.asm.wires if w.label == f"{label}:sleep"]
         if opens and path in timers:
-            observe(path, label, opens, closes, f"from a release of {label} to the end of its cycle", 4 * timers[path])
+            observe(path + ("response",), label, opens, closes, f"from a release of {label} to the end of its cycle",
+                    4 * timers[path])
     for parts in level.services.values():
         opens = [w for w in level.asm.wires if w.label == f"{parts.label}:trigger"]
         closes = [w for w in level.asm.wires if w.label in {f"{parts.label}:{p}" for p in FINALS}]
@@ -496,7 +501,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
             continue
         period = timers.get(parts.task, max(timers.values(), default=1))
         cap = None if _loops(parts.fsm) else 2 * (_longest(parts.fsm) + 2) * period
-        observe(parts.path, parts.label, opens, closes, f"from a request of {parts.label} to its final report", cap)
+        observe((ident("_".join(parts.path + ("response",))),), parts.label, opens, closes,
+                f"from a request of {parts.label} to its final report", cap)
 
 
 def apply(level, options: TimeOptions) -> Timing:

@@ -198,13 +198,13 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
     if times:
         print(f"response times ({times[0].method}, {times[0].figures.states:,} symbolic states, "
               f"{times[0].figures.seconds:.2f} s):")
-        width = max(len(r.observer.rsplit(".", 1)[0]) for r in times)
+        width = max(len(r.owner) for r in times)
         for r in times:
-            owner = r.observer.rsplit(".", 1)[0]
+            owner = r.owner
             period = f"  (period {r.ms(r.period_ticks):g} ms)" if r.period_ticks else ""
             print(f"  {owner:<{width}}  {_response_value(r)}{period}")
         for r in times:
-            owner = r.observer.rsplit(".", 1)[0]
+            owner = r.owner
             if r.trace is not None:
                 print(f"{owner}: {_response_value(r)} ({len(r.trace)} steps):")
                 timed_trace(r.trace)

@@ -30,6 +30,7 @@ class ResponseResult(CheckResult):
     check: ClassVar[str] = "response"
 
     observer: str = ""
+    owner: str = ""  # the task or service: ``NDD.motion``, ``NDD.GoTo``
     kind: str = ""  # "task" or "service"
     value_ticks: int | None = None  # None: more than the cap, or no bound at all (``unbounded``)
     unbounded: bool = False  # a lasso: a request (or a cycle of the task) can wait for ever
@@ -45,7 +46,7 @@ class ResponseResult(CheckResult):
         return self.ms(self.value_ticks)
 
     def details(self) -> dict[str, Any]:
-        return {"observer": self.observer, "kind": self.kind, "value_ticks": self.value_ticks,
+        return {"observer": self.observer, "owner": self.owner, "kind": self.kind, "value_ticks": self.value_ticks,
                 "unbounded": self.unbounded,
                 "value_ms": self.value_ms, "cap_ticks": self.cap_ticks, "cap_ms": self.ms(self.cap_ticks),
                 "period_ms": self.ms(self.period_ticks)}
@@ -133,16 +134,24 @@ def _trace(z, path, goal, space, tick, loop: int | None = None) -> tuple[Trace |
     return Trace(steps, loop=at, ticks=ticks, tick_us=tick), ""
 
 
+def _owners(model: Model) -> dict[str, str]:
+    """Observer instance -> the service it measures, for the service observers at the root (``@timed``)."""
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    pairs = (ann.arguments.get("responses", "") if ann is not None else "").split(",")
+    return dict(p.split("=", 1) for p in pairs if "=" in p)
+
+
 def _response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive) -> ResponseResult:
     """One response time: the largest value of the observer's clock, or no bound shown by a lasso."""
     from runtime.zones.search import lasso
     from runtime.zones.trace import path_to
 
     fa = by_path[atom.path]
-    owner = atom.path.rsplit(".", 1)[0]
+    owner = _owners(model).get(atom.path) or atom.path.rsplit(".", 1)[0]
     timer = by_path.get(owner + ".timer")  # a task's observer sits beside its timer
     period = int(timer.constants["ticks"][0]) if timer is not None else None
-    common = dict(figures=figures, method=method, observer=atom.path, kind="task" if timer is not None else "service",
+    common = dict(figures=figures, method=method, observer=atom.path, owner=owner,
+                  kind="task" if timer is not None else "service",
                   cap_ticks=atom.bound, tick_us=tick, period_ticks=period,
                   limit=result.stopped if inconclusive else "")
     subject_text = f"response time of {owner}"
