@@ -108,13 +108,19 @@ def run(paths, include, platform, client, exceptions, max_states, queue) -> None
     """One ``nc``: the timing checks and response times, in a process of its own (its peak memory is the run's)."""
     from genom2bip.loading import TimeSettings
     from genom2bip.verify.model import build_model
-    from genom2bip.verify.options import SearchOptions
+    from genom2bip.verify.options import Listener, SearchOptions
     from genom2bip.verify.zones import ResponseResult, check_timing
+    from runtime.explore import Progress
+
+    class Shown(Listener):
+        def progress(self):
+            return Progress()  # on a terminal: states, rate, frontier and memory, once a second
 
     settings = TimeSettings(platform=platform, client=client, responses=True, exceptions=exceptions)
     model = build_model(paths, include_dirs=[include], no_rules=True, time=settings)
     start = time.perf_counter()
-    results = check_timing(model, kinds=("overrun",), responses=True, options=SearchOptions(max_states=max_states))
+    results = check_timing(model, kinds=("overrun",), responses=True, options=SearchOptions(max_states=max_states),
+                           listener=Shown())
     seconds = time.perf_counter() - start
     out = {"seconds": seconds, "mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "verdicts": {},
            "responses": {}}
