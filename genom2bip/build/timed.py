@@ -469,7 +469,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
     """
     level.atom_types["ResponseObserver"] = response_type()
     level.docs.setdefault("ResponseObserver", "Response time: the ticks from an opening to its closing.")
-    timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
+    timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items()
+              if inst.type in ("Timer", "DelayedTimer")}  # a task with a delay has a DelayedTimer
 
     def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None) -> None:
         """``path``: the observer's (a service's at the root: its trigger may join other modules' atoms)."""
