@@ -118,8 +118,8 @@ def client_type(mission: Mission, tick_us: int, refusable: set[str]) -> tuple[At
         if after_send == waiting:
             places.append(waiting)
             if step.until == "started":
-                transitions.append(Transition(f"started_{key}", [waiting], [nxt], annotations=src))
-            transitions.append(Transition(f"ended_{key}", [waiting], [nxt], annotations=src))
+                transitions.append(Transition(f"started_{key}", [waiting], [nxt], action=[restart], annotations=src))
+            transitions.append(Transition(f"ended_{key}", [waiting], [nxt], action=[restart], annotations=src))
     places.append("DONE")
     # A named request is open from its send to the first final report of its service.
     for name, target in named.items():
