@@ -1,0 +1,115 @@
+"""Response times: every maximum reported is reached by its trace, clock zones and ticks agree, and what a run
+without --platform assumes is said in one line."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from genom2bip.loading import TimeSettings
+from genom2bip.verify import build_model
+from genom2bip.verify.zones import ResponseResult, check_timing
+from platformkit import FIXTURES, observed_response, platform_file, response_ms, verify
+from runtime.explore import StateSpace
+
+ZENO = FIXTURES / "Zeno.gen"
+PAIR = FIXTURES / "Pair.gen"
+SHARED = FIXTURES / "Shared.gen"
+ANOMALY = FIXTURES / "Anomaly.gen"
+
+#: (name, description, defines, platform file, mission): small models with every kind of response.
+CASES = [
+    ("pair-1-edf", PAIR, {}, "cores: 1\npolicy: edf\nbest: wcet\n", None),
+    ("pair-1-fp", PAIR, {}, "cores: 1\npolicy: fixed-priority\n", None),
+    ("shared-slow", SHARED, {"SLOW": "1"}, "cores: 2\npolicy: edf\n", None),
+    ("anomaly", ANOMALY, {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n"
+                             "execution:\n  Anomaly.mid.mid_step: [1 ms, 4 ms]\n", None),
+    ("zeno-services", ZENO, {"PERIOD": "10"}, "cores: 1\n", None),
+    ("zeno-client", ZENO, {"PERIOD": "10"}, "cores: 1\n", FIXTURES / "a_then_b.yaml"),
+]
+
+
+def model_of(tmp_path, gen, defines, platform, mission):
+    settings = TimeSettings(platform=platform_file(tmp_path, platform), client=mission, responses=True)
+    return build_model([gen], defines={k: v for k, v in defines.items()}, time=settings)
+
+
+def tick_maxima(model) -> dict[str, int]:
+    """The largest value of every response observer's clock over the tick model's reachable states.
+
+    An oracle independent of the zone explorer: the reference semantics explored state by state, every
+    variable kept exact.
+    """
+    space = StateSpace(model.package, model.root, {}, None, False, ())
+    atoms = [fa for fa in space.engine.flat.atoms if fa.type.name == "ResponseObserver"]
+    k = 0
+    while k < len(space):
+        space.successors(k)
+        k += 1
+        assert k < 200_000, "the fixture is meant to be small"
+    best = {fa.name: 0 for fa in atoms}
+    for sid in range(len(space)):
+        state = space.engine_state(sid)
+        for fa in atoms:
+            best[fa.name] = max(best[fa.name], state[fa.slot("c")])
+    return best
+
+
+@pytest.mark.parametrize("name,gen,defines,platform,mission", CASES, ids=[c[0] for c in CASES])
+def test_every_maximum_is_reached_by_its_trace(tmp_path, name, gen, defines, platform, mission):
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    results = [r for r in check_timing(model, (), responses=True) if isinstance(r, ResponseResult)]
+    assert results
+    for r in results:
+        data = json.loads(json.dumps(r.to_json()))  # what a campaign records
+        details = data["details"]
+        if details["value_ms"] is None:
+            continue
+        trace = data["trace"]
+        assert trace is not None and trace["timed"], data
+        steps = [(s["time_ms"], s["label"]) for s in trace["steps"]]
+        end = steps[-1][0] if steps else 0.0
+        owner = details["observer"].rsplit(".", 1)[0]
+        seen = observed_response(owner, details["kind"], steps, end)
+        assert seen == details["value_ms"], f"{owner}: the trace shows {seen} ms, the result says " \
+                                            f"{details['value_ms']} ms\n{trace['steps']}"
+
+
+@pytest.mark.parametrize("name,gen,defines,platform,mission", CASES, ids=[c[0] for c in CASES])
+def test_zones_and_ticks_agree_on_the_maxima(tmp_path, name, gen, defines, platform, mission):
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    zones = {r.observer: r.value_ticks for r in check_timing(model, (), responses=True)
+             if isinstance(r, ResponseResult) and not r.unbounded}
+    ticks = tick_maxima(model_of(tmp_path, gen, defines, platform, mission))
+    for observer, value in zones.items():
+        if observer in ticks and value is not None:
+            assert ticks[observer] == value, f"{observer}: zones {value} ticks, tick by tick {ticks[observer]}"
+    assert {o for o, v in zones.items() if v is not None} <= set(ticks)
+
+
+def test_response_times_by_ticks_are_printed_or_refused(tmp_path, capsys):
+    # --time-search ticks with --response-times must not drop the response times without a word.
+    path = platform_file(tmp_path, "cores: 1\npolicy: edf\nbest: wcet\n")
+    code, out, err = verify(capsys, PAIR, "--timed", "--platform", path, "--response-times", "--time-search", "ticks")
+    if code == 2:
+        assert "--response-times" in err
+    else:
+        assert response_ms(out) == {"Pair.fast": 12, "Pair.slow": 12}, out
+
+
+# --------------------------------------------------------------------------- without --platform
+
+
+def test_without_platform_one_line_says_each_task_has_its_core_and_exact_wcets(capsys):
+    code, out, _ = verify(capsys, PAIR, "--timed", "--schedulability")
+    lines = [line for line in out.splitlines() if line.startswith("platform: ")]
+    assert lines == ["platform: a core per task, codels taking their WCET (no --platform)"], out
+    assert code == 0  # a core each: 6 ms of 10
+
+
+def test_without_platform_response_times_say_the_same_line(capsys):
+    code, out, _ = verify(capsys, PAIR, "--timed", "--response-times")
+    lines = [line for line in out.splitlines() if line.startswith("platform: ")]
+    assert lines == ["platform: a core per task, codels taking their WCET (no --platform)"], out
+    assert response_ms(out) == {"Pair.fast": 6, "Pair.slow": 6}
+    assert code == 0
