@@ -77,6 +77,30 @@ def test_response_times_of_two_tasks_under_edf(tmp_path, capsys, cores, expected
     assert response_ms(out) == expected
 
 
+SWAPPED = ("cores: 1\npolicy: {policy}\nbest: wcet\n"
+           "tasks:\n  Pair.slow:\n    priority: 0\n  Pair.fast:\n    priority: 1\n")
+
+
+def test_edf_goes_by_deadlines_whatever_the_priorities(tmp_path, capsys):
+    # slow's period is 20 ms: at every common release fast's deadline is earlier and EDF grants it first
+    # (0..6, slow 6..12; fast's next release at 10 waits for slow until 12: 8 ms; at 20 slow waits for fast: 12 ms).
+    path = platform_file(tmp_path, SWAPPED.format(policy="edf"))
+    code, out, _ = verify(capsys, PAIR, "-DSLOW_PERIOD=20", "--timed", "--schedulability", "--platform", path,
+                          "--response-times")
+    assert response_ms(out) == {"Pair.fast": 8, "Pair.slow": 12}
+    assert code == 0
+
+
+def test_the_platform_file_priorities_override_the_description(tmp_path, capsys):
+    # slow made priority 0: it is granted first at 0 and fast ends 12 ms after its release.
+    path = platform_file(tmp_path, SWAPPED.format(policy="fixed-priority"))
+    code, out, _ = verify(capsys, PAIR, "-DSLOW_PERIOD=20", "--timed", "--schedulability", "--platform", path,
+                          "--response-times")
+    assert verdicts(out) == {"Pair.fast": "overrun", "Pair.slow": "none"}
+    assert response_ms(out) == {"Pair.fast": 12, "Pair.slow": 6}
+    assert code == 4
+
+
 def test_the_platform_is_said_in_one_line(tmp_path, capsys):
     path = platform_file(tmp_path, "cores: 2\npolicy: fixed-priority\n")
     _, out, _ = verify(capsys, PAIR, "--timed", "--schedulability", "--platform", path)
@@ -140,6 +164,15 @@ def test_a_shorter_best_case_gives_a_longer_response_time(tmp_path, capsys):
     assert steps.index("Anomaly.mid:end_start") < steps.index("Anomaly.low:exec_start") \
         < steps.index("Anomaly.high:exec_start")
     assert early["Anomaly.low"] == exact["Anomaly.low"] == 16  # mid 4, high 2, low 10 in the worst case
+
+
+def test_the_platform_file_delay_overrides_the_description(tmp_path, capsys):
+    # high released at 5 ms instead of 3: low was granted at 4 ms when mid ended, and holds the core to 14 ms.
+    path = platform_file(tmp_path, EXACT + "tasks:\n  Anomaly.high:\n    delay: 5 ms\n")
+    _, out, _ = verify(capsys, ANOMALY, "--timed", "--platform", path, "--response-times")
+    assert response_ms(out)["Anomaly.high"] == 11, out
+    steps = printed_trace(out, "Anomaly.high: ")
+    assert [ms for ms, label in steps if label == "Anomaly.high:period"][0] == 5
 
 
 def test_the_anomaly_is_seen_by_a_latency_observer_too(tmp_path, capsys):
