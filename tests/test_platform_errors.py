@@ -81,3 +81,33 @@ def test_a_missing_platform_file_is_bad_input(tmp_path, capsys):
 def test_platform_needs_timed(tmp_path, capsys):
     code, _, err = verify(capsys, ANOMALY, "--platform", platform_file(tmp_path, "cores: 1\n"))
     assert code == 2 and "--platform needs --timed" in err
+
+
+# --------------------------------------------------------------------------- bad client missions
+
+ZENO = FIXTURES / "Zeno.gen"
+
+
+@pytest.mark.parametrize("text,line,column,message", [
+    ("steps:\n  - send: Zeno.C\n    expect: ok\n", 2, 5, "client: no service Zeno.C in the model"),
+    ("steps:\n  - send: Zeno.A\n    after: soon\n", 3, 12,
+     "after: a number of seconds (0 or more) expected, got 'soon'"),
+    ("steps:\n  - send: Zeno.A\n    until: begun\n", 3, 12,
+     "until: one of queued, started, final expected, got 'begun'"),
+])
+def test_a_bad_client_mission_is_located(tmp_path, capsys, text, line, column, message):
+    path = platform_file(tmp_path, text, "mission.yaml")
+    code, out, err = verify(capsys, ZENO, "--timed", "--schedulability", "--client", path)
+    assert code == 1
+    assert f"{path}:{line}:{column}: error: {message}" in err, err
+    assert "overrun" not in out
+
+
+def test_a_missing_client_mission_is_bad_input(tmp_path, capsys):
+    code, _, err = verify(capsys, ZENO, "--timed", "--client", tmp_path / "nowhere.yaml")
+    assert code == 1 and f"{tmp_path / 'nowhere.yaml'}: no such mission file" in err
+
+
+def test_client_needs_timed(capsys):
+    code, _, err = verify(capsys, ZENO, "--client", FIXTURES / "a_then_b.yaml")
+    assert code == 2 and "--client needs --timed" in err
