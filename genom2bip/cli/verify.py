@@ -230,11 +230,10 @@ def _zones(model, args) -> bool:
     try:
         explorer(model)
     except ZonesUnsupported as exc:
-        note = f"clock zones do not take this model ({exc}): exploring tick by tick"
-        if choice == "zones":
-            error(note)
+        if choice == "zones":  # asked for: nothing is explored, so the message does not say it is
+            error(f"--time-search zones: clock zones do not take this model ({exc}); try --time-search ticks")
             raise Failure(EXIT_USAGE) from None
-        print(f"note: {note}")
+        print(f"note: clock zones do not take this model ({exc}): exploring tick by tick")
         return False
     return True
 
