@@ -183,3 +183,11 @@ def test_an_unbounded_response_in_json(tmp_path):
     assert data["trace"]["loop"] is not None and data["trace"]["timed"]
     ticks = [s["tick"] for s in data["trace"]["steps"]]
     assert ticks[-1] > ticks[data["trace"]["loop"]]  # the loop lets time pass
+
+
+def test_zones_asked_for_on_a_model_they_do_not_take_is_refused_without_exploring(capsys):
+    # Without a platform the schedulers count busy ticks as data, which clock zones do not take.
+    code, out, err = verify(capsys, PAIR, "--timed", "--schedulability", "--time-search", "zones")
+    assert code == 2
+    assert "--time-search zones: clock zones do not take this model (" in err
+    assert "exploring tick by tick" not in err and "overrun" not in out
