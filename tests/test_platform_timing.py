@@ -212,6 +212,21 @@ def test_a_mission_keeps_its_order(tmp_path, capsys):
     assert times["Zeno.B:trigger"] - times["Zeno.A:finish"] >= 10  # 'after: 10 ms'
 
 
+def test_execution_times_of_service_codels_override_their_wcet(tmp_path, capsys):
+    # A then B, never in one period: the task's cycle is one codel long, A's or B's.
+    mission = FIXTURES / "a_then_b.yaml"
+    exact = platform_file(tmp_path, "cores: 1\nbest: wcet\n", "exact.yaml")
+    _, out, _ = verify(capsys, ZENO, "-DPERIOD=10", "--timed", "--platform", exact, "--client", mission,
+                       "--response-times")
+    assert response_ms(out)["Zeno.main"] == 6, out
+    faster = platform_file(tmp_path, "cores: 1\nbest: wcet\nexecution:\n  Zeno.A.a_run: 2 ms\n"
+                                     "  Zeno.B.b_run: [1 ms, 3 ms]\n", "faster.yaml")
+    _, out, _ = verify(capsys, ZENO, "-DPERIOD=10", "--timed", "--platform", faster, "--client", mission,
+                       "--response-times")
+    assert response_ms(out)["Zeno.main"] == 3, out
+    assert "one tick is 1 ms" in out  # the tick divides the platform's durations too
+
+
 def test_until_started_lets_the_next_request_share_the_period(tmp_path, capsys):
     one = platform_file(tmp_path, "cores: 1\n")
     code, out, _ = verify(capsys, ZENO, "-DPERIOD=10", "--timed", "--schedulability", "--platform", one,
