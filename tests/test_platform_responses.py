@@ -75,7 +75,7 @@ def test_every_maximum_is_reached_by_its_trace(tmp_path, name, gen, defines, pla
         assert trace is not None and trace["timed"], data
         steps = [(s["time_ms"], s["label"]) for s in trace["steps"]]
         end = steps[-1][0] if steps else 0.0
-        owner = details["observer"].rsplit(".", 1)[0]
+        owner = details["owner"]
         seen = observed_response(owner, details["kind"], steps, end)
         assert seen == details["value_ms"], f"{owner}: the trace shows {seen} ms, the result says " \
                                             f"{details['value_ms']} ms\n{trace['steps']}"
