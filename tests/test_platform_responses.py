@@ -81,6 +81,18 @@ def test_every_maximum_is_reached_by_its_trace(tmp_path, name, gen, defines, pla
                                             f"{details['value_ms']} ms\n{trace['steps']}"
 
 
+@pytest.mark.parametrize("name,gen,defines,platform,mission", CASES, ids=[c[0] for c in CASES])
+def test_every_overrun_trace_holds_a_period_open_longer_than_the_period(tmp_path, name, gen, defines, platform,
+                                                                       mission):
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    violated = [r.to_json() for r in check_timing(model, ("overrun",)) if r.verdict.value == "violated"]
+    assert bool(violated) == (name in ("pair-1-edf", "pair-1-fp", "shared-slow", "zeno-services"))
+    for data in violated:
+        steps = [(s["time_ms"], s["label"]) for s in data["trace"]["steps"]]
+        owner = data["details"]["observer"].rsplit(".", 1)[0]
+        assert observed_response(owner, "task", steps, steps[-1][0]) > data["details"]["bound_ms"], data["trace"]
+
+
 @pytest.mark.parametrize("name,gen,defines,platform,mission", SMALL, ids=[c[0] for c in SMALL])
 def test_zones_and_ticks_agree_on_the_maxima(tmp_path, name, gen, defines, platform, mission):
     model = model_of(tmp_path, gen, defines, platform, mission)
