@@ -166,6 +166,14 @@ def test_a_shorter_best_case_gives_a_longer_response_time(tmp_path, capsys):
     assert early["Anomaly.low"] == exact["Anomaly.low"] == 16  # mid 4, high 2, low 10 in the worst case
 
 
+def test_a_delayed_first_release_is_there_to_choose_from_at_its_instant(tmp_path, capsys):
+    # mid takes exactly 3 ms and high is released at 3 ms: at that instant the core goes to high (priority 0),
+    # as it does at every later release (23 ms, 43 ms...), not to low (priority 2), which would keep it 10 ms.
+    path = platform_file(tmp_path, EXACT + "execution:\n  Anomaly.mid.mid_step: 3 ms\n")
+    _, out, _ = verify(capsys, ANOMALY, "--timed", "--platform", path, "--response-times")
+    assert response_ms(out)["Anomaly.high"] == 2, out
+
+
 def test_the_platform_file_delay_overrides_the_description(tmp_path, capsys):
     # high released at 5 ms instead of 3: low was granted at 4 ms when mid ended, and holds the core to 14 ms.
     path = platform_file(tmp_path, EXACT + "tasks:\n  Anomaly.high:\n    delay: 5 ms\n")
