@@ -104,7 +104,7 @@ def client_text(requests: list[str]) -> str:
     return f"mission: robnav-client\nsteps:\n{steps}"
 
 
-def run(paths, include, platform, client, exceptions, max_states, queue) -> None:
+def run(paths, include, platform, client, exceptions, max_states, shown, queue) -> None:
     """One ``nc``: the timing checks and response times, in a process of its own (its peak memory is the run's)."""
     from genom2bip.loading import TimeSettings
     from genom2bip.verify.model import build_model
@@ -114,7 +114,7 @@ def run(paths, include, platform, client, exceptions, max_states, queue) -> None
 
     class Shown(Listener):
         def progress(self):
-            return Progress()  # on a terminal: states, rate, frontier and memory, once a second
+            return Progress(force=shown)  # states, rate, frontier and memory: on a terminal, or asked
 
     settings = TimeSettings(platform=platform, client=client, responses=True, exceptions=exceptions)
     model = build_model(paths, include_dirs=[include], no_rules=True, time=settings)
@@ -141,6 +141,7 @@ def main() -> None:
     ap.add_argument("--cores", default="1-5", help="a range (1-5) or a list (3,4)")
     ap.add_argument("--exceptions", action="store_true", help="codels may also end in their service's exceptions")
     ap.add_argument("--max-states", type=int, default=5_000_000)
+    ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when it is not a terminal")
     ap.add_argument("--keep", type=Path, help="write the platform files and the client mission there")
     args = ap.parse_args()
     from genom2bip.parser import parse_paths
@@ -165,7 +166,7 @@ def main() -> None:
         platform.write_text(platform_text(nc, execution, offsets))
         queue = ctx.Queue()
         proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
-                                             args.exceptions, args.max_states, queue))
+                                             args.exceptions, args.max_states, args.progress, queue))
         proc.start()
         got = queue.get()
         proc.join()
