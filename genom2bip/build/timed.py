@@ -24,7 +24,7 @@ Ticks are ordinary ports and data (docs/verification.md, *Time* says why).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import reduce
 
 from genom2bip import ir
@@ -405,6 +405,72 @@ def arm_requests(level, watch) -> None:
                 watch(opening, End(acceptor, port))
 
 
+def start_windows(level, watch, platform: bool) -> None:
+    """An activity of a periodic task starts only when its task takes up new work, as GenoM3's execution task does.
+
+    The execution task looks for newly started activities when its period
+    opens and runs their codels in that period; a request that comes later
+    starts its activity at the next opening.  Each such activity atom gets a
+    ``window`` flag, set by the task's period opening and cleared once the
+    task runs (its grant on a platform, else its first codel) or the period
+    closes; its ``start`` needs it and closes it.  Starts at the instant of an
+    opening come before the task runs (priorities), so no request waits a
+    period more for a tie.
+    """
+    periodic = {task for task, label in level.task_labels.items()
+                if any(w.label == f"{label}:period" for w in level.asm.wires) and task + ("timer",) in level.asm.atoms}
+    for parts in level.services.values():
+        if parts.service.kind != ir.ServiceKind.ACTIVITY or parts.task not in periodic:
+            continue
+        label = level.task_labels[parts.task]
+        starts = [w for w in level.asm.wires if w.label == f"{parts.label}:start"]
+        if not starts:
+            continue
+        inst = level.asm.atoms[parts.activity]
+        t = level.atom_types[inst.type]
+        if sum(1 for i in level.asm.atoms.values() if i.type == inst.type) > 1:  # a type of its own to change
+            t = replace(t, name=f"{t.name}_{ident('_'.join(parts.path))}")
+            level.atom_types[t.name] = t
+            inst.type = t.name
+        window = Var("window")
+        t.data = list(t.data) + [DataDecl("bool", "window")]
+        t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action) + [Assign(window, Const(False))])
+        t.ports = list(t.ports) + [PortDecl(library.PORT, "window_open", exported=True),
+                                   PortDecl(library.PORT, "window_shut", exported=True)]
+        t.transitions = [replace(tr, guard=Binary("&&", tr.guard, window) if tr.guard is not None else window,
+                                 action=list(tr.action) + [Assign(window, Const(False))])
+                         if tr.port == "start" else tr for tr in t.transitions]
+        t.transitions += [Transition(port, [p], [p], action=[Assign(window, Const(value))])
+                          for port, value in (("window_open", True), ("window_shut", False)) for p in t.places]
+        for w in level.asm.wires:
+            if w.label != f"{label}:period":
+                continue
+            joined = next((e.port for e in w.ends if isinstance(e, End) and e.atom == parts.activity), None)
+            if joined is None:
+                watch(w, End(parts.activity, "window_open"))
+                continue
+            # The opening already wakes this activity (a paused one goes on): that port opens the window too,
+            # in every place (where it did nothing, it now only opens it).
+            has = {src for tr in t.transitions if tr.port == joined for src in tr.sources}
+            t.transitions = [replace(tr, action=list(tr.action) + [Assign(window, Const(True))])
+                             if tr.port == joined else tr for tr in t.transitions]
+            t.transitions += [Transition(joined, [p], [p], action=[Assign(window, Const(True))])
+                              for p in t.places if p not in has]
+        runs = [w for w in level.asm.wires if w.label == f"{label}:grant"] if platform else []
+        runs = (runs or list(level.task_execs.get(parts.task, []))) + [w for w in level.asm.wires
+                                                                       if w.label == f"{label}:sleep"]
+        for k, w in enumerate(runs):
+            joined = next((e.port for e in w.ends if isinstance(e, End) and e.atom == parts.activity), None)
+            if joined is None:
+                watch(w, End(parts.activity, "window_shut"))
+            else:  # its own codel, or its being quiet when the period closes: that port closes the window
+                t.transitions = [replace(tr, action=list(tr.action) + [Assign(window, Const(False))])
+                                 if tr.port == joined else tr for tr in t.transitions]
+            for j, start in enumerate(starts):
+                level.asm.rank(Rank(f"{ident('_'.join(parts.path))}_start_{j}_before_{w.name}_{k}", w, start,
+                                    owner=(), comment="a request there when the task takes up work starts with it"))
+
+
 #: Service reports that end a request.
 FINALS = ("finish", "fail", "interrupted", "reject")
 
@@ -498,8 +564,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
     for parts in level.services.values():
         opens = [w for w in level.asm.wires if w.label == f"{parts.label}:trigger"]
         closes = [w for w in level.asm.wires if w.label in {f"{parts.label}:{p}" for p in FINALS}]
-        if not (opens and closes and parts.fsm.states):
-            continue
+        if not (closes and parts.fsm.states):
+            continue  # no trigger (a client that never sends it): an observer never opened says "never requested"
         period = timers.get(parts.task, max(timers.values(), default=1))
         cap = None if _loops(parts.fsm) else 2 * (_longest(parts.fsm) + 2) * period
         observe((ident("_".join(parts.path + ("response",))),), parts.label, opens, closes,
@@ -566,6 +632,7 @@ def apply(level, options: TimeOptions) -> Timing:
             urgent += added.urgent
         else:
             arm_requests(level, watch)
+        start_windows(level, watch, options.platform is not None)
 
     if timers:
         level.atom_types["PeriodObserver"] = overrun_type()
