@@ -73,9 +73,13 @@ class Platform:
     def describe(self) -> str:
         """One line for reports: ``2 cores, cooperative EDF``."""
         if not self.path:
-            return "a core per task, codels taking their WCET (no --platform)"
+            return DEDICATED
         policy = "cooperative EDF" if self.policy == "edf" else "fixed priority (non-preemptive at codel boundaries)"
         return f"{self.cores} core{'s' if self.cores != 1 else ''}, {policy}"
+
+
+#: What a timed model's tasks run on without --platform, in words.
+DEDICATED = "a core per task, codels taking their WCET (no --platform)"
 
 
 def dedicated(description: ir.Description) -> Platform:
@@ -144,7 +148,8 @@ class _Reader(rules._Reader):
     def component(self, node: yaml.Node, name: str) -> ir.Component | None:
         found = next((c for c in self.description.components if c.name == name), None)
         if found is None:
-            self.error(node, f"unknown component '{name}'", _suggest(name, [c.name for c in self.description.components]))
+            names = [c.name for c in self.description.components]
+            self.error(node, f"unknown component '{name}'", _suggest(name, names))
         return found
 
     def codel(self, node: yaml.Node) -> tuple[str, str, str] | None:
@@ -159,7 +164,8 @@ class _Reader(rules._Reader):
             return None
         owners = codel_owners(component)
         if parts[1] not in owners:
-            self.error(node, f"component {parts[0]} has no task or service '{parts[1]}'", _suggest(parts[1], list(owners)))
+            self.error(node, f"component {parts[0]} has no task or service '{parts[1]}'",
+                       _suggest(parts[1], list(owners)))
             return None
         names = list(dict.fromkeys(c.name for c in owners[parts[1]]))
         if parts[2] not in names:
@@ -190,7 +196,8 @@ class _Reader(rules._Reader):
         fields: dict[str, yaml.Node] = {}
         for k, v in self.mapping(root, "the platform") or []:
             if k.value not in KEYS:
-                self.error(k, f"unknown key '{k.value}'", _suggest(k.value, list(KEYS)) or f"keys are {', '.join(KEYS)}")
+                self.error(k, f"unknown key '{k.value}'",
+                           _suggest(k.value, list(KEYS)) or f"keys are {', '.join(KEYS)}")
             else:
                 fields[k.value] = v
         if "cores" not in fields:

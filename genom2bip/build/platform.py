@@ -31,8 +31,7 @@ from dataclasses import dataclass, field
 from genom2bip import ir
 from genom2bip.build import library
 from genom2bip.build.assembly import End, Rank, Wire
-from genom2bip.build.names import ident, place
-from genom2bip.build.service import FAILED, FINISHED, INTERRUPTED, exec_port
+from genom2bip.build.names import ident
 from genom2bip.platform import LOWEST_PRIORITY, Interval, Platform
 from runtime.model import (
     Annotation,
@@ -439,8 +438,8 @@ class PlatformBuilder:
         if self.tasks[c.task].core and self.platform.policy != "edf":
             end_ends.append(End(self.cores, "give"))
         prefix = w.label.rsplit(":", 1)[0]
-        end = self.asm.wire(Wire(level._rendezvous(end_ends), end_ends, f"end_{state}", w.owner, f"{prefix}:end_{state}",
-                                 comment=f"codel {c.codel.name} ends", annotations=list(w.annotations)))
+        self.asm.wire(Wire(level._rendezvous(end_ends), end_ends, f"end_{state}", w.owner, f"{prefix}:end_{state}",
+                           comment=f"codel {c.codel.name} ends", annotations=list(w.annotations)))
         self.urgent.append(w)
 
     def periods(self, info: TaskInfo) -> None:
@@ -515,8 +514,16 @@ class PlatformBuilder:
                     if w.label == f"{i.label}:period" and id(w) not in firsts]
         for i in tasks:
             for w in openings:
-                self.asm.rank(Rank(f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}", self.grants[i.path],
-                                   w, owner=(), comment="the tasks released at an instant are all there to choose from"))
+                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
+                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(),
+                                   comment="the tasks released at an instant are all there to choose from"))
+        for w in (w for w in self.asm.wires if id(w) in firsts):  # a first release: at the latest instant of its delay
+            timer = next(e.atom for e in w.ends if isinstance(e, End) and e.port == "first")
+            forced = Binary(">=", self.exposed_t(timer), self.asm.atoms[timer].args[-1])
+            for i in tasks:
+                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
+                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(), guard=forced,
+                                   comment="a first release that can wait no longer is there to choose from"))
         if self.platform.policy == "edf":
             left = {i.path: self.time_left(i) for i in tasks}
             for a in tasks:
@@ -547,12 +554,16 @@ class PlatformBuilder:
         """Ticks to the end of the task's period: ``period - t``, read from its timer (exported up to the root)."""
         if not info.timer:
             return Const(NO_DEADLINE)
-        timer = self.asm.atoms[info.path + ("timer",)]
-        for name in {timer.type, "Timer"} & set(self.level.atom_types):
+        ticks = self.asm.atoms[info.path + ("timer",)].args[1]  # Timer(period_us, ticks)
+        return Binary("-", ticks, self.exposed_t(info.path + ("timer",)))
+
+    def exposed_t(self, timer: tuple[str, ...]):
+        """A timer's clock ``t`` read at the root (priorities between tasks read it there)."""
+        inst = self.asm.atoms[timer]
+        for name in {inst.type, "Timer"} & set(self.level.atom_types):
             for d in self.level.atom_types[name].data:
                 d.exported = d.exported or d.name == "t"
-        ticks = timer.args[1]  # Timer(period_us, ticks)
-        return Binary("-", ticks, self.asm.expose(info.path + ("timer",), "t"))
+        return self.asm.expose(timer, "t")
 
 
 def apply(level, platform: Platform, tick: int, default_wcet_us: int) -> list[Wire]:

@@ -190,11 +190,17 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
     responses = bool(getattr(args, "response_times", False))
     deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers or responses)
     load_externs(args.externs)
-    if (observers or responses) and _zones(model, args):
+    zones = bool(observers or responses) and _zones(model, args)
+    if responses and not zones:  # response times are the zone explorer's: ticks would print nothing for them
+        error("--response-times: response times are measured with clock zones; "
+              + ("drop --time-search ticks" if getattr(args, "time_search", None) == "ticks" else
+                 "this model is not one clock zones take (see the note above)"))
+        raise Failure(EXIT_USAGE)
+    if zones:
         from genom2bip.cli.verify_timed import check_timing_zones
         if args.method == "explore":
             print(f"model {model.title}")
-        _platform_line(model)
+        platform_line(model)
         worst = check_timing_zones(model, observers, responses, options, listener)
         if not (deadlock or properties or args.aut or args.dot or args.promela):
             return max(compositional, worst)
@@ -243,10 +249,13 @@ def _platform_of(model) -> str | None:
     return ann.arguments.get("platform") if ann is not None else None
 
 
-def _platform_line(model) -> None:
-    platform = _platform_of(model)
-    if platform:
-        print(f"platform: {platform}")
+def platform_line(model) -> None:
+    """What the tasks of a timed model run on, in one line (a timed model without --platform says so too)."""
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    if ann is None:
+        return
+    from genom2bip.platform import DEDICATED
+    print(f"platform: {ann.arguments.get('platform') or DEDICATED}")
 
 
 def _observer_kinds(args) -> set[str]:

@@ -143,6 +143,8 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
         print("observers: none in the model" + ("" if tick else " (build it with --timed)"))
         return EXIT_OK
     if tick:
+        from genom2bip.cli.verify import platform_line
+        platform_line(model)
         print(f"time: one tick is {tick / 1000:g} ms")
     worst = EXIT_OK
     for atom in atoms:
@@ -210,7 +212,7 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
                 timed_trace(r.trace)
                 if r.trace.loop is not None:
                     print(f"    ... and back to the state after step {r.trace.loop}, forever")
-            elif r.message and r.verdict is not Verdict.INCONCLUSIVE:
+            elif r.message and r.verdict is not Verdict.INCONCLUSIVE and r.message != _response_value(r):
                 print(f"{owner}: {r.message}")
         if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
             worst = max(worst, EXIT_INCONCLUSIVE)

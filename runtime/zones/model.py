@@ -432,7 +432,7 @@ def _activity(flat, places, steps, per_atom) -> None:
             place.active = a & mine
             stopped = place.active - place.advancing
             if place.ticks and stopped:
-                names = ", ".join(v for (i, v) in [(k, n) for n, k in per_atom[fa.index].items()] if v in stopped)
+                names = ", ".join(n for n, k in per_atom[fa.index].items() if k in stopped)
                 raise Unsupported(f"atom {fa.name}: clock(s) {names} stand still in place "
                                   f"{fa.places[bit.bit_length() - 1]} while a guard may read them")
 
