@@ -34,7 +34,7 @@ class Node:
     """A stored symbolic state: its discrete state, zone, and how it was reached (for traces)."""
 
     state: tuple
-    zone: np.ndarray
+    zone: np.ndarray | None  # None: a step into a zone another node covers (that node's zone stands for it)
     parent: int
     via: int  # interaction index of the erased engine, -1 for an initial state
     guard: list  # the bounds the step added to its parent's zone (before resets)
@@ -340,7 +340,8 @@ class ZoneExplorer:
                 stack = np.stack([self.nodes[k].zone for k in kept])
                 bigger = np.flatnonzero((stack >= zone).all(axis=(1, 2)))
                 if len(bigger):
-                    if parent >= 0:
+                    if parent >= 0:  # the step is kept for cycles (lassos), its zone not: the covering node's stands
+                        step.zone, step.by = None, kept[bigger[0]]
                         self.out[parent].append((kept[bigger[0]], step))
                     return
                 for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):

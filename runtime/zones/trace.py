@@ -73,7 +73,8 @@ def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]])
             for c, v in z.guard(n.via, path[step - 1].state)[1]:
                 origin[c] = (step, v)
         nxt = step + 1 if step + 1 < k else end
-        limits = z.limits(n.state, n.zone) if n.grown else None
+        zone = n.zone if n.zone is not None else z.nodes[n.by].zone
+        limits = z.limits(n.state, zone) if n.grown else None
         if limits is None:
             le(nxt, step, 0)
             continue
