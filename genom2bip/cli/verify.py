@@ -200,6 +200,7 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         from genom2bip.cli.verify_timed import check_timing_zones
         if args.method == "explore":
             print(f"model {model.title}")
+        from genom2bip.cli.verify_timed import platform_line
         platform_line(model)
         worst = check_timing_zones(model, observers, responses, options, listener)
         if not (deadlock or properties or args.aut or args.dot or args.promela):
@@ -247,15 +248,6 @@ def _zones(model, args) -> bool:
 def _platform_of(model) -> str | None:
     ann = next((a for a in model.package.annotations if a.name == "timed"), None)
     return ann.arguments.get("platform") if ann is not None else None
-
-
-def platform_line(model) -> None:
-    """What the tasks of a timed model run on, in one line (a timed model without --platform says so too)."""
-    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
-    if ann is None:
-        return
-    from genom2bip.platform import DEDICATED
-    print(f"platform: {ann.arguments.get('platform') or DEDICATED}")
 
 
 def _observer_kinds(args) -> set[str]:

@@ -143,7 +143,6 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
         print("observers: none in the model" + ("" if tick else " (build it with --timed)"))
         return EXIT_OK
     if tick:
-        from genom2bip.cli.verify import platform_line
         platform_line(model)
         print(f"time: one tick is {tick / 1000:g} ms")
     worst = EXIT_OK
@@ -230,3 +229,12 @@ def _response_value(r) -> str:
     if r.value_ticks is None:
         return r.message if r.message == "never requested" else f"more than {r.ms(r.cap_ticks):g} ms"
     return f"{r.value_ms:g} ms"
+
+
+def platform_line(model) -> None:
+    """What the tasks of a timed model run on, in one line (a timed model without --platform says so too)."""
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    if ann is None:
+        return
+    from genom2bip.platform import DEDICATED
+    print(f"platform: {ann.arguments.get('platform') or DEDICATED}")
