@@ -228,3 +228,25 @@ def test_a_sweep_over_cores_records_each_response_time_tables_and_draws_them(tmp
     assert table[4].split() == ["starved", "response-times", "Starved.idle", "unbounded", "1", "ms"]
     assert f"picture: {out / 'cores.png'}" in proc.stdout
     assert (out / "cores.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@needs_cc
+@pytest.mark.parametrize("of, verdict, values", [
+    # Watch pauses for ever once started: its request never ends; Once ends within 14 ms (docs of Endless.gen)
+    ("[services]", "violated", {"Endless.Watch": "unbounded", "Endless.Once": 14}),
+    ("[tasks]", "holds", {"Endless.main": None}),
+])
+def test_the_verdict_and_values_are_those_of_the_tasks_or_services_recorded(tmp_path, of, verdict, values):
+    (tmp_path / "fp.yaml").write_text("cores: 1\npolicy: fixed-priority\nbest: wcet\n")
+    path = tmp_path / "c.yaml"
+    path.write_text(f"models:\n  m: {{paths: [{PLATFORM / 'Endless.gen'}], timed: {{platform: fp.yaml}}}}\n"
+                    f"checks: [{{check: response-times, model: m, of: {of}}}]\n")
+    (job,) = expand(read_campaign(path)).jobs
+    record = run_job(job)
+    assert (record["status"], record["verdict"]) == ("done", verdict), record["message"]
+    assert set(record["values"]) == set(values) and record["of"] == [of.strip("[]")]
+    for owner, value in values.items():
+        if value is None:  # main's cycle ends within its period, whichever services run
+            assert 0 < record["values"][owner] <= 10
+        else:
+            assert record["values"][owner] == value

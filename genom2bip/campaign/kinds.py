@@ -143,17 +143,17 @@ def _response_targets(check, model) -> list[str]:
 
 
 def _run_responses(model, job, options):
+    """The response times of the job's tasks and services (``of``, ``only``): its verdict is theirs."""
     from genom2bip.verify.zones import check_response_times
 
-    return check_response_times(model, options)
+    wanted = {k[:-1] for k in (job.of or RESPONSE_OWNERS)}  # tasks -> task, services -> service
+    return check_response_times(model, options,
+                                owners=lambda r: r.kind in wanted and (job.only is None or r.owner in job.only))
 
 
 def _response_figures(result, job) -> dict[str, float | str]:
-    """Each recorded owner's response time (ms, or a word where there is none): tasks, services, ``only``."""
-    kinds = {"tasks": "task", "services": "service"}
-    wanted = {kinds[k] for k in (job.of or RESPONSE_OWNERS)}
-    return {r.owner: value for r, value in zip(result.responses, result.values().values())
-            if r.kind in wanted and (job.only is None or r.owner in job.only)}
+    """Each recorded task's or service's response time: ms, or a word where there is none."""
+    return result.values()
 
 
 def _only(check, names: list[str], what: str) -> list[str]:

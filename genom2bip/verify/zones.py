@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 from genom2bip.verify.model import Model, tick_us
 from genom2bip.verify.options import Listener, SearchOptions
@@ -214,12 +214,16 @@ def response_value(r: ResponseResult) -> float | str:
     return f"more than {r.ms(r.cap_ticks):g} ms"
 
 
-def check_response_times(model: Model, options: SearchOptions | None = None,
-                         listener: Listener | None = None) -> ResponseTimes:
-    """Every task's and service's response time (:func:`check_timing` with ``responses``), as one result."""
+def check_response_times(model: Model, options: SearchOptions | None = None, listener: Listener | None = None,
+                         owners: Callable[[ResponseResult], bool] | None = None) -> ResponseTimes:
+    """Every task's and service's response time (:func:`check_timing` with ``responses``), as one result;
+    ``owners`` keeps some (the tasks): the verdict is theirs."""
     found = [r for r in check_timing(model, (), True, options, listener) if isinstance(r, ResponseResult)]
     if not found:
         raise LookupError("no response-time observer in this model: build it with TimeSettings(responses=True)")
+    found = [r for r in found if owners is None or owners(r)]
+    if not found:
+        raise LookupError("no task or service of this model is among those asked for")
     first = found[0]
     unbounded = [r for r in found if r.unbounded]
     stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE]
