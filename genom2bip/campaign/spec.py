@@ -8,11 +8,14 @@ models:
   dala-timed:
     paths: [.]                      # rules.yaml of a directory is read, as verify reads it
     timed: true                     # or {tick: 1 ms, default-wcet: 25 ms, observers: observers.yaml}
+  sensing:
+    paths: [RFLEX.gen, POM.gen]
+    timed: {platform: platforms/one-core.yaml, client: missions/sensing.yaml}
   corpus: {each: "${corpus}"}       # one model per .gen file of a directory (--set corpus=DIR)
 options: {max-states: 2000000}      # every check's search options (verify's, without dashes in front)
 vary: {wcet-scale: [1, 2]}          # every check's axes: the cross product of their values
 checks:
-  - check: property                 # deadlock, property or observer (genom2bip/campaign/kinds.py)
+  - check: property                 # deadlock, property, observer, response-times (genom2bip/campaign/kinds.py)
     model: ndd
     files: [properties/NDD.mcl]     # one job per property (only: [names] for some)
     method: explore                 # or compositional: invariants, localization
@@ -20,6 +23,9 @@ checks:
     model: dala-timed
     method: compositional
     vary: {default-wcet: [0 ms, 25 ms]}   # this check's axes, over the file's
+  - check: response-times           # one job per point: every task's response time (of: [tasks, services])
+    model: sensing
+    vary: {cores: [1, 2, 3, 4], policy: [edf, fixed-priority]}   # over the platform file's
 ```
 """
 from __future__ import annotations
