@@ -91,6 +91,8 @@ def test_a_model_s_platform_and_client_are_located(tmp_path, model, token, messa
     ("{check: response-times, model: pair, files: [x]}", "files", "'files' belongs to another kind of check (this "
                                                                   "one takes: check, model, method, options, timeout, "
                                                                   "vary, doc, of, only)"),
+    ("{check: response-times, model: pair, method: compositional}", "compositional",
+     "response times are measured by one exploration with clock zones: method explore (the default)"),
     ("{check: response-times, model: pair, only: [Pair.nope]}", "[Pair",
      "no task or service Pair.nope (found: Pair.fast, Pair.slow)"),
 ])

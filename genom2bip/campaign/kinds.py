@@ -137,6 +137,9 @@ def _response_targets(check, model) -> list[str]:
     there, named now)."""
     from genom2bip.verify.zones import response_owners
 
+    if check.method != "explore":
+        raise TargetError("method", "response times are measured by one exploration with clock zones: "
+                                    "method explore (the default)")
     if check.only is not None:
         _only(check, list(response_owners(model())), "task or service")
     return ["response times"]
