@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
-from typing import Any, ClassVar
+from dataclasses import dataclass, field
+from typing import Any, Callable, ClassVar
 
 from genom2bip.verify.model import Model, tick_us
 from genom2bip.verify.options import Listener, SearchOptions
@@ -179,3 +179,70 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
     trace, message = _trace(z, path, [], space, tick, loop=entry)
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
                           message=message or "a request can wait for ever", **common)
+
+
+@dataclass
+class ResponseTimes(CheckResult):
+    """Every response time of a model from one exploration: holds when each one has a bound, violated when one
+    has none (``trace``: its lasso), inconclusive when the search stopped (the values so far are not maxima)."""
+
+    check: ClassVar[str] = "response-times"
+
+    responses: list[ResponseResult] = field(default_factory=list)
+
+    def values(self) -> dict[str, float | str]:
+        """Each owner's response time in ms, or in words where there is no number (``unbounded``, ``never
+        requested``, ``more than 200 ms``, ``inconclusive``, ``bounded, not measured``)."""
+        return {r.owner: response_value(r) for r in self.responses}
+
+    def details(self) -> dict[str, Any]:
+        return {"values": self.values(), "responses": [r.to_json() for r in self.responses]}
+
+
+def response_value(r: ResponseResult) -> float | str:
+    """A response time as a number of ms, or a word saying why there is none."""
+    if r.verdict is Verdict.INCONCLUSIVE:
+        return "inconclusive"
+    if r.unbounded:
+        return "unbounded"
+    if r.value_ticks is not None:
+        return r.value_ms
+    if r.message == "never requested":
+        return r.message
+    if r.kind == "service" and "not measured" in r.message:
+        return "bounded, not measured"
+    return f"more than {r.ms(r.cap_ticks):g} ms"
+
+
+def check_response_times(model: Model, options: SearchOptions | None = None, listener: Listener | None = None,
+                         owners: Callable[[ResponseResult], bool] | None = None) -> ResponseTimes:
+    """Every task's and service's response time (:func:`check_timing` with ``responses``), as one result;
+    ``owners`` keeps some (the tasks): the verdict is theirs."""
+    found = [r for r in check_timing(model, (), True, options, listener) if isinstance(r, ResponseResult)]
+    if not found:
+        raise LookupError("no response-time observer in this model: build it with TimeSettings(responses=True)")
+    found = [r for r in found if owners is None or owners(r)]
+    if not found:
+        raise LookupError("no task or service of this model is among those asked for")
+    first = found[0]
+    unbounded = [r for r in found if r.unbounded]
+    stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE]
+    if stopped:
+        verdict, message = Verdict.INCONCLUSIVE, f"stopped by {first.limit or 'a limit'}: the values are not maxima"
+    elif unbounded:
+        verdict, message = Verdict.VIOLATED, "no bound: " + ", ".join(r.owner for r in unbounded)
+    else:
+        verdict, message = Verdict.HOLDS, "every response time has a bound"
+    return ResponseTimes(f"response times of {model.title}", verdict, first.figures,
+                         unbounded[0].trace if unbounded and not stopped else None, first.method,
+                         first.limit if stopped else "", message, responses=found)
+
+
+def response_owners(model: Model) -> dict[str, str]:
+    """The tasks and services whose response times the model measures: owner -> ``task`` or ``service``."""
+    names = _owners(model)
+    out = {}
+    for atom in observers(model, RESPONSE_KINDS):
+        owner = names.get(atom.path) or atom.path.rsplit(".", 1)[0]
+        out[owner] = "service" if atom.path in names else "task"
+    return out
