@@ -137,6 +137,12 @@ class TimeSettings:
     tick_us: int | None = None  # None: the gcd of every period, WCET and observer bound
     default_wcet_us: int | None = None  # None: the builder's default (0, with a warning naming the codels)
     observers: str | Path | None = None  # latency observers (YAML); None: observers.yaml in the directory given
+    platform: str | Path | None = None  # the computer (YAML, genom2bip/platform.py); None: a core per task
+    cores: int | None = None  # over the platform file's; without a file, a platform of that many cores (EDF)
+    policy: str | None = None  # over the platform file's (edf or fixed-priority); needs a file or ``cores``
+    client: str | Path | None = None  # a mission whose steps are the environment; None: any request, once per period
+    responses: bool = False  # response-time observers (a task's release to its end, a request to its report)
+    exceptions: bool = True  # False: codels never throw (their declared yields only)
 
 
 def observers_file(paths: Sequence[str | Path], observers: str | Path | None = None) -> Path | None:
@@ -165,4 +171,60 @@ def time_options(description: Description, paths: Sequence[str | Path], settings
         latencies = load_observers(path, description, reporter)
         (diagnostics or Diagnostics()).reporter(reporter)
     default = DEFAULT_WCET_US if settings.default_wcet_us is None else settings.default_wcet_us
-    return TimeOptions(settings.tick_us, default, latencies, ticks=settings.ticks)
+    platform = _platform(description, settings, diagnostics)
+    if settings.responses and platform is None:
+        from genom2bip.platform import dedicated
+
+        platform = dedicated(description)
+    return TimeOptions(settings.tick_us, default, latencies, ticks=settings.ticks, platform=platform,
+                       client=_client(description, settings.client, diagnostics), responses=settings.responses,
+                       exceptions=settings.exceptions)
+
+
+def _platform(description: Description, settings: TimeSettings, diagnostics: Diagnostics | None):
+    """The platform file read and checked against the description, its cores and policy replaced by the settings';
+    without a file, ``cores`` alone makes a platform of that many cores, the file's defaults for the rest (EDF);
+    None with neither."""
+    from dataclasses import replace
+
+    from genom2bip.platform import MAX_CORES, POLICIES, Platform, load_platform
+
+    path, cores, policy = settings.platform, settings.cores, settings.policy
+    if cores is not None and not 1 <= cores <= MAX_CORES:
+        raise UsageError([f"cores is {cores}; expected a whole number from 1 to {MAX_CORES}"])
+    if policy is not None and policy not in POLICIES:
+        raise UsageError([f"policy is {policy!r}; expected {' or '.join(POLICIES)}"])
+    if path is None:
+        if cores is None:
+            if policy is not None:
+                raise UsageError([f"policy {policy} needs a platform: a platform file or a number of cores"])
+            return None
+        return Platform(cores=cores, policy=policy or "edf", path=f"<{cores} cores>")
+    if not Path(path).is_file():
+        raise InputError([f"{path}: no such platform file"])
+    reporter = Reporter()
+    platform = load_platform(Path(path), description, reporter)
+    (diagnostics or Diagnostics()).reporter(reporter)
+    if platform is None:
+        return None
+    return replace(platform, cores=cores or platform.cores, policy=policy or platform.policy)
+
+
+def _client(description: Description, path: str | Path | None, diagnostics: Diagnostics | None):
+    """A mission file as the environment, every service it sends checked against the description."""
+    from genom2bip.build.client import check
+    from genom2bip.mission.spec import read_mission
+
+    if path is None:
+        return None
+    if not Path(path).is_file():
+        raise InputError([f"{path}: no such mission file"])
+    reporter = Reporter()
+    try:
+        mission = read_mission(path, reporter)
+    except DiagnosticError:
+        mission = None
+    if mission is not None:
+        check(mission, description, reporter)
+    (diagnostics or Diagnostics()).reporter(reporter)
+    return mission

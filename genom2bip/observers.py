@@ -24,28 +24,15 @@ import yaml
 
 from genom2bip import ir
 from genom2bip.build.timed import LatencySpec
-from genom2bip.parser.limits import MAX_DURATION
+from genom2bip.durations import parse_duration
 from genom2bip import rules
 from genom2bip.rules import _suggest
 from genom2bip.yamlfile import compose_file
 from runtime.diagnostics import Reporter, Span
 
 KEYS = ("name", "doc", "from", "to", "within")
-UNITS = {"s": 1_000_000, "ms": 1000, "us": 1, "µs": 1, "min": 60_000_000}
 SERVICE_PORTS = ("trigger", "start", "finish", "fail", "interrupted", "reject", "refuse", "exec")
 TASK_PORTS = ("period", "sleep", "exec")
-DURATION = re.compile(r"\s*(\d+(?:\.\d+)?)\s*(s|ms|us|µs|min)\s*\Z")
-
-
-def parse_duration(text: str) -> int | None:
-    """``1 s``, ``250 ms``, ``10 us`` → microseconds; None when it is not a duration of at most a day."""
-    m = DURATION.match(text)
-    if not m or len(m.group(1)) > 20:  # float() of thousands of digits is infinite
-        return None
-    value = float(m.group(1)) * UNITS[m.group(2)]
-    return round(value) if value <= MAX_DURATION * 1e6 else None
-
-
 class _Reader(rules._Reader):
     """The rule file's reader (positions, messages), reading observers."""
 

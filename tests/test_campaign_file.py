@@ -66,7 +66,7 @@ def test_the_file_s_shape(tmp_path, text, line, token, message):
 
 @pytest.mark.parametrize("check, token, message", [
     ("{check: liveness, model: ndd}", "liveness", "check 1: unknown check 'liveness' (checks: deadlock, property, "
-                                                  "observer)"),
+                                                  "observer, response-times)"),
     ("{check: deadlock, model: nope}", "nope", "check 1 (deadlock): no model 'nope' (models: cruise, ndd)"),
     ("{check: deadlock, model: ndd, method: magic}", "magic", "method: one of explore, compositional expected"),
     (f"{{check: deadlock, model: ndd, files: [{NDD_PROPS}]}}", "files",
@@ -188,7 +188,7 @@ def test_deadlock_freedom_in_a_property_file_is_the_deadlock_check_s_job_composi
     dala = [j for j in jobs if j.model == "dala"]
     assert [j.target for j in dala].count("deadlock freedom") == 1
     assert len([j for j in dala if j.check == "property"]) == 10  # NDD.mcl's 4 others and rules.mcl's 6
-    assert len(jobs) == 5 + 1 + 10 + 1 + 6
+    assert len(jobs) == 5 + 1 + 10 + 1 + 6 + 4  # and the response times on 1 to 4 cores
 
 
 @pytest.mark.parametrize("axis, value, verdict", [

@@ -674,7 +674,7 @@ def Aspect_Run_Activity() -> AtomType:
             Transition(
                 None,
                 ['WAIT_YIELD'],
-                ['FUSE'],
+                ['FUSE_PAUSED'],
                 guard=Binary('==', Var('outcome'), Const(1)),
                 action=[Assign(Var('outcome'), Const(0))],
                 annotations=[
@@ -694,7 +694,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '76'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -708,7 +708,7 @@ def Aspect_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '69'},
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '48', 'column': '76'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -10140,7 +10140,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'aspWaitScan', 'yields': 'pause::wait,fuse,ether', 'throws': 'Aspect::e_no_scan', 'wcet_us': '1000'},
+                        arguments={'codel': 'aspWaitScan', 'yields': 'pause::wait,pause::fuse,ether', 'throws': 'Aspect::e_no_scan', 'wcet_us': '1000'},
                     ),
                 ],
             ),

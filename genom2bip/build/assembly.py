@@ -24,6 +24,7 @@ from runtime.model import (
     CompoundType,
     ConnectorInstance,
     ConnectorType,
+    ExportData,
     ExportPort,
     InteractionPattern,
     PortRef,
@@ -31,7 +32,7 @@ from runtime.model import (
     Priority,
     SOURCE,
 )
-from runtime.model.expressions import Expr
+from runtime.model.expressions import Expr, PortData
 
 from genom2bip.build.split import SplitError, split_connector
 
@@ -92,6 +93,11 @@ class AtomInstance:
     args: list[Expr] = field(default_factory=list)
 
 
+def _exported_name(rest: Path, data: str) -> str:
+    """The name under which a compound exports ``data`` of the atom at path ``rest`` below it."""
+    return "_".join(rest + (data,))
+
+
 def _common_prefix(paths: list[Path]) -> Path:
     if not paths:
         return ()
@@ -119,6 +125,12 @@ class Assembly:
         self.children: dict[Path, list[Path]] = {}
         self.wires: list[Wire] = []
         self.ranks: list[Rank] = []
+        self.exposed: dict[tuple[Path, str], str] = {}  # (atom, exported data) -> its type
+
+    def expose(self, atom: Path, data: str, dtype: str = "int") -> PortData:
+        """``data`` of ``atom`` (exported by its type) exported up to the root: what a root priority's guard reads."""
+        self.exposed[(atom, data)] = dtype
+        return PortData(atom[0], _exported_name(atom[1:], data)) if len(atom) > 1 else PortData(atom[0], data)
 
     # -- building ---------------------------------------------------------------------------
     def group(self, path: Path, type_name: str, comment: str | None = None) -> Path:
@@ -140,6 +152,19 @@ class Assembly:
     def rank(self, rank: Rank) -> Rank:
         self.ranks.append(rank)
         return rank
+
+    def remove(self, path: Path) -> None:
+        """Drop a compound (everything in it) or an atom, with the wires that touch it and their ranks."""
+        gone = {p for p in list(self.atoms) + list(self.groups) if p[:len(path)] == path}
+        for p in gone:
+            self.atoms.pop(p, None)
+            self.groups.pop(p, None)
+            self.children.pop(p, None)
+        if path[:-1] in self.children:
+            self.children[path[:-1]] = [c for c in self.children[path[:-1]] if c != path]
+        dropped = {id(w) for w in self.wires if any(e.atom[:len(path)] == path for e in w.atom_ends())}
+        self.wires = [w for w in self.wires if id(w) not in dropped]
+        self.ranks = [r for r in self.ranks if id(r.low) not in dropped and id(r.high) not in dropped]
 
     # -- placement ------------------------------------------------------------------------
     def _placement(self) -> dict[int, Path]:
@@ -261,6 +286,12 @@ class Assembly:
                 )
             )
 
+        data: dict[Path, list[ExportData]] = {p: [] for p in self.groups}
+        for (atom, name), dtype in sorted(self.exposed.items()):
+            for k in range(len(atom) - 1, 0, -1):  # each compound between the atom and the root exports it
+                inner = name if k == len(atom) - 1 else _exported_name(atom[k + 1:], name)
+                data[atom[:k]].append(ExportData(dtype, _exported_name(atom[k:], name), PortRef(atom[k], inner)))
+
         out: list[CompoundType] = []
         for path in sorted(self.groups, key=lambda p: (-len(p), p)):
             g = self.groups[path]
@@ -279,6 +310,7 @@ class Assembly:
                     connectors=connectors[path],
                     priorities=priorities[path],
                     ports=list(exports[path].values()),
+                    data=data[path],
                 )
             )
         return out

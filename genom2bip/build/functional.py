@@ -86,6 +86,7 @@ class FunctionalLevel:
         self.docs: dict[str, str] = {}  # type name -> one line saying what it stands for
         self.task_labels: dict[Path, str] = {}  # task compound -> "Component.task" as its labels say it
         self.task_spans: dict[Path, Span] = {}  # task compound -> where the description declares the task
+        self.task_of: dict[Path, tuple[str, ir.Task | None]] = {}  # task compound -> (component, task; None: control)
 
     # -- registries ---------------------------------------------------------------------
     def _port_type(self, atom_type: str, port: str) -> str:
@@ -140,6 +141,9 @@ class FunctionalLevel:
             self.timing = timed.apply(self, self.time)
             if self.timing.ticks:
                 port_types.append(timed.cost_port_type())
+            if self.time.platform is not None:
+                from genom2bip.build.platform import interval_port_type
+                port_types.append(interval_port_type())
             annotations.append(self.timing.annotation())
         compounds = self.asm.compounds()  # may add connector and port types: before the package lists them
         port_types += sorted(self.asm.port_types.values(), key=lambda t: t.name)
@@ -169,7 +173,9 @@ class FunctionalLevel:
         taken = {ident(s.name) for s in c.services}
         for task in c.tasks:
             tasks[task.name] = self._task(c.name, root, task, taken)
+            self.task_of[tasks[task.name]] = (c.name, task)
         tasks[CONTROL_TASK + "\0"] = self._task(c.name, root, ir.Task(CONTROL_TASK, span=c.span), taken)  # GenoM's own
+        self.task_of[tasks[CONTROL_TASK + "\0"]] = (c.name, None)
 
         for s in c.services:
             on = (

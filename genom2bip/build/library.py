@@ -30,6 +30,8 @@ from runtime.model.expressions import Expr
 
 #: A synchronisation without data.
 PORT = "Port"
+#: Marks the data of a timed model that count ticks: a zone explorer treats them as clocks (runtime/zones).
+CLOCK = Annotation("tick_clock", {})
 #: The status of a service controller: completed at least once, latest run succeeded, running now.
 STATUS = "Status"
 STATUS_FIELDS = ("done", "ok", "running")

@@ -24,11 +24,14 @@ Ticks are ordinary ports and data (docs/verification.md, *Time* says why).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import reduce
 
+from genom2bip import ir
 from genom2bip.build import library
-from genom2bip.build.assembly import End, Wire
+from genom2bip.build.assembly import End, Path, Rank, Wire
+from genom2bip.mission.spec import Mission
+from genom2bip.platform import Platform
 from genom2bip.build.names import ident
 from runtime.diagnostics import NOWHERE, Reporter, Span
 from runtime.model import (
@@ -61,6 +64,8 @@ ERROR = "ERROR"
 DEFAULT_WCET_US = 0
 #: Port type of a scheduler's ``exec``: the connector tells it how many ticks the codel takes.
 COST = "Cost"
+#: A service's reports: on a platform, time does not pass while one can be given.
+REPORTS = ("start", "finish", "fail", "interrupted", "reject")
 
 
 @dataclass
@@ -82,6 +87,11 @@ class TimeOptions:
     default_wcet_us: int = DEFAULT_WCET_US
     latencies: list[LatencySpec] = field(default_factory=list)
     ticks: bool = True  # False: observers only, for a controller that measures real time
+    platform: Platform | None = None  # None: a core per task, codels take their WCET (genom2bip.platform)
+    client: Mission | None = None  # a mission whose steps are the environment (genom2bip.build.client)
+    responses: bool = False  # a response-time observer per periodic task and per service
+    exceptions: bool = True  # False: codels take their declared yields only (they never throw)
+    response_cap_us: int | None = None  # response times stop counting there (default: 10 x the longest period)
 
 
 @dataclass
@@ -90,7 +100,7 @@ class Observer:
 
     name: str  # what reports call it
     atom: str  # instance path, e.g. NDD.motion.overrun
-    kind: str  # "overrun" or "latency"
+    kind: str  # "overrun", "latency" or "response"
     bound_ticks: int
     text: str  # the property in words
 
@@ -105,6 +115,8 @@ class Timing:
     default_wcet_us: int
     costs: dict[str, int]  # exec label -> ticks
     ticks: bool = True
+    platform: str = ""  # the platform in words, when the tasks run on one
+    client: str = ""  # the mission that is the environment, when one is
 
     def annotation(self) -> Annotation:
         """``@timed(tick_us=...)`` (or ``@monitored`` without ticks) on the package: a ``.bip`` knows its resolution."""
@@ -113,6 +125,14 @@ class Timing:
             return Annotation("monitored", args)
         if self.untimed_codels:
             args.update(untimed=",".join(self.untimed_codels), default_wcet_us=str(self.default_wcet_us))
+        if self.platform:
+            args["platform"] = self.platform
+        if self.client:
+            args["client"] = self.client
+        served = [f"{o.atom}={o.name.rsplit(':', 1)[0]}" for o in self.observers
+                  if o.kind in ("response", "pending") and "." not in o.atom]
+        if served:
+            args["responses"] = ",".join(served)  # service observers sit at the root: whose response each one is
         return Annotation("timed", args)
 
 
@@ -164,7 +184,7 @@ def timer_type() -> AtomType:
     """
     base = library.timer_type()
     base.params.append(DataParam("int", "ticks"))
-    base.data.append(DataDecl("int", "t"))
+    base.data.append(DataDecl("int", "t", annotations=[library.CLOCK]))
     base.ports.append(PortDecl(library.PORT, "tick", exported=True))
     base.initial = InitialTransition(["WAIT"], [Assign(Var("t"), Var("ticks"))])
     t_ready = Binary(">=", Var("t"), Var("ticks"))
@@ -235,7 +255,7 @@ def _observer_type(name: str, kind: str, opening: str, closing: str, bound: str,
         name=name,
         annotations=[Annotation("observer", {"kind": kind, "open": opening, "close": closing, "bound": bound})],
         params=[DataParam("int", bound)],
-        data=[DataDecl("int", "c")],
+        data=[DataDecl("int", "c", annotations=[library.CLOCK])],
         ports=[PortDecl(library.PORT, n, exported=True) for n in (opening, closing, "tick")],
         places=["IDLE", watching, ERROR],
         initial=InitialTransition(["IDLE"], restart),
@@ -251,6 +271,33 @@ def overrun_type() -> AtomType:
 def latency_type() -> AtomType:
     """After ``cause``, ``effect`` must come within ``bound`` ticks, else ERROR; the oldest cause counts."""
     return _observer_type("LatencyObserver", "latency", "cause", "effect", "bound", "WAIT", either_order=True)
+
+
+def response_type() -> AtomType:
+    """Clock ``c`` counts from ``open`` to ``close`` (a period to its end, a request to its final report).
+
+    It has no ERROR: its largest value over the reachable states is the response
+    time (``verify --response-times``).  ``c`` stops at ``cap`` (a finite model):
+    reaching it means "at least cap".  Every place takes every port.
+    """
+    c = Var("c")
+    return AtomType(
+        name="ResponseObserver",
+        annotations=[Annotation("observer", {"kind": "response", "open": "open", "close": "close", "bound": "cap"})],
+        params=[DataParam("int", "cap")],
+        data=[DataDecl("int", "c", annotations=[library.CLOCK])],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("open", "close", "tick")],
+        places=["IDLE", "WATCH"],
+        initial=InitialTransition(["IDLE"], [Assign(c, Const(0))]),
+        transitions=[
+            Transition("open", ["IDLE"], ["WATCH"], action=[Assign(c, Const(0))]),
+            Transition("open", ["WATCH"], ["WATCH"]),
+            Transition("close", ["WATCH"], ["IDLE"]),
+            Transition("close", ["IDLE"], ["IDLE"]),
+            Transition("tick", ["IDLE"], ["IDLE"]),
+            Transition("tick", ["WATCH"], ["WATCH"], action=[_capped("c", "cap")]),
+        ],
+    )
 
 
 def observed(ctype: ConnectorType, extra: int) -> tuple[ConnectorType, int]:
@@ -308,12 +355,230 @@ def _codel_of(level, wire: Wire) -> tuple[str, int | None]:
     return codel.name, round(codel.wcet.seconds * 1e6) if codel.wcet is not None else None
 
 
+def _constants(level, options: TimeOptions, execs, timers) -> list[int]:
+    """Every duration of the model in µs: the tick divides them all (periods, WCETs, bounds, the platform's)."""
+    out = [inst.args[0].value for inst in timers.values()]
+    out += [wcet for _, _, wcet in execs if wcet is not None]
+    out += [spec.within_us for spec in options.latencies]
+    if any(wcet is None for _, _, wcet in execs):
+        out.append(options.default_wcet_us)
+    platform = options.platform
+    if platform is not None:
+        out += [us for span in platform.execution.values() for us in (span.best_us, span.worst_us)]
+        out += [us for t in platform.tasks.values() if t.delay for us in (t.delay.best_us, t.delay.worst_us)]
+        out += [round(t.delay.seconds * 1e6) for _, t in level.task_of.values() if t is not None and t.delay]
+        if isinstance(platform.best, int):
+            out.append(platform.best)
+    return out
+
+
+def arm_requests(level, watch) -> None:
+    """The default environment is not Zeno: a service of a periodic task is requested at most once per period.
+
+    The acceptor's port of such a service is armed when its task's period
+    opens and disarmed by the request it lets through (docs/verification.md,
+    *The environment*).
+    """
+    armed: dict[Path, dict[tuple[str, ...], list[str]]] = {}  # acceptor -> task -> services
+    for (component, service), parts in level.services.items():
+        if parts.service.kind != ir.ServiceKind.ACTIVITY or parts.task + ("timer",) not in level.asm.atoms:
+            continue
+        acceptor = (ident(component), "requests")
+        armed.setdefault(acceptor, {}).setdefault(parts.task, []).append(ident(service))
+    for acceptor, tasks in armed.items():
+        inst = level.asm.atoms[acceptor]
+        t = level.atom_types[inst.type]
+        flags = {s: f"armed_{s}" for services in tasks.values() for s in services}
+        t.data = list(t.data) + [DataDecl("bool", f) for f in flags.values()]
+        t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action)
+                                      + [Assign(Var(f), Const(True)) for f in flags.values()])
+        for tr in t.transitions:
+            if tr.port in flags:
+                tr.guard = Binary("&&", tr.guard, Var(flags[tr.port])) if tr.guard is not None else Var(flags[tr.port])
+                tr.action = list(tr.action) + [Assign(Var(flags[tr.port]), Const(False))]
+        for task, services in tasks.items():
+            port = f"arm_{task[-1]}"
+            t.ports = list(t.ports) + [PortDecl(library.PORT, port, exported=True)]
+            t.transitions = list(t.transitions) + [
+                Transition(port, ["READY"], ["READY"], action=[Assign(Var(flags[s]), Const(True)) for s in services])]
+            for opening in (w for w in level.asm.wires if w.label == f"{level.task_labels[task]}:period"):
+                watch(opening, End(acceptor, port))
+
+
+def start_windows(level, watch, platform: bool) -> None:
+    """An activity of a periodic task starts only when its task takes up new work, as GenoM3's execution task does.
+
+    The execution task looks for newly started activities when its period
+    opens and runs their codels in that period; a request that comes later
+    starts its activity at the next opening.  Each such activity atom gets a
+    ``window`` flag, set by the task's period opening and cleared once the
+    task runs (its grant on a platform, else its first codel) or the period
+    closes; its ``start`` needs it and closes it.  Starts at the instant of an
+    opening come before the task runs (priorities), so no request waits a
+    period more for a tie.
+    """
+    periodic = {task for task, label in level.task_labels.items()
+                if any(w.label == f"{label}:period" for w in level.asm.wires) and task + ("timer",) in level.asm.atoms}
+    for parts in level.services.values():
+        if parts.service.kind != ir.ServiceKind.ACTIVITY or parts.task not in periodic:
+            continue
+        label = level.task_labels[parts.task]
+        starts = [w for w in level.asm.wires if w.label == f"{parts.label}:start"]
+        if not starts:
+            continue
+        inst = level.asm.atoms[parts.activity]
+        t = level.atom_types[inst.type]
+        if sum(1 for i in level.asm.atoms.values() if i.type == inst.type) > 1:  # a type of its own to change
+            t = replace(t, name=f"{t.name}_{ident('_'.join(parts.path))}")
+            level.atom_types[t.name] = t
+            inst.type = t.name
+        window = Var("window")
+        t.data = list(t.data) + [DataDecl("bool", "window")]
+        t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action) + [Assign(window, Const(False))])
+        t.ports = list(t.ports) + [PortDecl(library.PORT, "window_open", exported=True),
+                                   PortDecl(library.PORT, "window_shut", exported=True)]
+        t.transitions = [replace(tr, guard=Binary("&&", tr.guard, window) if tr.guard is not None else window,
+                                 action=list(tr.action) + [Assign(window, Const(False))])
+                         if tr.port == "start" else tr for tr in t.transitions]
+        t.transitions += [Transition(port, [p], [p], action=[Assign(window, Const(value))])
+                          for port, value in (("window_open", True), ("window_shut", False)) for p in t.places]
+        for w in level.asm.wires:
+            if w.label != f"{label}:period":
+                continue
+            joined = next((e.port for e in w.ends if isinstance(e, End) and e.atom == parts.activity), None)
+            if joined is None:
+                watch(w, End(parts.activity, "window_open"))
+                continue
+            # The opening already wakes this activity (a paused one goes on): that port opens the window too,
+            # in every place (where it did nothing, it now only opens it).
+            has = {src for tr in t.transitions if tr.port == joined for src in tr.sources}
+            t.transitions = [replace(tr, action=list(tr.action) + [Assign(window, Const(True))])
+                             if tr.port == joined else tr for tr in t.transitions]
+            t.transitions += [Transition(joined, [p], [p], action=[Assign(window, Const(True))])
+                              for p in t.places if p not in has]
+        runs = [w for w in level.asm.wires if w.label == f"{label}:grant"] if platform else []
+        runs = (runs or list(level.task_execs.get(parts.task, []))) + [w for w in level.asm.wires
+                                                                       if w.label == f"{label}:sleep"]
+        for k, w in enumerate(runs):
+            joined = next((e.port for e in w.ends if isinstance(e, End) and e.atom == parts.activity), None)
+            if joined is None:
+                watch(w, End(parts.activity, "window_shut"))
+            else:  # its own codel, or its being quiet when the period closes: that port closes the window
+                t.transitions = [replace(tr, action=list(tr.action) + [Assign(window, Const(False))])
+                                 if tr.port == joined else tr for tr in t.transitions]
+            for j, start in enumerate(starts):
+                level.asm.rank(Rank(f"{ident('_'.join(parts.path))}_start_{j}_before_{w.name}_{k}", w, start,
+                                    owner=(), comment="a request there when the task takes up work starts with it"))
+
+
+#: Service reports that end a request.
+FINALS = ("finish", "fail", "interrupted", "reject")
+
+
+def pending_type() -> AtomType:
+    """Whether a request is waiting for its final report, without a clock: for a service that can run for ever.
+
+    An activity whose codels can go round a cycle (``pause::`` back to an
+    earlier state) may never report: its response time has no bound, which a
+    cycle of the model shows (a lasso), not a clock counting to a cap.
+    """
+    return AtomType(
+        name="PendingObserver",
+        annotations=[Annotation("observer", {"kind": "pending", "open": "open", "close": "close"})],
+        ports=[PortDecl(library.PORT, n, exported=True) for n in ("open", "close")],
+        places=["IDLE", "WATCH"],
+        initial=InitialTransition(["IDLE"]),
+        transitions=[
+            Transition("open", ["IDLE"], ["WATCH"]),
+            Transition("open", ["WATCH"], ["WATCH"]),
+            Transition("close", ["WATCH"], ["IDLE"]),
+            Transition("close", ["IDLE"], ["IDLE"]),
+        ],
+    )
+
+
+def _loops(fsm) -> bool:
+    """The activity's codels can go round a cycle: a state reachable again from itself."""
+    edges = {s: {y.state for y in fsm.codel_of[s].yields if y.state in fsm.codel_of} for s in fsm.states}
+
+    def reach(a: str) -> set[str]:
+        seen, todo = set(), [a]
+        while todo:
+            for b in edges.get(todo.pop(), ()):
+                if b not in seen:
+                    seen.add(b)
+                    todo.append(b)
+        return seen
+
+    return any(s in reach(s) for s in fsm.states)
+
+
+def _longest(fsm) -> int:
+    """Codel steps on the longest run of an activity without a cycle."""
+    memo: dict[str, int] = {}
+
+    def depth(s: str) -> int:
+        if s not in memo:
+            memo[s] = 1 + max([depth(y.state) for y in fsm.codel_of[s].yields if y.state in fsm.codel_of] or [0])
+        return memo[s]
+
+    return max([depth(s) for s in fsm.states] or [0])
+
+
+def add_responses(level, options: TimeOptions, tick: int, periods, watch, ticking: list, observers: list) -> None:
+    """A response observer per periodic task (release to end of cycle) and per service (request to final report).
+
+    Clocks stop counting at a cap, past which a response time is reported as
+    "more than the cap": a task's is 4 periods (an overrun long before); a
+    service's, twice the periods its longest run of codels can take.  A
+    service whose codels can cycle gets a :func:`pending_type` observer instead.
+    """
+    level.atom_types["ResponseObserver"] = response_type()
+    level.docs.setdefault("ResponseObserver", "Response time: the ticks from an opening to its closing.")
+    timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items()
+              if inst.type in ("Timer", "DelayedTimer")}  # a task with a delay has a DelayedTimer
+
+    def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None) -> None:
+        """``path``: the observer's (a service's at the root: its trigger may join other modules' atoms)."""
+        if options.response_cap_us is not None:
+            cap = max(1, -(-options.response_cap_us // tick))
+        kind, args = ("response", [Const(cap)]) if cap is not None else ("pending", [])
+        if cap is None and "PendingObserver" not in level.atom_types:
+            level.atom_types["PendingObserver"] = pending_type()
+            level.docs["PendingObserver"] = "A request waiting for its report (a service that may never end)."
+        atom = level.asm.atom(path, "ResponseObserver" if cap is not None else "PendingObserver", args)
+        for w in opens:
+            watch(w, End(atom, "open"))
+        for w in closes:
+            watch(w, End(atom, "close"))
+        if cap is not None:
+            ticking.append(End(atom, "tick"))
+        observers.append(Observer(f"{label}:response", ".".join(atom), kind, cap or 0, what))
+
+    for path, label in level.task_labels.items():
+        opens = [w for w in level.asm.wires if w.label == f"{label}:period"]
+        closes = [w for w in level.asm.wires if w.label == f"{label}:sleep"]
+        if opens and path in timers:
+            observe(path + ("response",), label, opens, closes, f"from a release of {label} to the end of its cycle",
+                    4 * timers[path])
+    for parts in level.services.values():
+        opens = [w for w in level.asm.wires if w.label == f"{parts.label}:trigger"]
+        closes = [w for w in level.asm.wires if w.label in {f"{parts.label}:{p}" for p in FINALS}]
+        if not (closes and parts.fsm.states):
+            continue  # no trigger (a client that never sends it): an observer never opened says "never requested"
+        period = timers.get(parts.task, max(timers.values(), default=1))
+        cap = None if _loops(parts.fsm) else 2 * (_longest(parts.fsm) + 2) * period
+        observe((ident("_".join(parts.path + ("response",))),), parts.label, opens, closes,
+                f"from a request of {parts.label} to its final report", cap)
+
+
 def apply(level, options: TimeOptions) -> Timing:
     """Add time to ``level`` (a FunctionalLevel whose wires are all built); returns what was chosen.
 
     With ``options.ticks`` false only the observers are added (no tick, no
     clock moves): the model a controller runs, whose monitor measures real
     time instead (runtime/controller/monitor.py); bounds are then in µs.
+    With ``options.platform`` the tasks run on its cores (genom2bip.build.platform).
     """
     execs: list[tuple[Wire, str, int | None]] = []
     for task, wires in level.task_execs.items():
@@ -321,11 +586,7 @@ def apply(level, options: TimeOptions) -> Timing:
             execs.append((w, *_codel_of(level, w)))
     timers = {path: inst for path, inst in level.asm.atoms.items() if inst.type == "Timer"}
     untimed = sorted({f"{w.label.split('.')[0]}.{name}" for w, name, wcet in execs if wcet is None})
-    constants = [inst.args[0].value for inst in timers.values()]
-    constants += [wcet for _, _, wcet in execs if wcet is not None]
-    constants += [spec.within_us for spec in options.latencies]
-    if untimed:
-        constants.append(options.default_wcet_us)
+    constants = _constants(level, options, execs, timers)
     tick = options.tick_us or reduce(math.gcd, [c for c in constants if c > 0], 0) or options.default_wcet_us or 1
     if not options.ticks:
         tick, untimed = 1, []
@@ -333,25 +594,45 @@ def apply(level, options: TimeOptions) -> Timing:
 
     ticking: list[End] = []
     costs: dict[str, int] = {}
-    if options.ticks:
-        level.atom_types["Timer"] = timer_type()
-        level.atom_types["Scheduler"] = scheduler_type()
-        if "IdleScheduler" in level.atom_types:
-            level.atom_types["IdleScheduler"] = library.idle_scheduler_type(scheduler_type())
-        for path, inst in timers.items():
-            inst.args.append(Const(periods[path]))
-            ticking.append(End(path, "tick"))
-        ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
-        for w, name, wcet in execs:
-            cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
-            w.type = level._connector(exec_type(w.type, cost))
-            costs[w.label] = cost
-
+    urgent: list[Wire] = []
     observers: list[Observer] = []
     extra: dict[int, tuple[Wire, list[End]]] = {}
 
     def watch(wire: Wire, end: End) -> None:
         extra.setdefault(id(wire), (wire, []))[1].append(end)
+
+    if not options.exceptions:  # the codels' outcomes are their yields: exploration never makes one throw
+        for f in level.externs.values():
+            for a in f.annotations:
+                if a.name == "codel":
+                    a.arguments["throws"] = ""
+    if options.ticks:
+        level.atom_types["Timer"] = timer_type()
+        for path, inst in timers.items():
+            inst.args.append(Const(periods[path]))
+            ticking.append(End(path, "tick"))
+        if options.platform is None:
+            level.atom_types["Scheduler"] = scheduler_type()
+            for w, name, wcet in execs:
+                cost = ticks_up(options.default_wcet_us if wcet is None else wcet, tick)
+                w.type = level._connector(exec_type(w.type, cost))
+                costs[w.label] = cost
+        else:
+            from genom2bip.build import platform
+            level.atom_types.pop("Scheduler", None)
+            urgent = platform.apply(level, options.platform, tick, options.default_wcet_us)
+            urgent += [w for w in level.asm.wires if w.label and w.label.rsplit(":", 1)[1] in REPORTS]
+        if "IdleScheduler" in level.atom_types:
+            level.atom_types["IdleScheduler"] = library.idle_scheduler_type(scheduler_type())
+        ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
+        if options.client is not None:
+            from genom2bip.build import client
+            added = client.apply(level, options.client, tick, watch)
+            ticking.append(End(added.atom, "tick"))
+            urgent += added.urgent
+        else:
+            arm_requests(level, watch)
+        start_windows(level, watch, options.platform is not None)
 
     if timers:
         level.atom_types["PeriodObserver"] = overrun_type()
@@ -381,11 +662,18 @@ def apply(level, options: TimeOptions) -> Timing:
         ticking.append(End(atom, "tick"))
         observers.append(Observer(spec.name, ".".join(atom), "latency", bound,
                                   f"after {spec.begin}, {spec.end} within {spec.within_us / 1000:g} ms"))
+    if options.responses:
+        add_responses(level, options, tick, periods, watch, ticking, observers)
     for wire, ends in extra.values():
         ctype, at = observed(wire.type, len(ends))
         wire.ends = list(wire.ends)[:at] + ends + list(wire.ends)[at:]
         wire.type = level._connector(ctype)
     if options.ticks:
-        level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
-                            comment="time passes by one tick for every timed atom at once"))
-    return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks)
+        passing = level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
+                                      comment="time passes by one tick for every timed atom at once"))
+        for w in urgent:
+            level.asm.rank(Rank(f"tick_after_{'_'.join(w.owner)}_{w.name}", passing, w, owner=(),
+                                comment="time passes only when nothing urgent can happen"))
+    return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks,
+                  options.platform.describe() if options.platform is not None else "",
+                  options.client.name if options.client is not None else "")

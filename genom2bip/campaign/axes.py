@@ -27,6 +27,7 @@ class AxisKind:
     named: bool = False  # written KIND.NAME (a define's macro, a task's Module.task)
     timed: bool = False  # changes only a timed model
     unit: str = ""  # the unit of a numeric value in pictures
+    path: bool = False  # a file, relative to the campaign file (the reader makes it absolute)
 
 
 def _number(value: Any) -> float | int:
@@ -59,6 +60,29 @@ def _positive_duration(value: Any) -> int:
     return us
 
 
+def _cores(value: Any) -> int:
+    from genom2bip.platform import MAX_CORES
+
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_CORES:
+        raise ValueError(f"a whole number of cores from 1 to {MAX_CORES} expected")
+    return value
+
+
+def _policy(value: Any) -> str:
+    from genom2bip.platform import POLICIES
+
+    if value not in POLICIES:
+        raise ValueError(f"a policy expected ({' or '.join(POLICIES)})")
+    return value
+
+
+def _file(value: Any) -> str:
+    """A platform file's path as written; the campaign file's reader makes it absolute and checks it is there."""
+    if not isinstance(value, str) or not value:
+        raise ValueError("a platform file's path expected")
+    return value
+
+
 def _define(value: Any) -> str | int | float:
     if isinstance(value, (dict, list)) or value is None:
         raise ValueError("a macro value expected (a number or a word)")
@@ -87,6 +111,12 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
              named=True, timed=True, unit="ms"),
     AxisKind("tick", "the tick's resolution (a duration)", _positive_duration,
              lambda p, _, v: replace(p, tick_us=v), timed=True, unit="ms"),
+    AxisKind("platform", "the platform file (paths relative to the campaign file)", _file,
+             lambda p, _, v: replace(p, platform=v), timed=True, path=True),
+    AxisKind("cores", "the platform's cores (over its file's; without one, that many cores under EDF)", _cores,
+             lambda p, _, v: replace(p, cores=v), timed=True),
+    AxisKind("policy", "the platform's scheduling policy (edf, fixed-priority; over its file's)", _policy,
+             lambda p, _, v: replace(p, policy=v), timed=True),
 )}
 
 #: The macro of ``define.NAME`` and the task of ``period.Module.task``.

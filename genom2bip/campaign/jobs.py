@@ -9,10 +9,10 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from genom2bip.campaign.kinds import KINDS, TargetError
+from genom2bip.campaign.kinds import KINDS, RESPONSE_OWNERS, TargetError
 from genom2bip.campaign.params import ModelParams
 from genom2bip.campaign.spec import Axis, Campaign, CheckSpec, ModelSpec
 from runtime.diagnostics import DiagnosticError, Reporter, Span
@@ -34,6 +34,8 @@ class Job:
     point: tuple[tuple[str, Any], ...] = ()  # axis -> value as written in the file
     index: int = 0  # the job's place in the campaign (the order of the summary)
     timeout: float | None = None  # seconds of wall clock before the job is stopped (not part of its id)
+    of: tuple[str, ...] = ()  # response times: whose are recorded (tasks, services); () all
+    only: tuple[str, ...] | None = None  # response times: the owners recorded; None all
 
     @property
     def title(self) -> str:
@@ -44,7 +46,17 @@ class Job:
     def parameters(self) -> dict[str, Any]:
         """What the results file says of the job: the model, the check, the point."""
         return {"model": self.model, "check": self.check, "method": self.method, "target": self.target,
-                "point": dict(self.point), "options": dict(self.options), "timeout": self.timeout}
+                "point": dict(self.point), "options": dict(self.options), "timeout": self.timeout,
+                **self.selection()}
+
+    def selection(self) -> dict[str, Any]:
+        """What a response-time job records (``of``, ``only``), where the file narrows it."""
+        out: dict[str, Any] = {}
+        if self.of:
+            out["of"] = list(self.of)
+        if self.only is not None:
+            out["only"] = list(self.only)
+        return out
 
 
 @dataclass
@@ -56,12 +68,14 @@ class Expansion:
     warnings: list = field(default_factory=list)  # Diagnostic: a check with nothing to check
 
 
-def job_id(base, params: ModelParams, check: str, method: str, target: str, files, options) -> str:
-    """A hash of what decides the job's answer (not the names given in the file, nor its place)."""
+def job_id(base, params: ModelParams, check: str, method: str, target: str, files, options,
+           selection: dict[str, Any] | None = None) -> str:
+    """A hash of what decides the job's answer and what it records (not the names given in the file, nor its
+    place)."""
     import os
 
     data = {"model": params.identity(base), "check": check, "method": method, "target": target,
-            "files": [os.path.relpath(f, base) for f in files], "options": sorted(options)}
+            "files": [os.path.relpath(f, base) for f in files], "options": sorted(options), **(selection or {})}
     return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -80,7 +94,8 @@ def expand(campaign: Campaign, reporter: Reporter | None = None) -> Expansion:
         kind = KINDS[check.kind]
         for spec in campaign.models[check.model]:
             grid = points(check.axes)
-            first = _at(spec.params, grid[0])
+            base = kind.params(spec.params) if kind.params else spec.params
+            first = _at(base, grid[0])
             model = _build(out, first, spec, check, reporter)
             if model is None:
                 continue
@@ -95,21 +110,31 @@ def expand(campaign: Campaign, reporter: Reporter | None = None) -> Expansion:
             if not targets:
                 reporter.warning(check.span, f"check {check.kind} on {spec.name}: nothing to check")
             for point in grid:
-                params = _at(spec.params, point)
+                params = _at(base, point)
                 for target in targets:
                     name, files = kind.name, tuple(check.files)
                     if isinstance(target, tuple):  # another kind's job answers it
                         (name, target), files = target, ()
                     options = tuple(sorted(check.options.items()))
-                    jid = job_id(campaign.base, params, name, check.method, target, files, options)
+                    job = Job("", spec.name, params, name, check.method, target, files, options,
+                              tuple((a.key, v) for a, v, _ in point), len(out.jobs), check.timeout,
+                              *_selection(check, name))
+                    jid = job_id(campaign.base, params, name, check.method, target, files, options, job.selection())
                     if jid in seen:
                         continue  # the same job twice (two checks overlap): run once
                     seen.add(jid)
-                    out.jobs.append(Job(jid, spec.name, params, name, check.method, target, files, options,
-                                        tuple((a.key, v) for a, v, _ in point), len(out.jobs), check.timeout))
+                    out.jobs.append(replace(job, id=jid))
     reporter.raise_if_errors()
     out.warnings = [d for d in reporter.diagnostics if d.severity == "warning"]
     return out
+
+
+def _selection(check: CheckSpec, kind: str) -> tuple[tuple[str, ...], tuple[str, ...] | None]:
+    """``(of, only)`` of a response-time job: () and None where the file keeps them all."""
+    if kind != "response-times":
+        return (), None
+    of = () if set(check.of) == set(RESPONSE_OWNERS) else tuple(check.of)
+    return of, tuple(check.only) if check.only is not None else None
 
 
 def _at(params: ModelParams, point) -> ModelParams:

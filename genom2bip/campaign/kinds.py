@@ -9,8 +9,10 @@ how a job runs, and (for pictures) the figures its result gives.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Callable
+
+from genom2bip.campaign.params import ModelParams
 
 if TYPE_CHECKING:
     from genom2bip.verify import CheckResult, Model, SearchOptions
@@ -41,8 +43,11 @@ class CheckKind:
     targets: Callable[[Any, Callable[[], "Model"]], list[str | tuple[str, str]]]
     run: Callable[["Model", Any, "SearchOptions"], "CheckResult"]
     timed: bool = False  # needs a timed model
-    # numbers a result gives besides states and seconds (a response time per task): a record's ``values``, plotted
-    figures: Callable[["CheckResult"], dict[str, float]] | None = None
+    # numbers a result gives besides states and seconds (a response time per task): a record's ``values``, plotted;
+    # a value that is a word (``unbounded``) is recorded as such and drawn apart from the numbers
+    figures: Callable[["CheckResult", Any], dict[str, float | str]] | None = None  # (result, its job)
+    # what the kind asks of its model's parameters (the response-time observers), before the axes
+    params: Callable[[ModelParams], ModelParams] | None = None
 
 
 # --------------------------------------------------------------------------- deadlock freedom
@@ -111,7 +116,47 @@ def _run_observer(model, job, options):
         raise LookupError(f"no observer {job.target} in this model")
     if job.method == "compositional":
         return check_observer_localized(model, atom, options)
+    if job.params.platform or job.params.cores:  # as verify does on a platform: clock zones, where they take it
+        from genom2bip.verify.zones import ZonesUnsupported, check_timing
+
+        try:
+            return next(r for r in check_timing(model, (atom.kind,), options=options) if r.observer == atom.path)
+        except ZonesUnsupported:
+            pass
     return check_observer(model, atom, None, options)
+
+
+# --------------------------------------------------------------------------- response times
+
+#: ``of:`` of a response-time check: whose response times it records.
+RESPONSE_OWNERS = ("tasks", "services")
+
+
+def _response_targets(check, model) -> list[str]:
+    """One job per model and point: one exploration gives every response time (``only``: owners that must be
+    there, named now)."""
+    from genom2bip.verify.zones import response_owners
+
+    if check.method != "explore":
+        raise TargetError("method", "response times are measured by one exploration with clock zones: "
+                                    "method explore (the default)")
+    if check.only is not None:
+        _only(check, list(response_owners(model())), "task or service")
+    return ["response times"]
+
+
+def _run_responses(model, job, options):
+    """The response times of the job's tasks and services (``of``, ``only``): its verdict is theirs."""
+    from genom2bip.verify.zones import check_response_times
+
+    wanted = {k[:-1] for k in (job.of or RESPONSE_OWNERS)}  # tasks -> task, services -> service
+    return check_response_times(model, options,
+                                owners=lambda r: r.kind in wanted and (job.only is None or r.owner in job.only))
+
+
+def _response_figures(result, job) -> dict[str, float | str]:
+    """Each recorded task's or service's response time: ms, or a word where there is none."""
+    return result.values()
 
 
 def _only(check, names: list[str], what: str) -> list[str]:
@@ -131,4 +176,7 @@ KINDS: dict[str, CheckKind] = {k.name: k for k in (
               ("files",), _property_targets, _run_property),
     CheckKind("observer", "each timing observer of a timed model (kinds: [overrun, latency], only: [paths])",
               ("kinds", "only"), (), _observer_targets, _run_observer, timed=True),
+    CheckKind("response-times", "every task's and service's largest response time, one job per point "
+              "(of: [tasks, services], only: [owners])", ("of", "only"), (), _response_targets, _run_responses,
+              timed=True, figures=_response_figures, params=lambda p: replace(p, responses=True)),
 )}

@@ -7,6 +7,10 @@ from pathlib import Path
 from typing import Any
 
 
+#: The fields of the platform, the client and the response times: left out of a job's id when unset.
+PLATFORM_FIELDS = ("platform", "client", "cores", "policy", "responses")
+
+
 @dataclass(frozen=True)
 class ModelParams:
     """The arguments of :func:`genom2bip.verify.build_model`, and of the variant of a sweep's point."""
@@ -22,6 +26,11 @@ class ModelParams:
     tick_us: int | None = None
     default_wcet_us: int | None = None
     observers: str | None = None
+    platform: str | None = None  # a platform file (genom2bip/platform.py); None: a core per task, or ``cores``
+    client: str | None = None  # a mission file as the environment
+    cores: int | None = None  # over the platform file's; without one, a platform of that many cores (EDF)
+    policy: str | None = None  # over the platform file's
+    responses: bool = False  # response-time observers (set by the response-times check)
     # the variant (genom2bip.variants.Variant)
     wcet_scale: float = 1.0
     periods: tuple[tuple[str, int], ...] = ()
@@ -31,7 +40,9 @@ class ModelParams:
         from genom2bip.variants import Variant
         from genom2bip.verify import TimeSettings, build_model
 
-        time = (TimeSettings(tick_us=self.tick_us, default_wcet_us=self.default_wcet_us, observers=self.observers)
+        time = (TimeSettings(tick_us=self.tick_us, default_wcet_us=self.default_wcet_us, observers=self.observers,
+                             platform=self.platform, client=self.client, cores=self.cores, policy=self.policy,
+                             responses=self.responses)
                 if self.timed else None)
         return build_model(list(self.paths), rules=self.rules, no_rules=self.no_rules, defines=dict(self.defines),
                            include_dirs=list(self.include_dirs), root=self.root, time=time,
@@ -45,7 +56,11 @@ class ModelParams:
 
         data = asdict(self)
         data.update(paths=[rel(p) for p in self.paths], rules=rel(self.rules), observers=rel(self.observers),
+                    platform=rel(self.platform), client=rel(self.client),
                     include_dirs=[rel(p) for p in self.include_dirs])
+        for key in PLATFORM_FIELDS:  # unset, they leave the ids of campaigns written before they existed alone
+            if data[key] in (None, False):
+                del data[key]
         return data
 
 

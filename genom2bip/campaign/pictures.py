@@ -75,11 +75,10 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     if len(names) <= 12 and states.lines:
         states.legend(fontsize=7, loc="best", framealpha=0.7)
     if extra:
-        for name, points in extra.items():
-            xs, ys = zip(*sorted(points))
-            axes[2].plot(xs, ys, marker="o", label=name)
-        axes[2].grid(alpha=0.3)
-        axes[2].legend(fontsize=7)
+        _draw_figures(axes[2], extra)
+    if all(float(x).is_integer() for points in series.values() for x, _ in points):
+        from matplotlib.ticker import MaxNLocator
+        axes[-1].xaxis.set_major_locator(MaxNLocator(integer=True))  # cores: 1, 2, 3, not 1.2
     axes[-1].set_xlabel(f"{key}" + (f" ({kind.unit})" if kind.unit else ""))
     fig.tight_layout()
     path = directory / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', key)}.png"
@@ -87,9 +86,32 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     return path
 
 
-def _figures(jobs, records, key, kind) -> dict[str, list[tuple[float, float]]]:
-    """The numbers a kind of check gives (a record's ``values``: ``CheckKind.figures``), against the axis."""
-    out: dict[str, list[tuple[float, float]]] = {}
+def _draw_figures(ax, extra: dict[str, list[tuple[float, float | str]]]) -> None:
+    """A line per figure (a task's response time) through its numbers; a value that is a word (``unbounded``) is a
+    triangle on the top edge, in the line's colour, with the word beside it."""
+    top = 0.0
+    for n, (name, points) in enumerate(extra.items()):
+        numbers = sorted((x, y) for x, y in points if not isinstance(y, str))
+        words = [(x, y) for x, y in points if isinstance(y, str)]
+        colour, marker = f"C{n % 10}", "osD^vP*X"[n // 10 % 8]
+        if numbers:
+            ax.plot(*zip(*numbers), marker=marker, color=colour, label=name,
+                    linestyle=("-", "--", ":", "-.")[n % 4], markersize=max(3, 8 - n % 4))  # equal lines stay seen
+            top = max(top, max(y for _, y in numbers))
+        for k, (x, word) in enumerate(words):
+            ax.plot([x], [1], marker="^", color=colour, markersize=9, linestyle="", clip_on=False,
+                    transform=ax.get_xaxis_transform(), label=None if numbers or k else f"{name} ({word})")
+            ax.annotate(word, (x, 1), xycoords=ax.get_xaxis_transform(), xytext=(6, -3),
+                        textcoords="offset points", fontsize=7, color=colour)
+    ax.set_ylabel("response time (ms)")
+    ax.set_ylim(0, top * 1.2 or 1)  # room under the top edge, where the words are
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best", framealpha=0.7)
+
+
+def _figures(jobs, records, key, kind) -> dict[str, list[tuple[float, float | str]]]:
+    """The values a kind of check gives (a record's ``values``: ``CheckKind.figures``), against the axis."""
+    out: dict[str, list[tuple[float, float | str]]] = {}
     for job in jobs:
         record = records.get(job.id)
         point = dict(job.point)

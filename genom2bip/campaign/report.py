@@ -109,3 +109,26 @@ def summary(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | N
         print("  ".join(cells).rstrip(), file=out)
     print(f"{len(jobs)} jobs: " + ", ".join(f"{n} {word}" for word, n in counts.most_common()), file=out)
     return counts
+
+
+def values_table(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | None = None) -> None:
+    """The values of the jobs that give some (response times): a row per model and figure (a task), a column per
+    point of the axes; a word where there is no number (``unbounded``), ``-`` where the job has no record."""
+    out = out or sys.stdout
+    given = [j for j in sorted(jobs, key=lambda j: j.index) if (records.get(j.id) or {}).get("values")]
+    if not given:
+        return
+    columns = list(dict.fromkeys(" ".join(f"{k}={v}" for k, v in j.point) or "-" for j in given))
+    rows: dict[tuple[str, str, str], dict[str, str]] = {}
+    for job in given:
+        column = " ".join(f"{k}={v}" for k, v in job.point) or "-"
+        for name, value in records[job.id]["values"].items():
+            text = f"{value:g} ms" if isinstance(value, (int, float)) else str(value)
+            rows.setdefault((job.model, job.check, name), {})[column] = text
+    header = ("model", "check", "task or service", *columns)
+    lines = [(*key, *(cells.get(c, "-") for c in columns)) for key, cells in rows.items()]
+    widths = [max(len(str(r[i])) for r in (header, *lines)) for i in range(len(header))]
+    print(file=out)
+    for row in (header, *lines):
+        cells = [str(c).rjust(w) if i >= 3 else str(c).ljust(w) for i, (c, w) in enumerate(zip(row, widths))]
+        print("  ".join(cells).rstrip(), file=out)

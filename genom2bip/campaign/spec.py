@@ -8,11 +8,14 @@ models:
   dala-timed:
     paths: [.]                      # rules.yaml of a directory is read, as verify reads it
     timed: true                     # or {tick: 1 ms, default-wcet: 25 ms, observers: observers.yaml}
+  sensing:
+    paths: [RFLEX.gen, POM.gen]
+    timed: {platform: platforms/one-core.yaml, client: missions/sensing.yaml}
   corpus: {each: "${corpus}"}       # one model per .gen file of a directory (--set corpus=DIR)
 options: {max-states: 2000000}      # every check's search options (verify's, without dashes in front)
 vary: {wcet-scale: [1, 2]}          # every check's axes: the cross product of their values
 checks:
-  - check: property                 # deadlock, property or observer (genom2bip/campaign/kinds.py)
+  - check: property                 # deadlock, property, observer, response-times (genom2bip/campaign/kinds.py)
     model: ndd
     files: [properties/NDD.mcl]     # one job per property (only: [names] for some)
     method: explore                 # or compositional: invariants, localization
@@ -20,6 +23,9 @@ checks:
     model: dala-timed
     method: compositional
     vary: {default-wcet: [0 ms, 25 ms]}   # this check's axes, over the file's
+  - check: response-times           # one job per point: every task's response time (of: [tasks, services])
+    model: sensing
+    vary: {cores: [1, 2, 3, 4], policy: [edf, fixed-priority]}   # over the platform file's
 ```
 """
 from __future__ import annotations
@@ -33,14 +39,14 @@ from typing import Any, Mapping
 import yaml
 
 from genom2bip.campaign.axes import AxisKind, axis_kind
-from genom2bip.campaign.kinds import KINDS, METHODS
+from genom2bip.campaign.kinds import KINDS, METHODS, RESPONSE_OWNERS
 from genom2bip.campaign.params import ModelParams
 from genom2bip.yamlfile import span_of
 from runtime.diagnostics import Reporter, Span
 
 TOP = ("campaign", "doc", "models", "options", "timeout", "vary", "checks")
 MODEL_KEYS = ("paths", "each", "rules", "no-rules", "defines", "include", "root", "timed", "doc")
-TIME_KEYS = ("tick", "default-wcet", "observers")
+TIME_KEYS = ("tick", "default-wcet", "observers", "platform", "client")
 CHECK_KEYS = ("check", "model", "method", "options", "timeout", "vary", "doc")
 OBSERVER_KINDS = ("overrun", "latency")
 #: Search options: key -> (SearchOptions field, reader).  Integers are 0 or more.
@@ -87,6 +93,7 @@ class CheckSpec:
     files: list[str] = field(default_factory=list)
     only: list[str] | None = None
     kinds: tuple[str, ...] = OBSERVER_KINDS
+    of: tuple[str, ...] = RESPONSE_OWNERS  # response times: whose are recorded
     options: dict[str, Any] = field(default_factory=dict)  # SearchOptions keyword arguments
     axes: list[Axis] = field(default_factory=list)
     timeout: float | None = None  # seconds of wall clock a job may take before it is stopped
@@ -240,7 +247,7 @@ class _Reader:
                             for k, v in value.items()))
 
     def timed(self, node: yaml.Node, name: str) -> dict[str, Any]:
-        """``timed: true`` or a mapping of tick, default-wcet and observers."""
+        """``timed: true`` or a mapping of tick, default-wcet, observers, platform and client."""
         from genom2bip.observers import parse_duration
 
         if isinstance(node, yaml.ScalarNode):
@@ -254,8 +261,9 @@ class _Reader:
                 if us is None or (key == "tick" and us <= 0):
                     self.error(v, f"model {name}: {key}: a duration expected (e.g. 1 ms, 500 us)")
                 out[field_name] = us
-        if "observers" in fields:
-            out["observers"] = self.file_path(fields["observers"][1], f"model {name}: observers")
+        for key in ("observers", "platform", "client"):
+            if key in fields:
+                out[key] = self.file_path(fields[key][1], f"model {name}: {key}")
         return out
 
     def seconds(self, node: yaml.Node, what: str) -> float | None:
@@ -327,6 +335,10 @@ class _Reader:
                 except ValueError as exc:
                     self.error(item, f"{what}vary: {key}: {exc}, got {value!r}")
                     ok = False
+                else:
+                    if kind.path:
+                        parsed[-1] = self.file_path(item, f"{what}vary: {key}")
+                        ok = ok and parsed[-1] is not None
                 values.append(value)
             if any(p == q for i, p in enumerate(parsed) for q in parsed[:i]):
                 self.error(v, f"{what}vary: {key}: a value is given twice")
@@ -390,6 +402,11 @@ class _Reader:
             for bad in (k for k in kinds if k not in OBSERVER_KINDS):
                 self.error(fields["kinds"][1], f"{what}: kinds: {bad!r} is not one of {', '.join(OBSERVER_KINDS)}")
             spec.kinds = tuple(kinds)
+        if "of" in fields:
+            of = self.strings(fields["of"][1], f"{what}: of") or []
+            for bad in (k for k in of if k not in RESPONSE_OWNERS):
+                self.error(fields["of"][1], f"{what}: of: {bad!r} is not one of {', '.join(RESPONSE_OWNERS)}")
+            spec.of = tuple(of)
         spec.options = {**options, **(self.options(fields["options"][1], f"{what}: ") if "options" in fields else {})}
         spec.timeout = self.seconds(fields["timeout"][1], f"{what}: timeout") if "timeout" in fields else self.timeout
         own = self.axes(fields["vary"][1], f"{what}: ") if "vary" in fields else []
@@ -399,7 +416,13 @@ class _Reader:
         return spec
 
     def _fits(self, spec: CheckSpec, kind, models: list[ModelSpec], node, what: str) -> None:
-        """A timed check or a timed axis on a model without time is refused where the check names it."""
+        """A timed check or a timed axis on a model without time is refused where the check names it; a policy
+        without a platform (no file, no cores) where the axis is."""
+        cores = any(a.kind.name in ("cores", "platform") for a in spec.axes)
+        for axis in spec.axes:
+            if axis.kind.name == "policy" and not cores and any(m.params.platform is None for m in models):
+                self.reporter.error(axis.span, f"{what}: axis policy needs a platform, and model {spec.model} has "
+                                               "none", "give the model timed: {platform: FILE}, or vary cores too")
         untimed = [m.name for m in models if not m.params.timed]
         if not untimed:
             return

@@ -62,7 +62,7 @@ def run_job(job: Job) -> dict[str, Any]:
         result = kind.run(model, job, _options(job, worker))
         record.update(status="done", verdict=result.verdict.value, message=result.message,
                       limit=result.limit or None, figures=result.figures.to_json(),
-                      values=kind.figures(result) if kind.figures else None, result=result.to_json())
+                      values=kind.figures(result, job) if kind.figures else None, result=result.to_json())
     except Exception as exc:  # noqa: BLE001 - recorded: the campaign goes on with the other jobs
         record.update(status="failed", verdict=None, message=failure(exc), limit=None, figures=None, values=None,
                       result=None)

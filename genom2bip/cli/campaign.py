@@ -160,10 +160,11 @@ def _run(todo, connection, out):
 def _report(campaign, jobs, out, run) -> int:
     """The summary table, the pictures, what an interruption left undone; the exit status."""
     from genom2bip.campaign.pictures import draw
-    from genom2bip.campaign.report import summary
+    from genom2bip.campaign.report import summary, values_table
 
     print()
     counts = summary(jobs, out.records)
+    values_table(jobs, out.records)
     if run is not None:
         busy = sum(r.get("seconds") or 0 for r in run.written)
         cpu = sum(r.get("cpu_seconds") or 0 for r in run.written)

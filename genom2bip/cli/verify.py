@@ -187,8 +187,26 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         print(exc.render(), file=sys.stderr)
         return EXIT_ERRORS
     observers = _observer_kinds(args)
-    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers)
+    responses = bool(getattr(args, "response_times", False))
+    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers or responses)
     load_externs(args.externs)
+    zones = bool(observers or responses) and _zones(model, args)
+    if responses and not zones:  # response times are the zone explorer's: ticks would print nothing for them
+        error("--response-times: response times are measured with clock zones; "
+              + ("drop --time-search ticks" if getattr(args, "time_search", None) == "ticks" else
+                 "this model is not one clock zones take (see the note above)"))
+        raise Failure(EXIT_USAGE)
+    if zones:
+        from genom2bip.cli.verify_timed import check_timing_zones
+        if args.method == "explore":
+            print(f"model {model.title}")
+        from genom2bip.cli.verify_timed import platform_line
+        platform_line(model)
+        worst = check_timing_zones(model, observers, responses, options, listener)
+        if not (deadlock or properties or args.aut or args.dot or args.promela):
+            return max(compositional, worst)
+        observers, responses = set(), False
+        compositional = max(compositional, worst)
     try:
         space = state_space(model, options, properties, keep_edges=bool(properties or args.aut or args.dot))
     except (ExploreError, EngineError) as exc:
@@ -208,6 +226,28 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         from genom2bip.cli.verify_timed import check_observers
         worst = max(worst, check_observers(model, observers, space, options, listener))
     return worst
+
+
+def _zones(model, args) -> bool:
+    """Time by clock zones: asked for, or by default on a platform model the zone explorer takes."""
+    choice = getattr(args, "time_search", None)
+    if choice == "ticks" or (choice is None and not _platform_of(model)):
+        return False
+    from genom2bip.verify.zones import ZonesUnsupported, explorer
+    try:
+        explorer(model)
+    except ZonesUnsupported as exc:
+        if choice == "zones":  # asked for: nothing is explored, so the message does not say it is
+            error(f"--time-search zones: clock zones do not take this model ({exc}); try --time-search ticks")
+            raise Failure(EXIT_USAGE) from None
+        print(f"note: clock zones do not take this model ({exc}): exploring tick by tick")
+        return False
+    return True
+
+
+def _platform_of(model) -> str | None:
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    return ann.arguments.get("platform") if ann is not None else None
 
 
 def _observer_kinds(args) -> set[str]:

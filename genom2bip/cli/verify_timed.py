@@ -27,6 +27,12 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
                       help="WCET of a codel that declares none (default: 0, with a warning naming it)")
     time.add_argument("--observers", metavar="FILE",
                       help="latency observers (YAML); default: observers.yaml in the directory given")
+    time.add_argument("--client", metavar="MISSION",
+                      help="a mission file whose steps are the environment: its requests in order, each once the "
+                           "previous one is accepted, started or over (default: any request, once per period)")
+    time.add_argument("--platform", metavar="FILE",
+                      help="the computer: cores, scheduling policy, codel execution intervals, task offsets (YAML; "
+                           "docs/verification.md, Platform); default: a core per task, codels take their WCET")
     if not verify:
         time.add_argument("--monitor", action="store_true",
                           help="add the observers without ticks: the controller measures them in real time "
@@ -34,10 +40,18 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
     if verify:
         time.add_argument("--schedulability", action="store_true",
                           help="check the period observers: is an overrun of each periodic task reachable?")
+        time.add_argument("--response-times", action="store_true",
+                          help="the largest response time of each periodic task (release to end of cycle) and of "
+                               "each service (request to final report), each with a trace that reaches it")
+        time.add_argument("--no-exceptions", action="store_true",
+                          help="codels take their declared yields only: no exception is explored (timing as the "
+                               "GenoM3 templates model it)")
+        time.add_argument("--time-search", choices=("zones", "ticks"),
+                          help="explore time with clock zones (default on a platform) or tick by tick")
 
 
 def _duration(text: str | None, option: str) -> int | None:
-    from genom2bip.observers import parse_duration
+    from genom2bip.durations import parse_duration
 
     if text is None:
         return None
@@ -59,6 +73,10 @@ def time_settings(args: argparse.Namespace):
     if timed and getattr(args, "engine", "explore") == "spin":
         error("the observers of --timed are checked by our explorer: drop --engine spin")
         raise Failure(EXIT_USAGE)
+    for option in ("platform", "client", "response_times", "time_search", "no_exceptions"):
+        if getattr(args, option, None) and not timed:
+            error(f"--{option.replace('_', '-')} needs --timed")
+            raise Failure(EXIT_USAGE)
     if not (timed or monitor):
         if getattr(args, "schedulability", False) or getattr(args, "observers", None):
             error("--schedulability and --observers need --timed" + ("" if hasattr(args, "schedulability")
@@ -70,7 +88,9 @@ def time_settings(args: argparse.Namespace):
         error("--tick must be positive")
         raise Failure(EXIT_USAGE)
     return TimeSettings(ticks=timed, tick_us=tick, default_wcet_us=_duration(args.default_wcet, "default-wcet"),
-                        observers=args.observers)
+                        observers=args.observers, platform=getattr(args, "platform", None),
+                        client=getattr(args, "client", None), responses=bool(getattr(args, "response_times", False)),
+                        exceptions=not getattr(args, "no_exceptions", False))
 
 
 def warn_untimed(package) -> None:
@@ -123,6 +143,7 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
         print("observers: none in the model" + ("" if tick else " (build it with --timed)"))
         return EXIT_OK
     if tick:
+        platform_line(model)
         print(f"time: one tick is {tick / 1000:g} ms")
     worst = EXIT_OK
     for atom in atoms:
@@ -145,3 +166,75 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
             print(f"{found.subject}: inconclusive ({found.message})")
             worst = max(worst, EXIT_VIOLATED if found.verdict is Verdict.ERROR else EXIT_INCONCLUSIVE)
     return worst
+
+
+def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
+    """The observers of ``kinds`` and, with ``responses``, the response times, by one zone exploration; printed as
+    the tick explorer prints verdicts, the response times as a table with a trace each; the worst exit status."""
+    from genom2bip.verify import Verdict, tick_us
+    from genom2bip.verify.zones import ResponseResult, check_timing
+
+    tick = tick_us(model.package)
+    if tick:
+        print(f"time: one tick is {tick / 1000:g} ms; explored with clock zones")
+    results = check_timing(model, kinds, responses, options, listener)
+    worst = EXIT_OK
+    for found in results:
+        if isinstance(found, ResponseResult):
+            continue
+        what = "overrun" if found.kind == "overrun" else "violation"
+        if found.verdict is Verdict.HOLDS:
+            print(f"{found.subject}: no {what} reachable ({found.method}, {found.figures.states:,} symbolic "
+                  f"states, {found.figures.seconds:.2f} s)")
+        elif found.verdict is Verdict.VIOLATED:
+            print(f"{found.subject}: {what} reachable" + (f" ({len(found.trace)} steps):" if found.trace else
+                                                          f" ({found.message})"))
+            if found.trace is not None:
+                timed_trace(found.trace)
+            worst = EXIT_VIOLATED
+        else:
+            print(f"{found.subject}: inconclusive ({found.limit or found.message})")
+            worst = max(worst, EXIT_INCONCLUSIVE)
+    times = [r for r in results if isinstance(r, ResponseResult)]
+    if times:
+        print(f"response times ({times[0].method}, {times[0].figures.states:,} symbolic states, "
+              f"{times[0].figures.seconds:.2f} s):")
+        width = max(len(r.owner) for r in times)
+        for r in times:
+            owner = r.owner
+            period = f"  (period {r.ms(r.period_ticks):g} ms)" if r.period_ticks else ""
+            print(f"  {owner:<{width}}  {_response_value(r)}{period}")
+        for r in times:
+            owner = r.owner
+            if r.trace is not None:
+                print(f"{owner}: {_response_value(r)} ({len(r.trace)} steps):")
+                timed_trace(r.trace)
+                if r.trace.loop is not None:
+                    print(f"    ... and back to the state after step {r.trace.loop}, forever")
+            elif r.message and r.verdict is not Verdict.INCONCLUSIVE and r.message != _response_value(r):
+                print(f"{owner}: {r.message}")
+        if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
+            worst = max(worst, EXIT_INCONCLUSIVE)
+    return worst
+
+
+def _response_value(r) -> str:
+    """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms``."""
+    from genom2bip.verify import Verdict
+
+    if r.verdict is Verdict.INCONCLUSIVE:
+        return f"inconclusive ({r.limit})"
+    if r.unbounded:
+        return "no bound: a request can wait for ever"
+    if r.value_ticks is None:
+        return r.message if r.message == "never requested" else f"more than {r.ms(r.cap_ticks):g} ms"
+    return f"{r.value_ms:g} ms"
+
+
+def platform_line(model) -> None:
+    """What the tasks of a timed model run on, in one line (a timed model without --platform says so too)."""
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    if ann is None:
+        return
+    from genom2bip.platform import DEDICATED
+    print(f"platform: {ann.arguments.get('platform') or DEDICATED}")

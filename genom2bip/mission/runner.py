@@ -63,11 +63,12 @@ class Runner:
 
     def step(self, step: Step) -> Outcome:
         out = Outcome(step)
-        if step.kind == "wait":
-            end = self.now() + step.seconds
+        if step.kind == "wait" or step.after:
+            end = self.now() + (step.seconds if step.kind == "wait" else step.after)
             while self.now() < end:
                 time.sleep(POLL / 5)
-            return out
+            if step.kind == "wait":
+                return out
         if step.kind == "send":
             component, service = step.target.split(".")
             try:

@@ -10,6 +10,7 @@ steps:
   - send: NDD.GoTo
     as: goto                          # a name to await it later
     until: started                    # queued | started | final (default)
+    after: 10 ms                      # sent this long after the previous step is over
     timeout: 60                       # controller seconds (default 120)
   - wait: 2.0                         # controller seconds
   - await: goto
@@ -25,6 +26,7 @@ from typing import Any
 
 import yaml
 
+from genom2bip.durations import parse_duration
 from genom2bip.yamlfile import compose_file, span_of
 from runtime.diagnostics import Reporter, Span
 
@@ -54,6 +56,7 @@ class Step:
     expect: dict[str, str] | None = None
     timeout: float = DEFAULT_TIMEOUT
     seconds: float = 0.0
+    after: float = 0.0  # send: seconds to wait once the previous step is over
 
     @property
     def where(self) -> str:
@@ -92,6 +95,12 @@ class _Reader:
             return None
         return float(value)
 
+    def delay(self, node: yaml.Node, what: str) -> float | None:
+        """Seconds, as a number (``0.5``) or a duration (``10 ms``), at most a day."""
+        if isinstance(node, yaml.ScalarNode) and parse_duration(node.value) is not None:
+            return parse_duration(node.value) / 1e6
+        return self.number(node, what)
+
     def expect(self, node: yaml.Node) -> dict[str, str] | None:
         value = _plain(node)
         if isinstance(value, str):
@@ -120,7 +129,7 @@ class _Reader:
             )
             return None
         kind = kinds[0]
-        allowed = {"send": {"send", "with", "as", "until", "expect", "timeout"}, "wait": {"wait"},
+        allowed = {"send": {"send", "with", "as", "until", "expect", "timeout", "after"}, "wait": {"wait"},
                    "await": {"await", "expect", "timeout"}}[kind]
         ok = True
         for key, (knode, _) in fields.items():
@@ -158,6 +167,10 @@ class _Reader:
         if "expect" in fields:
             step.expect = self.expect(fields["expect"][1])
             ok = ok and step.expect is not None
+        if "after" in fields:
+            after = self.delay(fields["after"][1], "after")
+            ok = ok and after is not None
+            step.after = after or 0.0
         if "timeout" in fields:
             t = self.number(fields["timeout"][1], "timeout")
             ok = ok and t is not None

@@ -132,7 +132,7 @@ def load(path: Path) -> ctypes.CDLL:
         "c_width": (i32, [i32]), "c_words": (i32, []),
         "c_state_width": (i32, []), "c_nstates": (i64, []), "c_parent": (i64, [i64]), "c_via": (i64, [i64]),
         "c_deadlock": (i64, [i64]), "c_state": (None, [i64, p(i64)]), "c_free": (None, []),
-        "c_successors": (i32, [p(i64), p(i64), p(ctypes.c_uint32), i32, i64, p(i32), p(i64)]),
+        "c_successors": (i32, [p(i64), p(i64), p(i64), i32, i64, p(i32), p(i64)]), "c_via_bits": (i32, []),
         "c_set_por": (None, [i32]), "c_por_available": (i32, []), "c_reduced": (i64, []),
         "c_search": (i32, [i32, i64, i64, i64, i32, i64, ctypes.c_double, PROGRESS, p(Result), i32, i32, i32]),
         "c_table_size": (ctypes.c_uint64, []), "c_bits_per_state": (i32, []), "c_parallel": (i32, []),

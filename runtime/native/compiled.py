@@ -52,17 +52,19 @@ def exploration_choices(package, externs: dict[str, Any] | None) -> dict[str, Ch
 
 
 def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
-                  monitors=()) -> tuple[CompiledSpace | None, str]:
+                  monitors=(), wide_numbers: bool = False) -> tuple[CompiledSpace | None, str]:
     """The compiled step and search of ``space``, or None and why not (one line).
 
-    ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction.
+    ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction;
+    ``wide_numbers`` stores 64-bit interaction numbers even when 32 bits hold them (what tests and benches
+    compare the two layouts with).
     """
     if space.engine.invariants:
         return None, "the compiled explorer does not check atom invariants: exploring with the Python step"
     cc = compiler()
     if cc is None:
         return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
-    cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc, monitors)
+    cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc, monitors, wide_numbers)
     try:
         cs.build()
     except Unsupported as exc:
@@ -80,8 +82,10 @@ class _Interrupt:
 class CompiledSpace:
     """The C library of one model bound to its Python :class:`StateSpace` (which words errors and traces)."""
 
-    def __init__(self, space: StateSpace, choices: dict[str, Choice], cc: str, monitors=()) -> None:
+    def __init__(self, space: StateSpace, choices: dict[str, Choice], cc: str, monitors=(),
+                 wide_numbers: bool = False) -> None:
         self.space = space
+        self.wide_numbers = wide_numbers  # 64-bit interaction numbers even where 32 bits hold them
         self.monitors = list(monitors)
         self.choices = choices
         self.cc = cc
@@ -101,7 +105,7 @@ class CompiledSpace:
         """
         if parallel is not None:
             self.parallel = parallel
-        model = generate(self.space, self.choices, self.widths, self.monitors)
+        model = generate(self.space, self.choices, self.widths, self.monitors, self.wide_numbers)
         flat = self.engine.flat
         self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}"))
         self.width, self.source, self.bits = model.width, model.source, model.bits
@@ -119,17 +123,23 @@ class CompiledSpace:
             out[i] = bool(out[i])
         return tuple(out)
 
+    def interaction_index(self, number: int) -> int:
+        """The engine's index of the interaction the compiled search numbers ``number`` (runtime.native.numbering)."""
+        src, mask = self.model.numbering.interaction(number)
+        return self.engine._make(src, mask).index
+
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
         """``(interaction index, next state)`` for every successor of an explorer state, dead variables reset."""
         cap = 1024
         while True:
             s = (ctypes.c_int64 * self.width)(*to_words(self.model, state))
             out = (ctypes.c_int64 * (self.width * cap))()
-            via = (ctypes.c_uint32 * cap)()
+            via = (ctypes.c_int64 * cap)()
             code, arg = ctypes.c_int(0), ctypes.c_int64(0)
             n = self.lib.c_successors(s, out, via, cap, self.budget, ctypes.byref(code), ctypes.byref(arg))
             if n >= 0:
-                return [(via[i], self._typed(out[i * self.width:(i + 1) * self.width])) for i in range(n)]
+                return [(self.interaction_index(via[i]), self._typed(out[i * self.width:(i + 1) * self.width]))
+                        for i in range(n)]
             if code.value == 8:  # a field too narrow: widen and redo
                 self._widen(arg.value)
                 continue
@@ -235,7 +245,7 @@ class CompiledSpace:
             ids = [space._add(space._pack(self.state(k)[:explorer]), -1, -1) for k in path]
         finally:
             space.max_states = saved
-        labels = [space.interaction(self.lib.c_via(k)).label for k in path[1:]]
+        labels = [space.interaction(self.interaction_index(self.lib.c_via(k))).label for k in path[1:]]
         return space.steps_along(ids, labels)
 
     def concrete(self, steps: list[Step]) -> tuple:

@@ -37,9 +37,10 @@ from runtime.native.cexpr import (
     statements,
     stored,
 )
-from runtime.native.ctree import TreeGen, node_pm, nodes
+from runtime.native.ctree import TreeGen, node_pm, node_pm_of, nodes
 from runtime.native.ctree import width as offer_width
 from runtime.native.observers import gen_observers
+from runtime.native.numbering import Numbering, TooMany
 from runtime.native.por import gen_por
 
 
@@ -51,7 +52,10 @@ def at(sc: CScope, what: str) -> CScope:
 SEARCH_C = Path(__file__).with_name("search.c")
 #: Guards of atom or compound priorities past which the tables would be too large.
 MAX_GUARDED = 10
-#: Ports of a connector: its interactions are masks of 32 bits.
+#: Past this many words, the closures of compound priorities are computed as guard combinations are met.
+MAX_REACH_WORDS = 1 << 16
+#: Ports of a connector with triggers or sub-connectors: its interactions are masks of 32 bits (a rendezvous has
+#: one interaction, whatever its ports: runtime.native.numbering).
 MAX_PARAMS = 32
 #: Ports of a flat connector up to which its largest interactions are a table rather than computed.
 MAX_TABLE = 12
@@ -71,6 +75,7 @@ class CModel:
     bits: int = 0
     label_ids: dict[int, int] = field(default_factory=dict)  # interaction index -> label id (static ones)
     labels: list[str] = field(default_factory=list)
+    numbering: Numbering | None = None  # how the search numbers interactions (the parent links' via)
     floats: list[int] = field(default_factory=list)  # state slots holding the bits of a double
     strings: dict[int, list[str]] = field(default_factory=dict)  # state slot -> its strings by number
 
@@ -81,8 +86,10 @@ class CGen(StepEmitter):
     TRUE, FALSE = "1", "0"
     HAVE_VALUES = "vals"
 
-    def __init__(self, space, choices: dict[str, Choice], widths: dict[int, int], monitors=()) -> None:
+    def __init__(self, space, choices: dict[str, Choice], widths: dict[int, int], monitors=(),
+                 wide_numbers: bool = False) -> None:
         super().__init__(space.engine.flat, CWriter())
+        self.wide_numbers = wide_numbers
         self.space = space
         self.widths = widths
         self.monitors = list(monitors)
@@ -206,15 +213,16 @@ class CGen(StepEmitter):
         self.check_port_types()
         self.trees = {src.index: TreeGen(self, src) for src in self.sources if src.kind == "generic"}
         for src in self.sources:
-            if len(src.leaves) > MAX_PARAMS:
+            if src.kind != "rendezvous" and len(src.leaves) > MAX_PARAMS:
                 raise Unsupported(
                     f"connector {src.connector.path}: {len(src.leaves)} ports, more than the {MAX_PARAMS} "
                     "bits of the compiled step's interaction masks"
                 )
         nsrc = len(self.sources)
-        if max((s.full for s in self.sources), default=0) * nsrc + nsrc >= (1 << 32) - 1:
-            raise Unsupported(f"{nsrc} sources with up to {max(len(s.leaves) for s in self.sources)} ports: too many "
-                              "interactions to number them in 32 bits")
+        try:
+            self.numbering = Numbering.of(self.sources, self.wide_numbers)
+        except TooMany as exc:
+            raise Unsupported(str(exc)) from None
         self.base = fl.state_size + (len(self.space.services) if self.externs.services is not None else 0)
         self.width = self.base + len(self.monitors)
         for m, (mon, _) in enumerate(self.monitors):
@@ -230,7 +238,9 @@ class CGen(StepEmitter):
         w(f"#define NSLOTS {len(self.slots)}")
         w(f"#define MAXINT {MAX_INTERNAL}")
         w(f"#define NSERV {len(self.space.services) if self.externs.services is not None else 0}")
+        w(self.numbering.c_define())
         w('#include "prelude.h"')
+        w(self.numbering.c_offsets())
         self.gen_choices()
         for fa in fl.atoms:
             self.gen_internal(fa)
@@ -244,7 +254,7 @@ class CGen(StepEmitter):
         for src in self.sources:
             self.gen_fire(src)
         self.gen_fire_table()
-        model = CModel("", self.width)
+        model = CModel("", self.width, numbering=self.numbering)
         self.gen_labels(model)
         self.gen_priorities()
         self.gen_blocked()
@@ -297,7 +307,7 @@ class CGen(StepEmitter):
         return f"V lv[{max(len(vals), 1)}] = {{{', '.join(vals) or '0'}}};"
 
     def gen_fire(self, src) -> None:
-        """``f<k>(L, mask)``: fire interaction ``mask`` of source ``k`` on the state ``L``."""
+        """``f<k>(L, mask)``: fire interaction ``mask`` of source ``k`` on the state ``L`` (a single one's: 0)."""
         w = self.w
         fl = self.flat
         if src.kind == "generic":
@@ -316,15 +326,19 @@ class CGen(StepEmitter):
             if info.clauses:
                 w(self.locals_init(info))
                 w("(void)lv;")
-                key = str(info.all_params) if src.kind == "rendezvous" else "mask"
-                w(f"switch ({key}) {{")
-                for mask, spec in info.clauses.items():
+                clauses = info.clauses.items()
+                if src.kind == "rendezvous":  # its one interaction: every parameter, no mask to switch on
+                    clauses = [(m, spec) for m, spec in clauses if m == info.all_params]
+                else:
+                    w("switch (mask) {")
+                for mask, spec in clauses:
                     calls = [f"k{k}_{mask}_{part}(pv, lv);" for part, body in (("u", spec.up), ("d", spec.down))
                              if body]
                     if calls:
-                        w(f"case {mask}: {' '.join(calls)} break;")
-                w("default: break;")
-                w("}")
+                        w(" ".join(calls) if src.kind == "rendezvous" else f"case {mask}: {' '.join(calls)} break;")
+                if src.kind != "rendezvous":
+                    w("default: break;")
+                    w("}")
             for i, p in enumerate(src.leaves):
                 if src.kind == "rendezvous":
                     w(f"ap{p}(L, pv[{i}]);")
@@ -449,7 +463,7 @@ class CGen(StepEmitter):
             if label not in ids:
                 ids[label] = len(ids)
                 model.labels.append(label)
-            static.append(f"{{{ids[label]}, {1 if named else 0}, {src.full}}}")
+            static.append(f"{{{ids[label]}, {1 if named else 0}, {0 if named else src.full}u}}")
         self.w(f"#define NLABELS {len(ids)}")
         self.w(f"static const LabelDesc LABELS[NSRC] = {{{', '.join(static)}}};")
 
@@ -492,25 +506,25 @@ class CGen(StepEmitter):
             return
         pr: support.Priorities = self.prio
         nr = len(pr.rules)
-        if len(pr.guards) > MAX_GUARDED:
-            names = ", ".join(self.flat.priorities[r].name for r, _ in pr.guards[:3])
-            raise Unsupported(f"compound priorities of {self.flat.root}: {len(pr.guards)} guarded ones ({names}, ...); "
-                              f"the compiled tables take at most {MAX_GUARDED}")
         words = (nr + 63) // 64
-        rows, cyc = [], []
-        for key in range(1 << len(pr.guards)):
-            bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
-            try:
-                reach = pr._reach(bits)
-                cyc.append("0")
-            except ModelError:
-                reach = [0] * nr
-                cyc.append("1")
-            rows.append("{" + ", ".join(_words(r, words) for r in reach) + "}")
         self.w(f"#define NRULES {nr}")
         self.w(f"#define NRW {words}")
-        self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}][NRW] = {{{', '.join(rows)}}};")
-        self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
+        self.dynamic_reach = len(pr.guards) > MAX_GUARDED or (nr * words << len(pr.guards)) > MAX_REACH_WORDS
+        if self.dynamic_reach:
+            self.gen_reach_cache(pr, words)
+        else:
+            rows, cyc = [], []
+            for key in range(1 << len(pr.guards)):
+                bits = tuple(bool(key >> k & 1) for k in range(len(pr.guards)))
+                try:
+                    reach = pr._reach(bits)
+                    cyc.append("0")
+                except ModelError:
+                    reach = [0] * nr
+                    cyc.append("1")
+                rows.append("{" + ", ".join(_words(r, words) for r in reach) + "}")
+            self.w(f"static const uint64_t PREACH[{1 << len(pr.guards)}][{nr}][NRW] = {{{', '.join(rows)}}};")
+            self.w(f"static const uint8_t PCYC[{1 << len(pr.guards)}] = {{{', '.join(cyc)}}};")
         # guard functions of compound priorities, reading exported data from the state
         for k, (r, _) in enumerate(pr.guards):
             fp = self.flat.priorities[r]
@@ -519,7 +533,12 @@ class CGen(StepEmitter):
         for src in self.sources:
             for side, name in ((1, "lo"), (2, "hi")):
                 terms = []
-                if src.tree is not None:
+                if src.kind == "rendezvous":  # one interaction: which rules it is in is known now
+                    pms = {node.connector.id: node_pm_of(node, src.full) for node in nodes(src.tree)}
+                    for i, rule in enumerate(pr.rules):
+                        if any(_in_rule(pms[c], pm, side) for c, pm in rule[side] if c in pms):
+                            terms.append(f"o[{i >> 6}] |= UINT64_C({1 << (i & 63)});")
+                elif src.tree is not None:
                     pms = {node.connector.id: node_pm(node) for node in nodes(src.tree)}
                     for i, rule in enumerate(pr.rules):
                         conds = [(f"({pms[c]} & {pm}u) == {pm}u" + ("" if pm else f" && {pms[c]}")
@@ -588,12 +607,80 @@ class CGen(StepEmitter):
                     self.gen_compound_priorities()
             w("return n;")
 
+    def gen_reach_cache(self, pr, words: int) -> None:
+        """Rule closures computed when a combination of guards is first met, kept per thread (many guards).
+
+        ``reach_of(key)`` returns the closure of the rules active under the guard
+        values ``key`` (``NGW`` words), or NULL when they form a cycle; the static
+        table of every combination would be exponential in the guards.
+        """
+        nr, ng = len(pr.rules), len(pr.guards)
+        gw = max(1, (ng + 63) // 64)
+        edges = ", ".join(_words(sum(1 << y for y in pr.edges[r]), words) for r in range(nr))
+        guarded = sum(1 << r for r, _ in pr.guards)
+        w = self.w
+        w(f"#define NGW {gw}")
+        w(f"static const uint64_t PEDGE[NRULES][NRW] = {{{edges}}};")
+        w(f"static const uint64_t PFIXED[NRW] = {_words(((1 << nr) - 1) & ~guarded, words)};")
+        w(f"static const int PGRULE[{max(1, ng)}] = {{{', '.join(str(r) for r, _ in pr.guards) or '0'}}};")
+        w("typedef struct { uint64_t key[NGW]; uint8_t cyc; uint64_t reach[NRULES][NRW]; } PReach;")
+        w("static TL PReach **PCACHE; static TL uint64_t PCAP, PUSED;")
+        with w.block("static PReach *reach_compute(const uint64_t *key)"):
+            w("PReach *e = (PReach *)calloc(1, sizeof(PReach));")
+            w("if (!e) fail(E_FULL, 0);")
+            w("memcpy(e->key, key, sizeof(e->key));")
+            w("uint64_t active[NRW];")
+            w("for (int x = 0; x < NRW; x++) active[x] = PFIXED[x];")
+            w(f"for (int k = 0; k < {ng}; k++) if (key[k >> 6] >> (k & 63) & 1) "
+              "active[PGRULE[k] >> 6] |= UINT64_C(1) << (PGRULE[k] & 63);")
+            with w.block("for (int r = 0; r < NRULES; r++)"):
+                w("if (!(active[r >> 6] >> (r & 63) & 1)) continue;")
+                w("uint64_t *seen = e->reach[r], todo[NRW] = {0};")
+                w("seen[r >> 6] |= UINT64_C(1) << (r & 63); todo[r >> 6] |= UINT64_C(1) << (r & 63);")
+                with w.block("for (int more = 1; more;)"):
+                    w("more = 0;")
+                    with w.block("for (int y = 0; y < NRULES; y++)"):
+                        w("if (!(todo[y >> 6] >> (y & 63) & 1)) continue;")
+                        w("todo[y >> 6] &= ~(UINT64_C(1) << (y & 63));")
+                        with w.block("for (int x = 0; x < NRW; x++)"):
+                            w("uint64_t next = PEDGE[y][x] & active[x];")
+                            w("if (x == (r >> 6) && (next >> (r & 63) & 1)) e->cyc = 1;")
+                            w("next &= ~seen[x]; seen[x] |= next; todo[x] |= next; more |= next != 0;")
+            w("return e;")
+        with w.block("static PReach *reach_of(const uint64_t *key)"):
+            w("uint64_t h = 1469598103934665603ull;")
+            w("for (int x = 0; x < NGW; x++) h = (h ^ key[x]) * 1099511628211ull;")
+            with w.block("if (PUSED * 2 >= PCAP)"):
+                w("uint64_t cap = PCAP ? PCAP * 2 : 64;")
+                w("PReach **t = (PReach **)calloc(cap, sizeof(PReach *));")
+                w("if (!t) fail(E_FULL, 0);")
+                w("for (uint64_t i = 0; i < PCAP; i++) if (PCACHE[i]) {")
+                w("    uint64_t g = 1469598103934665603ull;")
+                w("    for (int x = 0; x < NGW; x++) g = (g ^ PCACHE[i]->key[x]) * 1099511628211ull;")
+                w("    uint64_t j = g & (cap - 1); while (t[j]) j = (j + 1) & (cap - 1); t[j] = PCACHE[i]; }")
+                w("free(PCACHE); PCACHE = t; PCAP = cap;")
+            w("uint64_t j = h & (PCAP - 1);")
+            with w.block("while (PCACHE[j])"):
+                w("if (!memcmp(PCACHE[j]->key, key, sizeof(PCACHE[j]->key))) return PCACHE[j];")
+                w("j = (j + 1) & (PCAP - 1);")
+            w("PCACHE[j] = reach_compute(key); PUSED++;")
+            w("return PCACHE[j];")
+
     def gen_compound_priorities(self) -> None:
         """Drop the interactions low in a compound priority whose high side (reached through the rules) is enabled."""
         w = self.w
-        key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(self.prio.guards))) or "0"
-        w(f"int key = {key};")
-        w.if_then("PCYC[key]", f"fail({E_CYCLE}, -1)")
+        if self.dynamic_reach:
+            w("uint64_t key[NGW] = {0};")
+            for k in range(len(self.prio.guards)):
+                w(f"if (pg{k}(s)) key[{k >> 6}] |= UINT64_C({1 << (k & 63)});")
+            w("const PReach *pr = reach_of(key);")
+            w.if_then("pr->cyc", f"fail({E_CYCLE}, -1)")
+            reach = "pr->reach[r][x]"
+        else:
+            key = " | ".join(f"(pg{k}(s) ? {1 << k} : 0)" for k in range(len(self.prio.guards))) or "0"
+            w(f"int key = {key};")
+            w.if_then("PCYC[key]", f"fail({E_CYCLE}, -1)")
+            reach = "PREACH[key][r][x]"
         w("uint64_t high[NRW] = {0}, blocked[NRW] = {0};")
         w("int any = 0;")
         w("for (int i = 0; i < n; i++) HIT[isrc[i]](imask[i], high);")
@@ -602,7 +689,7 @@ class CGen(StepEmitter):
             w("int b = 0;")
             w("for (int r = 0; r < NRULES; r++)")
             w("    for (int x = 0; x < NRW; x++)")
-            w("        if (PREACH[key][r][x] & high[x]) { blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }")
+            w(f"        if ({reach} & high[x]) {{ blocked[r >> 6] |= UINT64_C(1) << (r & 63); b = 1; break; }}")
             with w.block("if (b)"):
                 w("int k = 0;")
                 with w.block("for (int i = 0; i < n; i++)"):
@@ -638,14 +725,14 @@ class CGen(StepEmitter):
         w = self.w
         fl = self.flat
         if src.kind == "port":
-            w(f"if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 1; n++; }}")
+            w(f"if (e{src.port.id}) {{ isrc[n] = {src.index}; imask[n] = 0; n++; }}")
             return
         if src.kind == "generic":
             self.trees[src.index].gen_enabled()
             return
         info = self.infos[src.connector.type.name]
         if src.kind == "rendezvous":
-            w(f"if ({self.rendezvous_enabled(src, info)}) {{ isrc[n] = {src.index}; imask[n] = {src.full}; n++; }}")
+            w(f"if ({self.rendezvous_enabled(src, info)}) {{ isrc[n] = {src.index}; imask[n] = 0; n++; }}")
             return
         enabled = [f"e{p}" for p in src.leaves]
         nparams = len(src.leaves)
@@ -667,6 +754,17 @@ class CGen(StepEmitter):
             else:
                 w(f"uint32_t k = maxa{src.index}(em);")
                 w(f"if (k) {{ isrc[n] = {src.index}; imask[n] = k; n++; }}")
+
+
+def _in_rule(part: int, pm: int, side: int) -> bool:
+    """Whether a connector taking part with parameters ``part`` matches a rule's ``(connector, pm)`` on ``side``.
+
+    The C conditions above, evaluated for an interaction known in advance: high (2) or ``*`` (pm 0): every
+    parameter of pm takes part (and something does); low: nothing outside pm takes part.
+    """
+    if side == 2 or pm == 0:
+        return (part & pm) == pm and (pm != 0 or part != 0)
+    return (part & ~pm) == 0 and part != 0
 
 
 def _words(value: int, words: int) -> str:
@@ -691,11 +789,13 @@ def max_allowed_c(node, w: CWriter) -> str:
     return name
 
 
-def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = None, monitors=()) -> CModel:
+def generate(space, choices: dict[str, Choice], widths: dict[int, int] | None = None, monitors=(),
+             wide_numbers: bool = False) -> CModel:
     """The C text of a state space's step and search (raises :class:`Unsupported` with the reason).
 
     ``widths`` gives the field of some int slots (by position in the layout) wider than START_BITS;
-    ``monitors`` are ``(Monitor, statics)`` safety observers stepped with every interaction.
+    ``monitors`` are ``(Monitor, statics)`` safety observers stepped with every interaction;
+    ``wide_numbers``: 64-bit interaction numbers even when the model's fit in 32 bits.
     """
-    gen = CGen(space, choices, dict(widths or {}), monitors)
+    gen = CGen(space, choices, dict(widths or {}), monitors, wide_numbers)
     return gen.generate()

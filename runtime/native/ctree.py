@@ -59,6 +59,15 @@ def node_pm(node: TreeNode) -> str:
     return "(" + " | ".join(terms) + ")" if terms else "0u"
 
 
+def node_pm_of(node: TreeNode, mask: int) -> int:
+    """The parameter mask :func:`node_pm` computes for interaction ``mask``, computed now."""
+    out = 0
+    for i, alts in enumerate(node.params):
+        if any(mask & a.mask for a in alts):
+            out |= 1 << i
+    return out
+
+
 class TreeGen:
     """The offers functions and the firing function of one generic source."""
 

@@ -80,20 +80,21 @@ def minimal(mon: Monitor) -> Monitor:
 
 
 def gen_observers(w: CWriter, monitors, sources, flat, base: int) -> None:
-    """``observe(s, L, via)`` and ``observe_initial(L)``: advance every observer, 1 when one is violated.
+    """``observe(s, L, src, mask)`` and ``observe_initial(L)``: advance every observer, 1 when one is violated.
 
     ``monitors`` are ``(Monitor, statics)`` pairs; observer ``m`` lives in slot ``base + m``.
     """
     w(f"#define NMON {len(monitors)}")
     if not monitors:
-        w("static int observe(const V *s, V *L, uint32_t via) { (void)s; (void)L; (void)via; return 0; }")
+        w("static int observe(const V *s, V *L, uint32_t src, uint32_t mask) "
+          "{ (void)s; (void)L; (void)src; (void)mask; return 0; }")
         w("static int observe_initial(const V *L) { (void)L; return 0; }")
         return
     statics = monitors[0][1]
     by_index = {st.index: k for k, st in enumerate(statics)}
     nsrc = len(sources)
-    with w.block("static int KOF(uint32_t via)"):
-        w(f"uint32_t src = via % {nsrc}, mask = via / {nsrc};")
+    with w.block("static int KOF(uint32_t src, uint32_t mask)", "the observers' number of interaction mask of src"):
+        w("(void)mask;")
         w("switch (src) {")
         for src in sources:
             masks = sorted(st.mask for st in statics if st.source.index == src.index)
@@ -116,8 +117,8 @@ def gen_observers(w: CWriter, monitors, sources, flat, base: int) -> None:
             f"{{{', '.join('1' if q in mon.accepting else '0' for q in range(mon.states))}}};"
         )
         w(f"static int P{m}(const V *L) {{ return {c_pred(mon.pred, flat)}; }}")
-    with w.block("static int observe(const V *s, V *L, uint32_t via)"):
-        w("int k = KOF(via), bad = 0;")
+    with w.block("static int observe(const V *s, V *L, uint32_t src, uint32_t mask)"):
+        w("int k = KOF(src, mask), bad = 0;")
         for m in range(len(monitors)):
             w(f"L[{base + m}] = D{m}[k][s[{base + m}]];")
             w.if_then(f"A{m}[L[{base + m}]] && !P{m}(L)", "bad = 1")

@@ -1,5 +1,6 @@
 /* Shared by every generated step: value type, error exit, checked arithmetic, the request environment.
-   Included by the C text runtime.native.cstep generates, after E, W, NSRC, MAXF, NSLOTS, NSERV are defined. */
+   Included by the C text runtime.native.cstep generates, after E, W, NSRC, MAXF, NSLOTS, NSERV, VIA_BITS are
+   defined. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdint.h>
@@ -28,6 +29,16 @@ static inline uint64_t aor_plain(uint64_t *p, uint64_t v) { uint64_t o = *p; *p 
 
 typedef int64_t V;
 typedef struct { int label, fixed; uint32_t full; } LabelDesc;
+
+/* the number of an interaction (runtime.native.numbering): OFF[src] + mask, or OFF[src] for a source with one
+   interaction; stored with every state as the link to its parent, in 32 bits when the model's numbers fit */
+#if VIA_BITS == 64
+typedef uint64_t VIA_T;
+#define VIA_NONE UINT64_MAX
+#else
+typedef uint32_t VIA_T;
+#define VIA_NONE UINT32_MAX
+#endif
 
 enum { E_NONDET = 1, E_UNSAFE, E_STUCK, E_NOTENABLED, E_ARITH, E_CYCLE, E_DOMAIN, E_WIDEN, E_CHOICES, E_FULL };
 

@@ -38,7 +38,8 @@ static int KIND;                    /* the store: ST_EXACT, ST_COMPACT or ST_BIT
 static int NWORK = 1;               /* threads of the breadth-first search */
 static uint64_t *STORE;             /* packed states numbered WBASE.. (exact: all of them, WBASE 0) */
 static int64_t WBASE, WCAP;         /* first number in STORE, room in states */
-static uint32_t *PARENT, *VIA;
+static uint32_t *PARENT;
+static VIA_T *VIA;                  /* the interaction that first reached each state (numbering.py) */
 static uint16_t *OUTK;              /* lossy: rank among the parent's successors by the same interaction */
 static int64_t NSTATES, CAP;        /* numbered states, room of PARENT and VIA */
 static int64_t RES, LIMIT;          /* numbers promised to pending steps (NSTATES <= RES <= LIMIT); the room */
@@ -48,7 +49,8 @@ static uint64_t TSIZE;              /* slots of TABLE or FTAB; bits of the bitst
 static int64_t *DEAD;
 static int64_t NDEAD, DCAP;
 static TL V *SUCC;
-static TL uint32_t *SVIA;
+static TL VIA_T *SVIA;              /* successor i: the number of its interaction */
+static TL uint32_t *SSRC;           /* successor i: its interaction's source */
 static TL uint8_t *SBAD; /* successor i violates an observer */
 static TL uint64_t *PK;
 static TL int SCAP;
@@ -113,18 +115,18 @@ static inline uint64_t *at(int64_t id) { return STORE + (id - WBASE) * NW; }
 
 static int64_t memory(void) {
     int64_t table = KIND == ST_EXACT ? (int64_t)TSIZE * 4 : KIND == ST_COMPACT ? (int64_t)TSIZE * 8 : (int64_t)(TSIZE / 8);
-    return CAP * (8 + (OUTK ? 2 : 0)) + WCAP * NW * 8 + table + DCAP * 8 + EXTRA;
+    return CAP * (4 + (int64_t)sizeof(VIA_T) + (OUTK ? 2 : 0)) + WCAP * NW * 8 + table + DCAP * 8 + EXTRA;
 }
 
 static void free_scratch(void) {
-    free(SUCC); free(SVIA); free(PK); free(SBAD);
-    SUCC = 0; SVIA = 0; PK = 0; SBAD = 0; SCAP = 0;
+    free(SUCC); free(SVIA); free(SSRC); free(PK); free(SBAD);
+    SUCC = 0; SVIA = 0; SSRC = 0; PK = 0; SBAD = 0; SCAP = 0;
 }
 
 static void c_release(void) {
     free(STORE); free(PARENT); free(VIA); free(OUTK); free(TABLE); free(FTAB); free(DEAD);
     free_scratch();
-    STORE = 0; PARENT = VIA = TABLE = 0; OUTK = 0; FTAB = 0; DEAD = 0; VIOL = -1;
+    STORE = 0; PARENT = TABLE = 0; VIA = 0; OUTK = 0; FTAB = 0; DEAD = 0; VIOL = -1;
     NSTATES = CAP = NDEAD = DCAP = NREDUCED = REDUCED_ALL = TRANS_ALL = WBASE = WCAP = RES = LIMIT = 0;
     TSIZE = 0; EXTRA = 0;
 }
@@ -172,7 +174,7 @@ static int grow(int64_t need) {
         while (cap < need) cap *= 2;
         uint32_t *p = realloc(PARENT, cap * 4);
         if (p) PARENT = p;
-        uint32_t *v = realloc(VIA, cap * 4);
+        VIA_T *v = realloc(VIA, cap * sizeof *VIA);
         if (v) VIA = v;
         uint16_t *k = KIND == ST_EXACT ? OUTK : realloc(OUTK, cap * 2);
         if (k) OUTK = k;
@@ -210,7 +212,7 @@ static int room(int m) {
 }
 
 /* a new number for w: -1 at the state limit, -2 past 32-bit numbers */
-static int64_t number(const uint64_t *w, uint32_t parent, uint32_t via, int k, int64_t max_states) {
+static int64_t number(const uint64_t *w, uint32_t parent, VIA_T via, int k, int64_t max_states) {
     int64_t n = ALOAD(&NSTATES);
     do {
         if (max_states >= 0 && n >= max_states) return -1;
@@ -225,7 +227,7 @@ static int64_t number(const uint64_t *w, uint32_t parent, uint32_t via, int k, i
 
 /* the number of a packed state, numbering it when new (*added); SEEN when a lossy store holds it already;
    -1 at the state limit, -2 when memory is out.  *key names the state in the step's transition count */
-static int64_t add(const uint64_t *w, uint32_t parent, uint32_t via, int k, int64_t max_states, int *added,
+static int64_t add(const uint64_t *w, uint32_t parent, VIA_T via, int k, int64_t max_states, int *added,
                    uint64_t *key) {
     *added = 0;
     if (KIND == ST_EXACT) {
@@ -305,6 +307,7 @@ static void ensure_succ(int n) {
     while (cap < n) cap *= 2;
     SUCC = realloc(SUCC, (size_t)cap * W * sizeof *SUCC);
     SVIA = realloc(SVIA, (size_t)cap * sizeof *SVIA);
+    SSRC = realloc(SSRC, (size_t)cap * sizeof *SSRC);
     PK = realloc(PK, (size_t)cap * NW * sizeof *PK);
     SBAD = realloc(SBAD, (size_t)cap);
     SCAP = cap;
@@ -397,8 +400,9 @@ static int expand(const V *s, int reduce) {
             memcpy(L, s, W * sizeof *L);
             FIRE[isrc[i]](L, imask[i]);
             for (int k = 0; k < NSERV; k++) L[E + k] = s[E + k] + TAKEN[k];
-            SVIA[cnt] = imask[i] * NSRC + isrc[i];
-            SBAD[cnt] = (uint8_t)observe(s, L, SVIA[cnt]);
+            SVIA[cnt] = OFF[isrc[i]] + imask[i];  /* imask is 0 for a source of one interaction */
+            SSRC[cnt] = isrc[i];
+            SBAD[cnt] = (uint8_t)observe(s, L, isrc[i], imask[i]);
             cnt++;
         } while (odometer_next());
     }
@@ -416,7 +420,8 @@ static int initials(void) {
         memset(L, 0, W * sizeof *L);
         initial(L);
         for (int k = 0; k < NSERV; k++) L[E + k] = TAKEN[k];
-        SVIA[cnt] = UINT32_MAX;
+        SVIA[cnt] = VIA_NONE;
+        SSRC[cnt] = 0;
         SBAD[cnt] = (uint8_t)observe_initial(L);
         cnt++;
     } while (odometer_next());
@@ -452,7 +457,7 @@ static int step_proviso(const V *s, int (*closes)(const uint64_t *w)) {
     if (n <= 1) return n;
     memset(bad, 0, sizeof bad);
     for (int i = 0; i < n; i++) {
-        int src = (int)(SVIA[i] % NSRC);
+        int src = (int)SSRC[i];
         isrc[i] = (uint32_t)src;
         imask[i] = 0;
         if (!has(bad, src) && closes(PK + (size_t)i * NW)) bad[src >> 6] |= UINT64_C(1) << (src & 63);
@@ -461,11 +466,12 @@ static int step_proviso(const V *s, int (*closes)(const uint64_t *w)) {
     if (!PROPER) return n;
     int k = 0;
     for (int i = 0; i < n; i++) {
-        if (!has(AMPLE, (int)(SVIA[i] % NSRC))) continue;
+        if (!has(AMPLE, (int)SSRC[i])) continue;
         if (k != i) {
             memcpy(SUCC + (size_t)k * W, SUCC + (size_t)i * W, W * sizeof *SUCC);
             memcpy(PK + (size_t)k * NW, PK + (size_t)i * NW, NW * sizeof *PK);
             SVIA[k] = SVIA[i];
+            SSRC[k] = SSRC[i];
             SBAD[k] = SBAD[i];
         }
         k++;
@@ -492,10 +498,10 @@ static int step_search(const V *s) {
     return step_proviso(s, backward);
 }
 
-static int label_of(uint32_t via) {
-    uint32_t src = via % NSRC, mask = via / NSRC;
-    if (LABELS[src].fixed || mask == LABELS[src].full) return LABELS[src].label;
-    return NLABELS + (int)via;
+/* the label of interaction `via` of source `src` when it does not depend on the mask, else one of its own */
+static int64_t label_of(uint32_t src, VIA_T via) {
+    if (LABELS[src].fixed || via - OFF[src] == LABELS[src].full) return LABELS[src].label;
+    return NLABELS + (int64_t)via;
 }
 
 /* ---- entry points called from Python ---- */
@@ -505,7 +511,8 @@ int c_words(void) { return NW; }
 int c_state_width(void) { return W; }
 int64_t c_nstates(void) { return NSTATES; }
 int64_t c_parent(int64_t id) { return PARENT[id] == UINT32_MAX ? -1 : (int64_t)PARENT[id]; }
-int64_t c_via(int64_t id) { return VIA[id] == UINT32_MAX ? -1 : (int64_t)VIA[id]; }
+int64_t c_via(int64_t id) { return VIA[id] == VIA_NONE ? -1 : (int64_t)VIA[id]; }
+int c_via_bits(void) { return VIA_BITS; }
 int64_t c_deadlock(int64_t i) { return DEAD[i]; }
 void c_free(void) { c_release(); }
 void c_set_por(int on) { POR = on && POR_ON; }
@@ -544,7 +551,7 @@ void c_state(int64_t id, V *out) {
 }
 
 /* successors of one explorer state, packed then unpacked (dead variables reset): the agreement tests' view */
-int c_successors(const V *s, V *out, uint32_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
+int c_successors(const V *s, V *out, int64_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
     BUDGET = budget;
     ensure_succ(1);
     int n = step_packed(s);
@@ -552,7 +559,7 @@ int c_successors(const V *s, V *out, uint32_t *via, int max, int64_t budget, int
     if (n > max) { *ecode = E_FULL; return -1; }
     for (int i = 0; i < n; i++) {
         unpack(PK + (size_t)i * NW, out + (size_t)i * W);
-        if (via) via[i] = SVIA[i];
+        if (via) via[i] = (int64_t)SVIA[i];
     }
     return n;
 }
@@ -608,7 +615,8 @@ static int record(int64_t sid, int n, int64_t *targets) {
         if (t == -2) { stop_with(S_MAX_MEMORY, -2); return -1; }
         fresh += added;
         if (SBAD[i]) { int64_t none = -1; ACAS(&VIOL, &none, t); }
-        int lab = sid < 0 ? -1 : label_of(SVIA[i]), dup = 0;
+        int64_t lab = sid < 0 ? -1 : label_of(SSRC[i], SVIA[i]);
+        int dup = 0;
         for (int j = 0; j < distinct; j++)
             if (targets[2 * j] == lab && (uint64_t)targets[2 * j + 1] == key) { dup = 1; break; }
         if (!dup) { targets[2 * distinct] = lab; targets[2 * distinct + 1] = (int64_t)key; distinct++; }
@@ -900,8 +908,8 @@ int c_search(int dfs_order, int64_t max_states, int64_t max_depth, int64_t max_b
     for (int i = 0; i < n && !STOP; i++) {
         int added;
         uint64_t key;
-        int64_t id = add(PK + (size_t)i * NW, UINT32_MAX, UINT32_MAX, i, max_states, &added, &key);
-        if (id == SEEN && SBAD[i]) id = number(PK + (size_t)i * NW, UINT32_MAX, UINT32_MAX, i, max_states);
+        int64_t id = add(PK + (size_t)i * NW, UINT32_MAX, VIA_NONE, i, max_states, &added, &key);
+        if (id == SEEN && SBAD[i]) id = number(PK + (size_t)i * NW, UINT32_MAX, VIA_NONE, i, max_states);
         if (id == -1 || id == -2) { stop_with(id == -1 ? S_MAX_STATES : S_MAX_MEMORY, -2); break; }
         if (added && ninit < 64) init_ids[ninit++] = id;
         if (SBAD[i] && VIOL < 0) { VIOL = id; stop_with(S_VIOLATED, id); }

@@ -50,7 +50,7 @@ def aspFuse(Scan, resolution, decay, last_seq, Obs):
 
 
 def aspWaitScan(Scan):
-    return "fuse" if Scan is not None and Scan["seq"] != _seen["seq"] else "pause::wait"
+    return "pause::fuse" if Scan is not None and Scan["seq"] != _seen["seq"] else "pause::wait"
 
 
 def aspStop():

@@ -1,0 +1,195 @@
+"""RobNav's schedulability study run by genom2bip, beside the published UPPAAL results.
+
+Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--exceptions] [--keep DIR]``.
+
+ARTEFACT_DIR is a clone of the public schedulability artefact of the RobNav
+functional level (four components robloco, robmotion, robmap, roblaser, each
+``NAME/NAME.gen``, and the UPPAAL model ``robnav-artefact-edf.xta``).  Its
+``.gen`` files include ``robsim/robsim-struct.idl``, which is not public: put a
+stub declaring ``robsim::map`` and ``robsim::cell_type`` there first.
+
+The script reads from the ``.xta`` what its authors set by hand: each codel's
+execution interval (the invariant ``x <= max`` of the state the codel runs in,
+the guard ``x >= min`` or ``x == v`` leaving it), the offset of a task whose
+timer starts when another task's initial codel ends, and the client's requests
+in order.  It writes them as a genom2bip platform file (cooperative EDF, ``nc``
+cores) and a client mission (each request sent once the previous one is
+queued), then runs ``verify --timed --platform P --client C --response-times``
+through the verification API, one process per ``nc`` (for its peak memory).
+Printed per ``nc``: whether task ``track`` keeps its period, the largest
+response time of each task beside the published one, states, seconds, MB.
+
+The artefact's templates give codels no exception: they take their declared
+yields only.  The default here is the same (``--no-exceptions``);
+``--exceptions`` keeps genom2bip's default, where every codel of a service
+that declares ``throw`` may also end in its exception.
+"""
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import re
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+COMPONENTS = ("robloco", "robmotion", "robmap", "roblaser")
+#: The artefact's README and res.csv (row sd = 0): largest response time per task at nc = 4, in ms.
+PUBLISHED = {"robloco.odo": 40, "robloco.track": 40, "robmap.fuse": 45, "roblaser.scan": 65, "robmotion.plan": 60}
+#: The artefact's finding: task track keeps its period from 4 cores on, not with 3.
+PUBLISHED_SCHEDULABLE_FROM = 4
+
+PROCESS = re.compile(r"^process\s+(\w+)\s*\(.*?\)\s*\{(.*?)^\}", re.S | re.M)
+INVARIANT = re.compile(r"(\w+)\s*\{\s*x\s*<=\s*(\d+)\s*\}")
+LEAVING = re.compile(r"(\w+)\s*->\s*\w+\s*\{\s*guard\s+x\s*(>=|==)\s*(\d+)\s*;")
+SPAWN = re.compile(r"idle\s*->\s*start\s*\{\s*sync\s+end_spawn_(\w+?)_(\w+)\?")
+REQUEST = re.compile(r"(\w+)\s*->\s*\w+\s*\{\s*sync\s+recv_(\w+)!\s*;\s*assign\s+req_\w+\s*:=\s*(\w+?)_\2\s*;")
+
+
+def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], dict[str, tuple[int, int]], list[str]]:
+    """Execution intervals per ``Component.Owner.codel``, task offsets, and the client's requests, from the .xta."""
+    components = {c.name: c for c in description.components}
+    execution: dict[str, tuple[int, int]] = {}
+    offsets: dict[str, tuple[int, int]] = {}
+    requests: list[tuple[int, str]] = []
+    init_of: dict[str, tuple[int, int]] = {}
+    for name, body in PROCESS.findall(xta):
+        high = {state.rstrip("_2").rstrip("_"): int(v) for state, v in INVARIANT.findall(body)}
+        low = {state.rstrip("_2").rstrip("_"): int(v) for state, _, v in LEAVING.findall(body)}
+        perm = re.fullmatch(r"Perm_(\w+?)_(\w+)", name)
+        activity = re.fullmatch(r"(\w+?)_(\w+)_", name)
+        if perm:
+            task_name, comp = perm.groups()
+            task = next(t for t in components[comp].tasks if t.name == task_name)
+            for codel in task.codels:
+                state = codel.triggers[0]
+                if state in high:
+                    execution[f"{comp}.{task_name}.{codel.name}"] = (low.get(state, high[state]), high[state])
+                    init_of[f"{comp}.{task_name}"] = execution[f"{comp}.{task_name}.{codel.name}"]
+        elif activity and activity.group(2) in components:
+            service, comp = activity.groups()
+            owner = next(s for s in components[comp].services if s.name == service)
+            for codel in owner.codels:
+                state = codel.triggers[0]
+                if state in high:
+                    execution[f"{comp}.{service}.{codel.name}"] = (low.get(state, high[state]), high[state])
+        elif name == "client":
+            order = {"start": 0} | {f"s{k}": k for k in range(1, 100)}
+            requests += [(order[src], f"{comp}.{service}") for src, comp, service in REQUEST.findall(body)]
+        timer = re.fullmatch(r"Timer_(\w+?)_(\w+)", name)
+        spawn = SPAWN.search(body)
+        if timer and spawn:
+            offsets[f"{timer.group(2)}.{timer.group(1)}"] = (spawn.group(1), spawn.group(2))
+    offsets = {task: init_of[f"{comp}.{other}"] for task, (other, comp) in offsets.items()}
+    return execution, offsets, [r for _, r in sorted(requests)]
+
+
+def platform_text(cores: int, execution: dict, offsets: dict) -> str:
+    lines = [f"cores: {cores}", "policy: edf", "execution:"]
+    lines += [f"  {key}: [{lo} ms, {hi} ms]" for key, (lo, hi) in execution.items()]
+    if offsets:
+        lines.append("tasks:")
+        for task, (lo, hi) in offsets.items():
+            lines += [f"  {task}:", f"    delay: [{lo} ms, {hi} ms]"]
+    return "\n".join(lines) + "\n"
+
+
+def client_text(requests: list[str]) -> str:
+    steps = "".join(f"  - send: {r}\n    until: queued\n" for r in requests)
+    return f"mission: robnav-client\nsteps:\n{steps}"
+
+
+def run(paths, include, platform, client, exceptions, max_states, shown, queue) -> None:
+    """One ``nc``: the timing checks and response times, in a process of its own (its peak memory is the run's)."""
+    from genom2bip.loading import TimeSettings
+    from genom2bip.verify.model import build_model
+    from genom2bip.verify.options import Listener, SearchOptions
+    from genom2bip.verify.zones import ResponseResult, check_timing
+    from runtime.explore import Progress
+
+    class Shown(Listener):
+        def progress(self):
+            return Progress(force=shown)  # states, rate, frontier and memory: on a terminal, or asked
+
+    settings = TimeSettings(platform=platform, client=client, responses=True, exceptions=exceptions)
+    model = build_model(paths, include_dirs=[include], no_rules=True, time=settings)
+    start = time.perf_counter()
+    results = check_timing(model, kinds=("overrun",), responses=True, options=SearchOptions(max_states=max_states),
+                           listener=Shown())
+    seconds = time.perf_counter() - start
+    out = {"seconds": seconds, "mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "verdicts": {},
+           "responses": {}}
+    for r in results:
+        out["states"] = r.figures.states
+        if isinstance(r, ResponseResult):
+            if r.kind == "task":
+                out["responses"][r.owner] = "inf" if r.unbounded else r.value_ms
+        else:
+            out["verdicts"][r.observer.rsplit(".", 1)[0]] = r.verdict.value
+    queue.put(out)
+
+
+def main() -> None:
+    """Every ``nc`` asked, one process each, and the table beside the published figures."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("artefact", type=Path)
+    ap.add_argument("--cores", default="1-5", help="a range (1-5) or a list (3,4)")
+    ap.add_argument("--exceptions", action="store_true", help="codels may also end in their service's exceptions")
+    ap.add_argument("--max-states", type=int, default=5_000_000)
+    ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when it is not a terminal")
+    ap.add_argument("--keep", type=Path, help="write the platform files and the client mission there")
+    args = ap.parse_args()
+    from genom2bip.parser import parse_paths
+
+    if "-" in args.cores:
+        lo, hi = map(int, args.cores.split("-"))
+        cores = list(range(lo, hi + 1))
+    else:
+        cores = [int(c) for c in args.cores.split(",")]
+    paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
+    description = parse_paths(paths, [str(args.artefact)])
+    execution, offsets, requests = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(), description)
+    out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "client.yaml").write_text(client_text(requests))
+    print(f"{len(execution)} codel intervals, offsets {offsets}, client {' -> '.join(requests)}")
+    print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; files in {out}")
+    rows = []
+    ctx = multiprocessing.get_context("spawn")
+    for nc in cores:
+        platform = out / f"edf{nc}.yaml"
+        platform.write_text(platform_text(nc, execution, offsets))
+        queue = ctx.Queue()
+        proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
+                                             args.exceptions, args.max_states, args.progress, queue))
+        proc.start()
+        got = queue.get()
+        proc.join()
+        rows.append((nc, got))
+        show(nc, got)
+    print()
+    print("track keeps its period from", next((str(nc) for nc, g in rows if _track_ok(g)), "no nc tried"),
+          f"cores on (published: {PUBLISHED_SCHEDULABLE_FROM})")
+
+
+def _track_ok(got: dict) -> bool:
+    return any(o == "robloco.track" and v == "holds" for o, v in got["verdicts"].items())
+
+
+def show(nc: int, got: dict) -> None:
+    track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
+    print(f"\nnc = {nc}: track keeps its period: {track}; {got.get('states', 0):,} symbolic states, "
+          f"{got['seconds']:.1f} s, {got['mb']:.0f} MB")
+    print(f"  {'task':16} {'genom2bip':>10} {'published (nc=4)':>17}")
+    for task, value in sorted(got["responses"].items()):
+        shown = "unbounded" if value == "inf" else ("> cap" if value is None else f"{value:g} ms")
+        print(f"  {task:16} {shown:>10} {PUBLISHED.get(task, '-'):>14} ms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,248 @@
+"""Timing checks of a platform model by clock zones: period observers, latencies and response times in one run.
+
+One exploration by :class:`runtime.zones.search.ZoneExplorer` decides every
+observer (is its ERROR condition reachable?) and gives the largest value of
+every response-time observer; each verdict's trace is made concrete and
+replayed on the tick model (runtime/zones/trace.py), so the trace printed is
+the reference semantics' own.  docs/verification.md (*Clock zones*) says why
+zones and not ticks for these models.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, ClassVar
+
+from genom2bip.verify.model import Model, tick_us
+from genom2bip.verify.options import Listener, SearchOptions
+from genom2bip.verify.results import CheckResult, Figures, ObserverResult, Trace, Verdict
+from genom2bip.verify.timing import observers, subject
+
+#: Response-time observers: a clock up to a cap, or a pending request (a service whose codels can cycle).
+RESPONSE_KINDS = ("response", "pending")
+
+
+@dataclass
+class ResponseResult(CheckResult):
+    """The largest response time of a task (release to end of cycle) or a service (request to final report)."""
+
+    check: ClassVar[str] = "response"
+
+    observer: str = ""
+    owner: str = ""  # the task or service: ``NDD.motion``, ``NDD.GoTo``
+    kind: str = ""  # "task" or "service"
+    value_ticks: int | None = None  # None: more than the cap, or no bound at all (``unbounded``)
+    unbounded: bool = False  # a lasso: a request (or a cycle of the task) can wait for ever
+    cap_ticks: int = 0
+    tick_us: int | None = None
+    period_ticks: int | None = None  # a task's period
+
+    def ms(self, ticks: int | None) -> float | None:
+        return ticks * self.tick_us / 1000 if ticks is not None and self.tick_us else None
+
+    @property
+    def value_ms(self) -> float | None:
+        return self.ms(self.value_ticks)
+
+    def details(self) -> dict[str, Any]:
+        return {"observer": self.observer, "owner": self.owner, "kind": self.kind, "value_ticks": self.value_ticks,
+                "unbounded": self.unbounded,
+                "value_ms": self.value_ms, "cap_ticks": self.cap_ticks, "cap_ms": self.ms(self.cap_ticks),
+                "period_ms": self.ms(self.period_ticks)}
+
+
+class ZonesUnsupported(Exception):
+    """The model is outside what the zone explorer takes: the tick explorer decides it (the message says why)."""
+
+
+def explorer(model: Model, options: SearchOptions | None = None):
+    """The zone explorer of a platform model; :class:`ZonesUnsupported` when it does not take the model."""
+    from runtime.zones.model import Unsupported
+    from runtime.zones.search import ZoneExplorer
+
+    try:
+        return ZoneExplorer(model.package, model.root, (options or SearchOptions()).externs)
+    except Unsupported as exc:
+        raise ZonesUnsupported(str(exc)) from None
+
+
+def _steps(timed_steps) -> tuple[list, list[int]]:
+    """Runtime steps with one ``tick`` step per tick, and the ticks elapsed at each (the tick printers' shape)."""
+    from genom2bip.build.timed import TICK
+    from runtime.explore.space import Step
+
+    steps, ticks, now = [], [], 0
+    for ts in timed_steps:
+        for _ in range(ts.ticks):
+            now += 1
+            steps.append(Step(TICK, -1, (), ()))
+            ticks.append(now)
+        if ts.step.label:
+            steps.append(ts.step)
+            ticks.append(now)
+    return steps, ticks
+
+
+def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = False,
+                 options: SearchOptions | None = None, listener: Listener | None = None) -> list[CheckResult]:
+    """Every observer of ``kinds`` and, with ``responses``, every response time, from one zone exploration."""
+    from runtime.explore import StateSpace
+    from runtime.zones.trace import path_to
+
+    options = options or SearchOptions()
+    z = explorer(model, options)
+    start = time.perf_counter()
+    result = z.explore(max_states=options.max_states, progress=(listener or Listener()).progress())
+    figures = Figures(states=result.states, transitions=result.transitions, seconds=time.perf_counter() - start)
+    method = f"zones, {result.discrete:,} discrete states"
+    tick = tick_us(model.package)
+    space = StateSpace(model.package, model.root, options.externs, None, True, set())
+    by_path = {fa.name: fa for fa in z.flat.atoms}
+    out: list[CheckResult] = []
+    inconclusive = Verdict.INCONCLUSIVE if not result.complete else None
+    for atom in observers(model, kinds):
+        fa = by_path[atom.path]
+        node = result.violations.get(fa.index)
+        common = dict(figures=figures, method=method, observer=atom.path, kind=atom.kind, bound_ticks=atom.bound,
+                      tick_us=tick)
+        if node is not None:
+            clock = z.model.observers[fa.index][1]
+            trace, message = _trace(z, path_to(z, node), [(0, clock, -(atom.bound + 1))], space, tick)
+            out.append(ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message, **common))
+        else:
+            out.append(ObserverResult(subject(atom, tick), inconclusive or Verdict.HOLDS,
+                                      limit=result.stopped if inconclusive else "", **common))
+    if responses:
+        for atom in observers(model, ("response", "pending")):
+            out.append(_response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive))
+    return out
+
+
+def _trace(z, path, goal, space, tick, loop: int | None = None) -> tuple[Trace | None, str]:
+    """``path`` replayed on the tick model as a timed trace (a lasso when ``loop`` is the entry's index)."""
+    from runtime.zones.trace import ConcretizeError, replay
+
+    try:
+        timed_steps, _ = replay(z, path, goal, space)
+    except ConcretizeError as exc:
+        return None, f"no concrete trace: {exc}"
+    steps, ticks = _steps(timed_steps)
+    at = None
+    if loop is not None:  # the printed step after which the loop starts: the entry's own step, ticks included
+        at = sum(ts.ticks + (1 if ts.step.label else 0) for ts in timed_steps[:loop])
+    return Trace(steps, loop=at, ticks=ticks, tick_us=tick), ""
+
+
+def _owners(model: Model) -> dict[str, str]:
+    """Observer instance -> the service it measures, for the service observers at the root (``@timed``)."""
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    pairs = (ann.arguments.get("responses", "") if ann is not None else "").split(",")
+    return dict(p.split("=", 1) for p in pairs if "=" in p)
+
+
+def _response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive) -> ResponseResult:
+    """One response time: the largest value of the observer's clock, or no bound shown by a lasso."""
+    from runtime.zones.search import lasso
+    from runtime.zones.trace import path_to
+
+    fa = by_path[atom.path]
+    owner = _owners(model).get(atom.path) or atom.path.rsplit(".", 1)[0]
+    timer = by_path.get(owner + ".timer")  # a task's observer sits beside its timer
+    period = int(timer.constants["ticks"][0]) if timer is not None else None
+    common = dict(figures=figures, method=method, observer=atom.path, owner=owner,
+                  kind="task" if timer is not None else "service",
+                  cap_ticks=atom.bound, tick_us=tick, period_ticks=period,
+                  limit=result.stopped if inconclusive else "")
+    subject_text = f"response time of {owner}"
+    watch = fa.place_mask(["WATCH"])
+    offset = fa.offset
+    if atom.kind == "response":
+        place, clock = z.model.measures[fa.index]
+        top, node = result.maxima.get(clock, (-1.0, -1))
+        if node >= 0 and not math.isinf(top) and top <= atom.bound:
+            value = max(0, int(top))
+            trace, message = _trace(z, path_to(z, node), [(0, clock, -value)], space, tick)
+            return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, trace=trace, message=message,
+                                  value_ticks=value, **common)
+        if node < 0:
+            return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, value_ticks=None,
+                                  message="never requested", **common)
+    if inconclusive:
+        return ResponseResult(subject_text, inconclusive, value_ticks=None, **common)
+    found = lasso(z, lambda n: n.state[offset] == watch)
+    if found is None:
+        message = ("every request ends, after more than the cap" if atom.kind == "response" else
+                   "every request ends (not measured: its codels can cycle)")
+        return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message=message, **common)
+    path, entry = found
+    trace, message = _trace(z, path, [], space, tick, loop=entry)
+    return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
+                          message=message or "a request can wait for ever", **common)
+
+
+@dataclass
+class ResponseTimes(CheckResult):
+    """Every response time of a model from one exploration: holds when each one has a bound, violated when one
+    has none (``trace``: its lasso), inconclusive when the search stopped (the values so far are not maxima)."""
+
+    check: ClassVar[str] = "response-times"
+
+    responses: list[ResponseResult] = field(default_factory=list)
+
+    def values(self) -> dict[str, float | str]:
+        """Each owner's response time in ms, or in words where there is no number (``unbounded``, ``never
+        requested``, ``more than 200 ms``, ``inconclusive``, ``bounded, not measured``)."""
+        return {r.owner: response_value(r) for r in self.responses}
+
+    def details(self) -> dict[str, Any]:
+        return {"values": self.values(), "responses": [r.to_json() for r in self.responses]}
+
+
+def response_value(r: ResponseResult) -> float | str:
+    """A response time as a number of ms, or a word saying why there is none."""
+    if r.verdict is Verdict.INCONCLUSIVE:
+        return "inconclusive"
+    if r.unbounded:
+        return "unbounded"
+    if r.value_ticks is not None:
+        return r.value_ms
+    if r.message == "never requested":
+        return r.message
+    if r.kind == "service" and "not measured" in r.message:
+        return "bounded, not measured"
+    return f"more than {r.ms(r.cap_ticks):g} ms"
+
+
+def check_response_times(model: Model, options: SearchOptions | None = None, listener: Listener | None = None,
+                         owners: Callable[[ResponseResult], bool] | None = None) -> ResponseTimes:
+    """Every task's and service's response time (:func:`check_timing` with ``responses``), as one result;
+    ``owners`` keeps some (the tasks): the verdict is theirs."""
+    found = [r for r in check_timing(model, (), True, options, listener) if isinstance(r, ResponseResult)]
+    if not found:
+        raise LookupError("no response-time observer in this model: build it with TimeSettings(responses=True)")
+    found = [r for r in found if owners is None or owners(r)]
+    if not found:
+        raise LookupError("no task or service of this model is among those asked for")
+    first = found[0]
+    unbounded = [r for r in found if r.unbounded]
+    stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE]
+    if stopped:
+        verdict, message = Verdict.INCONCLUSIVE, f"stopped by {first.limit or 'a limit'}: the values are not maxima"
+    elif unbounded:
+        verdict, message = Verdict.VIOLATED, "no bound: " + ", ".join(r.owner for r in unbounded)
+    else:
+        verdict, message = Verdict.HOLDS, "every response time has a bound"
+    return ResponseTimes(f"response times of {model.title}", verdict, first.figures,
+                         unbounded[0].trace if unbounded and not stopped else None, first.method,
+                         first.limit if stopped else "", message, responses=found)
+
+
+def response_owners(model: Model) -> dict[str, str]:
+    """The tasks and services whose response times the model measures: owner -> ``task`` or ``service``."""
+    names = _owners(model)
+    out = {}
+    for atom in observers(model, RESPONSE_KINDS):
+        owner = names.get(atom.path) or atom.path.rsplit(".", 1)[0]
+        out[owner] = "service" if atom.path in names else "task"
+    return out

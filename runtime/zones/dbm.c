@@ -1,0 +1,98 @@
+/* The hot operations of runtime/zones/dbm.py in C: the same functions on the same row-major
+ * (n+1) x (n+1) matrices of doubles (INFINITY absorbs sums), in place.  dbm.py keeps the numpy
+ * versions as the reference and uses these when a compiler is there. */
+#include <math.h>
+
+/* Floyd-Warshall: tightest bounds; an empty zone ends with a negative diagonal. */
+void z_close(double *m, int d)
+{
+    for (int k = 0; k < d; k++) {
+        const double *rk = m + (long)k * d;
+        for (int i = 0; i < d; i++) {
+            double *ri = m + (long)i * d;
+            double ik = ri[k];
+            if (ik == INFINITY)
+                continue;
+            for (int j = 0; j < d; j++) {
+                double v = ik + rk[j];
+                if (v < ri[j])
+                    ri[j] = v;
+            }
+        }
+    }
+}
+
+/* xi - xj <= c added to a canonical zone; 0 when nothing is left (m then unchanged). */
+int z_constrain(double *m, int d, int i, int j, double c)
+{
+    if (m[(long)i * d + j] <= c)
+        return 1;
+    if (m[(long)j * d + i] + c < 0)
+        return 0;
+    double col[256], row[256];
+    for (int a = 0; a < d; a++) {
+        col[a] = m[(long)a * d + i];
+        row[a] = m[(long)j * d + a];
+    }
+    for (int a = 0; a < d; a++) {
+        double head = col[a] + c;
+        if (head == INFINITY)
+            continue;
+        double *ra = m + (long)a * d;
+        for (int b = 0; b < d; b++) {
+            double v = head + row[b];
+            if (v < ra[b])
+                ra[b] = v;
+        }
+    }
+    return 1;
+}
+
+/* Extra_M on integers: bounds past a clock's ceiling forgotten (dbm.py's extrapolate_np), then closed;
+ * 1 when something changed. */
+int z_extrapolate(double *m, int d, const double *ceiling)
+{
+    int changed = 0;
+    for (int i = 0; i < d; i++)
+        for (int j = 0; j < d; j++) {
+            if (i == j)
+                continue;
+            double *v = m + (long)i * d + j;
+            if (*v > ceiling[i]) {
+                if (*v != INFINITY) {
+                    *v = INFINITY;
+                    changed = 1;
+                }
+            } else if (*v < -ceiling[j] - 1) {
+                *v = -ceiling[j] - 1;
+                changed = 1;
+            }
+        }
+    if (changed)
+        z_close(m, d);
+    return changed;
+}
+
+/* Every bound of big at least small's. */
+int z_includes(const double *big, const double *small, int len)
+{
+    for (int k = 0; k < len; k++)
+        if (big[k] < small[k])
+            return 0;
+    return 1;
+}
+
+/* The clocks idx[0..count) forgotten: any value >= 0, as dbm.py's free_many. */
+void z_free(double *m, const double *src, int d, const int *idx, int count)
+{
+    for (int c = 0; c < count; c++) {
+        int i = idx[c];
+        for (int a = 0; a < d; a++) {
+            m[(long)i * d + a] = INFINITY;
+            m[(long)a * d + i] = src[(long)a * d];
+        }
+    }
+    for (int c = 0; c < count; c++)
+        for (int e = 0; e < count; e++)
+            m[(long)idx[c] * d + idx[e]] = c == e ? 0 : INFINITY;
+}

@@ -1,0 +1,240 @@
+"""Difference-bound matrices over integer clocks: the sets of clock values a zone explorer keeps per state.
+
+A zone over clocks ``x1 .. xn`` is ``M[i][j]``: ``xi - xj <= M[i][j]``, with
+``x0 = 0``.  Time here is discrete (a model's tick), so every bound is an
+integer and a strict ``x < c`` is ``x <= c - 1``: the integer points of a zone
+are exactly the clock values the tick semantics reaches (closed constraints,
+as digitization wants).  Entries are floats so that ``inf`` absorbs sums;
+integers below 2**53 are exact.  Every function takes and returns canonical
+matrices (all bounds tight), and never changes its argument.
+"""
+from __future__ import annotations
+
+import ctypes
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+INF = np.inf
+
+
+@cache
+def _c():
+    """dbm.c compiled and loaded (the C cache of runtime/native), or None without a compiler."""
+    from runtime.native.build import BuildError, build, compiler
+
+    cc = compiler()
+    if cc is None:
+        return None
+    try:
+        lib = ctypes.CDLL(str(build((Path(__file__).with_name("dbm.c")).read_text(), cc, what="zone DBM")))
+    except (BuildError, OSError):
+        return None
+    ptr, i32, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+    for name, res, args in (("z_close", None, [ptr, i32]), ("z_constrain", i32, [ptr, i32, i32, i32, dbl]),
+                            ("z_extrapolate", i32, [ptr, i32, ptr]), ("z_includes", i32, [ptr, ptr, i32]),
+                            ("z_free", None, [ptr, ptr, i32, ptr, i32])):
+        fn = getattr(lib, name)
+        fn.restype, fn.argtypes = res, args
+    return lib
+
+
+def use_c(on: bool) -> None:
+    """Choose the C operations (the default where a compiler is) or the numpy ones (the reference, for tests)."""
+    global close, constrain, extrapolate, includes, free_many
+    lib = _c() if on else None
+    if lib is None:
+        close, constrain, extrapolate, includes, free_many = close_np, constrain_np, extrapolate_np, includes_np, \
+            free_many_np
+        return
+
+    def close_c(m: np.ndarray) -> np.ndarray:
+        out = np.array(m, order="C")
+        lib.z_close(out.ctypes.data, out.shape[0])
+        return out
+
+    def constrain_c(m: np.ndarray, i: int, j: int, c: float) -> np.ndarray | None:
+        if m[i, j] <= c:
+            return m
+        out = m.copy()
+        return out if lib.z_constrain(out.ctypes.data, out.shape[0], i, j, c) else None
+
+    def extrapolate_c(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
+        out = m.copy()
+        return out if lib.z_extrapolate(out.ctypes.data, out.shape[0], _doubles(ceiling).ctypes.data) else m
+
+    def includes_c(big: np.ndarray, small: np.ndarray) -> bool:
+        return bool(lib.z_includes(big.ctypes.data, small.ctypes.data, big.size))
+
+    def free_many_c(m: np.ndarray, clocks: list[int]) -> np.ndarray:
+        out = m.copy()
+        idx = (ctypes.c_int * len(clocks))(*clocks)
+        lib.z_free(out.ctypes.data, m.ctypes.data, out.shape[0], idx, len(clocks))
+        return out
+
+    close, constrain, extrapolate, includes, free_many = close_c, constrain_c, extrapolate_c, includes_c, free_many_c
+
+
+def _doubles(a: np.ndarray) -> np.ndarray:
+    return a if a.dtype == np.float64 and a.flags.c_contiguous else np.ascontiguousarray(a, dtype=np.float64)
+
+
+def zero(n: int) -> np.ndarray:
+    """Every clock at 0."""
+    return np.zeros((n + 1, n + 1))
+
+
+def free_all(n: int) -> np.ndarray:
+    """Every clock any value >= 0: the universe."""
+    m = np.full((n + 1, n + 1), INF)
+    m[0, :] = 0
+    np.fill_diagonal(m, 0)
+    return m
+
+
+def close_np(m: np.ndarray) -> np.ndarray:
+    """Floyd–Warshall: the tightest bounds (canonical form); an empty zone has a negative diagonal."""
+    m = m.copy()
+    for k in range(m.shape[0]):
+        np.minimum(m, m[:, k:k + 1] + m[k:k + 1, :], out=m)
+    return m
+
+
+def empty(m: np.ndarray) -> bool:
+    return bool((np.diagonal(m) < 0).any())
+
+
+def constrain_np(m: np.ndarray, i: int, j: int, c: float) -> np.ndarray | None:
+    """``xi - xj <= c`` added (incremental closure, O(n^2)); None when nothing is left."""
+    if m[i, j] <= c:
+        return m
+    if m[j, i] + c < 0:
+        return None
+    out = m.copy()
+    # every path a -> i -> j -> b may now be shorter
+    np.minimum(out, m[:, i:i + 1] + c + m[j:j + 1, :], out=out)
+    return out
+
+
+def constrain_all(m: np.ndarray, bounds) -> np.ndarray | None:
+    """Several ``(i, j, c)`` at once; None when the zone is empty."""
+    for i, j, c in bounds:
+        m = constrain(m, i, j, c)
+        if m is None:
+            return None
+    return m
+
+
+def up(m: np.ndarray) -> np.ndarray:
+    """Time passes: no clock has an upper bound any more (differences stay)."""
+    out = m.copy()
+    out[1:, 0] = INF
+    return out
+
+
+def reset(m: np.ndarray, i: int, v: float) -> np.ndarray:
+    """``xi := v``."""
+    out = m.copy()
+    out[i, :] = v + m[0, :]
+    out[:, i] = m[:, 0] - v
+    out[i, i] = 0
+    return out
+
+
+def free(m: np.ndarray, i: int) -> np.ndarray:
+    """``xi`` forgotten: any value >= 0 (a clock no guard reads before its next reset)."""
+    out = m.copy()
+    out[i, :] = INF
+    out[:, i] = m[:, 0]
+    out[i, i] = 0
+    return out
+
+
+def free_many_np(m: np.ndarray, clocks: list[int]) -> np.ndarray:
+    """:func:`free` of several clocks at once."""
+    out = m.copy()
+    out[clocks, :] = INF
+    out[:, clocks] = m[:, [0]]
+    out[np.ix_(clocks, clocks)] = INF
+    out[clocks, clocks] = 0
+    return out
+
+
+def includes_np(big: np.ndarray, small: np.ndarray) -> bool:
+    return bool((big >= small).all())
+
+
+def upper(m: np.ndarray, i: int) -> float:
+    """The largest value ``xi`` takes in the zone (inf when unbounded)."""
+    return float(m[i, 0])
+
+
+def lower(m: np.ndarray, i: int) -> float:
+    return float(-m[0, i])
+
+
+def extrapolate_np(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
+    """Extra_M: bounds past the largest constant a clock is compared with are forgotten (finitely many zones).
+
+    ``ceiling[i]`` is that constant for clock ``i`` (``ceiling[0] = 0``); a clock compared with nothing has
+    ceiling -1 and is then free of bounds above and below.  On integers, every value above ``M`` is alike:
+    ``x <= v`` with ``v > M`` becomes no bound, ``x >= v`` with ``v > M + 1`` becomes ``x >= M + 1``.
+    """
+    rows = ceiling[:, None]
+    cols = ceiling[None, :] + 1
+    above = (m > rows) & (m != INF)
+    low = (m < -cols) & ~(m > rows)
+    np.fill_diagonal(above, False)
+    np.fill_diagonal(low, False)
+    if not above.any() and not low.any():
+        return m
+    out = m.copy()
+    out[above] = INF
+    out[low] = np.broadcast_to(-cols, out.shape)[low]
+    return close_np(out)
+
+
+def subtract(m: np.ndarray, other: np.ndarray) -> list[np.ndarray]:
+    """``m`` minus ``other`` as disjoint zones (integer complements: ``not (xi - xj <= c)`` is ``xj - xi <= -c-1``)."""
+    return [z for z, _ in subtract_bounds(m, other)]
+
+
+def subtract_bounds(m: np.ndarray, other: np.ndarray) -> list[tuple[np.ndarray, list]]:
+    """:func:`subtract`, each piece with the bounds ``(i, j, c)`` that cut it out of ``m`` (for traces)."""
+    out = []
+    rest = m
+    kept: list = []
+    n = m.shape[0]
+    for i in range(n):
+        for j in range(n):
+            if i == j or other[i, j] == INF or rest[i, j] <= other[i, j]:
+                continue
+            cut = (j, i, -other[i, j] - 1)
+            piece = constrain(rest, *cut)
+            if piece is not None:
+                out.append((piece, kept + [cut]))
+            rest = constrain(rest, i, j, other[i, j])
+            kept = kept + [(i, j, other[i, j])]
+            if rest is None:
+                return out
+    return out
+
+
+def point(m: np.ndarray) -> list[int]:
+    """One integer valuation of a non-empty canonical zone (each clock as low as it can be, in order)."""
+    z = m
+    values = []
+    for i in range(1, m.shape[0]):
+        v = lower(z, i)
+        z = constrain_all(z, [(i, 0, v), (0, i, -v)])
+        values.append(int(v))
+    return values
+
+
+def key(m: np.ndarray) -> bytes:
+    return m.tobytes()
+
+
+close, constrain, extrapolate, includes, free_many = close_np, constrain_np, extrapolate_np, includes_np, free_many_np
+use_c(True)

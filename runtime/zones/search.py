@@ -1,0 +1,519 @@
+"""Symbolic-time exploration: the erased model's discrete states, each with zones of clock values.
+
+A symbolic state is ``(D, Z)``: a state of the erased model (runtime/zones/model.py)
+and a zone of the clocks (runtime/zones/dbm.py).  Its successors come from the
+engine's successors of ``D`` (the compiled step when it compiles): for each
+interaction, ``Z`` meets the clock guards of the transitions it fires and the
+priorities the engine no longer applies (EDF, urgency), the clocks it resets
+are set, the clocks no guard reads any more are forgotten, and time passes as
+far as every timed atom's tick allows and no urgent interaction is enabled.
+Zones of one discrete state that another includes are not kept.
+
+What the tick semantics reaches, this reaches: every bound is an integer, so a
+zone's integer points are the clock values of the discrete-time states it
+stands for (docs/verification.md, *Clock zones*).
+"""
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from runtime.engine.errors import ModelError
+from runtime.engine.support import _matches, matches_low, rule_edges, top_connectors
+from runtime.explore.progress import Progress, null_progress
+from runtime.explore.space import StateSpace
+from runtime.zones import dbm
+from runtime.zones.model import Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
+
+
+@dataclass
+class Node:
+    """A stored symbolic state: its discrete state, zone, and how it was reached (for traces)."""
+
+    state: tuple
+    zone: np.ndarray | None  # None: a step into a zone another node covers (that node's zone stands for it)
+    parent: int
+    via: int  # interaction index of the erased engine, -1 for an initial state
+    guard: list  # the bounds the step added to its parent's zone (before resets)
+    grown: bool  # time may have passed after the step (else the zone is where it cannot)
+    covered: bool = False  # a larger zone of the same discrete state came later
+    by: int = -1  # the node whose zone covers this one
+
+
+@dataclass
+class ZoneResult:
+    states: int  # symbolic states kept
+    discrete: int  # distinct discrete states
+    transitions: int
+    seconds: float
+    complete: bool
+    stopped: str = ""
+    violations: dict[int, int] = field(default_factory=dict)  # observer atom -> node of its first violation
+    maxima: dict[int, tuple[float, int]] = field(default_factory=dict)  # clock -> (largest value, node)
+
+
+class ZoneExplorer:
+    """Explores a timed model with zones; ``watch`` clocks get their largest value while their atom watches."""
+
+    def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None) -> None:
+        self.model: TimedModel = analyse(package, root)
+        self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
+        from runtime.native.compiled import compile_space
+
+        self.compiled, self.note = compile_space(self.space, externs)
+        flat = self.space.engine.flat
+        self.flat = flat
+        self.n = len(self.model.clocks)
+        original = {fc.path: fc.id for fc in self.model.flat.connectors}
+        self.connector_id = {fc.id: original[fc.path] for fc in flat.connectors}
+        self.atom_index = {fa.name: fa.index for fa in flat.atoms}
+        self.watch = watch or {}
+        self.ceiling = np.array([float(c) if c else np.inf for c in self.model.ceilings])
+        self.ceiling[0] = 0
+        self._inter: dict[int, tuple] = {}
+        self._succ: dict[tuple, list] = {}
+        self._rules: dict[int, tuple[list[int], list[int]]] = {}
+        self._blocks: dict[tuple, Blocking] = {}
+        self._guards: dict[tuple, tuple] = {}
+        self._passing: dict[tuple, tuple | None] = {}
+        self._idle: dict[tuple, list[int]] = {}
+        self.nodes: list[Node] = []
+        self.out: list[list[tuple[int, Node]]] = []  # per node: (node that holds the successor, the step into it)
+        tops = {}
+        for c, srcs in top_connectors(self.space.engine.sources).items():
+            tops[self.connector_id[c]] = set(srcs)
+        tick = next(fc.id for fc in self.model.flat.connectors if fc.label == "tick")
+        tops[tick] = {-1}
+        self._feasible: dict[tuple, bool] = {}
+        self.edges = self.useful_edges(rule_edges([(r.low, r.high) for r in self.model.rules], tops))
+        self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
+
+    # -- the discrete side ------------------------------------------------------------------------
+    def successors(self, state: tuple) -> list[tuple[int, tuple]]:
+        got = self._succ.get(state)
+        if got is None:
+            if self.compiled is not None:
+                got = self.compiled.successors(state)
+            else:
+                got = self._python_successors(state)
+            self._succ[state] = got
+        return got
+
+    def _python_successors(self, state: tuple) -> list[tuple[int, tuple]]:
+        space = self.space
+        return [(inter.index, nxt) for inter, nxt, _ in space._fire_all(state)]
+
+    def interaction(self, index: int) -> tuple:
+        """``(parts in the original model's connector ids, [(atom, port)])`` of an interaction of the erased engine."""
+        got = self._inter.get(index)
+        if got is None:
+            inter = self.space.interaction(index)
+            parts = tuple((self.connector_id[c], m) for c, m in inter.parts)
+            ports = []
+            for p in inter.ports:
+                atom, _, port = p.rpartition(".")
+                ports.append((self.atom_index[atom], port))
+            got = self._inter[index] = (parts, ports, inter.label)
+        return got
+
+    def place_bit(self, state: tuple, atom: int) -> int:
+        return int(state[self.flat.atoms[atom].offset])
+
+    # -- clock constraints ------------------------------------------------------------------------
+    def bounds(self, atoms: list[Atom], atom: int, state: tuple) -> list[tuple[int, int, float]]:
+        fa = self.flat.atoms[atom]
+        out = []
+        for a in atoms:
+            v = value(a.rhs, fa, state)
+            k = a.clock
+            if a.op in ("<", "<="):
+                out.append((k, 0, v - 1 if a.op == "<" else v))
+            elif a.op in (">", ">="):
+                out.append((0, k, -(v + 1) if a.op == ">" else -v))
+            else:
+                out += [(k, 0, v), (0, k, -v)]
+        return out
+
+    @staticmethod
+    def diagonal_bounds(ds: list[Diagonal]) -> list[tuple[int, int, float]]:
+        out = []
+        for d in ds:
+            if d.op in ("<", "<="):
+                out.append((d.i, d.j, d.k - 1 if d.op == "<" else d.k))
+            elif d.op in (">", ">="):
+                out.append((d.j, d.i, -(d.k + 1) if d.op == ">" else -d.k))
+            else:
+                out += [(d.i, d.j, d.k), (d.j, d.i, -d.k)]
+        return out
+
+    def guard(self, index: int, state: tuple) -> tuple[list, list]:
+        """The clock bounds an interaction needs at ``state`` and the clock resets it makes."""
+        got = self._guards.get((index, state))
+        if got is None:
+            got = self._guards[(index, state)] = self._guard(index, state)
+        return got
+
+    def _guard(self, index: int, state: tuple) -> tuple[list, list]:
+        _, ports, _ = self.interaction(index)
+        need, resets = [], []
+        for atom, port in ports:
+            step = self.model.steps.get((atom, port, self.place_bit(state, atom)))
+            if step is None:
+                continue
+            need += self.bounds(step.atoms, atom, state)
+            fa = self.flat.atoms[atom]
+            resets += [(k, value(e, fa, state)) for k, e in step.resets]
+        return need, resets
+
+    # -- priorities ------------------------------------------------------------------------------
+    def feasible(self, bounds: tuple) -> bool:
+        """Some clock values meet every bound (any discrete state): chains of priorities that can hold at once."""
+        got = self._feasible.get(bounds)
+        if got is None:
+            got = self._feasible[bounds] = dbm.constrain_all(dbm.free_all(self.n), list(bounds)) is not None
+        return got
+
+    def useful_edges(self, edges: list[list[int]]) -> list[list[int]]:
+        """The chains of priorities that can say more than a single rule: ``r -> r2`` is dropped when the two
+        guards never hold together, or when a rule from r's low side to r2's high side already holds
+        wherever both do (EDF's ``a < b < c`` next to ``a < c``; ``tick < a < b`` next to ``tick < b``)."""
+        rules = self.model.rules
+
+        def bounds(rule) -> tuple | None:
+            if rule.guard is None:
+                return ()
+            return tuple(self.diagonal_bounds(rule.guard)) if isinstance(rule.guard, list) else None
+
+        out = []
+        for r, targets in enumerate(edges):
+            kept = []
+            for r2 in targets:
+                g1, g2 = bounds(rules[r]), bounds(rules[r2])
+                if g1 is not None and g2 is not None:
+                    both = tuple(sorted(set(g1) | set(g2)))
+                    if not self.feasible(both):
+                        continue
+                    implied = False
+                    for r3 in rules:
+                        g3 = bounds(r3)
+                        if r3.low != rules[r].low or r3.high != rules[r2].high or g3 is None:
+                            continue
+                        zone = dbm.constrain_all(dbm.free_all(self.n), list(both))
+                        if all(zone[i, j] <= c for i, j, c in g3):
+                            implied = True
+                            break
+                    if implied:
+                        continue
+                kept.append(r2)
+            out.append(kept)
+        return out
+
+    def rules_of(self, index: int) -> tuple[list[int], list[int]]:
+        """The compound priorities an interaction is low in, and those it is high in."""
+        got = self._rules.get(index)
+        if got is None:
+            parts = self.interaction(index)[0]
+            got = self._rules[index] = (
+                [r for r, rule in enumerate(self.model.rules) if matches_low(parts, rule.low)],
+                [r for r, rule in enumerate(self.model.rules) if _matches(parts, rule.high)])
+        return got
+
+    def blocking(self, state: tuple, enabled: list[int]) -> "Blocking":
+        """Where each compound priority blocks its low side at ``state`` (computed as asked, kept per state)."""
+        got = self._blocks.get(state)
+        if got is None:
+            got = self._blocks[state] = Blocking(self, state, enabled)
+        return got
+
+    def allowed(self, zone: np.ndarray, index: int, blocks: "Blocking") -> list[tuple[np.ndarray, list]]:
+        """Where the interaction may fire within ``zone``: the zones the priorities leave, each with its bounds."""
+        pieces = [(zone, [])]
+        for r in self.rules_of(index)[0]:
+            for b in blocks.region(r):
+                if not b:
+                    return []
+                block = dbm.constrain_all(zone, b)
+                if block is None:
+                    continue
+                pieces = [(q, cut + more) for p, cut in pieces for q, more in dbm.subtract_bounds(p, block)]
+                if not pieces:
+                    return []
+        return pieces
+
+    def passing(self, state: tuple, blocks: "Blocking") -> tuple[list, list, list] | None:
+        """Where time may pass at ``state``, whatever the zone: the invariants' bounds before a tick and after it,
+        and the urgent priorities' regions ``(bounds, clock, lower bound)`` that stop time once reached; None when
+        time cannot pass at all (kept per state)."""
+        if state in self._passing:
+            return self._passing[state]
+        got = self._passing[state] = self._passing_at(state, blocks)
+        return got
+
+    def _passing_at(self, state: tuple, blocks: "Blocking") -> tuple[list, list, list] | None:
+        before, after = [], []
+        for atom in self.model.timed_atoms:
+            place = self.model.places[(atom, self.place_bit(state, atom))]
+            if not place.ticks:
+                return None
+            fa = self.flat.atoms[atom]
+            if place.discrete is not None and not value(place.discrete, fa, state):
+                return None
+            for k, j, c in self.bounds(place.atoms, atom, state):
+                if j != 0:
+                    raise Unsupported(f"atom {fa.name}: time is bounded from below in one of its places")
+                before.append((k, 0, c))
+                after.append((k, 0, c + 1))
+        if any(not b for r in self.tick_rules for b in blocks.region(r)):
+            return None  # something urgent can happen now: no time passes
+        waits = []
+        for r in self.tick_rules:
+            for b in blocks.region(r):
+                lower = [(j, c) for i, j, c in b if i == 0]
+                waits.append((b, r, lower[0] if len(b) == 1 and lower else None))
+        return before, after, waits
+
+    def limits(self, state: tuple, zone: np.ndarray) -> tuple[list, list] | None:
+        """Bounds before a tick and after it at ``state`` from ``zone``: invariants, and urgent priorities that
+        ``zone`` can reach as time passes; None when time cannot pass at all."""
+        fixed = self._passing.get(state, False)
+        if fixed is False:
+            enabled = sorted({i for i, _ in self.successors(state)})
+            fixed = self.passing(state, self.blocking(state, enabled))
+        if fixed is None:
+            return None
+        before, after, waits = fixed
+        if not waits:
+            return before, after
+        before, after = list(before), list(after)
+        reach = dbm.constrain_all(dbm.up(zone), before)
+        for b, r, lower in waits:
+            if reach is None or dbm.constrain_all(reach, b) is None:
+                continue  # time never passes from where this holds (an invariant stops it first)
+            if lower is None:
+                raise Unsupported(f"priority {self.model.rules[r].name}: time waits for a clock condition that "
+                                  "is not one lower bound")
+            k, c = lower
+            before.append((k, 0, -c - 1))  # blocked from x >= -c on: time passes while x <= -c - 1
+            after.append((k, 0, -c))
+        return before, after
+
+    def elapse(self, zone: np.ndarray, state: tuple) -> list[tuple[np.ndarray, bool]]:
+        """The zone after time passes at ``state``, as far as it can: pieces, True for the one where it may have."""
+        limits = self.limits(state, zone)
+        if limits is None:
+            return [(zone, False)]
+        # A tick needs x <= c - 1 before it (``before``), so after any number of them x <= c (``after``): from the
+        # points that meet ``after``, time reaches exactly up(Z & after) & after, as a dense-time invariant would.
+        _, after = limits
+        start = dbm.constrain_all(zone, after)
+        if start is None:
+            return [(zone, False)]
+        grown = dbm.constrain_all(dbm.up(start), after)
+        return [(grown, True)] + [(z, False) for z in dbm.subtract(zone, grown)]
+
+    def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
+        """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
+        idle = self._idle.get(state)
+        if idle is None:
+            idle = self._idle[state] = [k for k, (atom, _) in enumerate(self.model.clocks, 1)
+                                        if k not in self.model.places[(atom, self.place_bit(state, atom))].active]
+        return dbm.free_many(zone, idle) if idle else zone
+
+    # -- the search -------------------------------------------------------------------------------
+    def explore(self, max_states: int | None = None, progress: Progress | None = None,
+                stop_at_violation: bool = False) -> ZoneResult:
+        """Breadth-first over symbolic states; observers checked and watched clocks maximised on the way."""
+        progress = progress or null_progress()
+        start = time.perf_counter()
+        passed: dict[tuple, list[int]] = {}
+        waiting: deque[int] = deque()
+        result = ZoneResult(0, 0, 0, 0.0, True)
+
+        def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> None:
+            zone = dbm.extrapolate(zone, self.ceiling) if np.isfinite(self.ceiling).any() else zone
+            kept = passed.setdefault(state, [])
+            step = Node(state, zone, parent, via, guard, grown)
+            if kept:
+                stack = np.stack([self.nodes[k].zone for k in kept])
+                bigger = np.flatnonzero((stack >= zone).all(axis=(1, 2)))
+                if len(bigger):
+                    if parent >= 0:  # the step is kept for cycles (lassos), its zone not: the covering node's stands
+                        step.zone, step.by = None, kept[bigger[0]]
+                        self.out[parent].append((kept[bigger[0]], step))
+                    return
+                for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):
+                    self.nodes[kept[i]].covered = True  # a larger zone came: this one need not be expanded
+                    self.nodes[kept[i]].by = len(self.nodes)
+            kept[:] = [k for k in kept if not self.nodes[k].covered]
+            self.nodes.append(step)
+            self.out.append([])
+            if parent >= 0:
+                self.out[parent].append((len(self.nodes) - 1, step))
+            kept.append(len(self.nodes) - 1)
+            waiting.append(len(self.nodes) - 1)
+
+        for sid in self.space.initial_ids:
+            state = self.space.state(sid)
+            zone = dbm.zero(self.n)
+            for k, v in self.model.initial.items():
+                zone = dbm.reset(zone, k, v)
+            zone = self.forget(zone, state)
+            for z, grown in self.elapse(zone, state):
+                add(state, z, -1, -1, [], grown)
+        while waiting:
+            k = waiting.popleft()
+            node = self.nodes[k]
+            if node.covered:
+                continue
+            self.check(k, result)
+            if result.violations and stop_at_violation:
+                result.complete, result.stopped = False, "violated"
+                break
+            succ = self.successors(node.state)
+            enabled = sorted({i for i, _ in succ})
+            blocks = self.blocking(node.state, enabled)
+            for index, nxt in succ:
+                need, resets = self.guard(index, node.state)
+                met = dbm.constrain_all(node.zone, need)
+                if met is None:
+                    continue
+                for piece, cut in self.allowed(met, index, blocks):
+                    zone = piece
+                    for c, v in resets:
+                        zone = dbm.reset(zone, c, v)
+                    zone = self.forget(zone, nxt)
+                    result.transitions += 1
+                    for z, grown in self.elapse(zone, nxt):
+                        add(nxt, z, k, index, need + cut, grown)
+            if max_states is not None and len(self.nodes) >= max_states:
+                result.complete, result.stopped = False, "max-states"
+                break
+            progress.tick(len(self.nodes), result.transitions, len(waiting), lambda: 0)
+        progress.done()
+        result.states = len(self.nodes)
+        result.discrete = len(passed)
+        result.seconds = time.perf_counter() - start
+        return result
+
+    def check(self, k: int, result: ZoneResult) -> None:
+        """Observers in error and the largest values of watched clocks at node ``k``."""
+        node = self.nodes[k]
+        for atom, (watching, clock, bound) in self.model.observers.items():
+            fa = self.flat.atoms[atom]
+            if self.place_bit(node.state, atom) != fa.place_mask([watching]):
+                continue
+            if dbm.upper(node.zone, clock) > value(bound, fa, node.state) and atom not in result.violations:
+                result.violations[atom] = k
+        for atom, (place, clock) in self.model.measures.items():
+            fa = self.flat.atoms[atom]
+            if self.place_bit(node.state, atom) != fa.place_mask([place]):
+                continue
+            top = dbm.upper(node.zone, clock)
+            if clock not in result.maxima or top > result.maxima[clock][0]:
+                result.maxima[clock] = (top, k)
+
+
+class Blocking:
+    """Where the compound priorities block at one discrete state, as lists of clock bounds (one zone each).
+
+    BIP's semantics (runtime.engine.support.Priorities): a rule ``L < H`` whose guard holds blocks L
+    while an interaction matching H is enabled, or while a rule reachable from it (its high side
+    overlapping the next one's low side) blocks.  A rule's guard over clocks and the clock guards of
+    H make that a region of clock values; chains whose guards contradict each other are dropped.
+    ``[[]]`` is "everywhere".
+    """
+
+    def __init__(self, explorer: ZoneExplorer, state: tuple, enabled: list[int]) -> None:
+        self.x, self.state = explorer, state
+        self.highs: dict[int, list[int]] = {}
+        for h in enabled:
+            for r in explorer.rules_of(h)[1]:
+                self.highs.setdefault(r, []).append(h)
+        self.memo: dict[tuple, list] = {}
+
+    def region(self, r: int) -> list:
+        return self._region(r, (), ())
+
+    def _region(self, r: int, acc: tuple, path: tuple) -> list:
+        got = self.memo.get((r, acc))
+        if got is not None:
+            return got
+        x = self.x
+        rule = x.model.rules[r]
+        key = (r, acc)
+        if isinstance(rule.guard, list):
+            acc = tuple(sorted(set(acc) | set(x.diagonal_bounds(rule.guard))))
+            if not x.feasible(acc):
+                self.memo[key] = []
+                return []  # this chain of rules is never active at once
+        elif rule.guard is not None and not _holds(rule.guard, self.state):
+            self.memo[key] = []
+            return []
+        if r in path:
+            raise ModelError("priority cycle between compound priorities "
+                             + ", ".join(x.model.rules[y].name for y in path + (r,)))
+        out = []
+        for h in self.highs.get(r, ()):
+            need = list(acc) + x.guard(h, self.state)[0]
+            if not need:
+                self.memo[key] = [[]]
+                return [[]]  # blocked everywhere: nothing down the chain can say more
+            out.append(need)
+        for r2 in x.edges[r]:
+            for b in self._region(r2, acc, path + (r,)):
+                if not b:
+                    self.memo[key] = [[]]
+                    return [[]]
+                out.append(b)
+        out = [b for b in out if x.feasible(tuple(sorted(set(b))))]
+        self.memo[key] = out
+        return out
+
+
+def lasso(z: ZoneExplorer, watching) -> tuple[list[Node], int] | None:
+    """A reachable cycle of symbolic states that all satisfy ``watching(node)``, in which time passes.
+
+    Returns the steps from an initial state to the cycle's entry, then once round the cycle (back to a zone
+    the entry's covers), and the index of the entry in that list; None when every such run ends.  Nodes
+    covered by a larger zone of their discrete state stand for that one (their runs are among its runs).
+    """
+    import networkx as nx
+
+    def rep(k: int) -> int:
+        while z.nodes[k].covered and z.nodes[k].by >= 0:
+            k = z.nodes[k].by
+        return k
+
+    graph = nx.DiGraph()
+    for k, edges in enumerate(z.out):
+        if not watching(z.nodes[k]):
+            continue
+        for target, step in edges:
+            t = rep(target)
+            if watching(z.nodes[t]):
+                a = rep(k)
+                if not graph.has_edge(a, t) or step.grown:
+                    graph.add_edge(a, t, step=step)
+    for component in nx.strongly_connected_components(graph):
+        if len(component) == 1:
+            (u,) = component
+            if not graph.has_edge(u, u):
+                continue
+        sub = graph.subgraph(component)
+        passing = [(a, b) for a, b, d in sub.edges(data=True) if d["step"].grown]
+        if not passing:
+            continue  # a cycle in zero time: no request waits for ever on it
+        a, b = passing[0]
+        back = nx.shortest_path(sub, b, a) if a != b else [a]
+        loop = [sub.edges[a, b]["step"]] + [sub.edges[x, y]["step"] for x, y in zip(back, back[1:])]
+        prefix = []
+        k = a
+        while k >= 0:
+            prefix.append(z.nodes[k])
+            k = z.nodes[k].parent
+        prefix = prefix[::-1]
+        return prefix + loop, len(prefix) - 1
+    return None

@@ -1,0 +1,157 @@
+"""A symbolic path made concrete: the time of each step, then the steps replayed on the tick model.
+
+The zone explorer keeps, for each symbolic state, its parent, the interaction
+and the clock bounds of the step (runtime/zones/search.py).  Along a path the
+clock values are differences of step times (a clock is the time since its last
+reset), so every bound is a difference constraint between step times;
+Bellman–Ford gives integer times that meet them all, and a goal at the end
+(``c >= 7``: the largest value a response time reaches).  The steps are then
+replayed on the model with ticks, the reference semantics: the trace printed
+is the tick model's own, and the goal is checked on its last state.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from runtime.explore.space import StateSpace, Step
+from runtime.zones.search import Node, ZoneExplorer
+
+
+class ConcretizeError(Exception):
+    """The path's bounds have no integer solution (an extrapolated zone), or its replay went elsewhere."""
+
+
+@dataclass
+class TimedStep:
+    ticks: int  # ticks before the step
+    step: Step
+
+
+def path_to(z: ZoneExplorer, node: int) -> list[Node]:
+    """The stored symbolic states from an initial one to ``node``, along parent links."""
+    out = []
+    while node >= 0:
+        out.append(z.nodes[node])
+        node = z.nodes[node].parent
+    return out[::-1]
+
+
+def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]) -> tuple[list[int], int]:
+    """Integer times of the steps of ``path`` (each record: the step into it, the first one initial) and the time
+    after the last step where ``goal`` holds."""
+    k = len(path)
+    end, zero = k, k + 1  # time variables: one per step, the goal's time, the constant 0
+    edges: list[tuple[int, int, float]] = []  # (w, u, d): u - w <= d
+
+    def le(u, w, d):
+        edges.append((w, u, d))
+
+    origin = {c: (zero, v) for c, v in z.model.initial.items()}  # clock -> (step time var, value at reset)
+    for c in range(1, z.n + 1):
+        origin.setdefault(c, (zero, 0))
+    le(0, zero, 0)
+    le(zero, 0, 0)
+
+    def bound(i, j, c, at):
+        """``xi - xj <= c`` at time variable ``at`` (index 0 is the constant 0)."""
+        if i and j:
+            (ti, vi), (tj, vj) = origin[i], origin[j]
+            le(tj, ti, c - vi + vj)  # (at - ti + vi) - (at - tj + vj) <= c
+        elif i:
+            ti, vi = origin[i]
+            le(at, ti, c - vi)
+        elif j:
+            tj, vj = origin[j]
+            le(tj, at, c + vj)
+
+    for step in range(k):
+        n = path[step]
+        if step:
+            le(step - 1, step, 0)  # time goes forward
+            for i, j, c in n.guard:
+                bound(i, j, c, step)
+            for c, v in z.guard(n.via, path[step - 1].state)[1]:
+                origin[c] = (step, v)
+        nxt = step + 1 if step + 1 < k else end
+        zone = n.zone if n.zone is not None else z.nodes[n.by].zone
+        limits = z.limits(n.state, zone) if n.grown else None
+        if limits is None:
+            le(nxt, step, 0)
+            continue
+        for i, j, c in limits[1]:
+            bound(i, j, c, nxt)
+    le(k - 1, end, 0)
+    for i, j, c in goal:
+        bound(i, j, c, end)
+    dist = _shortest(k + 2, edges)
+    base = dist[zero]
+    return [int(dist[s] - base) for s in range(k)], int(dist[end] - base)
+
+
+def _shortest(n: int, edges: list[tuple[int, int, float]]) -> list[float]:
+    """Bellman–Ford from a virtual source at distance 0 of every variable; raises on a negative cycle."""
+    dist = [0.0] * n
+    for _ in range(n):
+        changed = False
+        for w, u, d in edges:
+            if dist[w] + d < dist[u]:
+                dist[u] = dist[w] + d
+                changed = True
+        if not changed:
+            return dist
+    raise ConcretizeError("the path's clock bounds have no solution")
+
+
+def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]],
+           space: StateSpace) -> tuple[list[TimedStep], tuple]:
+    """``path`` (:func:`path_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
+    before each, and the last state."""
+    at, end = times(z, path, goal)
+    engine = space.engine
+    state = space.state(space.initial_ids[0])
+    ticks_before, out = 0, []
+    clocks = {z.flat.atoms[a].slot(v) for a, v in z.model.clocks}
+
+    errors = {}
+    for a, (watching, _, _) in z.model.observers.items():  # the erased model has no observer in ERROR
+        fa = z.flat.atoms[a]
+        if "ERROR" in fa.places:
+            errors[fa.offset] = (fa.place_mask(["ERROR"]), fa.place_mask([watching]))
+
+    def erased(full: tuple) -> tuple:
+        values = list(full[:z.space.width])
+        for s in clocks:
+            values[s] = 0
+        for offset, (error, watching) in errors.items():
+            if values[offset] == error:
+                values[offset] = watching
+        return z.space.codec.unpack(z.space._pack(tuple(values) + tuple(full[z.space.width:])))
+
+    def tick(s: tuple, count: int) -> tuple:
+        for _ in range(count):
+            nxt = [n for inter, n, _ in space._fire_all(s) if inter.label == "tick"]
+            if len(nxt) != 1:
+                raise ConcretizeError("time cannot pass where the zones said it could")
+            s = nxt[0]
+        return s
+
+    for step in range(1, len(path)):
+        n = path[step]
+        wait = at[step] - at[step - 1]
+        state = tick(state, wait)
+        _, ports, label = z.interaction(n.via)
+        target = n.state
+        for inter, nxt, made in space._fire_all(state):
+            if inter.label == label and erased(nxt) == z.space.codec.unpack(z.space._pack(target)):
+                out.append(TimedStep(wait, Step(inter.label, inter.index, tuple((c.name, p) for c, p in made),
+                                                tuple(c.describe(p) for c, p in made))))
+                state = nxt
+                break
+        else:
+            raise ConcretizeError(f"step {step} ({label}) has no counterpart on the tick model")
+    state = tick(state, end - at[-1])
+    ticks_before = end - at[-1]
+    if ticks_before:
+        out.append(TimedStep(ticks_before, Step("", -1, (), ())))
+    del engine
+    return out, state

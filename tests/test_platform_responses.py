@@ -1,0 +1,205 @@
+"""Response times: every maximum reported is reached by its trace, clock zones and ticks agree, and what a run
+without --platform assumes is said in one line."""
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from genom2bip.loading import TimeSettings
+from genom2bip.verify import build_model
+from genom2bip.verify.zones import ResponseResult, check_timing
+from platformkit import (
+    FIXTURES, observed_response, platform_file, printed_trace, response_ms, response_table, verify,
+)
+from runtime.explore import StateSpace
+
+ZENO = FIXTURES / "Zeno.gen"
+PAIR = FIXTURES / "Pair.gen"
+SHARED = FIXTURES / "Shared.gen"
+ANOMALY = FIXTURES / "Anomaly.gen"
+
+#: (name, description, defines, platform file, mission): small models with every kind of response.
+CASES = [
+    ("pair-1-edf", PAIR, {}, "cores: 1\npolicy: edf\nbest: wcet\n", None),
+    ("pair-1-fp", PAIR, {}, "cores: 1\npolicy: fixed-priority\n", None),
+    ("shared-slow", SHARED, {"SLOW": "1"}, "cores: 2\npolicy: edf\n", None),
+    ("anomaly", ANOMALY, {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n"
+                             "execution:\n  Anomaly.mid.mid_step: [1 ms, 4 ms]\n", None),
+    ("zeno-services", ZENO, {"PERIOD": "10"}, "cores: 1\n", None),
+    ("zeno-client", ZENO, {"PERIOD": "10"}, "cores: 1\n", FIXTURES / "a_then_b.yaml"),
+    ("endless", FIXTURES / "Endless.gen", {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n", None),
+]
+#: The cases whose tick model is small enough to explore state by state in a test (zeno-services is not).
+SMALL = [c for c in CASES if c[0] != "zeno-services"]
+
+
+def model_of(tmp_path, gen, defines, platform, mission):
+    settings = TimeSettings(platform=platform_file(tmp_path, platform), client=mission, responses=True)
+    return build_model([gen], defines={k: v for k, v in defines.items()}, time=settings)
+
+
+def tick_maxima(model) -> dict[str, int]:
+    """The largest value of every response observer's clock over the tick model's reachable states.
+
+    An oracle independent of the zone explorer: the reference semantics explored state by state, every
+    variable kept exact.
+    """
+    space = StateSpace(model.package, model.root, {}, None, False, ())
+    atoms = [fa for fa in space.engine.flat.atoms if fa.type.name == "ResponseObserver"]
+    k = 0
+    while k < len(space):
+        space.successors(k)
+        k += 1
+        assert k < 200_000, "the fixture is meant to be small"
+    best = {fa.name: 0 for fa in atoms}
+    for sid in range(len(space)):
+        state = space.engine_state(sid)
+        for fa in atoms:
+            best[fa.name] = max(best[fa.name], state[fa.slot("c")])
+    return best
+
+
+@pytest.mark.parametrize("name,gen,defines,platform,mission", CASES, ids=[c[0] for c in CASES])
+def test_every_maximum_is_reached_by_its_trace(tmp_path, name, gen, defines, platform, mission):
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    results = [r for r in check_timing(model, (), responses=True) if isinstance(r, ResponseResult)]
+    assert results
+    for r in results:
+        data = json.loads(json.dumps(r.to_json()))  # what a campaign records
+        details = data["details"]
+        if details["value_ms"] is None:
+            continue
+        trace = data["trace"]
+        assert trace is not None and trace["timed"], data
+        steps = [(s["time_ms"], s["label"]) for s in trace["steps"]]
+        end = steps[-1][0] if steps else 0.0
+        owner = details["owner"]
+        seen = observed_response(owner, details["kind"], steps, end)
+        assert seen == details["value_ms"], f"{owner}: the trace shows {seen} ms, the result says " \
+                                            f"{details['value_ms']} ms\n{trace['steps']}"
+
+
+@pytest.mark.parametrize("name,gen,defines,platform,mission", CASES, ids=[c[0] for c in CASES])
+def test_every_overrun_trace_holds_a_period_open_longer_than_the_period(tmp_path, name, gen, defines, platform,
+                                                                       mission):
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    violated = [r.to_json() for r in check_timing(model, ("overrun",)) if r.verdict.value == "violated"]
+    assert bool(violated) == (name in ("pair-1-edf", "pair-1-fp", "shared-slow", "zeno-services"))
+    for data in violated:
+        steps = [(s["time_ms"], s["label"]) for s in data["trace"]["steps"]]
+        owner = data["details"]["observer"].rsplit(".", 1)[0]
+        assert observed_response(owner, "task", steps, steps[-1][0]) > data["details"]["bound_ms"], data["trace"]
+
+
+@pytest.mark.parametrize("name,gen,defines,platform,mission", SMALL, ids=[c[0] for c in SMALL])
+def test_zones_and_ticks_agree_on_the_maxima(tmp_path, name, gen, defines, platform, mission):
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    zones = {r.observer: r.value_ticks for r in check_timing(model, (), responses=True)
+             if isinstance(r, ResponseResult) and not r.unbounded}
+    ticks = tick_maxima(model_of(tmp_path, gen, defines, platform, mission))
+    for observer, value in zones.items():
+        if observer in ticks and value is not None:
+            assert ticks[observer] == value, f"{observer}: zones {value} ticks, tick by tick {ticks[observer]}"
+    assert {o for o, v in zones.items() if v is not None} <= set(ticks)
+
+
+def test_response_times_by_ticks_are_printed_or_refused(tmp_path, capsys):
+    # --time-search ticks with --response-times must not drop the response times without a word.
+    path = platform_file(tmp_path, "cores: 1\npolicy: edf\nbest: wcet\n")
+    code, out, err = verify(capsys, PAIR, "--timed", "--platform", path, "--response-times", "--time-search", "ticks")
+    if code == 2:
+        assert "--response-times" in err
+    else:
+        assert response_ms(out) == {"Pair.fast": 12, "Pair.slow": 12}, out
+
+
+# --------------------------------------------------------------------------- without --platform
+
+
+def test_without_platform_one_line_says_each_task_has_its_core_and_exact_wcets(capsys):
+    code, out, _ = verify(capsys, PAIR, "--timed", "--schedulability")
+    lines = [line for line in out.splitlines() if line.startswith("platform: ")]
+    assert lines == ["platform: a core per task, codels taking their WCET (no --platform)"], out
+    assert code == 0  # a core each: 6 ms of 10
+
+
+def test_without_platform_response_times_say_the_same_line(capsys):
+    code, out, _ = verify(capsys, PAIR, "--timed", "--response-times")
+    lines = [line for line in out.splitlines() if line.startswith("platform: ")]
+    assert lines == ["platform: a core per task, codels taking their WCET (no --platform)"], out
+    assert response_ms(out) == {"Pair.fast": 6, "Pair.slow": 6}
+    assert code == 0
+
+
+# --------------------------------------------------------------------------- responses without a bound
+
+ENDLESS = FIXTURES / "Endless.gen"
+STARVED = FIXTURES / "Starved.gen"
+FP1 = "cores: 1\npolicy: fixed-priority\nbest: wcet\n"
+
+
+def lasso_of(out: str, owner: str) -> tuple[list[tuple[float, str]], list[str], int]:
+    """The steps of ``owner``'s printed lasso, its lines, and the step after which it loops."""
+    block = out.split(f"\n{owner}: no bound: a request can wait for ever (", 1)[1]
+    loop = re.search(r"^    \.\.\. and back to the state after step (\d+), forever$", block, re.M)
+    assert loop, block
+    lines = block[:loop.start()].splitlines()[1:]
+    return printed_trace(out, f"{owner}: no bound"), lines, int(loop.group(1))
+
+
+def after_step(lines: list[str], n: int) -> list[str]:
+    """The printed lines of a trace after its step ``n`` (0: all of them)."""
+    numbers = [int(m.group(1)) if (m := re.match(r"^\s+(\d+)\s+\[", line)) else None for line in lines]
+    assert n == 0 or n in numbers, (n, lines)
+    return lines if n == 0 else lines[numbers.index(n) + 1:]
+
+
+def test_a_service_that_never_ends_has_no_bound_shown_by_a_lasso_where_time_passes(tmp_path, capsys):
+    code, out, _ = verify(capsys, ENDLESS, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times")
+    table = response_table(out)
+    assert table["Endless.Watch"] == "no bound: a request can wait for ever", out
+    # Once: requested just after a period closed, it waits 10 ms, then Watch's two codels (1 ms each) may go first.
+    assert table["Endless.Once"] == "14 ms"
+    steps, lines, loop = lasso_of(out, "Endless.Watch")
+    labels = [label for _, label in steps]
+    assert "Endless.Watch:trigger" in labels
+    assert not any(label.startswith("Endless.Watch:") and label.rsplit(":", 1)[1] in
+                   ("finish", "fail", "interrupted", "reject") for label in labels)
+    # The cycle lets time pass: a request waits for ever, not an infinity of steps at one instant.
+    assert any("time passes" in line for line in after_step(lines, loop)), lines
+    assert code == 0
+
+
+def test_a_starved_task_has_no_bound_on_one_core_and_a_small_one_on_two(tmp_path, capsys):
+    code, out, _ = verify(capsys, STARVED, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times")
+    table = response_table(out)
+    assert table["Starved.busy"] == "10 ms"
+    assert table["Starved.idle"].startswith("no bound"), out
+    steps, lines, loop = lasso_of(out, "Starved.idle")
+    assert "Starved.idle:grant" not in [label for _, label in steps]
+    assert any("time passes" in line for line in after_step(lines, loop)), lines
+    assert code == 4  # idle overruns as well
+    two = platform_file(tmp_path, "cores: 2\npolicy: fixed-priority\nbest: wcet\n", "two.yaml")
+    code, out, _ = verify(capsys, STARVED, "--timed", "--platform", two, "--response-times")
+    assert response_ms(out) == {"Starved.busy": 10, "Starved.idle": 1}
+    assert code == 0
+
+
+def test_an_unbounded_response_in_json(tmp_path):
+    model = model_of(tmp_path, STARVED, {}, FP1, None)
+    found = {r.observer: r for r in check_timing(model, (), responses=True) if isinstance(r, ResponseResult)}
+    data = found["Starved.idle.response"].to_json()
+    assert data["details"]["unbounded"] is True and data["details"]["value_ms"] is None
+    assert data["trace"]["loop"] is not None and data["trace"]["timed"]
+    ticks = [s["tick"] for s in data["trace"]["steps"]]
+    assert ticks[-1] > ticks[data["trace"]["loop"]]  # the loop lets time pass
+
+
+def test_zones_asked_for_on_a_model_they_do_not_take_is_refused_without_exploring(capsys):
+    # Without a platform the schedulers count busy ticks as data, which clock zones do not take.
+    code, out, err = verify(capsys, PAIR, "--timed", "--schedulability", "--time-search", "zones")
+    assert code == 2
+    assert "--time-search zones: clock zones do not take this model (" in err
+    assert "exploring tick by tick" not in err and "overrun" not in out
