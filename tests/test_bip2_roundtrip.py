@@ -159,6 +159,12 @@ def host(guard, action) -> Package:
     )
 
 
+def test_a_string_holding_line_separators_roundtrips():
+    """U+2028 and U+2029 written as is would split the line the string is on: they are escaped."""
+    text = roundtrip(host(Binary("==", Var("a"), Const("x\u2028y\u2029z")), []))
+    assert "\u2028" not in text and "\\u2028" in text
+
+
 @settings(max_examples=300, deadline=None)
 @given(expressions(), st.lists(statements(), max_size=4))
 def test_random_guards_and_actions_roundtrip(guard, action):

@@ -34,12 +34,13 @@ def decode_string(token: str) -> str:
 
 
 def encode_string(value: str) -> str:
-    """A BIP2 string literal for ``value``: printable text as is, control characters escaped."""
+    """A BIP2 string literal for ``value``: printable text as is, control characters and line separators (U+2028,
+    U+2029, which break lines where a reader splits them) escaped."""
     out = ['"']
     for ch in value:
         if ch in _NAMED:
             out.append(_NAMED[ch])
-        elif unicodedata.category(ch) in ("Cc", "Cs") and ord(ch) <= 0xFFFF:
+        elif unicodedata.category(ch) in ("Cc", "Cs", "Zl", "Zp") and ord(ch) <= 0xFFFF:
             out.append(f"\\u{ord(ch):04x}")
         else:
             out.append(ch)
