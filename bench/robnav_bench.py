@@ -63,22 +63,20 @@ def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], di
         low = {state.rstrip("_2").rstrip("_"): int(v) for state, _, v in LEAVING.findall(body)}
         perm = re.fullmatch(r"Perm_(\w+?)_(\w+)", name)
         activity = re.fullmatch(r"(\w+?)_(\w+)_", name)
-        if perm:
-            task_name, comp = perm.groups()
-            task = next(t for t in components[comp].tasks if t.name == task_name)
-            for codel in task.codels:
-                state = codel.triggers[0]
-                if state in high:
-                    execution[f"{comp}.{task_name}.{codel.name}"] = (low.get(state, high[state]), high[state])
-                    init_of[f"{comp}.{task_name}"] = execution[f"{comp}.{task_name}.{codel.name}"]
+        owner = None
+        if perm:  # a task's permanent activity: its initial codels
+            owner, comp = perm.groups()
+            codels = next(t for t in components[comp].tasks if t.name == owner).codels
         elif activity and activity.group(2) in components:
-            service, comp = activity.groups()
-            owner = next(s for s in components[comp].services if s.name == service)
-            for codel in owner.codels:
-                state = codel.triggers[0]
-                if state in high:
-                    execution[f"{comp}.{service}.{codel.name}"] = (low.get(state, high[state]), high[state])
-        elif name == "client":
+            owner, comp = activity.groups()
+            codels = next(s for s in components[comp].services if s.name == owner).codels
+        for codel in codels if owner else ():
+            state = codel.triggers[0]
+            if state in high:
+                execution[f"{comp}.{owner}.{codel.name}"] = (low.get(state, high[state]), high[state])
+                if perm:
+                    init_of[f"{comp}.{owner}"] = execution[f"{comp}.{owner}.{codel.name}"]
+        if name == "client":
             order = {"start": 0} | {f"s{k}": k for k in range(1, 100)}
             requests += [(order[src], f"{comp}.{service}") for src, comp, service in REQUEST.findall(body)]
         timer = re.fullmatch(r"Timer_(\w+?)_(\w+)", name)
