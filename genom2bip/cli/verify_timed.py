@@ -219,16 +219,14 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
 
 
 def _response_value(r) -> str:
-    """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms``."""
-    from genom2bip.verify import Verdict
+    """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms`` (the campaign's value, worded)."""
+    from genom2bip.verify.zones import response_value
 
-    if r.verdict is Verdict.INCONCLUSIVE:
-        return f"inconclusive ({r.limit})"
-    if r.unbounded:
-        return "no bound: a request can wait for ever"
-    if r.value_ticks is None:
-        return r.message if r.message == "never requested" else f"more than {r.ms(r.cap_ticks):g} ms"
-    return f"{r.value_ms:g} ms"
+    value = response_value(r)
+    if isinstance(value, float | int):
+        return f"{value:g} ms"
+    return {"inconclusive": f"inconclusive ({r.limit})", "unbounded": "no bound: a request can wait for ever",
+            "bounded, not measured": "every request ends (not measured: its codels can cycle)"}.get(value, value)
 
 
 def platform_line(model) -> None:

@@ -647,17 +647,20 @@ class CGen(StepEmitter):
                             w("if (x == (r >> 6) && (next >> (r & 63) & 1)) e->cyc = 1;")
                             w("next &= ~seen[x]; seen[x] |= next; todo[x] |= next; more |= next != 0;")
             w("return e;")
-        with w.block("static PReach *reach_of(const uint64_t *key)"):
+        with w.block("static uint64_t reach_hash(const uint64_t *key)"):  # FNV-1a over the guard words
             w("uint64_t h = 1469598103934665603ull;")
             w("for (int x = 0; x < NGW; x++) h = (h ^ key[x]) * 1099511628211ull;")
+            w("return h;")
+        with w.block("static PReach *reach_of(const uint64_t *key)"):
+            w("uint64_t h = reach_hash(key);")
             with w.block("if (PUSED * 2 >= PCAP)"):
                 w("uint64_t cap = PCAP ? PCAP * 2 : 64;")
                 w("PReach **t = (PReach **)calloc(cap, sizeof(PReach *));")
                 w("if (!t) fail(E_FULL, 0);")
                 w("for (uint64_t i = 0; i < PCAP; i++) if (PCACHE[i]) {")
-                w("    uint64_t g = 1469598103934665603ull;")
-                w("    for (int x = 0; x < NGW; x++) g = (g ^ PCACHE[i]->key[x]) * 1099511628211ull;")
-                w("    uint64_t j = g & (cap - 1); while (t[j]) j = (j + 1) & (cap - 1); t[j] = PCACHE[i]; }")
+                w("    uint64_t j = reach_hash(PCACHE[i]->key) & (cap - 1);")
+                w("    while (t[j]) j = (j + 1) & (cap - 1);")
+                w("    t[j] = PCACHE[i]; }")
                 w("free(PCACHE); PCACHE = t; PCAP = cap;")
             w("uint64_t j = h & (PCAP - 1);")
             with w.block("while (PCACHE[j])"):
