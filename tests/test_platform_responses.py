@@ -105,6 +105,23 @@ def test_zones_and_ticks_agree_on_the_maxima(tmp_path, name, gen, defines, platf
     assert {o for o, v in zones.items() if v is not None} <= set(ticks)
 
 
+def test_merging_zones_changes_no_maximum_and_no_verdict(tmp_path):
+    # Zones of one discrete state whose union is one zone are merged (runtime/zones/search.py); the maxima and
+    # the observers in error must be those of the search that keeps every zone apart.
+    from runtime.zones.search import ZoneExplorer
+
+    merged = 0
+    for name, gen, defines, platform, mission in CASES:
+        model = model_of(tmp_path, gen, defines, platform, mission)
+        apart = ZoneExplorer(model.package, model.root, merge=False).explore()
+        one = ZoneExplorer(model.package, model.root).explore()
+        assert apart.complete and one.complete, name
+        assert {c: v for c, (v, _) in one.maxima.items()} == {c: v for c, (v, _) in apart.maxima.items()}, name
+        assert set(one.violations) == set(apart.violations), name
+        merged += one.merged
+    assert merged, "no case merged a zone: the comparison says nothing"
+
+
 def test_response_times_by_ticks_are_printed_or_refused(tmp_path, capsys):
     # --time-search ticks with --response-times must not drop the response times without a word.
     path = platform_file(tmp_path, "cores: 1\npolicy: edf\nbest: wcet\n")

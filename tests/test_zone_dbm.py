@@ -72,6 +72,38 @@ def test_extrapolation_forgets_only_what_is_above_a_clock_s_ceiling(ops):
     assert dbm.extrapolate(low, ceiling).tolist() == low.tolist()
 
 
+def _boxed(rng: random.Random, n: int, top: int) -> np.ndarray:
+    """A random zone with every clock in 0..top (so that :func:`points` sees all of it)."""
+    z = dbm.constrain_all(dbm.free_all(n), [(i, 0, top) for i in range(1, n + 1)])
+    for _ in range(rng.randint(1, 5)):
+        i, j = rng.sample(range(n + 1), 2)
+        got = dbm.constrain(z, i, j, rng.randint(-top, top))
+        z = z if got is None else got
+    return z
+
+
+def test_two_zones_make_one_exactly_when_their_points_do(ops):
+    box = dbm.constrain_all(dbm.free_all(2), [(1, 0, 4), (2, 0, 4)])
+    before, after = dbm.constrain(box, 1, 2, 0), dbm.constrain(box, 2, 1, 0)  # x1 <= x2, x2 <= x1
+    assert dbm.union(before, after).tolist() == box.tolist()  # the two orders of two resets: the whole box
+    apart = dbm.constrain_all(box, [(1, 0, 1)]), dbm.constrain_all(box, [(0, 1, -3)])  # x1 <= 1, x1 >= 3
+    assert dbm.union(*apart) is None  # x1 = 2 is in neither
+    touching = dbm.constrain_all(box, [(1, 0, 1)]), dbm.constrain_all(box, [(0, 1, -2)])  # integers: no gap
+    assert points(dbm.union(*touching), 4) == points(box, 4)
+    rng = random.Random(7)
+    merged = 0
+    for _ in range(300):
+        a, b = _boxed(rng, 3, 4), _boxed(rng, 3, 4)
+        got = dbm.union(a, b)
+        whole = points(a, 4) | points(b, 4)
+        assert (got is not None) == (points(np.maximum(a, b), 4) == whole)
+        if got is not None:
+            merged += 1
+            assert points(got, 4) == whole
+            assert a.tolist() == dbm.union(a, a).tolist()
+    assert 20 < merged < 280  # both answers were exercised
+
+
 def _random_run(seed: int) -> list:
     rng = random.Random(seed)
     n = 5
@@ -88,6 +120,10 @@ def _random_run(seed: int) -> list:
             z = dbm.extrapolate(z, ceiling)
         elif op < 0.5:
             z = dbm.free_many(z, rng.sample(range(1, n + 1), rng.randint(1, 3)))
+        elif op < 0.55:
+            other = dbm.constrain(dbm.up(z), rng.randint(1, n), 0, rng.randint(0, 9))
+            got = dbm.union(z, other) if other is not None else None
+            out.append(None if got is None else got.tolist())
         else:
             i, j = rng.sample(range(n + 1), 2)
             got = dbm.constrain(z, i, j, rng.randint(-8, 9))

@@ -88,7 +88,6 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
                  options: SearchOptions | None = None, listener: Listener | None = None) -> list[CheckResult]:
     """Every observer of ``kinds`` and, with ``responses``, every response time, from one zone exploration."""
     from runtime.explore import StateSpace
-    from runtime.zones.trace import path_to
 
     options = options or SearchOptions()
     z = explorer(model, options)
@@ -108,7 +107,7 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
                       tick_us=tick)
         if node is not None:
             clock = z.model.observers[fa.index][1]
-            trace, message = _trace(z, path_to(z, node), [(0, clock, -(atom.bound + 1))], space, tick)
+            trace, message = _trace(z, _ways(z, node), [(0, clock, -(atom.bound + 1))], space, tick)
             out.append(ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message, **common))
         else:
             out.append(ObserverResult(subject(atom, tick), inconclusive or Verdict.HOLDS,
@@ -119,14 +118,27 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     return out
 
 
-def _trace(z, path, goal, space, tick, loop: int | None = None) -> tuple[Trace | None, str]:
-    """``path`` replayed on the tick model as a timed trace (a lasso when ``loop`` is the entry's index)."""
+def _ways(z, node: int):
+    """The paths to ``node`` as :func:`_trace` takes them (no loop)."""
+    from runtime.zones.trace import paths_to
+
+    return ((p, None) for p in paths_to(z, node))
+
+
+def _trace(z, paths, goal, space, tick) -> tuple[Trace | None, str]:
+    """The first of ``paths`` that replays on the tick model, as a timed trace: ``(path, loop)`` pairs, ``loop``
+    the index of a lasso's entry in ``path`` (None for a path)."""
     from runtime.zones.trace import ConcretizeError, replay
 
-    try:
-        timed_steps, _ = replay(z, path, goal, space)
-    except ConcretizeError as exc:
-        return None, f"no concrete trace: {exc}"
+    problem = "no path"
+    for path, loop in paths:
+        try:
+            timed_steps, _ = replay(z, path, goal, space)
+            break
+        except ConcretizeError as exc:
+            problem = str(exc)
+    else:
+        return None, f"no concrete trace: {problem}"
     steps, ticks = _steps(timed_steps)
     at = None
     if loop is not None:  # the printed step after which the loop starts: the entry's own step, ticks included
@@ -144,7 +156,7 @@ def _owners(model: Model) -> dict[str, str]:
 def _response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive) -> ResponseResult:
     """One response time: the largest value of the observer's clock, or no bound shown by a lasso."""
     from runtime.zones.search import lasso
-    from runtime.zones.trace import path_to
+    from runtime.zones.trace import paths_to
 
     fa = by_path[atom.path]
     owner = _owners(model).get(atom.path) or atom.path.rsplit(".", 1)[0]
@@ -162,7 +174,7 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         top, node = result.maxima.get(clock, (-1.0, -1))
         if node >= 0 and not math.isinf(top) and top <= atom.bound:
             value = max(0, int(top))
-            trace, message = _trace(z, path_to(z, node), [(0, clock, -value)], space, tick)
+            trace, message = _trace(z, _ways(z, node), [(0, clock, -value)], space, tick)
             return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, trace=trace, message=message,
                                   value_ticks=value, **common)
         if node < 0:
@@ -175,8 +187,8 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         message = ("every request ends, after more than the cap" if atom.kind == "response" else
                    "every request ends (not measured: its codels can cycle)")
         return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message=message, **common)
-    path, entry = found
-    trace, message = _trace(z, path, [], space, tick, loop=entry)
+    entry, loop = found
+    trace, message = _trace(z, ((head + loop, len(head) - 1) for head in paths_to(z, entry)), [], space, tick)
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
                           message=message or "a request can wait for ever", **common)
 

@@ -2,6 +2,8 @@
  * (n+1) x (n+1) matrices of doubles (INFINITY absorbs sums), in place.  dbm.py keeps the numpy
  * versions as the reference and uses these when a compiler is there. */
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* Floyd-Warshall: tightest bounds; an empty zone ends with a negative diagonal. */
 void z_close(double *m, int d)
@@ -95,4 +97,40 @@ void z_free(double *m, const double *src, int d, const int *idx, int count)
     for (int c = 0; c < count; c++)
         for (int e = 0; e < count; e++)
             m[(long)idx[c] * d + idx[e]] = c == e ? 0 : INFINITY;
+}
+
+/* The hull of a and b (the least zone holding both) into h; 1 when it holds nothing else (their union is
+ * that zone), as dbm.py's union_np: h minus a cut into pieces, each inside b. */
+int z_union(double *h, const double *a, const double *b, int d)
+{
+    long len = (long)d * d;
+    for (long k = 0; k < len; k++)
+        h[k] = a[k] > b[k] ? a[k] : b[k];
+    double *rest = malloc(2 * len * sizeof(double));
+    if (!rest)
+        return 0;
+    double *piece = rest + len;
+    memcpy(rest, h, len * sizeof(double));
+    int ok = 1;
+    for (int i = 0; i < d && ok; i++)
+        for (int j = 0; j < d; j++) {
+            double c = a[(long)i * d + j];
+            if (i == j || c == INFINITY || rest[(long)i * d + j] <= c)
+                continue;
+            memcpy(piece, rest, len * sizeof(double));
+            if (z_constrain(piece, d, j, i, -c - 1)) {
+                for (long k = 0; k < len; k++)
+                    if (piece[k] > b[k]) {
+                        ok = 0;
+                        break;
+                    }
+                if (!ok)
+                    break;
+            }
+            if (!z_constrain(rest, d, i, j, c))
+                goto done;
+        }
+done:
+    free(rest);
+    return ok;
 }

@@ -34,7 +34,7 @@ def _c():
     ptr, i32, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     for name, res, args in (("z_close", None, [ptr, i32]), ("z_constrain", i32, [ptr, i32, i32, i32, dbl]),
                             ("z_extrapolate", i32, [ptr, i32, ptr]), ("z_includes", i32, [ptr, ptr, i32]),
-                            ("z_free", None, [ptr, ptr, i32, ptr, i32])):
+                            ("z_free", None, [ptr, ptr, i32, ptr, i32]), ("z_union", i32, [ptr, ptr, ptr, i32])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -42,11 +42,11 @@ def _c():
 
 def use_c(on: bool) -> None:
     """Choose the C operations (the default where a compiler is) or the numpy ones (the reference, for tests)."""
-    global close, constrain, extrapolate, includes, free_many
+    global close, constrain, extrapolate, includes, free_many, union
     lib = _c() if on else None
     if lib is None:
-        close, constrain, extrapolate, includes, free_many = close_np, constrain_np, extrapolate_np, includes_np, \
-            free_many_np
+        close, constrain, extrapolate, includes, free_many, union = close_np, constrain_np, extrapolate_np, \
+            includes_np, free_many_np, union_np
         return
 
     def close_c(m: np.ndarray) -> np.ndarray:
@@ -73,7 +73,13 @@ def use_c(on: bool) -> None:
         lib.z_free(out.ctypes.data, m.ctypes.data, out.shape[0], idx, len(clocks))
         return out
 
-    close, constrain, extrapolate, includes, free_many = close_c, constrain_c, extrapolate_c, includes_c, free_many_c
+    def union_c(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        out = np.empty_like(a)
+        return out if lib.z_union(out.ctypes.data, _doubles(a).ctypes.data, _doubles(b).ctypes.data,
+                                  a.shape[0]) else None
+
+    close, constrain, extrapolate, includes, free_many, union = close_c, constrain_c, extrapolate_c, includes_c, \
+        free_many_c, union_c
 
 
 def _doubles(a: np.ndarray) -> np.ndarray:
@@ -195,6 +201,13 @@ def extrapolate_np(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
     return close_np(out)
 
 
+def union_np(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """The zone ``a`` or ``b`` when their union is one (exact on integer points: the hull minus ``a`` lies in
+    ``b``), else None.  Zones that differ only in the order of independent zero-time steps merge so."""
+    hull = np.maximum(a, b)
+    return hull if all(includes(b, piece) for piece in subtract(hull, a)) else None
+
+
 def subtract(m: np.ndarray, other: np.ndarray) -> list[np.ndarray]:
     """``m`` minus ``other`` as disjoint zones (integer complements: ``not (xi - xj <= c)`` is ``xj - xi <= -c-1``)."""
     return [z for z, _ in subtract_bounds(m, other)]
@@ -236,5 +249,6 @@ def key(m: np.ndarray) -> bytes:
     return m.tobytes()
 
 
-close, constrain, extrapolate, includes, free_many = close_np, constrain_np, extrapolate_np, includes_np, free_many_np
+close, constrain, extrapolate, includes, free_many, union = close_np, constrain_np, extrapolate_np, includes_np, \
+    free_many_np, union_np
 use_c(True)

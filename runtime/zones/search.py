@@ -41,6 +41,8 @@ class Node:
     grown: bool  # time may have passed after the step (else the zone is where it cannot)
     covered: bool = False  # a larger zone of the same discrete state came later
     by: int = -1  # the node whose zone covers this one
+    own: np.ndarray | None = None  # the step's own zone when others merged into ``zone`` (their union is one)
+    members: list[int] = field(default_factory=list)  # the nodes merged into this one
 
 
 @dataclass
@@ -53,12 +55,14 @@ class ZoneResult:
     stopped: str = ""
     violations: dict[int, int] = field(default_factory=dict)  # observer atom -> node of its first violation
     maxima: dict[int, tuple[float, int]] = field(default_factory=dict)  # clock -> (largest value, node)
+    merged: int = 0  # zones merged into another of their discrete state (their union being one zone)
 
 
 class ZoneExplorer:
     """Explores a timed model with zones; ``watch`` clocks get their largest value while their atom watches."""
 
-    def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None) -> None:
+    def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
+                 merge: bool = True) -> None:
         self.model: TimedModel = analyse(package, root)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
         from runtime.native.compiled import compile_space
@@ -90,6 +94,7 @@ class ZoneExplorer:
         self._feasible: dict[tuple, bool] = {}
         self.edges = self.useful_edges(rule_edges([(r.low, r.high) for r in self.model.rules], tops))
         self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
+        self.merge = merge
 
     # -- the discrete side ------------------------------------------------------------------------
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
@@ -348,6 +353,8 @@ class ZoneExplorer:
                     self.nodes[kept[i]].covered = True  # a larger zone came: this one need not be expanded
                     self.nodes[kept[i]].by = len(self.nodes)
             kept[:] = [k for k in kept if not self.nodes[k].covered]
+            if self.merge and kept:
+                result.merged += self.merge_into(step, kept)
             self.nodes.append(step)
             self.out.append([])
             if parent >= 0:
@@ -397,6 +404,25 @@ class ZoneExplorer:
         result.discrete = len(passed)
         result.seconds = time.perf_counter() - start
         return result
+
+    def merge_into(self, step: Node, kept: list[int]) -> int:
+        """``step``'s zone grown by every kept zone of its discrete state that makes one zone with it: orders of
+        independent zero-time steps reset clocks at different instants and cut one zone into pieces."""
+        index = len(self.nodes)
+        grew = True
+        while grew:
+            grew = False
+            for k in kept:
+                hull = dbm.union(step.zone, self.nodes[k].zone)
+                if hull is not None:
+                    if step.own is None:
+                        step.own = step.zone
+                    step.zone = hull
+                    step.members.append(k)
+                    self.nodes[k].covered, self.nodes[k].by = True, index
+                    grew = True
+            kept[:] = [k for k in kept if not self.nodes[k].covered]
+        return len(step.members)
 
     def check(self, k: int, result: ZoneResult) -> None:
         """Observers in error and the largest values of watched clocks at node ``k``."""
@@ -473,11 +499,11 @@ class Blocking:
         return out
 
 
-def lasso(z: ZoneExplorer, watching) -> tuple[list[Node], int] | None:
+def lasso(z: ZoneExplorer, watching) -> tuple[int, list[Node]] | None:
     """A reachable cycle of symbolic states that all satisfy ``watching(node)``, in which time passes.
 
-    Returns the steps from an initial state to the cycle's entry, then once round the cycle (back to a zone
-    the entry's covers), and the index of the entry in that list; None when every such run ends.  Nodes
+    Returns the cycle's entry node and the steps once round the cycle (back to a zone the entry's covers); None
+    when every such run ends (runtime/zones/trace.py's ``paths_to`` gives the ways to the entry).  Nodes
     covered by a larger zone of their discrete state stand for that one (their runs are among its runs).
     """
     import networkx as nx
@@ -509,11 +535,5 @@ def lasso(z: ZoneExplorer, watching) -> tuple[list[Node], int] | None:
         a, b = passing[0]
         back = nx.shortest_path(sub, b, a) if a != b else [a]
         loop = [sub.edges[a, b]["step"]] + [sub.edges[x, y]["step"] for x, y in zip(back, back[1:])]
-        prefix = []
-        k = a
-        while k >= 0:
-            prefix.append(z.nodes[k])
-            k = z.nodes[k].parent
-        prefix = prefix[::-1]
-        return prefix + loop, len(prefix) - 1
+        return a, loop
     return None

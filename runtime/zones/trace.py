@@ -13,7 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from collections.abc import Iterator
+
 from runtime.explore.space import StateSpace, Step
+from runtime.zones import dbm
 from runtime.zones.search import Node, ZoneExplorer
 
 
@@ -34,6 +37,38 @@ def path_to(z: ZoneExplorer, node: int) -> list[Node]:
         out.append(z.nodes[node])
         node = z.nodes[node].parent
     return out[::-1]
+
+
+def paths_to(z: ZoneExplorer, node: int, limit: int = 64):
+    """Paths to ``node`` (as :func:`path_to`), then, where zones were merged on the way, the paths through the
+    nodes merged into them (a point of a merged zone lies in one of its parts); at most ``limit`` of them, those
+    whose parts meet the next step's bounds first."""
+    made = [0]
+
+    def ways(k: int, then: list) -> "Iterator[list[Node]]":
+        for a in _parts(z, k):
+            if made[0] >= limit:
+                return
+            m = z.nodes[a]
+            zone = m.own if m.own is not None else m.zone
+            if then and a != k and dbm.constrain_all(zone, then) is None:
+                continue  # this part cannot take the next step
+            if m.parent < 0:
+                made[0] += 1
+                yield [m]
+                continue
+            for head in ways(m.parent, m.guard):
+                yield head + [m]
+
+    yield from ways(node, [])
+
+
+def _parts(z: ZoneExplorer, k: int) -> list[int]:
+    """``k`` and, depth first, the nodes merged into it."""
+    out = [k]
+    for m in z.nodes[k].members:
+        out += _parts(z, m)
+    return out
 
 
 def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]) -> tuple[list[int], int]:
@@ -73,7 +108,7 @@ def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]])
             for c, v in z.guard(n.via, path[step - 1].state)[1]:
                 origin[c] = (step, v)
         nxt = step + 1 if step + 1 < k else end
-        zone = n.zone if n.zone is not None else z.nodes[n.by].zone
+        zone = n.own if n.own is not None else n.zone if n.zone is not None else z.nodes[n.by].zone
         limits = z.limits(n.state, zone) if n.grown else None
         if limits is None:
             le(nxt, step, 0)
