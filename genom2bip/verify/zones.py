@@ -9,6 +9,7 @@ zones and not ticks for these models.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -155,7 +156,7 @@ def _owners(model: Model) -> dict[str, str]:
 
 def _response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive) -> ResponseResult:
     """One response time: the largest value of the observer's clock, or no bound shown by a lasso."""
-    from runtime.zones.search import lasso
+    from runtime.zones.search import lassos
     from runtime.zones.trace import paths_to
 
     fa = by_path[atom.path]
@@ -182,13 +183,15 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
                                   message="never requested", **common)
     if inconclusive:
         return ResponseResult(subject_text, inconclusive, value_ticks=None, **common)
-    found = lasso(z, lambda n: n.state[offset] == watch)
-    if found is None:
+    cycles = lassos(z, lambda n: n.state[offset] == watch)
+    first = next(cycles, None)
+    if first is None:
         message = ("every request ends, after more than the cap" if atom.kind == "response" else
                    "every request ends (not measured: its codels can cycle)")
         return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message=message, **common)
-    entry, loop = found
-    trace, message = _trace(z, ((head + loop, len(head) - 1) for head in paths_to(z, entry)), [], space, tick)
+    ways = ((head + loop, len(head) - 1) for entry, loop in itertools.islice(itertools.chain([first], cycles), 20)
+            for head in itertools.islice(paths_to(z, entry), 8))
+    trace, message = _trace(z, ways, [], space, tick)
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
                           message=message or "a request can wait for ever", **common)
 

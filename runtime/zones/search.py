@@ -398,12 +398,16 @@ class ZoneExplorer:
             if max_states is not None and len(self.nodes) >= max_states:
                 result.complete, result.stopped = False, "max-states"
                 break
-            progress.tick(len(self.nodes), result.transitions, len(waiting), lambda: 0)
+            progress.tick(len(self.nodes), result.transitions, len(waiting), self.memory)
         progress.done()
         result.states = len(self.nodes)
         result.discrete = len(passed)
         result.seconds = time.perf_counter() - start
         return result
+
+    def memory(self) -> int:
+        """Bytes the kept zones take (the bulk of a long search; the caches of discrete states come beside)."""
+        return sum(1 for n in self.nodes if n.zone is not None) * (self.n + 1) ** 2 * 8
 
     def merge_into(self, step: Node, kept: list[int]) -> int:
         """``step``'s zone grown by every kept zone of its discrete state that makes one zone with it: orders of
@@ -499,41 +503,44 @@ class Blocking:
         return out
 
 
-def lasso(z: ZoneExplorer, watching) -> tuple[int, list[Node]] | None:
-    """A reachable cycle of symbolic states that all satisfy ``watching(node)``, in which time passes.
+def lassos(z: ZoneExplorer, watching, limit: int = 200):
+    """Reachable cycles of symbolic states that all satisfy ``watching(node)``, in which time passes.
 
-    Returns the cycle's entry node and the steps once round the cycle (back to a zone the entry's covers); None
-    when every such run ends (runtime/zones/trace.py's ``paths_to`` gives the ways to the entry).  Nodes
-    covered by a larger zone of their discrete state stand for that one (their runs are among its runs).
+    Yields each cycle's entry node and the steps once round it, shortest first; nothing when every such run
+    ends (runtime/zones/trace.py's ``paths_to`` gives the ways to the entry).  A cycle runs down the search's
+    own tree from its entry to a descendant whose step goes back into a zone the entry's covers: every step
+    but the last is one the search took from the zone it reached, so one round of it is a run of the model.
     """
-    import networkx as nx
-
     def rep(k: int) -> int:
         while z.nodes[k].covered and z.nodes[k].by >= 0:
             k = z.nodes[k].by
         return k
 
-    graph = nx.DiGraph()
-    for k, edges in enumerate(z.out):
-        if not watching(z.nodes[k]):
+    found = []
+    for u, edges in enumerate(z.out):
+        if len(found) >= limit:
+            break
+        if not watching(z.nodes[u]):
             continue
+        ancestors = None
         for target, step in edges:
-            t = rep(target)
-            if watching(z.nodes[t]):
-                a = rep(k)
-                if not graph.has_edge(a, t) or step.grown:
-                    graph.add_edge(a, t, step=step)
-    for component in nx.strongly_connected_components(graph):
-        if len(component) == 1:
-            (u,) = component
-            if not graph.has_edge(u, u):
+            if step.zone is not None and target == rep(target):
+                continue  # a step into a zone of its own: the tree goes on below it
+            a = rep(target)
+            if not watching(z.nodes[a]):
                 continue
-        sub = graph.subgraph(component)
-        passing = [(a, b) for a, b, d in sub.edges(data=True) if d["step"].grown]
-        if not passing:
-            continue  # a cycle in zero time: no request waits for ever on it
-        a, b = passing[0]
-        back = nx.shortest_path(sub, b, a) if a != b else [a]
-        loop = [sub.edges[a, b]["step"]] + [sub.edges[x, y]["step"] for x, y in zip(back, back[1:])]
-        return a, loop
-    return None
+            if ancestors is None:
+                ancestors, k = {}, u
+                chain = []
+                while k >= 0 and watching(z.nodes[k]):
+                    ancestors[k] = len(chain)
+                    chain.append(k)
+                    k = z.nodes[k].parent
+            if a not in ancestors:
+                continue
+            loop = [z.nodes[k] for k in reversed(chain[:ancestors[a]])] + [step]
+            if any(n.grown for n in loop):  # else a cycle in zero time, where no request waits for ever
+                found.append((len(loop), a, loop))
+                break
+    for _, a, loop in sorted(found, key=lambda f: f[0]):
+        yield a, loop
