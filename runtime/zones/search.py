@@ -43,6 +43,7 @@ class Node:
     by: int = -1  # the node whose zone covers this one
     own: np.ndarray | None = None  # the step's own zone when others merged into ``zone`` (their union is one)
     members: list[int] = field(default_factory=list)  # the nodes merged into this one
+    expanded: bool = False  # its successors were computed
 
 
 @dataclass
@@ -375,6 +376,7 @@ class ZoneExplorer:
             node = self.nodes[k]
             if node.covered:
                 continue
+            node.expanded = True
             self.check(k, result)
             if result.violations and stop_at_violation:
                 result.complete, result.stopped = False, "violated"
@@ -410,13 +412,16 @@ class ZoneExplorer:
         return sum(1 for n in self.nodes if n.zone is not None) * (self.n + 1) ** 2 * 8
 
     def merge_into(self, step: Node, kept: list[int]) -> int:
-        """``step``'s zone grown by every kept zone of its discrete state that makes one zone with it: orders of
-        independent zero-time steps reset clocks at different instants and cut one zone into pieces."""
+        """``step``'s zone grown by every kept zone of its discrete state, not expanded yet, that makes one zone with
+        it: orders of independent zero-time steps reset clocks at different instants and cut one zone into
+        pieces."""
         index = len(self.nodes)
         grew = True
         while grew:
             grew = False
             for k in kept:
+                if self.nodes[k].expanded:
+                    continue  # its successors are there: merging would compute them again
                 hull = dbm.union(step.zone, self.nodes[k].zone)
                 if hull is not None:
                     if step.own is None:
