@@ -351,8 +351,10 @@ class ZoneExplorer:
                         self.out[parent].append((kept[bigger[0]], step))
                     return
                 for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):
-                    self.nodes[kept[i]].covered = True  # a larger zone came: this one need not be expanded
-                    self.nodes[kept[i]].by = len(self.nodes)
+                    old = self.nodes[kept[i]]
+                    old.covered, old.by = True, len(self.nodes)  # a larger zone came: no need to expand this one
+                    if not old.expanded:
+                        old.zone = None  # no path goes through it: the larger zone stands for it
             kept[:] = [k for k in kept if not self.nodes[k].covered]
             if self.merge and kept:
                 result.merged += self.merge_into(step, kept)
