@@ -29,21 +29,50 @@ from runtime.zones import dbm
 from runtime.zones.model import Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
 
 
-@dataclass
 class Node:
-    """A stored symbolic state: its discrete state, zone, and how it was reached (for traces)."""
+    """A stored symbolic state: its discrete state, zone, and how it was reached (for traces).
 
-    state: tuple
-    zone: np.ndarray | None  # None: a step into a zone another node covers (that node's zone stands for it)
-    parent: int
-    via: int  # interaction index of the erased engine, -1 for an initial state
-    guard: list  # the bounds the step added to its parent's zone (before resets)
-    grown: bool  # time may have passed after the step (else the zone is where it cannot)
-    covered: bool = False  # a larger zone of the same discrete state came later
-    by: int = -1  # the node whose zone covers this one
-    own: np.ndarray | None = None  # the step's own zone when others merged into ``zone`` (their union is one)
-    members: list[int] = field(default_factory=list)  # the nodes merged into this one
-    expanded: bool = False  # its successors were computed
+    Zones are kept in single precision (their bounds are integers far below 2**24, and ``inf``), half the
+    memory of a long search; ``zone`` and ``own`` give them back as the double matrices dbm.py works on.
+    """
+
+    __slots__ = ("state", "_zone", "parent", "via", "guard", "grown", "covered", "by", "_own", "members",
+                 "expanded")
+
+    def __init__(self, state: tuple, zone: np.ndarray | None, parent: int, via: int, guard: list,
+                 grown: bool) -> None:
+        self.state = state
+        self.zone = zone  # None: a step into a zone another node covers (that node's zone stands for it)
+        self.parent = parent
+        self.via = via  # interaction index of the erased engine, -1 for an initial state
+        self.guard = guard  # the bounds the step added to its parent's zone (before resets)
+        self.grown = grown  # time may have passed after the step (else the zone is where it cannot)
+        self.covered = False  # a larger zone of the same discrete state came later
+        self.by = -1  # the node whose zone covers this one
+        self.own = None  # the step's own zone when others merged into ``zone`` (their union is one)
+        self.members: list[int] = []  # the nodes merged into this one
+        self.expanded = False  # its successors were computed
+
+    @property
+    def zone(self) -> np.ndarray | None:
+        return None if self._zone is None else self._zone.astype(np.float64)
+
+    @zone.setter
+    def zone(self, m: np.ndarray | None) -> None:
+        self._zone = None if m is None else m.astype(np.float32)
+
+    @property
+    def stored(self) -> np.ndarray | None:
+        """The zone as kept (single precision): enough to compare two zones."""
+        return self._zone
+
+    @property
+    def own(self) -> np.ndarray | None:
+        return None if self._own is None else self._own.astype(np.float64)
+
+    @own.setter
+    def own(self, m: np.ndarray | None) -> None:
+        self._own = None if m is None else m.astype(np.float32)
 
 
 @dataclass
@@ -343,7 +372,7 @@ class ZoneExplorer:
             kept = passed.setdefault(state, [])
             step = Node(state, zone, parent, via, guard, grown)
             if kept:
-                stack = np.stack([self.nodes[k].zone for k in kept])
+                stack = np.stack([self.nodes[k].stored for k in kept])
                 bigger = np.flatnonzero((stack >= zone).all(axis=(1, 2)))
                 if len(bigger):
                     if parent >= 0:  # the step is kept for cycles (lassos), its zone not: the covering node's stands
@@ -386,9 +415,10 @@ class ZoneExplorer:
             succ = self.successors(node.state)
             enabled = sorted({i for i, _ in succ})
             blocks = self.blocking(node.state, enabled)
+            here = node.zone
             for index, nxt in succ:
                 need, resets = self.guard(index, node.state)
-                met = dbm.constrain_all(node.zone, need)
+                met = dbm.constrain_all(here, need)
                 if met is None:
                     continue
                 for piece, cut in self.allowed(met, index, blocks):
@@ -411,7 +441,7 @@ class ZoneExplorer:
 
     def memory(self) -> int:
         """Bytes the kept zones take (the bulk of a long search; the caches of discrete states come beside)."""
-        return sum(1 for n in self.nodes if n.zone is not None) * (self.n + 1) ** 2 * 8
+        return sum(1 for n in self.nodes if n.stored is not None) * (self.n + 1) ** 2 * 4
 
     def merge_into(self, step: Node, kept: list[int]) -> int:
         """``step``'s zone grown by every kept zone of its discrete state, not expanded yet, that makes one zone with
@@ -442,13 +472,13 @@ class ZoneExplorer:
             fa = self.flat.atoms[atom]
             if self.place_bit(node.state, atom) != fa.place_mask([watching]):
                 continue
-            if dbm.upper(node.zone, clock) > value(bound, fa, node.state) and atom not in result.violations:
+            if dbm.upper(node.stored, clock) > value(bound, fa, node.state) and atom not in result.violations:
                 result.violations[atom] = k
         for atom, (place, clock) in self.model.measures.items():
             fa = self.flat.atoms[atom]
             if self.place_bit(node.state, atom) != fa.place_mask([place]):
                 continue
-            top = dbm.upper(node.zone, clock)
+            top = dbm.upper(node.stored, clock)
             if clock not in result.maxima or top > result.maxima[clock][0]:
                 result.maxima[clock] = (top, k)
 
@@ -531,7 +561,7 @@ def lassos(z: ZoneExplorer, watching, limit: int = 200):
             continue
         ancestors = None
         for target, step in edges:
-            if step.zone is not None and target == rep(target):
+            if step.stored is not None and target == rep(target):
                 continue  # a step into a zone of its own: the tree goes on below it
             a = rep(target)
             if not watching(z.nodes[a]):
