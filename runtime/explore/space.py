@@ -103,6 +103,12 @@ class StateSpace:
             except Widen as w:
                 self._widen(w.slot)
 
+    def canonical(self, state: tuple) -> tuple:
+        """``state`` as the explorer keeps it (slots it holds constant at their value).  Packing comes first: it
+        may widen the codec, and the packed number means something only to the codec that made it."""
+        packed = self._pack(state)
+        return self.codec.unpack(packed)
+
     def _widen(self, slot: int) -> None:
         """Regenerate the codec with a wider field for ``slot`` and re-pack every stored state."""
         old = self.codec

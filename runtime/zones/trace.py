@@ -160,7 +160,7 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
         for offset, (error, watching) in errors.items():
             if values[offset] == error:
                 values[offset] = watching
-        return z.space.codec.unpack(z.space._pack(tuple(values) + tuple(full[z.space.width:])))
+        return z.space.canonical(tuple(values) + tuple(full[z.space.width:]))
 
     def tick(s: tuple, count: int) -> tuple:
         for _ in range(count):
@@ -177,7 +177,7 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
         _, ports, label = z.interaction(n.via)
         target = n.state
         for inter, nxt, made in space._fire_all(state):
-            if inter.label == label and erased(nxt) == z.space.codec.unpack(z.space._pack(target)):
+            if inter.label == label and erased(nxt) == z.space.canonical(target):
                 out.append(TimedStep(wait, Step(inter.label, inter.index, tuple((c.name, p) for c, p in made),
                                                 tuple(c.describe(p) for c, p in made))))
                 state = nxt
