@@ -543,16 +543,24 @@ class Blocking:
 def lassos(z: ZoneExplorer, watching, limit: int = 200):
     """Reachable cycles of symbolic states that all satisfy ``watching(node)``, in which time passes.
 
-    Yields each cycle's entry node and the steps once round it, shortest first; nothing when every such run
-    ends (runtime/zones/trace.py's ``paths_to`` gives the ways to the entry).  A cycle runs down the search's
-    own tree from its entry to a descendant whose step goes back into a zone the entry's covers: every step
-    but the last is one the search took from the zone it reached, so one round of it is a run of the model.
+    Yields each cycle's entry node and the steps once round it; nothing when every such run ends
+    (runtime/zones/trace.py's ``paths_to`` gives the ways to the entry).  Cycles down the search's own tree come
+    first, shortest first: from the entry to a descendant whose step goes back into a zone the entry's covers,
+    every step but the last taken from the zone it reached, so one round of it is a run of the model.  Then
+    the cycles of the graph where a covered zone stands for the zone covering it (a cycle that closes on
+    another branch of the tree): each is a cycle of the model's zones, though one round of it may need, after
+    a step into a covered zone, clock values only the covering zone holds.
     """
     def rep(k: int) -> int:
         while z.nodes[k].covered and z.nodes[k].by >= 0:
             k = z.nodes[k].by
         return k
 
+    yield from _tree_lassos(z, watching, rep, limit)
+    yield from _graph_lassos(z, watching, rep)
+
+
+def _tree_lassos(z: ZoneExplorer, watching, rep, limit: int):
     found = []
     for u, edges in enumerate(z.out):
         if len(found) >= limit:
@@ -581,3 +589,27 @@ def lassos(z: ZoneExplorer, watching, limit: int = 200):
                 break
     for _, a, loop in sorted(found, key=lambda f: f[0]):
         yield a, loop
+
+
+def _graph_lassos(z: ZoneExplorer, watching, rep):
+    import networkx as nx
+
+    graph = nx.DiGraph()
+    for k, edges in enumerate(z.out):
+        if not watching(z.nodes[k]):
+            continue
+        for target, step in edges:
+            t = rep(target)
+            if watching(z.nodes[t]):
+                a = rep(k)
+                if not graph.has_edge(a, t) or step.grown:
+                    graph.add_edge(a, t, step=step)
+    for component in nx.strongly_connected_components(graph):
+        if len(component) == 1:
+            (u,) = component
+            if not graph.has_edge(u, u):
+                continue
+        sub = graph.subgraph(component)
+        for a, b in [(a, b) for a, b, d in sub.edges(data=True) if d["step"].grown][:20]:
+            back = nx.shortest_path(sub, b, a) if a != b else [a]
+            yield a, [sub.edges[a, b]["step"]] + [sub.edges[x, y]["step"] for x, y in zip(back, back[1:])]
