@@ -103,6 +103,7 @@ class Observer:
     kind: str  # "overrun", "latency" or "response"
     bound_ticks: int
     text: str  # the property in words
+    until_stopped: bool = False  # a service's: once started, only an interruption ends it (:func:`_ends_alone`)
 
 
 @dataclass
@@ -133,6 +134,9 @@ class Timing:
                   if o.kind in ("response", "pending") and "." not in o.atom]
         if served:
             args["responses"] = ",".join(served)  # service observers sit at the root: whose response each one is
+        stopped = [o.name.rsplit(":", 1)[0] for o in self.observers if o.until_stopped]
+        if stopped:
+            args["until_stopped"] = ",".join(stopped)  # the services whose requests only an interruption ends
         return Annotation("timed", args)
 
 
@@ -519,6 +523,24 @@ def _loops(fsm) -> bool:
     return any(s in reach(s) for s in fsm.states)
 
 
+def _ends_alone(fsm, exceptions: bool) -> bool:
+    """A started activity may end without an interruption: a codel reached from ``start`` yields ether or throws."""
+    seen, todo = {"start"}, ["start"]  # not from ``stop``: only an interruption leads there
+    while todo:
+        codel = fsm.codel_of.get(todo.pop())
+        if codel is None:
+            continue
+        if exceptions and fsm.throws:
+            return True
+        for y in codel.yields:
+            if y.state == "ether":
+                return True
+            if y.state not in seen:
+                seen.add(y.state)
+                todo.append(y.state)
+    return False
+
+
 def _longest(fsm) -> int:
     """Codel steps on the longest run of an activity without a cycle."""
     memo: dict[str, int] = {}
@@ -544,7 +566,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
     timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items()
               if inst.type in ("Timer", "DelayedTimer")}  # a task with a delay has a DelayedTimer
 
-    def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None) -> None:
+    def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None,
+                until_stopped: bool = False) -> None:
         """``path``: the observer's (a service's at the root: its trigger may join other modules' atoms)."""
         if options.response_cap_us is not None:
             cap = max(1, -(-options.response_cap_us // tick))
@@ -559,7 +582,7 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
             watch(w, End(atom, "close"))
         if cap is not None:
             ticking.append(End(atom, "tick"))
-        observers.append(Observer(f"{label}:response", ".".join(atom), kind, cap or 0, what))
+        observers.append(Observer(f"{label}:response", ".".join(atom), kind, cap or 0, what, until_stopped))
 
     for path, label in level.task_labels.items():
         opens = [w for w in level.asm.wires if w.label == f"{label}:period"]
@@ -575,7 +598,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
         period = timers.get(parts.task, max(timers.values(), default=1))
         cap = None if _loops(parts.fsm) else 2 * (_longest(parts.fsm) + 2) * period
         observe((ident("_".join(parts.path + ("response",))),), parts.label, opens, closes,
-                f"from a request of {parts.label} to its final report", cap)
+                f"from a request of {parts.label} to its final report", cap,
+                not _ends_alone(parts.fsm, options.exceptions))
 
 
 def apply(level, options: TimeOptions) -> Timing:
