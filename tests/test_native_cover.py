@@ -14,6 +14,7 @@ from runtime.bip2 import parse_text
 from runtime.engine.errors import EngineError
 from runtime.explore import StateSpace
 from runtime.native import compiled as native
+from runtime.native import cstep
 from tests import enginekit, verifykit
 from tests.nativekit import agree, compiled, models, needs_cc
 from tests.runkit import dala_without_wcets
@@ -265,6 +266,67 @@ def test_a_connector_past_32_ports_is_refused_by_name():
     cs, note = native.compile_space(verifykit.text_space(wide(33, False)))
     assert cs is None and "connector fan: 34 ports, more than the 32 bits of the compiled step's interaction masks" \
         in note
+
+
+def guarded_chain(n_atoms: int, n_rules: int, cycle: bool = False) -> str:
+    """Atoms toggling between two places (ports p, q) and counting x mod 3; one connector per port.
+
+    ``n_rules`` compound priorities, each guarded by some atom's x, go from a connector to one later in the
+    order p0 q0 p1 q1 ... (first the neighbours, then two apart), so the guards change along every run and the
+    closure often passes through a connector that is not enabled (p and q of one atom never are together).
+    ``cycle`` adds a rule back from p1 to p0 whose guard closes a cycle in some reachable states only.
+    """
+    conns = [f"{k}{i}" for i in range(n_atoms) for k in "pq"]
+    pairs = [(conns[i], conns[i + gap]) for gap in (1, 2) for i in range(len(conns) - gap)][:n_rules]
+    tests = ("!=", "==")
+    prios = [f"    priority r{r} {lo}:* < {hi}:* provided (a{(3 * r + 1) % n_atoms}.x {tests[r % 2]} {r % 3})"
+             for r, (lo, hi) in enumerate(pairs)]
+    if cycle:
+        prios.append("    priority back p1:* < p0:* provided (a0.x == 2 && a1.x == 2)")
+    atoms = ", ".join(f"a{i}()" for i in range(n_atoms))
+    connectors = "\n".join(f"    connector One p{i}(a{i}.p)\n    connector One q{i}(a{i}.q)" for i in range(n_atoms))
+    rules = "\n".join(prios)
+    return f"""package Guarded
+  port type Port()
+  atom type A()
+    export data int x
+    export port Port p(), q()
+    place s, t
+    initial to s
+    on p from s to t do {{ x = (x + 1) % 3; }}
+    on q from t to s
+  end
+  connector type One(Port a)
+    define a
+  end
+  compound type Main()
+    component A {atoms}
+{connectors}
+{rules}
+  end
+end
+"""
+
+
+def test_more_guarded_compound_priorities_than_the_tables_take_filter_as_the_python_step():
+    """Past MAX_GUARDED guards the C step computes each rule closure when its guards' combination is first met."""
+    space = verifykit.text_space(guarded_chain(4, 12))
+    priorities = space.engine.namespace["_prio"].__self__
+    assert len(priorities.guards) == 12 > cstep.MAX_GUARDED
+    cs = compiled(space)
+    assert "reach_of(key)" in cs.source  # the lazy closures, not the table of every combination
+    assert agree(space, cs, limit=5000) == len(space) == 1188
+    assert len(priorities.memo) >= 50  # combinations of the guards met by the Python step along the way
+
+
+def test_a_priority_cycle_that_guards_close_late_in_the_run_stops_both_steps_at_the_same_state():
+    space = verifykit.text_space(guarded_chain(4, 12, cycle=True))
+    cs = compiled(space)
+    assert "reach_of(key)" in cs.source
+    met = agree(space, cs, limit=5000)  # up to and including the first state where the cycle is enabled
+    with pytest.raises(EngineError, match="priority cycle between compound priorities .*back"):
+        space.successors(met - 1)
+    assert met > 10
 
 
 def test_more_than_64_compound_priorities_filter_as_the_python_step():

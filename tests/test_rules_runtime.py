@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import pytest
+import requests
+import schemathesis
 
 from runkit import DALA_CODELS, ORIGIN, dala, ndd_settings, serving_dala, until
 from runtime.controller import Controller, VirtualClock
@@ -54,6 +56,17 @@ def test_a_waiting_rule_holds_the_request_then_lets_it_proceed(client):
     until(lambda: client.request(goto)["status"] == "running")
     assert [r["status"] for r in client.request(goto)["reports"]] == ["queued", "held", "started"]
 
+
+def test_a_held_request_is_answered_as_the_published_openapi_document_says(client):
+    """The document served at /openapi.json lists every report status the controller emits, ``held`` included."""
+    sensors_and_settings(client)
+    assert client.call("POM", "Run", origin=ORIGIN, timeout=5)["status"] == "ok"
+    goto = client.send("NDD", "GoTo", goal=GOAL)
+    until(lambda: any(r["status"] == "held" for r in client.request(goto)["reports"]))
+    operation = schemathesis.openapi.from_dict(client.openapi())["/requests/{id}"]["GET"]
+    response = requests.get(f"{client.url}/requests/{goto}", timeout=10)
+    assert response.status_code == 200 and "held" in [r["status"] for r in response.json()["reports"]]
+    operation.validate_response(response)  # raises, naming the field, where the document disagrees
 
 
 def test_a_request_that_arrives_while_the_next_step_is_chosen_is_not_reported_held():

@@ -236,6 +236,19 @@ def test_bad_parameters_are_refused_with_the_path_of_the_problem(inputs, message
     assert err.value.status == 422 and message in err.value.message
 
 
+def test_a_report_status_outside_the_published_list_is_refused_and_nothing_is_reported(tick):
+    """The OpenAPI document lists ``REPORT_STATUSES``: a report with another status would break every client."""
+    package, root, interface = tick
+    c = Controller(package, root, interface, tick_codels(), clock=VirtualClock())
+    heard = []
+    c.subscribe(heard.append)
+    req = c.submit("tick", "Work", {})
+    heard.clear()
+    with pytest.raises(ValueError, match="report status 'waiting' is not one of queued, held, started, ok, "):
+        c.reports.report(req, "waiting")
+    assert [r["status"] for r in req.reports] == ["queued"] and req.status == "queued" and heard == []
+
+
 def test_partial_structs_take_the_default_members():
     pkg = dala()
     c = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, {}, clock=VirtualClock())

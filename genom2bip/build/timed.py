@@ -103,6 +103,7 @@ class Observer:
     kind: str  # "overrun", "latency" or "response"
     bound_ticks: int
     text: str  # the property in words
+    until_stopped: bool = False  # a service's: once started, only an interruption ends it (:func:`_ends_alone`)
 
 
 @dataclass
@@ -133,6 +134,9 @@ class Timing:
                   if o.kind in ("response", "pending") and "." not in o.atom]
         if served:
             args["responses"] = ",".join(served)  # service observers sit at the root: whose response each one is
+        stopped = [o.name.rsplit(":", 1)[0] for o in self.observers if o.until_stopped]
+        if stopped:
+            args["until_stopped"] = ",".join(stopped)  # the services whose requests only an interruption ends
         return Annotation("timed", args)
 
 
@@ -372,6 +376,23 @@ def _constants(level, options: TimeOptions, execs, timers) -> list[int]:
     return out
 
 
+def _flag(t: AtomType, name: str, initially: bool) -> Var:
+    """A bool ``name`` added to ``t``'s data, set to ``initially`` by its initial transition."""
+    t.data = list(t.data) + [DataDecl("bool", name)]
+    flag = Var(name)
+    t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action) + [Assign(flag, Const(initially))])
+    return flag
+
+
+def _on_port(t: AtomType, port: str, flag: Var, value: bool, needed: bool = False) -> None:
+    """Every transition of ``t`` on ``port`` ends by setting ``flag`` to ``value`` (and, ``needed``, requires it)."""
+    def changed(tr: Transition) -> Transition:
+        guard = library.conjunction([g for g in (tr.guard, flag) if g is not None]) if needed else tr.guard
+        return replace(tr, guard=guard, action=list(tr.action) + [Assign(flag, Const(value))])
+
+    t.transitions = [changed(tr) if tr.port == port else tr for tr in t.transitions]
+
+
 def arm_requests(level, watch) -> None:
     """The default environment is not Zeno: a service of a periodic task is requested at most once per period.
 
@@ -388,19 +409,14 @@ def arm_requests(level, watch) -> None:
     for acceptor, tasks in armed.items():
         inst = level.asm.atoms[acceptor]
         t = level.atom_types[inst.type]
-        flags = {s: f"armed_{s}" for services in tasks.values() for s in services}
-        t.data = list(t.data) + [DataDecl("bool", f) for f in flags.values()]
-        t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action)
-                                      + [Assign(Var(f), Const(True)) for f in flags.values()])
-        for tr in t.transitions:
-            if tr.port in flags:
-                tr.guard = Binary("&&", tr.guard, Var(flags[tr.port])) if tr.guard is not None else Var(flags[tr.port])
-                tr.action = list(tr.action) + [Assign(Var(flags[tr.port]), Const(False))]
+        flags = {s: _flag(t, f"armed_{s}", True) for services in tasks.values() for s in services}
+        for service, flag in flags.items():
+            _on_port(t, service, flag, False, needed=True)
         for task, services in tasks.items():
             port = f"arm_{task[-1]}"
             t.ports = list(t.ports) + [PortDecl(library.PORT, port, exported=True)]
             t.transitions = list(t.transitions) + [
-                Transition(port, ["READY"], ["READY"], action=[Assign(Var(flags[s]), Const(True)) for s in services])]
+                Transition(port, ["READY"], ["READY"], action=[Assign(flags[s], Const(True)) for s in services])]
             for opening in (w for w in level.asm.wires if w.label == f"{level.task_labels[task]}:period"):
                 watch(opening, End(acceptor, port))
 
@@ -432,14 +448,10 @@ def start_windows(level, watch, platform: bool) -> None:
             t = replace(t, name=f"{t.name}_{ident('_'.join(parts.path))}")
             level.atom_types[t.name] = t
             inst.type = t.name
-        window = Var("window")
-        t.data = list(t.data) + [DataDecl("bool", "window")]
-        t.initial = InitialTransition(list(t.initial.targets), list(t.initial.action) + [Assign(window, Const(False))])
+        window = _flag(t, "window", False)
         t.ports = list(t.ports) + [PortDecl(library.PORT, "window_open", exported=True),
                                    PortDecl(library.PORT, "window_shut", exported=True)]
-        t.transitions = [replace(tr, guard=Binary("&&", tr.guard, window) if tr.guard is not None else window,
-                                 action=list(tr.action) + [Assign(window, Const(False))])
-                         if tr.port == "start" else tr for tr in t.transitions]
+        _on_port(t, "start", window, False, needed=True)
         t.transitions += [Transition(port, [p], [p], action=[Assign(window, Const(value))])
                           for port, value in (("window_open", True), ("window_shut", False)) for p in t.places]
         for w in level.asm.wires:
@@ -452,8 +464,7 @@ def start_windows(level, watch, platform: bool) -> None:
             # The opening already wakes this activity (a paused one goes on): that port opens the window too,
             # in every place (where it did nothing, it now only opens it).
             has = {src for tr in t.transitions if tr.port == joined for src in tr.sources}
-            t.transitions = [replace(tr, action=list(tr.action) + [Assign(window, Const(True))])
-                             if tr.port == joined else tr for tr in t.transitions]
+            _on_port(t, joined, window, True)
             t.transitions += [Transition(joined, [p], [p], action=[Assign(window, Const(True))])
                               for p in t.places if p not in has]
         runs = [w for w in level.asm.wires if w.label == f"{label}:grant"] if platform else []
@@ -464,8 +475,7 @@ def start_windows(level, watch, platform: bool) -> None:
             if joined is None:
                 watch(w, End(parts.activity, "window_shut"))
             else:  # its own codel, or its being quiet when the period closes: that port closes the window
-                t.transitions = [replace(tr, action=list(tr.action) + [Assign(window, Const(False))])
-                                 if tr.port == joined else tr for tr in t.transitions]
+                _on_port(t, joined, window, False)
             for j, start in enumerate(starts):
                 level.asm.rank(Rank(f"{ident('_'.join(parts.path))}_start_{j}_before_{w.name}_{k}", w, start,
                                     owner=(), comment="a request there when the task takes up work starts with it"))
@@ -513,6 +523,24 @@ def _loops(fsm) -> bool:
     return any(s in reach(s) for s in fsm.states)
 
 
+def _ends_alone(fsm, exceptions: bool) -> bool:
+    """A started activity may end without an interruption: a codel reached from ``start`` yields ether or throws."""
+    seen, todo = {"start"}, ["start"]  # not from ``stop``: only an interruption leads there
+    while todo:
+        codel = fsm.codel_of.get(todo.pop())
+        if codel is None:
+            continue
+        if exceptions and fsm.throws:
+            return True
+        for y in codel.yields:
+            if y.state == "ether":
+                return True
+            if y.state not in seen:
+                seen.add(y.state)
+                todo.append(y.state)
+    return False
+
+
 def _longest(fsm) -> int:
     """Codel steps on the longest run of an activity without a cycle."""
     memo: dict[str, int] = {}
@@ -538,7 +566,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
     timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items()
               if inst.type in ("Timer", "DelayedTimer")}  # a task with a delay has a DelayedTimer
 
-    def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None) -> None:
+    def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None,
+                until_stopped: bool = False) -> None:
         """``path``: the observer's (a service's at the root: its trigger may join other modules' atoms)."""
         if options.response_cap_us is not None:
             cap = max(1, -(-options.response_cap_us // tick))
@@ -553,7 +582,7 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
             watch(w, End(atom, "close"))
         if cap is not None:
             ticking.append(End(atom, "tick"))
-        observers.append(Observer(f"{label}:response", ".".join(atom), kind, cap or 0, what))
+        observers.append(Observer(f"{label}:response", ".".join(atom), kind, cap or 0, what, until_stopped))
 
     for path, label in level.task_labels.items():
         opens = [w for w in level.asm.wires if w.label == f"{label}:period"]
@@ -569,7 +598,8 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
         period = timers.get(parts.task, max(timers.values(), default=1))
         cap = None if _loops(parts.fsm) else 2 * (_longest(parts.fsm) + 2) * period
         observe((ident("_".join(parts.path + ("response",))),), parts.label, opens, closes,
-                f"from a request of {parts.label} to its final report", cap)
+                f"from a request of {parts.label} to its final report", cap,
+                not _ends_alone(parts.fsm, options.exceptions))
 
 
 def apply(level, options: TimeOptions) -> Timing:

@@ -220,12 +220,13 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
 
 def _response_value(r) -> str:
     """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms`` (the campaign's value, worded)."""
-    from genom2bip.verify.zones import response_value
+    from genom2bip.verify.zones import UNTIL_STOPPED, response_value
 
     value = response_value(r)
     if isinstance(value, float | int):
         return f"{value:g} ms"
     return {"inconclusive": f"inconclusive ({r.limit})", "unbounded": "no bound: a request can wait for ever",
+            "until stopped": UNTIL_STOPPED,
             "bounded, not measured": "every request ends (not measured: its codels can cycle)"}.get(value, value)
 
 

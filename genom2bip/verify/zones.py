@@ -22,6 +22,8 @@ from genom2bip.verify.timing import observers, subject
 
 #: Response-time observers: a clock up to a cap, or a pending request (a service whose codels can cycle).
 RESPONSE_KINDS = ("response", "pending")
+#: Why a service has no bound when only an interruption ends it (a tracking service that pauses for ever).
+UNTIL_STOPPED = "runs until stopped: once started, no final report without an interruption"
 
 
 @dataclass
@@ -35,6 +37,7 @@ class ResponseResult(CheckResult):
     kind: str = ""  # "task" or "service"
     value_ticks: int | None = None  # None: more than the cap, or no bound at all (``unbounded``)
     unbounded: bool = False  # a lasso: a request (or a cycle of the task) can wait for ever
+    until_stopped: bool = False  # unbounded, and a service that once started ends only when interrupted
     cap_ticks: int = 0
     tick_us: int | None = None
     period_ticks: int | None = None  # a task's period
@@ -48,7 +51,7 @@ class ResponseResult(CheckResult):
 
     def details(self) -> dict[str, Any]:
         return {"observer": self.observer, "owner": self.owner, "kind": self.kind, "value_ticks": self.value_ticks,
-                "unbounded": self.unbounded,
+                "unbounded": self.unbounded, "until_stopped": self.until_stopped,
                 "value_ms": self.value_ms, "cap_ticks": self.cap_ticks, "cap_ms": self.ms(self.cap_ticks),
                 "period_ms": self.ms(self.period_ticks)}
 
@@ -147,11 +150,15 @@ def _trace(z, paths, goal, space, tick) -> tuple[Trace | None, str]:
     return Trace(steps, loop=at, ticks=ticks, tick_us=tick), ""
 
 
+def _timed(model: Model, key: str) -> list[str]:
+    """The comma-separated argument ``key`` of the model's ``@timed`` annotation (none for an untimed model)."""
+    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
+    return [x for x in (ann.arguments.get(key, "") if ann is not None else "").split(",") if x]
+
+
 def _owners(model: Model) -> dict[str, str]:
     """Observer instance -> the service it measures, for the service observers at the root (``@timed``)."""
-    ann = next((a for a in model.package.annotations if a.name == "timed"), None)
-    pairs = (ann.arguments.get("responses", "") if ann is not None else "").split(",")
-    return dict(p.split("=", 1) for p in pairs if "=" in p)
+    return dict(p.split("=", 1) for p in _timed(model, "responses") if "=" in p)
 
 
 def _response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive) -> ResponseResult:
@@ -192,8 +199,11 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
     ways = ((head + loop, len(head) - 1) for entry, loop in itertools.islice(itertools.chain([first], cycles), 20)
             for head in itertools.islice(paths_to(z, entry), 8))
     trace, message = _trace(z, ways, [], space, tick)
+    # the builder read the service's codels: none reached from its start yields ether or throws
+    stopped = owner in _timed(model, "until_stopped")
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
-                          message=message or "a request can wait for ever", **common)
+                          until_stopped=stopped,
+                          message=message or (UNTIL_STOPPED if stopped else "a request can wait for ever"), **common)
 
 
 @dataclass
@@ -206,8 +216,8 @@ class ResponseTimes(CheckResult):
     responses: list[ResponseResult] = field(default_factory=list)
 
     def values(self) -> dict[str, float | str]:
-        """Each owner's response time in ms, or in words where there is no number (``unbounded``, ``never
-        requested``, ``more than 200 ms``, ``inconclusive``, ``bounded, not measured``)."""
+        """Each owner's response time in ms, or in words where there is no number (``unbounded``, ``until
+        stopped``, ``never requested``, ``more than 200 ms``, ``inconclusive``, ``bounded, not measured``)."""
         return {r.owner: response_value(r) for r in self.responses}
 
     def details(self) -> dict[str, Any]:
@@ -218,6 +228,8 @@ def response_value(r: ResponseResult) -> float | str:
     """A response time as a number of ms, or a word saying why there is none."""
     if r.verdict is Verdict.INCONCLUSIVE:
         return "inconclusive"
+    if r.until_stopped:
+        return "until stopped"
     if r.unbounded:
         return "unbounded"
     if r.value_ticks is not None:

@@ -6,7 +6,8 @@ of its own (``start``/``stop``) and takes requests from any thread
 """
 from runtime.controller.controller import Controller
 from runtime.controller.meaning import StepInfo
-from runtime.controller.requests import FINAL, Request, RequestError
+from runtime.controller.requests import FINAL, REPORT_STATUSES, REQUEST_STATUSES, Request, RequestError
 from runtime.controller.timing import MonotonicClock, VirtualClock
 
-__all__ = ["FINAL", "Controller", "MonotonicClock", "Request", "RequestError", "StepInfo", "VirtualClock"]
+__all__ = ["FINAL", "REPORT_STATUSES", "REQUEST_STATUSES", "Controller", "MonotonicClock", "Request", "RequestError",
+           "StepInfo", "VirtualClock"]

@@ -17,7 +17,7 @@ from typing import Any, Callable
 from runtime.controller.data import Data
 from runtime.controller.intake import outputs, store_inputs
 from runtime.controller.meaning import StepInfo
-from runtime.controller.requests import FINAL, Request, RequestError, Service
+from runtime.controller.requests import FINAL, REPORT_STATUSES, Request, RequestError, Service
 
 Listener = Callable[[dict[str, Any]], None]
 #: When a report is made: (the controller's step, seconds since its run started).
@@ -76,6 +76,8 @@ class Reports:
     # -- reports and events ---------------------------------------------------------------------------------
     def report(self, req: Request, status: str, **fields: Any) -> None:
         """Add a report to ``req``: a final one ends it (its service is free, waiters wake); every listener hears it."""
+        if status not in REPORT_STATUSES:  # the OpenAPI document publishes that list: a new status goes there first
+            raise ValueError(f"report status {status!r} is not one of {', '.join(REPORT_STATUSES)}")
         step, time = self.stamp()
         report = {"request": req.id, "component": req.component, "service": req.service, "status": status,
                   "final": status in FINAL, "step": step, "time": time, **fields}

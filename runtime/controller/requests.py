@@ -14,6 +14,10 @@ from typing import Any
 from runtime.controller.binding import Scope
 
 FINAL = ("ok", "rejected", "failed", "interrupted")
+#: Every status a report can have, in the order a request meets them; the OpenAPI document lists these.
+REPORT_STATUSES = ("queued", "held", "started", *FINAL)
+#: Every status a request can be in (``Request.status``).
+REQUEST_STATUSES = ("queued", "running", *FINAL)
 
 
 class RequestError(Exception):
@@ -35,7 +39,7 @@ class Request:
     inputs: dict[str, Any]
     locals: dict[str, Any]
     reports: list[dict[str, Any]] = field(default_factory=list)
-    status: str = "queued"  # queued, running, then one of FINAL
+    status: str = "queued"  # one of REQUEST_STATUSES: queued, running, then one of FINAL
     final: dict[str, Any] | None = None
     failure: dict[str, Any] | None = None  # the last codel failure of this request
     interrupted_by: tuple[str, int | None] | None = None

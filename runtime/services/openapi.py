@@ -9,6 +9,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from runtime.controller import REPORT_STATUSES, REQUEST_STATUSES
+
 
 def _name(type_name: str) -> str:
     """OpenAPI component names allow ``[A-Za-z0-9._-]``: ``dala::pose`` → ``dala.pose``."""
@@ -41,17 +43,18 @@ _GENERIC_SCHEMAS: dict[str, Any] = {
     "Report": {"type": "object", "required": ["request", "component", "service", "status", "final"],
                "properties": {
                    "request": {"type": "integer"}, "component": {"type": "string"}, "service": {"type": "string"},
-                   "status": {"enum": ["queued", "started", "ok", "rejected", "failed", "interrupted"]},
+                   "status": {"enum": list(REPORT_STATUSES)},
                    "final": {"type": "boolean"}, "step": {"type": "integer"}, "time": {"type": "number"},
                    "message": {"type": "string"}, "outputs": {"type": "object"},
                    "reason": {"enum": ["rule", "validate"]}, "rule": {"type": "string"},
+                   "rules": {"type": "array", "items": {"type": "string"}},
                    "status_of": {"type": "object"}, "exception": {"type": "string"}, "detail": {"type": "object"},
                    "codel": {"type": "string"}, "error": {"type": "string"},
                    "by": {"type": ["string", "null"]}, "by_request": {"type": ["integer", "null"]}}},
     "Request": {"type": "object", "required": ["id", "component", "service", "status", "reports"],
                 "properties": {"id": {"type": "integer"}, "component": {"type": "string"},
                                "service": {"type": "string"}, "inputs": {"type": "object"},
-                               "status": {"enum": ["queued", "running", "ok", "rejected", "failed", "interrupted"]},
+                               "status": {"enum": list(REQUEST_STATUSES)},
                                "final": {"anyOf": [{"$ref": "#/components/schemas/Report"}, {"type": "null"}]},
                                "reports": {"type": "array", "items": {"$ref": "#/components/schemas/Report"}}}},
     "Accepted": {"type": "object", "properties": {"id": {"type": "integer"}, "status": {"const": "queued"},
