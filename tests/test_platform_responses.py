@@ -207,13 +207,6 @@ def test_the_model_names_the_services_that_only_an_interruption_ends(exceptions,
         assert timed.arguments.get("until_stopped", "") == expected, gen
 
 
-#: The zone search's lassos (runtime/zones/search.py, since they run down the search's own tree) miss the cycle of
-#: an activity whose codel pauses back to its own state: every such request is said to end.
-PAUSES_BACK_TO_ITSELF = pytest.mark.xfail(strict=True, reason="no lasso found for a codel that yields pause:: to "
-                                                               "its own state: 'every request ends' is printed")
-
-
-@PAUSES_BACK_TO_ITSELF
 @pytest.mark.parametrize("options, track", [((), NO_BOUND), (("--no-exceptions",), UNTIL_STOPPED)],
                          ids=["exceptions", "no-exceptions"])
 def test_a_service_that_can_end_by_itself_has_no_bound_and_one_that_cannot_runs_until_stopped(
@@ -244,7 +237,6 @@ def test_a_service_that_runs_until_stopped_in_json(tmp_path):
     assert (values["Endless.Watch"], values["Endless.Once"]) == ("until stopped", 14.0)
 
 
-@PAUSES_BACK_TO_ITSELF
 def test_a_service_that_can_end_by_itself_is_unbounded_in_json(tmp_path):
     polling = check_response_times(model_of(tmp_path, POLLING, {}, FP1, None))
     assert {r.owner: r.to_json()["details"]["until_stopped"] for r in polling.responses} == \
