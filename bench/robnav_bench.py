@@ -11,11 +11,15 @@ stub declaring ``robsim::map`` and ``robsim::cell_type`` there first.
 The script reads from the ``.xta`` what its authors set by hand: each codel's
 execution interval (the invariant ``x <= max`` of the state the codel runs in,
 the guard ``x >= min`` or ``x == v`` leaving it), the offset of a task whose
-timer starts when another task's initial codel ends, and the client's requests
-in order.  It writes them as a genom2bip platform file (cooperative EDF, ``nc``
-cores) and a client mission (each request sent once the previous one is
-queued), then runs ``verify --timed --platform P --client C --response-times``
-through the verification API, one process per ``nc`` (for its peak memory).
+timer starts when another task's initial codel ends, the client's requests in
+order, and when the components take them (each control task waits for a
+task's initial codel: robloco's for track's, which starts when odo's ends, so
+20 ms at the latest).  It writes them as a genom2bip platform file (cooperative
+EDF, ``nc`` cores) and a client mission (the first request sent once every
+component takes requests, each next one once the previous one is queued;
+``--requests-at-start`` sends them at 0 ms instead), then runs
+``verify --timed --platform P --client C --response-times`` through the
+verification API, one process per ``nc`` (for its peak memory).
 Printed per ``nc``: whether task ``track`` keeps its period, the largest
 response time of each task beside the published one, states, seconds, MB.
 
@@ -48,16 +52,21 @@ PROCESS = re.compile(r"^process\s+(\w+)\s*\(.*?\)\s*\{(.*?)^\}", re.S | re.M)
 INVARIANT = re.compile(r"(\w+)\s*\{\s*x\s*<=\s*(\d+)\s*\}")
 LEAVING = re.compile(r"(\w+)\s*->\s*\w+\s*\{\s*guard\s+x\s*(>=|==)\s*(\d+)\s*;")
 SPAWN = re.compile(r"idle\s*->\s*start\s*\{\s*sync\s+end_spawn_(\w+?)_(\w+)\?")
+ACCEPTS = re.compile(r"unspawned\s*->\s*receive\s*\{\s*sync\s+end_spawn_(\w+?)_(\w+)\?")
 REQUEST = re.compile(r"(\w+)\s*->\s*\w+\s*\{\s*sync\s+recv_(\w+)!\s*;\s*assign\s+req_\w+\s*:=\s*(\w+?)_\2\s*;")
 
 
-def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], dict[str, tuple[int, int]], list[str]]:
-    """Execution intervals per ``Component.Owner.codel``, task offsets, and the client's requests, from the .xta."""
+def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], dict[str, tuple[int, int]], list[str],
+                                                  int]:
+    """Execution intervals per ``Component.Owner.codel``, task offsets, the client's requests, and the latest time
+    every component that receives one takes requests (its control task waits for a task's initial codel), from
+    the .xta."""
     components = {c.name: c for c in description.components}
     execution: dict[str, tuple[int, int]] = {}
     offsets: dict[str, tuple[int, int]] = {}
     requests: list[tuple[int, str]] = []
     init_of: dict[str, tuple[int, int]] = {}
+    accepts: dict[str, tuple[str, str]] = {}  # component -> the task whose initial codel its control waits for
     for name, body in PROCESS.findall(xta):
         high = {state.rstrip("_2").rstrip("_"): int(v) for state, v in INVARIANT.findall(body)}
         low = {state.rstrip("_2").rstrip("_"): int(v) for state, _, v in LEAVING.findall(body)}
@@ -79,12 +88,20 @@ def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], di
         if name == "client":
             order = {"start": 0} | {f"s{k}": k for k in range(1, 100)}
             requests += [(order[src], f"{comp}.{service}") for src, comp, service in REQUEST.findall(body)]
+        control = re.fullmatch(r"control_(\w+)", name)
+        if control and ACCEPTS.search(body):
+            accepts[control.group(1)] = ACCEPTS.search(body).groups()
         timer = re.fullmatch(r"Timer_(\w+?)_(\w+)", name)
         spawn = SPAWN.search(body)
         if timer and spawn:
             offsets[f"{timer.group(2)}.{timer.group(1)}"] = (spawn.group(1), spawn.group(2))
     offsets = {task: init_of[f"{comp}.{other}"] for task, (other, comp) in offsets.items()}
-    return execution, offsets, [r for _, r in sorted(requests)]
+    requests = [r for _, r in sorted(requests)]
+    ready = 0
+    for comp in {r.split(".")[0] for r in requests}:
+        task, _ = accepts[comp]
+        ready = max(ready, init_of[f"{comp}.{task}"][1] + offsets.get(f"{comp}.{task}", (0, 0))[1])
+    return execution, offsets, requests, ready
 
 
 def platform_text(cores: int, execution: dict, offsets: dict) -> str:
@@ -97,8 +114,9 @@ def platform_text(cores: int, execution: dict, offsets: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def client_text(requests: list[str]) -> str:
-    steps = "".join(f"  - send: {r}\n    until: queued\n" for r in requests)
+def client_text(requests: list[str], after: int) -> str:
+    first = f"    after: {after} ms\n" if after else ""
+    steps = "".join(f"  - send: {r}\n{first if k == 0 else ''}    until: queued\n" for k, r in enumerate(requests))
     return f"mission: robnav-client\nsteps:\n{steps}"
 
 
@@ -141,6 +159,9 @@ def main() -> None:
     ap.add_argument("--max-states", type=int, default=5_000_000)
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when it is not a terminal")
     ap.add_argument("--keep", type=Path, help="write the platform files and the client mission there")
+    ap.add_argument("--requests-at-start", action="store_true",
+                    help="send the requests at time 0, before the initial codels end (the artefact's control tasks "
+                         "take requests only once their task's initial codel has ended)")
     args = ap.parse_args()
     from genom2bip.parser import parse_paths
 
@@ -151,11 +172,14 @@ def main() -> None:
         cores = [int(c) for c in args.cores.split(",")]
     paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
     description = parse_paths(paths, [str(args.artefact)])
-    execution, offsets, requests = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(), description)
+    execution, offsets, requests, ready = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(),
+                                                        description)
+    after = 0 if args.requests_at_start else ready
     out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
     out.mkdir(parents=True, exist_ok=True)
-    (out / "client.yaml").write_text(client_text(requests))
-    print(f"{len(execution)} codel intervals, offsets {offsets}, client {' -> '.join(requests)}")
+    (out / "client.yaml").write_text(client_text(requests, after))
+    print(f"{len(execution)} codel intervals, offsets {offsets}, client {' -> '.join(requests)}, "
+          f"the first request at {after} ms")
     print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; files in {out}")
     rows = []
     ctx = multiprocessing.get_context("spawn")

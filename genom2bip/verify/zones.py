@@ -111,7 +111,8 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
                       tick_us=tick)
         if node is not None:
             clock = z.model.observers[fa.index][1]
-            trace, message = _trace(z, _ways(z, node), [(0, clock, -(atom.bound + 1))], space, tick)
+            trace, message = _trace(z, _ways(z, node, [(0, clock, -(atom.bound + 1))]), [(0, clock, -(atom.bound + 1))],
+                                    space, tick)
             out.append(ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message, **common))
         else:
             out.append(ObserverResult(subject(atom, tick), inconclusive or Verdict.HOLDS,
@@ -122,11 +123,11 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     return out
 
 
-def _ways(z, node: int):
-    """The paths to ``node`` as :func:`_trace` takes them (no loop)."""
+def _ways(z, node: int, goal: list):
+    """The paths to ``node`` where ``goal`` can hold, as :func:`_trace` takes them (no loop)."""
     from runtime.zones.trace import paths_to
 
-    return ((p, None) for p in paths_to(z, node))
+    return ((p, None) for p in paths_to(z, node, goal))
 
 
 def _trace(z, paths, goal, space, tick) -> tuple[Trace | None, str]:
@@ -164,7 +165,7 @@ def _owners(model: Model) -> dict[str, str]:
 def _response(z, model, result, atom, by_path, space, tick, figures, method, inconclusive) -> ResponseResult:
     """One response time: the largest value of the observer's clock, or no bound shown by a lasso."""
     from runtime.zones.search import lassos
-    from runtime.zones.trace import paths_to
+    from runtime.zones.trace import loop_needs, paths_to
 
     fa = by_path[atom.path]
     owner = _owners(model).get(atom.path) or atom.path.rsplit(".", 1)[0]
@@ -182,7 +183,7 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         top, node = result.maxima.get(clock, (-1.0, -1))
         if node >= 0 and not math.isinf(top) and top <= atom.bound:
             value = max(0, int(top))
-            trace, message = _trace(z, _ways(z, node), [(0, clock, -value)], space, tick)
+            trace, message = _trace(z, _ways(z, node, [(0, clock, -value)]), [(0, clock, -value)], space, tick)
             return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, trace=trace, message=message,
                                   value_ticks=value, **common)
         if node < 0:
@@ -197,7 +198,8 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
                    "every request ends (not measured: its codels can cycle)")
         return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message=message, **common)
     ways = ((head + loop, len(head) - 1) for entry, loop in itertools.islice(itertools.chain([first], cycles), 20)
-            for head in itertools.islice(paths_to(z, entry), 8))
+            for need in [loop_needs(z, loop)] if need is not None
+            for head in itertools.islice(paths_to(z, entry, need=need), 8))
     trace, message = _trace(z, ways, [], space, tick)
     # the builder read the service's codels: none reached from its start yields ether or throws
     stopped = owner in _timed(model, "until_stopped")

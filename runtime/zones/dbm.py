@@ -139,6 +139,18 @@ def up(m: np.ndarray) -> np.ndarray:
     return out
 
 
+def down(m: np.ndarray) -> np.ndarray:
+    """The past: every point time could have reached it from (lower bounds as low as the differences let them)."""
+    out = m.copy()
+    out[0, 1:] = np.minimum(0, m[1:, 1:].min(axis=0))
+    return out
+
+
+def intersect(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """The points of both zones; None when they share none."""
+    return constrain_all(a, [(i, j, b[i, j]) for i, j in zip(*np.nonzero(b < a))])
+
+
 def reset(m: np.ndarray, i: int, v: float) -> np.ndarray:
     """``xi := v``."""
     out = m.copy()

@@ -351,11 +351,16 @@ class ZoneExplorer:
 
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
+        idle = self.idle(state)
+        return dbm.free_many(zone, idle) if idle else zone
+
+    def idle(self, state: tuple) -> list[int]:
+        """The clocks no guard reads at ``state`` before their next reset."""
         idle = self._idle.get(state)
         if idle is None:
             idle = self._idle[state] = [k for k, (atom, _) in enumerate(self.model.clocks, 1)
                                         if k not in self.model.places[(atom, self.place_bit(state, atom))].active]
-        return dbm.free_many(zone, idle) if idle else zone
+        return idle
 
     # -- the search -------------------------------------------------------------------------------
     def explore(self, max_states: int | None = None, progress: Progress | None = None,

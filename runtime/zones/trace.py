@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 from collections.abc import Iterator
 
+import numpy as np
+
 from runtime.explore.space import StateSpace, Step
 from runtime.zones import dbm
 from runtime.zones.search import Node, ZoneExplorer
@@ -39,28 +41,69 @@ def path_to(z: ZoneExplorer, node: int) -> list[Node]:
     return out[::-1]
 
 
-def paths_to(z: ZoneExplorer, node: int, limit: int = 64):
-    """Paths to ``node`` (as :func:`path_to`), then, where zones were merged on the way, the paths through the
-    nodes merged into them (a point of a merged zone lies in one of its parts); at most ``limit`` of them, those
-    whose parts meet the next step's bounds first."""
-    made = [0]
-
-    def ways(k: int, then: list) -> "Iterator[list[Node]]":
-        for a in _parts(z, k):
-            if made[0] >= limit:
-                return
+def paths_to(z: ZoneExplorer, node: int, goal: list | None = None, limit: int = 64,
+             need: np.ndarray | None = None) -> Iterator[list[Node]]:
+    """Paths to ``node`` (as :func:`path_to`), each merged zone on the way replaced by the part the path goes
+    through, at most ``limit`` of them.  The search goes backwards with the clock values the rest of the path
+    needs (the past of time passing, the values before a reset, the step's bounds): a part they miss is not
+    tried, so the first path is almost always one that :func:`times` makes concrete.  ``need``: the values
+    wanted at ``node`` (a lasso's loop from there, :func:`loop_needs`)."""
+    made = 0
+    want = need if need is not None else dbm.free_all(z.n)
+    want = dbm.constrain_all(want, goal) if goal else want
+    if want is None:
+        return
+    stack: list[tuple[int, np.ndarray, tuple]] = [(node, want, ())]
+    while stack and made < limit:
+        k, need, after = stack.pop()
+        for a in reversed(_parts(z, k)):
             m = z.nodes[a]
-            zone = m.own if m.own is not None else m.zone
-            if then and a != k and dbm.constrain_all(zone, then) is None:
-                continue  # this part cannot take the next step
+            here = dbm.intersect(m.own if m.own is not None else m.zone, need)
+            if here is None:
+                continue  # this part holds none of the values the rest of the path needs
             if m.parent < 0:
-                made[0] += 1
-                yield [m]
+                made += 1
+                yield [m] + _unfold(after)
                 continue
-            for head in ways(m.parent, m.guard):
-                yield head + [m]
+            before = _before(z, m, here)
+            if before is not None:
+                stack.append((m.parent, before, (m, after)))
 
-    yield from ways(node, [])
+
+def loop_needs(z: ZoneExplorer, loop: list[Node]) -> np.ndarray | None:
+    """The clock values at a lasso's entry from which one round of ``loop`` can be taken."""
+    need = dbm.free_all(z.n)
+    for m in reversed(loop):
+        zone = m.own if m.own is not None else m.zone
+        here = dbm.intersect(zone, need) if zone is not None else need
+        if here is None:
+            return None
+        need = _before(z, m, here)
+        if need is None:
+            return None
+    return need
+
+
+def _unfold(linked: tuple) -> list[Node]:
+    out = []
+    while linked:
+        head, linked = linked
+        out.append(head)
+    return out
+
+
+def _before(z: ZoneExplorer, m: Node, here: np.ndarray) -> np.ndarray | None:
+    """The clock values at the step into ``m``'s state from which it reaches ``here`` (its parent's side)."""
+    zone = dbm.down(here) if m.grown else here
+    idle = z.idle(m.state)
+    if idle:
+        zone = dbm.free_many(zone, idle)
+    for c, v in z.guard(m.via, z.nodes[m.parent].state)[1]:
+        zone = dbm.constrain_all(zone, [(c, 0, v), (0, c, -v)])
+        if zone is None:
+            return None
+        zone = dbm.free_many(zone, [c])
+    return dbm.constrain_all(zone, m.guard)
 
 
 def _parts(z: ZoneExplorer, k: int) -> list[int]:
