@@ -566,34 +566,58 @@ def lassos(z: ZoneExplorer, watching, limit: int = 200):
 
 
 def _tree_lassos(z: ZoneExplorer, watching, rep, limit: int):
+    nodes = z.nodes
+    watch = [watching(m) for m in nodes]
+    depth, top, inside = _tree(nodes, watch)
     found = []
     for u, edges in enumerate(z.out):
         if len(found) >= limit:
             break
-        if not watching(z.nodes[u]):
+        if not watch[u]:
             continue
-        ancestors = None
         for target, step in edges:
             if step.stored is not None and target == rep(target):
                 continue  # a step into a zone of its own: the tree goes on below it
             a = rep(target)
-            if not watching(z.nodes[a]):
-                continue
-            if ancestors is None:
-                ancestors, k = {}, u
-                chain = []
-                while k >= 0 and watching(z.nodes[k]):
-                    ancestors[k] = len(chain)
-                    chain.append(k)
-                    k = z.nodes[k].parent
-            if a not in ancestors:
-                continue
-            loop = [z.nodes[k] for k in reversed(chain[:ancestors[a]])] + [step]
+            if not watch[a] or depth[a] < top[u] or not inside(u, a):
+                continue  # the entry must be an ancestor reached through watching states only
+            chain, k = [], u
+            while k != a:
+                chain.append(k)
+                k = nodes[k].parent
+            loop = [nodes[k] for k in reversed(chain)] + [step]
             if any(n.grown for n in loop):  # else a cycle in zero time, where no request waits for ever
                 found.append((len(loop), a, loop))
                 break
     for _, a, loop in sorted(found, key=lambda f: f[0]):
         yield a, loop
+
+
+def _tree(nodes: list[Node], watch: list[bool]):
+    """Depths in the search's tree, the depth each watching run starts at, and an ancestor test (entry and exit
+    numbers of a depth-first walk), computed once rather than walking up from every state."""
+    n = len(nodes)
+    depth, top = [0] * n, [0] * n
+    children: list[list[int]] = [[] for _ in range(n)]
+    for u, m in enumerate(nodes):  # a parent is stored before its children
+        p = m.parent
+        depth[u] = depth[p] + 1 if p >= 0 else 0
+        top[u] = top[p] if p >= 0 and watch[p] and watch[u] else depth[u]
+        if p >= 0:
+            children[p].append(u)
+    enter, leave, clock = [0] * n, [0] * n, 0
+    for root in (u for u in range(n) if nodes[u].parent < 0):
+        stack = [(root, False)]
+        while stack:
+            u, done = stack.pop()
+            if done:
+                leave[u] = clock
+                continue
+            enter[u] = clock
+            clock += 1
+            stack.append((u, True))
+            stack.extend((c, False) for c in children[u])
+    return depth, top, lambda u, a: enter[a] <= enter[u] and leave[u] <= leave[a]
 
 
 def _graph_lassos(z: ZoneExplorer, watching, rep):
