@@ -1,0 +1,34 @@
+"""bench/robnav_bench.py reads the artefact's UPPAAL model: checked on a fixture of the same shape
+(tests/fixtures/artefact), since the artefact itself stays out of the repository."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from genom2bip.parser import parse_paths
+
+ROOT = Path(__file__).resolve().parents[1]
+ARTEFACT = ROOT / "tests" / "fixtures" / "artefact"
+sys.path.insert(0, str(ROOT / "bench"))
+import robnav_bench  # noqa: E402
+
+
+def read():
+    description = parse_paths([str(ARTEFACT / "alpha" / "alpha.gen")], [str(ARTEFACT)])
+    return robnav_bench.read_artefact((ARTEFACT / "robnav-artefact-edf.xta").read_text(), description)
+
+
+def test_intervals_offsets_requests_and_when_requests_are_taken_come_from_the_model():
+    execution, offsets, requests, ready = read()
+    assert execution == {"alpha.t.InitT": (8, 10), "alpha.u.InitU": (9, 10),
+                         "alpha.Go.goStart": (3, 5), "alpha.Go.goWork": (10, 10)}
+    assert offsets == {"alpha.u": (8, 10)}  # u's timer starts when t's initial codel ends
+    assert requests == ["alpha.Go"]
+    assert ready == 20  # alpha's control waits for u's initial codel, which waits for t's: 10 + 10 ms
+
+
+def test_the_client_sends_its_first_request_when_the_components_take_requests():
+    _, _, requests, ready = read()
+    text = robnav_bench.client_text(requests, ready)
+    assert text.splitlines()[2:] == ["  - send: alpha.Go", "    after: 20 ms", "    until: queued"]
+    assert "after" not in robnav_bench.client_text(requests, 0)  # --requests-at-start
