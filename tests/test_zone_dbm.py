@@ -82,6 +82,16 @@ def _boxed(rng: random.Random, n: int, top: int) -> np.ndarray:
     return z
 
 
+def test_the_past_and_the_intersection_keep_exactly_their_points(ops):
+    rng = random.Random(11)
+    for _ in range(100):
+        a, b = _boxed(rng, 2, 4), _boxed(rng, 2, 4)
+        both = dbm.intersect(a, b)
+        assert (points(both, 4) if both is not None else set()) == points(a, 4) & points(b, 4)
+        past = {tuple(v - d for v in p) for p in points(a, 4) for d in range(5) if min(p) - d >= 0}
+        assert points(dbm.down(a), 4) == past
+
+
 def test_two_zones_make_one_exactly_when_their_points_do(ops):
     box = dbm.constrain_all(dbm.free_all(2), [(1, 0, 4), (2, 0, 4)])
     before, after = dbm.constrain(box, 1, 2, 0), dbm.constrain(box, 2, 1, 0)  # x1 <= x2, x2 <= x1
