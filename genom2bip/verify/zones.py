@@ -111,8 +111,7 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
                       tick_us=tick)
         if node is not None:
             clock = z.model.observers[fa.index][1]
-            trace, message = _trace(z, _ways(z, node, [(0, clock, -(atom.bound + 1))]), [(0, clock, -(atom.bound + 1))],
-                                    space, tick)
+            trace, message = _trace_to(z, node, [(0, clock, -(atom.bound + 1))], space, tick)
             out.append(ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message, **common))
         else:
             out.append(ObserverResult(subject(atom, tick), inconclusive or Verdict.HOLDS,
@@ -123,11 +122,11 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     return out
 
 
-def _ways(z, node: int, goal: list):
-    """The paths to ``node`` where ``goal`` can hold, as :func:`_trace` takes them (no loop)."""
+def _trace_to(z, node: int, goal: list, space, tick) -> tuple[Trace | None, str]:
+    """A trace to ``node`` where ``goal`` holds at its end (:func:`_trace` of the paths there)."""
     from runtime.zones.trace import paths_to
 
-    return ((p, None) for p in paths_to(z, node, goal))
+    return _trace(z, ((p, None) for p in paths_to(z, node, goal)), goal, space, tick)
 
 
 def _trace(z, paths, goal, space, tick) -> tuple[Trace | None, str]:
@@ -183,7 +182,7 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         top, node = result.maxima.get(clock, (-1.0, -1))
         if node >= 0 and not math.isinf(top) and top <= atom.bound:
             value = max(0, int(top))
-            trace, message = _trace(z, _ways(z, node, [(0, clock, -value)]), [(0, clock, -value)], space, tick)
+            trace, message = _trace_to(z, node, [(0, clock, -value)], space, tick)
             return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, trace=trace, message=message,
                                   value_ticks=value, **common)
         if node < 0:

@@ -62,6 +62,12 @@ class Node:
         self._zone = None if m is None else m.astype(np.float32)
 
     @property
+    def reached(self) -> np.ndarray | None:
+        """The zone the step itself reached: ``own`` when others were merged into ``zone``."""
+        kept = self._own if self._own is not None else self._zone
+        return None if kept is None else kept.astype(np.float64)
+
+    @property
     def stored(self) -> np.ndarray | None:
         """The zone as kept (single precision): enough to compare two zones."""
         return self._zone
@@ -452,22 +458,22 @@ class ZoneExplorer:
         """``step``'s zone grown by every kept zone of its discrete state, not expanded yet, that makes one zone with
         it: orders of independent zero-time steps reset clocks at different instants and cut one zone into
         pieces."""
-        index = len(self.nodes)
+        index, zone = len(self.nodes), step.zone
         grew = True
         while grew:
             grew = False
             for k in kept:
                 if self.nodes[k].expanded:
                     continue  # its successors are there: merging would compute them again
-                hull = dbm.union(step.zone, self.nodes[k].zone)
+                hull = dbm.union(zone, self.nodes[k].zone)
                 if hull is not None:
-                    if step.own is None:
-                        step.own = step.zone
-                    step.zone = hull
+                    zone = hull
                     step.members.append(k)
                     self.nodes[k].covered, self.nodes[k].by = True, index
                     grew = True
             kept[:] = [k for k in kept if not self.nodes[k].covered]
+        if step.members:
+            step.own, step.zone = step.zone, zone
         return len(step.members)
 
     def check(self, k: int, result: ZoneResult) -> None:
@@ -561,13 +567,13 @@ def lassos(z: ZoneExplorer, watching, limit: int = 200):
             k = z.nodes[k].by
         return k
 
-    yield from _tree_lassos(z, watching, rep, limit)
-    yield from _graph_lassos(z, watching, rep)
+    watch = [watching(m) for m in z.nodes]
+    yield from _tree_lassos(z, watch, rep, limit)
+    yield from _graph_lassos(z, watch, rep)
 
 
-def _tree_lassos(z: ZoneExplorer, watching, rep, limit: int):
+def _tree_lassos(z: ZoneExplorer, watch: list[bool], rep, limit: int):
     nodes = z.nodes
-    watch = [watching(m) for m in nodes]
     depth, top, inside = _tree(nodes, watch)
     found = []
     for u, edges in enumerate(z.out):
@@ -620,16 +626,16 @@ def _tree(nodes: list[Node], watch: list[bool]):
     return depth, top, lambda u, a: enter[a] <= enter[u] and leave[u] <= leave[a]
 
 
-def _graph_lassos(z: ZoneExplorer, watching, rep):
+def _graph_lassos(z: ZoneExplorer, watch: list[bool], rep):
     import networkx as nx
 
     graph = nx.DiGraph()
     for k, edges in enumerate(z.out):
-        if not watching(z.nodes[k]):
+        if not watch[k]:
             continue
         for target, step in edges:
             t = rep(target)
-            if watching(z.nodes[t]):
+            if watch[t]:
                 a = rep(k)
                 if not graph.has_edge(a, t) or step.grown:
                     graph.add_edge(a, t, step=step)

@@ -11,9 +11,8 @@ is the tick model's own, and the goal is checked on its last state.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from collections.abc import Iterator
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -32,22 +31,13 @@ class TimedStep:
     step: Step
 
 
-def path_to(z: ZoneExplorer, node: int) -> list[Node]:
-    """The stored symbolic states from an initial one to ``node``, along parent links."""
-    out = []
-    while node >= 0:
-        out.append(z.nodes[node])
-        node = z.nodes[node].parent
-    return out[::-1]
-
-
 def paths_to(z: ZoneExplorer, node: int, goal: list | None = None, limit: int = 64,
              need: np.ndarray | None = None) -> Iterator[list[Node]]:
-    """Paths to ``node`` (as :func:`path_to`), each merged zone on the way replaced by the part the path goes
-    through, at most ``limit`` of them.  The search goes backwards with the clock values the rest of the path
-    needs (the past of time passing, the values before a reset, the step's bounds): a part they miss is not
-    tried, so the first path is almost always one that :func:`times` makes concrete.  ``need``: the values
-    wanted at ``node`` (a lasso's loop from there, :func:`loop_needs`)."""
+    """Paths from an initial state to ``node`` along parent links, each merged zone on the way replaced by the
+    part the path goes through, at most ``limit`` of them.  The search goes backwards with the clock values the
+    rest of the path needs (the past of time passing, the values before a reset, the step's bounds): a part
+    they miss is not tried, so the first path is almost always one that :func:`times` makes concrete.
+    ``need``: the values wanted at ``node`` (a lasso's loop from there, :func:`loop_needs`)."""
     made = 0
     want = need if need is not None else dbm.free_all(z.n)
     want = dbm.constrain_all(want, goal) if goal else want
@@ -58,7 +48,7 @@ def paths_to(z: ZoneExplorer, node: int, goal: list | None = None, limit: int = 
         k, need, after = stack.pop()
         for a in reversed(_parts(z, k)):
             m = z.nodes[a]
-            here = dbm.intersect(m.own if m.own is not None else m.zone, need)
+            here = dbm.intersect(m.reached, need)
             if here is None:
                 continue  # this part holds none of the values the rest of the path needs
             if m.parent < 0:
@@ -74,7 +64,7 @@ def loop_needs(z: ZoneExplorer, loop: list[Node]) -> np.ndarray | None:
     """The clock values at a lasso's entry from which one round of ``loop`` can be taken."""
     need = dbm.free_all(z.n)
     for m in reversed(loop):
-        zone = m.own if m.own is not None else m.zone
+        zone = m.reached
         here = dbm.intersect(zone, need) if zone is not None else need
         if here is None:
             return None
@@ -151,7 +141,7 @@ def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]])
             for c, v in z.guard(n.via, path[step - 1].state)[1]:
                 origin[c] = (step, v)
         nxt = step + 1 if step + 1 < k else end
-        zone = n.own if n.own is not None else n.zone if n.zone is not None else z.nodes[n.by].zone
+        zone = n.reached if n.stored is not None else z.nodes[n.by].zone
         limits = z.limits(n.state, zone) if n.grown else None
         if limits is None:
             le(nxt, step, 0)
@@ -182,7 +172,7 @@ def _shortest(n: int, edges: list[tuple[int, int, float]]) -> list[float]:
 
 def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]],
            space: StateSpace) -> tuple[list[TimedStep], tuple]:
-    """``path`` (:func:`path_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
+    """``path`` (:func:`paths_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
     before each, and the last state."""
     at, end = times(z, path, goal)
     engine = space.engine
