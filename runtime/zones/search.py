@@ -131,6 +131,7 @@ class ZoneExplorer:
         self.edges = self.useful_edges(rule_edges([(r.low, r.high) for r in self.model.rules], tops))
         self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
         self.merge = merge
+        self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
 
     # -- the discrete side ------------------------------------------------------------------------
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
@@ -395,6 +396,7 @@ class ZoneExplorer:
                     old.covered, old.by = True, len(self.nodes)  # a larger zone came: no need to expand this one
                     if not old.expanded:
                         old.zone = None  # no path goes through it: the larger zone stands for it
+                        self.dropped += 1
             kept[:] = [k for k in kept if not self.nodes[k].covered]
             if self.merge and kept:
                 result.merged += self.merge_into(step, kept)
@@ -452,7 +454,7 @@ class ZoneExplorer:
 
     def memory(self) -> int:
         """Bytes the kept zones take (the bulk of a long search; the caches of discrete states come beside)."""
-        return sum(1 for n in self.nodes if n.stored is not None) * (self.n + 1) ** 2 * 4
+        return (len(self.nodes) - self.dropped) * (self.n + 1) ** 2 * 4
 
     def merge_into(self, step: Node, kept: list[int]) -> int:
         """``step``'s zone grown by every kept zone of its discrete state, not expanded yet, that makes one zone with
