@@ -157,9 +157,10 @@ def test_an_overrun_of_whole_dala_is_found_with_a_trace_that_replays():
     v = result.verdict
     assert v.holds is False and rounds[-1].outcome == "violated" and rounds[-1].kept < 10
     labels = [s.label for s in v.trace]
-    # RFLEX's first period: its init and odometry codels, 25 ms each, in a period of 25 ms
+    # RFLEX's first period: its init and odometry codels, 25 ms each, in a period of 25 ms; the next release
+    # comes when the init codel ends, with the period still open (late)
     assert [x for x in labels if x.startswith("RFLEX.servo")] == ["RFLEX.servo:period", "RFLEX.servo:exec_start",
-                                                                 "RFLEX.servo:exec_odometry"]
+                                                                 "RFLEX.servo:late", "RFLEX.servo:exec_odometry"]
     end = StateSpace(package, root).concrete(v.trace)
     atom = next(a for a in flat.atoms if a.name == "RFLEX.servo.overrun")
     assert end[atom.offset] == 1 << atom.places.index("ERROR")

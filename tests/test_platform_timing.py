@@ -18,6 +18,7 @@ ZENO = FIXTURES / "Zeno.gen"
 PAIR = FIXTURES / "Pair.gen"
 SHARED = FIXTURES / "Shared.gen"
 ANOMALY = FIXTURES / "Anomaly.gen"
+CATCHUP = FIXTURES / "Catchup.gen"
 
 ONE_CORE = "cores: 1\npolicy: {policy}\nbest: wcet\n"
 
@@ -191,6 +192,22 @@ def test_the_anomaly_is_seen_by_a_latency_observer_too(tmp_path, capsys):
         path = platform_file(tmp_path, text)
         got, out, _ = verify(capsys, ANOMALY, "--timed", "--platform", path, "--observers", observers)
         assert got == code and f"latency high_quickly (within 5 ms): {verdict}" in out, out
+
+
+def test_a_late_period_opens_at_the_end_of_the_last_and_the_next_on_the_grid(tmp_path, capsys):
+    # Catchup.main (10 ms, first release at 1 ms): Run's start codel (13 ms) overruns the first period; the
+    # release at 11 ms is kept and opens the second period at 14 ms (second, 2 ms); the third opens at 21 ms,
+    # on the grid, not 10 ms after the late opening: Run's final report comes 23 ms after its request.
+    platform = platform_file(tmp_path, "cores: 1\nbest: wcet\ntasks:\n  Catchup.main:\n    delay: 1 ms\n")
+    mission = platform_file(tmp_path, "mission: run-once\nsteps:\n  - send: Catchup.Run\n    until: queued\n",
+                            "run.yaml")
+    code, out, err = verify(capsys, CATCHUP, "--timed", "--platform", platform, "--client", mission,
+                            "--response-times")
+    assert code == 4 and verdicts(out) == {"Catchup.main": "overrun"}, out + err
+    assert response_ms(out) == {"Catchup.main": 13, "Catchup.Run": 23}, out
+    steps = printed_trace(out, "Catchup.Run: ")
+    assert [ms for ms, label in steps if label == "Catchup.main:period"] == [1, 14, 21]
+    assert [ms for ms, label in steps if label == "Catchup.main:late"] == [11]
 
 
 # --------------------------------------------------------------------------- a client mission

@@ -42,12 +42,14 @@ def test_a_task_whose_codels_exceed_its_period_overruns_with_a_timed_trace(capsy
     assert "period of Cruise.loop (10 ms): overrun reachable" in out
     steps = trace_times(out)
     # The trace replays the paper's argument: within one period of 10 ms, sense (4 ms) then a step of Track
-    # (8 ms) run; a Track requested during a period starts only at the next opening.
+    # (8 ms) run; a Track requested during a period starts only at the next opening.  The next release comes
+    # while the step still runs: the timer keeps it (late) for when the period closes.
     opening = max(i for i, (_, label) in enumerate(steps) if label == "Cruise.loop:period")
     period_start = steps[opening][0]
     after = [label for _, label in steps[opening:]]
-    assert after[1:] == ["Cruise.loop:exec_sense", "Cruise.Track:exec_track"]
-    assert steps[-1][0] - period_start == 4  # the step starts 4 ms into the period and takes 8 ms
+    assert after[1:] == ["Cruise.loop:exec_sense", "Cruise.Track:exec_track", "Cruise.loop:late"]
+    assert steps[-2][0] - period_start == 4  # the step starts 4 ms into the period and takes 8 ms
+    assert steps[-1][0] - period_start == 10  # the next release, on the grid of the period
     assert re.search(r"\[\d+ ms \.\. (\d+) ms\] time passes", out.splitlines()[-1])
     last_time = int(re.search(r"\.\. (\d+) ms\]", out.splitlines()[-1]).group(1))
     assert last_time - period_start > 10
@@ -208,7 +210,7 @@ def test_timed_ndd_is_generated_explored_and_read_back(tmp_path, capsys):
     kinds = {a.name for a in package.atom_types}
     assert {"PeriodObserver", "Timer", "Scheduler"} <= kinds
     timer = package.atom_type("Timer")
-    assert [p.name for p in timer.ports] == ["trigger", "sleep", "tick"]
+    assert [p.name for p in timer.ports] == ["trigger", "sleep", "late", "tick"]
     capsys.readouterr()
     code, out, _ = verify(capsys, str(bip), "--timed", "--schedulability")
     # Every NDD codel takes 25 ms; GoTo goes from start through plan to arrived without pausing, so
@@ -216,4 +218,5 @@ def test_timed_ndd_is_generated_explored_and_read_back(tmp_path, capsys):
     assert "period of NDD.motion (100 ms): overrun reachable" in out, out
     assert code == 4
     steps = [label for _, label in trace_times(out)]
-    assert steps[-3:] == ["NDD.GoTo:exec_start", "NDD.GoTo:exec_plan", "NDD.GoTo:exec_arrived"]
+    # the fifth codel starts as the next release comes, which the timer keeps (late) for the period's end
+    assert steps[-4:] == ["NDD.GoTo:exec_start", "NDD.GoTo:exec_plan", "NDD.motion:late", "NDD.GoTo:exec_arrived"]

@@ -45,6 +45,7 @@ from runtime.model import (
     DataParam,
     DefineGroup,
     DefinePort,
+    If,
     InitialTransition,
     InteractionSpec,
     PortData,
@@ -74,12 +75,14 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     (cooperative EDF); otherwise each codel's end gives it back (fixed priority,
     non-preemptive at codel boundaries).  A codel runs ``x`` ticks, ending at
     any ``x`` in ``[lo, hi]``: ``end`` needs ``x >= lo`` and time stops at ``hi``.
+    While READY, ``x`` counts the ticks since the period opened (EDF reads it:
+    the time left to the deadline is ``p - x``), up to ``p``, the period in ticks.
     """
     x, lo, hi = Var("x"), Var("lo"), Var("hi")
     clear = [Assign(x, Const(0)), Assign(lo, Const(0)), Assign(hi, Const(0))]
     places = ["SLEEP", "READY", "RUN", "BUSY"] if core else ["SLEEP", "RUN", "BUSY"]
     ports = [PortDecl(library.PORT, "period", exported=True)]
-    transitions = [Transition("period", ["SLEEP"], ["READY" if core else "RUN"])]
+    transitions = [Transition("period", ["SLEEP"], ["READY" if core else "RUN"], action=[Assign(x, Const(0))])]
     if core:
         ports += [PortDecl(library.PORT, "grant", exported=True), PortDecl(library.PORT, "rest", exported=True)]
         transitions += [Transition("grant", ["READY"], ["RUN"]), Transition("rest", ["READY"], ["SLEEP"])]
@@ -91,14 +94,19 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
         Transition("end", ["BUSY"], [after], guard=Binary(">=", x, lo), action=clear),
         Transition("sleep", ["RUN"], ["SLEEP"]),
     ]
-    transitions += [Transition("tick", [p], [p]) for p in places if p != "BUSY"]
+    transitions += [Transition("tick", [p], [p]) for p in places if p not in ("BUSY", "READY")]
+    if core:
+        transitions.append(Transition("tick", ["READY"], ["READY"], action=[If(Binary("<", x, Var("p")), (
+            Assign(x, Binary("+", x, Const(1))),))]))
     transitions.append(Transition("tick", ["BUSY"], ["BUSY"], guard=Binary("<", x, hi),
                                   action=[Assign(x, Binary("+", x, Const(1)))]))
     name = ("CoreScheduler" if keep_core else "CodelScheduler") if core else "ControlScheduler"
     return AtomType(
         name=name,
         annotations=[Annotation("scheduler", {"period": "period", "exec": "exec", "sleep": "sleep"})],
-        data=[DataDecl("int", "x", annotations=[library.CLOCK]), DataDecl("int", "lo"), DataDecl("int", "hi")],
+        params=[DataParam("int", "p")] if core else [],
+        data=[DataDecl("int", "x", annotations=[library.CLOCK], exported=core and keep_core),
+              DataDecl("int", "lo"), DataDecl("int", "hi")],
         ports=ports,
         places=places,
         initial=InitialTransition(["SLEEP"], clear),
@@ -356,7 +364,10 @@ class PlatformBuilder:
                 asm.remove(path)
                 del level.task_execs[path], self.tasks[path]
             elif level.task_execs.get(path):  # a periodic task that runs no codel keeps its idle scheduler
-                asm.atoms[path + ("scheduler",)].type = core_type.name if info.core else "ControlScheduler"
+                scheduler = asm.atoms[path + ("scheduler",)]
+                scheduler.type = core_type.name if info.core else "ControlScheduler"
+                if info.core:
+                    scheduler.args = [Const(self.period_ticks(info))]
         self.activities()
         for c in self.codels:
             c.interval = self.interval(c)
@@ -550,12 +561,19 @@ class PlatformBuilder:
             return settings.priority
         return info.task.priority if info.task.priority is not None else LOWEST_PRIORITY
 
+    def period_ticks(self, info: TaskInfo) -> int:
+        """The task's period in ticks (0 for a task without period)."""
+        return self.asm.atoms[info.path + ("timer",)].args[1].value if info.timer else 0  # Timer(period_us, ticks)
+
     def time_left(self, info: TaskInfo):
-        """Ticks to the end of the task's period: ``period - t``, read from its timer (exported up to the root)."""
+        """Ticks to the task's deadline, a period after its period opened: ``p - x`` of its READY scheduler.
+
+        A period that opens late (its release came while the previous one ran) gets a whole period from its
+        opening, as in the anchor's EDF, whose queue counts a task's waiting time from when it enters.
+        """
         if not info.timer:
             return Const(NO_DEADLINE)
-        ticks = self.asm.atoms[info.path + ("timer",)].args[1]  # Timer(period_us, ticks)
-        return Binary("-", ticks, self.exposed_t(info.path + ("timer",)))
+        return Binary("-", Const(self.period_ticks(info)), self.asm.expose(info.path + ("scheduler",), "x"))
 
     def exposed_t(self, timer: tuple[str, ...]):
         """A timer's clock ``t`` read at the root (priorities between tasks read it there)."""

@@ -181,24 +181,35 @@ def _resolve(level, spec: LatencySpec) -> tuple[list[Wire], list[Wire]]:
 
 
 def timer_type() -> AtomType:
-    """Timer counting the ticks of its period; the next period opens only once ``ticks`` have passed.
+    """Timer of a periodic task: its releases fall on a fixed grid, every ``ticks`` from the first one.
 
-    Its guards compare ``t`` with ``ticks`` only (``<`` and ``>=``), so ``t``
-    stops at ``ticks``: larger values behave the same.
+    Clock ``t`` counts the ticks since the last release, whatever the task
+    does: time cannot pass beyond ``t == ticks`` before the next release.  A
+    release opens the next period at once when the task sleeps (``trigger``
+    in ``WAIT``); when the period is still open, it is kept (``late``:
+    ``PERIOD`` to ``LATE``) and the next period opens as soon as this one
+    closes (``DUE``), with ``t`` still counting from its release.  Releases
+    kept while one is already kept are lost, as a periodic timer's are.
     """
     base = library.timer_type()
     base.params.append(DataParam("int", "ticks"))
     base.data.append(DataDecl("int", "t", annotations=[library.CLOCK]))
-    base.ports.append(PortDecl(library.PORT, "tick", exported=True))
+    base.ports += [PortDecl(library.PORT, "late", exported=True), PortDecl(library.PORT, "tick", exported=True)]
+    base.places = ["WAIT", "PERIOD", "LATE", "DUE"]
     base.initial = InitialTransition(["WAIT"], [Assign(Var("t"), Var("ticks"))])
-    t_ready = Binary(">=", Var("t"), Var("ticks"))
+    t = Var("t")
+    released = Binary(">=", t, Var("ticks"))
+    passing = Binary("<", t, Var("ticks"))
+    older = [Assign(t, Binary("+", t, Const(1)))]
+    restart = [Assign(t, Const(0))]
     base.transitions = [
-        Transition("trigger", ["WAIT"], ["PERIOD"], guard=t_ready, action=[Assign(Var("t"), Const(0))]),
+        Transition("trigger", ["WAIT"], ["PERIOD"], guard=released, action=restart),
+        Transition("trigger", ["DUE"], ["PERIOD"]),
         Transition("sleep", ["PERIOD"], ["WAIT"]),
-        Transition("tick", ["WAIT"], ["WAIT"], guard=Binary("<", Var("t"), Var("ticks")),
-                   action=[Assign(Var("t"), Binary("+", Var("t"), Const(1)))]),
-        Transition("tick", ["PERIOD"], ["PERIOD"], action=[_capped("t", "ticks")]),
-    ]
+        Transition("sleep", ["LATE"], ["DUE"]),
+        Transition("late", ["PERIOD"], ["LATE"], guard=released, action=restart),
+        Transition("late", ["LATE"], ["LATE"], guard=released, action=restart),
+    ] + [Transition("tick", [place], [place], guard=passing, action=list(older)) for place in ("WAIT", "PERIOD", "LATE")]
     return base
 
 
@@ -641,6 +652,9 @@ def apply(level, options: TimeOptions) -> Timing:
         for path, inst in timers.items():
             inst.args.append(Const(periods[path]))
             ticking.append(End(path, "tick"))
+            late = [End(path, "late")]
+            level.asm.wire(Wire(level._rendezvous(late), late, "late", path[:-1], f"{level.task_labels[path[:-1]]}:late",
+                                comment="a release while the period is still open: the next one opens at its end"))
         if options.platform is None:
             level.atom_types["Scheduler"] = scheduler_type()
             for w, name, wcet in execs:

@@ -330,13 +330,30 @@ def analyse(package: Package, root: str) -> TimedModel:
         erased_types[t.name] = t
     for atom, (watching, clock, *_) in list(observers.items()) + list(measures.items()):  # read there by queries
         places[(atom, 1 << flat.atoms[atom].places.index(watching))].atoms_read.add(clock)
-    _activity(flat, places, steps, per_atom)
     for k in dynamic:
         ceilings[k] = 0  # 0: no ceiling (the explorer never extrapolates that clock's bounds)
     model = TimedModel(flat, package, root, clocks, initial, steps, places, timed_atoms, [], [], observers, ceilings,
                        measures)
     model.erased, model.urgent, model.rules = _erase(package, flat, model, per_atom, tick[0])
+    _read_by_priorities(flat, model)
+    _activity(flat, places, steps, per_atom)
     return model
+
+
+def _read_by_priorities(flat: FlatSystem, model: TimedModel) -> None:
+    """A clock a priority guard compares (EDF's time left) is read where its atom can take part in that priority."""
+    for rule in model.rules:
+        if not isinstance(rule.guard, list):
+            continue
+        clocks = {k for d in rule.guard for k in (d.i, d.j) if k}
+        ports = {p for cid, _ in rule.low + rule.high for p in flat.leaves(flat.connectors[cid])}
+        for k in clocks:
+            atom = model.clocks[k - 1][0]
+            fa = flat.atoms[atom]
+            names = {flat.ports[p].name for p in ports if flat.ports[p].atom == atom}
+            for tr in fa.type.transitions:
+                if tr.port in names and len(tr.sources) == 1:
+                    model.places[(atom, 1 << fa.places.index(tr.sources[0]))].atoms_read.add(k)
 
 
 def _static(e: Expr, fa) -> int | None:
