@@ -209,7 +209,7 @@ def timer_type() -> AtomType:
         Transition("sleep", ["LATE"], ["DUE"]),
         Transition("late", ["PERIOD"], ["LATE"], guard=released, action=restart),
         Transition("late", ["LATE"], ["LATE"], guard=released, action=restart),
-    ] + [Transition("tick", [place], [place], guard=passing, action=list(older)) for place in ("WAIT", "PERIOD", "LATE")]
+    ] + [Transition("tick", [p], [p], guard=passing, action=list(older)) for p in ("WAIT", "PERIOD", "LATE")]
     return base
 
 
@@ -653,7 +653,8 @@ def apply(level, options: TimeOptions) -> Timing:
             inst.args.append(Const(periods[path]))
             ticking.append(End(path, "tick"))
             late = [End(path, "late")]
-            level.asm.wire(Wire(level._rendezvous(late), late, "late", path[:-1], f"{level.task_labels[path[:-1]]}:late",
+            label = f"{level.task_labels[path[:-1]]}:late"
+            level.asm.wire(Wire(level._rendezvous(late), late, "late", path[:-1], label,
                                 comment="a release while the period is still open: the next one opens at its end"))
         if options.platform is None:
             level.atom_types["Scheduler"] = scheduler_type()
