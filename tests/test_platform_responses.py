@@ -30,6 +30,8 @@ CASES = [
     ("zeno-services", ZENO, {"PERIOD": "10"}, "cores: 1\n", None),
     ("zeno-client", ZENO, {"PERIOD": "10"}, "cores: 1\n", FIXTURES / "a_then_b.yaml"),
     ("endless", FIXTURES / "Endless.gen", {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n", None),
+    ("catchup", FIXTURES / "Catchup.gen", {}, "cores: 1\ntasks:\n  Catchup.main:\n    delay: [0 ms, 2 ms]\n",
+     FIXTURES / "run_once.yaml"),
 ]
 #: The cases whose tick model is small enough to explore state by state in a test (zeno-services is not).
 SMALL = [c for c in CASES if c[0] != "zeno-services"]
@@ -86,7 +88,7 @@ def test_every_overrun_trace_holds_a_period_open_longer_than_the_period(tmp_path
                                                                        mission):
     model = model_of(tmp_path, gen, defines, platform, mission)
     violated = [r.to_json() for r in check_timing(model, ("overrun",)) if r.verdict.value == "violated"]
-    assert bool(violated) == (name in ("pair-1-edf", "pair-1-fp", "shared-slow", "zeno-services"))
+    assert bool(violated) == (name in ("pair-1-edf", "pair-1-fp", "shared-slow", "zeno-services", "catchup"))
     for data in violated:
         steps = [(s["time_ms"], s["label"]) for s in data["trace"]["steps"]]
         owner = data["details"]["observer"].rsplit(".", 1)[0]
@@ -130,6 +132,33 @@ def test_response_times_by_ticks_are_printed_or_refused(tmp_path, capsys):
         assert "--response-times" in err
     else:
         assert response_ms(out) == {"Pair.fast": 12, "Pair.slow": 12}, out
+
+
+def test_a_platform_model_written_as_bip_is_verified_alike(tmp_path, capsys):
+    # The scheduler's ports are BIP2 names (none is a reserved word), and --response-times at generation puts
+    # the observers in the .bip, which verify then reads back with the verdicts and maxima of the descriptions.
+    from genom2bip.cli import main
+
+    path = platform_file(tmp_path, "cores: 1\npolicy: edf\nbest: wcet\n")
+    assert main([str(PAIR), "--timed", "--platform", str(path), "--response-times", "-o", str(tmp_path)]) == 0
+    bip = tmp_path / "pair" / "pair.bip"
+    assert "ResponseObserver" in bip.read_text()
+    capsys.readouterr()
+    code, out, _ = verify(capsys, bip, "--timed", "--response-times")
+    assert code == 4 and response_ms(out) == {"Pair.fast": 12, "Pair.slow": 12}, out
+
+
+def test_response_times_of_a_bip_without_their_observers_say_so(tmp_path, capsys):
+    from genom2bip.cli import main
+
+    path = platform_file(tmp_path, "cores: 1\npolicy: edf\nbest: wcet\n")
+    assert main([str(PAIR), "--timed", "--platform", str(path), "-o", str(tmp_path)]) == 0
+    capsys.readouterr()
+    code, out, _ = verify(capsys, tmp_path / "pair" / "pair.bip", "--timed", "--response-times")
+    assert "response times: the model has no response-time observer (a .bip carries them when generated with " \
+           "--timed --response-times)" in out.splitlines(), out
+    assert "\nresponse times (" not in out
+    assert code == 4  # the overrun verdicts are still given
 
 
 # --------------------------------------------------------------------------- without --platform

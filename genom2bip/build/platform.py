@@ -74,7 +74,7 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     BUSY).  ``keep_core``: the core stays granted from one codel to the next
     (cooperative EDF); otherwise each codel's end gives it back (fixed priority,
     non-preemptive at codel boundaries).  A codel runs ``x`` ticks, ending at
-    any ``x`` in ``[lo, hi]``: ``end`` needs ``x >= lo`` and time stops at ``hi``.
+    any ``x`` in ``[lo, hi]``: ``done`` needs ``x >= lo`` and time stops at ``hi``.
     While READY, ``x`` counts the ticks since the period opened (EDF reads it:
     the time left to the deadline is ``p - x``), up to ``p``, the period in ticks.
     """
@@ -86,12 +86,12 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     if core:
         ports += [PortDecl(library.PORT, "grant", exported=True), PortDecl(library.PORT, "rest", exported=True)]
         transitions += [Transition("grant", ["READY"], ["RUN"]), Transition("rest", ["READY"], ["SLEEP"])]
-    ports += [PortDecl(INTERVAL, "exec", ["lo", "hi"], exported=True), PortDecl(library.PORT, "end", exported=True),
+    ports += [PortDecl(INTERVAL, "exec", ["lo", "hi"], exported=True), PortDecl(library.PORT, "done", exported=True),
               PortDecl(library.PORT, "sleep", exported=True), PortDecl(library.PORT, "tick", exported=True)]
     after = "RUN" if keep_core or not core else "READY"
     transitions += [
         Transition("exec", ["RUN"], ["BUSY"], action=[Assign(x, Const(0))]),
-        Transition("end", ["BUSY"], [after], guard=Binary(">=", x, lo), action=clear),
+        Transition("done", ["BUSY"], [after], guard=Binary(">=", x, lo), action=clear),
         Transition("sleep", ["RUN"], ["SLEEP"]),
     ]
     transitions += [Transition("tick", [p], [p]) for p in places if p not in ("BUSY", "READY")]
@@ -444,7 +444,7 @@ class PlatformBuilder:
         w.ends = ends
         w.comment = (w.comment or "") + f" ({lo}..{hi} ticks" + (", locks " + ", ".join(lk[-1] for lk in c.locks)
                                                                if c.locks else "") + ")"
-        end_ends = [End(scheduler.atom, "end"), End(activity.atom, f"end_{state}")]
+        end_ends = [End(scheduler.atom, "done"), End(activity.atom, f"end_{state}")]
         end_ends += [End(lock, "give") for lock in c.locks] + writes
         if self.tasks[c.task].core and self.platform.policy != "edf":
             end_ends.append(End(self.cores, "give"))

@@ -43,9 +43,14 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
         time.add_argument("--response-times", action="store_true",
                           help="the largest response time of each periodic task (release to end of cycle) and of "
                                "each service (request to final report), each with a trace that reaches it")
-        time.add_argument("--no-exceptions", action="store_true",
-                          help="codels take their declared yields only: no exception is explored (timing as the "
-                               "GenoM3 templates model it)")
+    else:
+        time.add_argument("--response-times", action="store_true",
+                          help="add a response-time observer per periodic task and per service, which "
+                               "'verify MODEL.bip --timed --response-times' measures")
+    time.add_argument("--no-exceptions", action="store_true",
+                      help="codels take their declared yields only: no exception is explored (timing as the "
+                           "GenoM3 templates model it)")
+    if verify:
         time.add_argument("--time-search", choices=("zones", "ticks"),
                           help="explore time with clock zones (default on a platform) or tick by tick")
 
@@ -196,6 +201,9 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
             print(f"{found.subject}: inconclusive ({found.limit or found.message})")
             worst = max(worst, EXIT_INCONCLUSIVE)
     times = [r for r in results if isinstance(r, ResponseResult)]
+    if responses and not times:
+        print("response times: the model has no response-time observer (a .bip carries them when generated with "
+              "--timed --response-times)")
     if times:
         print(f"response times ({times[0].method}, {times[0].figures.states:,} symbolic states, "
               f"{times[0].figures.seconds:.2f} s):")
