@@ -161,6 +161,9 @@ def test_outputs_come_back_in_the_ok_report(ctl):
     ("GET", "/requests?limit=-5", None, 400, "limit='-5': a number of requests from 1 to 999999999 expected"),
     ("GET", "/requests?limit=0", None, 400, "limit='0'"),
     ("GET", "/requests?limit=" + "9" * 5000, None, 400, "a number of requests from 1"),
+    ("GET", "/requests?status=runing", None, 400,
+     "status='runing': one of queued, running, ok, rejected, failed, interrupted expected"),
+    ("GET", "/requests?status=", None, 400, "status='': one of queued"),
 ], ids=lambda v: None if v is None else (v.decode(errors="replace") if isinstance(v, bytes) else str(v))[:40])
 def test_bad_requests_get_a_4xx_that_names_the_problem(ctl, method, path, body, status, message):
     controller, server, client = ctl

@@ -4,7 +4,7 @@ from __future__ import annotations
 from starlette.requests import Request as HttpRequest
 from starlette.responses import Response
 
-from runtime.controller import RequestError
+from runtime.controller import REQUEST_STATUSES, RequestError
 from runtime.services.intake import request_id, wait_time, whole_number
 from runtime.services.jsonio import JSONResponse
 
@@ -12,6 +12,8 @@ from runtime.services.jsonio import JSONResponse
 async def requests_list(request: HttpRequest) -> Response:
     controller = request.app.state.controller
     status = request.query_params.get("status")
+    if status is not None and status not in REQUEST_STATUSES:
+        raise RequestError(400, f"status={status!r}: one of {', '.join(REQUEST_STATUSES)} expected")
     text = request.query_params.get("limit", "100")
     limit = whole_number(text) or 0 if len(text) < 10 else 0
     if limit < 1:
