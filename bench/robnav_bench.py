@@ -15,7 +15,9 @@ timer starts when another task's initial codel ends, the client's requests in
 order, and when the components take them (each control task waits for a
 task's initial codel: robloco's for track's, which starts when odo's ends, so
 20 ms at the latest).  It writes them as a genom2bip platform file (cooperative
-EDF, ``nc`` cores) and a client mission (the first request sent once every
+EDF, ``nc`` cores, the releases of one instant seen one by one as the
+artefact's timers fire: ``--releases together`` queues them all before a core
+is granted) and a client mission (the first request sent once every
 component takes requests, each next one once the previous one is queued;
 ``--requests-at-start`` sends them at 0 ms instead), then runs
 ``verify --timed --platform P --client C --response-times`` through the
@@ -104,8 +106,8 @@ def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], di
     return execution, offsets, requests, ready
 
 
-def platform_text(cores: int, execution: dict, offsets: dict) -> str:
-    lines = [f"cores: {cores}", "policy: edf", "execution:"]
+def platform_text(cores: int, execution: dict, offsets: dict, releases: str = "one-by-one") -> str:
+    lines = [f"cores: {cores}", "policy: edf", f"releases: {releases}", "execution:"]
     lines += [f"  {key}: [{lo} ms, {hi} ms]" for key, (lo, hi) in execution.items()]
     if offsets:
         lines.append("tasks:")
@@ -162,6 +164,9 @@ def main() -> None:
     ap.add_argument("--requests-at-start", action="store_true",
                     help="send the requests at time 0, before the initial codels end (the artefact's control tasks "
                          "take requests only once their task's initial codel has ended)")
+    ap.add_argument("--releases", choices=("one-by-one", "together"), default="one-by-one",
+                    help="tasks released at one instant: one by one, the first taking a free core before the next is "
+                         "queued, as in the artefact's model (default); or all queued before a core is granted")
     args = ap.parse_args()
     from genom2bip.parser import parse_paths
 
@@ -180,12 +185,13 @@ def main() -> None:
     (out / "client.yaml").write_text(client_text(requests, after))
     print(f"{len(execution)} codel intervals, offsets {offsets}, client {' -> '.join(requests)}, "
           f"the first request at {after} ms")
-    print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; files in {out}")
+    print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; "
+          f"releases at one instant: {args.releases}; files in {out}")
     rows = []
     ctx = multiprocessing.get_context("spawn")
     for nc in cores:
         platform = out / f"edf{nc}.yaml"
-        platform.write_text(platform_text(nc, execution, offsets))
+        platform.write_text(platform_text(nc, execution, offsets, args.releases))
         queue = ctx.Queue()
         proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
                                              args.exceptions, args.max_states, args.progress, queue))

@@ -4,6 +4,7 @@ A platform file (``verify --timed --platform FILE``)::
 
     cores: 2
     policy: edf                  # edf (cooperative EDF) or fixed-priority
+    releases: together           # tasks released at one instant: together (default) or one-by-one
     best: 0 ms                   # best case of a codel the file does not list: a duration, or wcet
     execution:                   # [best, worst] per codel; a single duration is exact
       robloco.TrackSpeedStart.tssExec: [0 ms, 10 ms]
@@ -34,7 +35,10 @@ from genom2bip.yamlfile import compose_file
 from runtime.diagnostics import Reporter, Span
 
 POLICIES = ("edf", "fixed-priority")
-KEYS = ("cores", "policy", "best", "execution", "tasks")
+#: How the tasks released at one instant meet the cores: all queued before a core is granted (one timer interrupt
+#: wakes them all), or each release seen in turn, the first taking a free core before the next is queued.
+RELEASES = ("together", "one-by-one")
+KEYS = ("cores", "policy", "releases", "best", "execution", "tasks")
 TASK_KEYS = ("delay", "priority")
 #: More cores than this is a typing error, not a computer (each core is a value of the model's state).
 MAX_CORES = 256
@@ -65,6 +69,7 @@ class Platform:
 
     cores: int
     policy: str = "edf"
+    releases: str = "together"
     best: str | int = 0  # µs, or "wcet": the best case of a codel the file does not list
     execution: dict[tuple[str, str, str], Interval] = field(default_factory=dict)  # (component, owner, codel)
     tasks: dict[tuple[str, str], TaskSettings] = field(default_factory=dict)  # (component, task)
@@ -75,7 +80,8 @@ class Platform:
         if not self.path:
             return DEDICATED
         policy = "cooperative EDF" if self.policy == "edf" else "fixed priority (non-preemptive at codel boundaries)"
-        return f"{self.cores} core{'s' if self.cores != 1 else ''}, {policy}"
+        releases = ", releases at one instant one by one" if self.releases == "one-by-one" else ""
+        return f"{self.cores} core{'s' if self.cores != 1 else ''}, {policy}{releases}"
 
 
 #: What a timed model's tasks run on without --platform, in words.
@@ -217,6 +223,13 @@ class _Reader(rules._Reader):
                            _suggest(policy, list(POLICIES)))
             elif policy is not None:
                 out.policy = policy
+        if "releases" in fields:
+            releases = self.scalar(fields["releases"], "releases")
+            if releases is not None and releases not in RELEASES:
+                self.error(fields["releases"], f"releases is '{releases}'; expected {' or '.join(RELEASES)}",
+                           _suggest(releases, list(RELEASES)))
+            elif releases is not None:
+                out.releases = releases
         if "best" in fields:
             node = fields["best"]
             if isinstance(node, yaml.ScalarNode) and node.value == "wcet":

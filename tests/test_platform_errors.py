@@ -15,6 +15,8 @@ BAD = [
     ("policy: edf\n", 1, 1, "the platform has no 'cores'"),
     ("cores: 1\npolicy: rms\n", 2, 9, "policy is 'rms'; expected edf or fixed-priority"),
     ("cores: 1\ncore: 2\n", 2, 1, "unknown key 'core'"),
+    ("cores: 1\nreleases: one by one\n", 2, 11, "releases is 'one by one'; expected together or one-by-one"),
+    ("cores: 1\nreleases: [together]\n", 2, 11, "releases must be a single value"),
     ("cores: 1\nbest: -1 ms\n", 2, 7, "best is '-1 ms'; expected a duration"),
     ("cores: 1\nexecution:\n  Anomaly.mid.mid_stp: [1 ms, 4 ms]\n", 3, 3, "Anomaly.mid runs no codel 'mid_stp'"),
     ("cores: 1\nexecution:\n  Anomaly.middle.mid_step: 1 ms\n", 3, 3,

@@ -70,6 +70,19 @@ def test_two_tasks_overrun_on_one_core_and_not_on_two(tmp_path, capsys, policy):
     assert verdicts(out) == {"Pair.fast": "none", "Pair.slow": "none"}, out
 
 
+def test_released_one_by_one_a_lower_priority_may_take_the_core_first(tmp_path, capsys):
+    # Both tasks are released at 0, 10, 20...  Together (the default), fixed priority grants fast first at every
+    # release and only slow overruns.  One by one, slow's release may be seen first and take the free core while
+    # fast is not queued yet: fast can overrun too, by a trace where slow is granted before fast opens.
+    one = platform_file(tmp_path, "cores: 1\npolicy: fixed-priority\nbest: wcet\nreleases: one-by-one\n")
+    code, out, _ = verify(capsys, PAIR, "--timed", "--schedulability", "--platform", one)
+    assert code == 4 and verdicts(out) == {"Pair.fast": "overrun", "Pair.slow": "overrun"}, out
+    assert "platform: 1 core, fixed priority (non-preemptive at codel boundaries), releases at one instant one " \
+           "by one" in out.splitlines()
+    labels = [label for _, label in printed_trace(out, "period of Pair.fast (10 ms): overrun reachable")]
+    assert labels.index("Pair.slow:grant") < labels.index("Pair.fast:period") < labels.index("Pair.fast:grant")
+
+
 @pytest.mark.parametrize("cores,expected", [(1, {"Pair.fast": 12, "Pair.slow": 12}),
                                             (2, {"Pair.fast": 6, "Pair.slow": 6})])
 def test_response_times_of_two_tasks_under_edf(tmp_path, capsys, cores, expected):

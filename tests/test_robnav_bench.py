@@ -32,3 +32,20 @@ def test_the_client_sends_its_first_request_when_the_components_take_requests():
     text = robnav_bench.client_text(requests, ready)
     assert text.splitlines()[2:] == ["  - send: alpha.Go", "    after: 20 ms", "    until: queued"]
     assert "after" not in robnav_bench.client_text(requests, 0)  # --requests-at-start
+
+
+def test_the_platform_written_is_valid_and_releases_one_by_one_as_the_artefact(tmp_path):
+    from genom2bip.platform import load_platform
+    from runtime.diagnostics import Reporter
+
+    execution, offsets, _, _ = read()
+    description = parse_paths([str(ARTEFACT / "alpha" / "alpha.gen")], [str(ARTEFACT)])
+    for releases in ("one-by-one", "together"):
+        path = tmp_path / f"{releases}.yaml"
+        path.write_text(robnav_bench.platform_text(3, execution, offsets, releases))
+        reporter = Reporter()
+        platform = load_platform(path, description, reporter)
+        assert platform is not None, reporter.diagnostics
+        assert (platform.cores, platform.policy, platform.releases) == (3, "edf", releases)
+        assert platform.tasks[("alpha", "u")].delay.best_us == 8000
+    assert "releases: one-by-one" in robnav_bench.platform_text(3, execution, offsets).splitlines()

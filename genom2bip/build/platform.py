@@ -146,9 +146,8 @@ def lock_type() -> AtomType:
 def delayed_timer_type(timer: AtomType) -> AtomType:
     """``timer`` whose first period opens at a tick in ``[first_lo, first_hi]`` (the task's ``delay``).
 
-    The first opening is port ``first``, not ``trigger``: its connector is not above the grants (a period
-    opening at an instant is, so that EDF chooses among every task released then), which would make it
-    urgent through the priorities and take the earliest offset only.
+    The first opening is a port of its own, ``first``, from a place of its own, ``START``, where time passes
+    up to ``first_hi``: a ``trigger`` would open the period the moment ``t`` reaches ``ticks``.
     """
     t = Var("t")
     out = AtomType(
@@ -516,25 +515,18 @@ class PlatformBuilder:
     def policy(self) -> None:
         """The scheduling policy as priorities between the grants of the tasks that wait for a core.
 
-        Every period that opens at an instant opens before a core is granted at
-        that instant: the policy chooses among all the tasks released then.
+        ``releases: together`` (the default): every period that opens at an
+        instant opens before a core is granted at that instant, so the policy
+        chooses among all the tasks released then, as when one timer interrupt
+        wakes them all.  ``one-by-one``: nothing orders the releases and the
+        grants of one instant, so a task whose release is seen first may take a
+        free core before another released at the same instant is queued (the
+        anchor's UPPAAL model, where a task enters the queue and is granted a
+        core before the next timer of that instant fires).
         """
         tasks = [i for i in self.tasks.values() if i.path in self.grants]
-        firsts = {id(w) for w in self.asm.wires if any(isinstance(e, End) and e.port == "first" for e in w.ends)}
-        openings = [w for i in tasks if i.timer for w in self.asm.wires
-                    if w.label == f"{i.label}:period" and id(w) not in firsts]
-        for i in tasks:
-            for w in openings:
-                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
-                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(),
-                                   comment="the tasks released at an instant are all there to choose from"))
-        for w in (w for w in self.asm.wires if id(w) in firsts):  # a first release: at the latest instant of its delay
-            timer = next(e.atom for e in w.ends if isinstance(e, End) and e.port == "first")
-            forced = Binary(">=", self.exposed_t(timer), self.asm.atoms[timer].args[-1])
-            for i in tasks:
-                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
-                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(), guard=forced,
-                                   comment="a first release that can wait no longer is there to choose from"))
+        if self.platform.releases == "together":
+            self.releases_first(tasks)
         if self.platform.policy == "edf":
             left = {i.path: self.time_left(i) for i in tasks}
             for a in tasks:
@@ -553,6 +545,32 @@ class PlatformBuilder:
                                        self.grants[b.path], owner=(),
                                        comment=f"fixed priority: {b.label} ({prio[b.path]}) before "
                                                f"{a.label} ({prio[a.path]})"))
+
+    def releases_first(self, tasks: list[TaskInfo]) -> None:
+        """Every grant waits for the periods that open at its instant (a delayed first one once it must)."""
+        firsts = {id(w) for w in self.asm.wires if any(isinstance(e, End) and e.port == "first" for e in w.ends)}
+        openings = [w for i in tasks if i.timer for w in self.asm.wires
+                    if w.label == f"{i.label}:period" and id(w) not in firsts]
+        for i in tasks:
+            for w in openings:
+                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
+                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(),
+                                   comment="the tasks released at an instant are all there to choose from"))
+        for w in (w for w in self.asm.wires if id(w) in firsts):  # a first release: at the latest instant of its delay
+            timer = next(e.atom for e in w.ends if isinstance(e, End) and e.port == "first")
+            forced = Binary(">=", self.exposed_t(timer), self.asm.atoms[timer].args[-1])
+            for i in tasks:
+                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
+                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(), guard=forced,
+                                   comment="a first release that can wait no longer is there to choose from"))
+
+    def exposed_t(self, timer: tuple[str, ...]):
+        """A timer's clock ``t`` read at the root (the rank of a delayed first release reads it there)."""
+        inst = self.asm.atoms[timer]
+        for name in {inst.type, "Timer"} & set(self.level.atom_types):
+            for d in self.level.atom_types[name].data:
+                d.exported = d.exported or d.name == "t"
+        return self.asm.expose(timer, "t")
 
     def priority(self, info: TaskInfo):
         component = self.level.task_of[info.path][0]
@@ -574,14 +592,6 @@ class PlatformBuilder:
         if not info.timer:
             return Const(NO_DEADLINE)
         return Binary("-", Const(self.period_ticks(info)), self.asm.expose(info.path + ("scheduler",), "x"))
-
-    def exposed_t(self, timer: tuple[str, ...]):
-        """A timer's clock ``t`` read at the root (priorities between tasks read it there)."""
-        inst = self.asm.atoms[timer]
-        for name in {inst.type, "Timer"} & set(self.level.atom_types):
-            for d in self.level.atom_types[name].data:
-                d.exported = d.exported or d.name == "t"
-        return self.asm.expose(timer, "t")
 
 
 def apply(level, platform: Platform, tick: int, default_wcet_us: int) -> list[Wire]:

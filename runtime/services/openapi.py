@@ -85,7 +85,7 @@ def openapi(interface: dict[str, Any]) -> dict[str, Any]:
             {"name": "status", "in": "query", "schema": {"enum": list(REQUEST_STATUSES)}},
             {"name": "limit", "in": "query", "schema": {"type": "integer", "minimum": 1}}],
             "responses": {"200": {"description": "list"},
-                          "400": _error("a status that is not a request status, a limit that is not a number from 1")}}},
+                          "400": _error("a status no request has, a limit that is not a number from 1")}}},
         "/requests/{id}": {"get": {
             "summary": "a request and its reports", "parameters": [
                 {"name": "id", "in": "path", "required": True, "schema": {"type": "integer"}}, wait],
