@@ -75,8 +75,9 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     (cooperative EDF); otherwise each codel's end gives it back (fixed priority,
     non-preemptive at codel boundaries).  A codel runs ``x`` ticks, ending at
     any ``x`` in ``[lo, hi]``: ``done`` needs ``x >= lo`` and time stops at ``hi``.
-    While READY, ``x`` counts the ticks since the period opened (EDF reads it:
-    the time left to the deadline is ``p - x``), up to ``p``, the period in ticks.
+    Under EDF (``keep_core``), while READY, ``x`` counts the ticks since the
+    period opened (the time left to the deadline is ``p - x``), up to ``p``,
+    the period in ticks.
     """
     x, lo, hi = Var("x"), Var("lo"), Var("hi")
     clear = [Assign(x, Const(0)), Assign(lo, Const(0)), Assign(hi, Const(0))]
@@ -94,8 +95,9 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
         Transition("done", ["BUSY"], [after], guard=Binary(">=", x, lo), action=clear),
         Transition("sleep", ["RUN"], ["SLEEP"]),
     ]
-    transitions += [Transition("tick", [p], [p]) for p in places if p not in ("BUSY", "READY")]
-    if core:
+    edf = core and keep_core
+    transitions += [Transition("tick", [p], [p]) for p in places if p != "BUSY" and not (edf and p == "READY")]
+    if edf:
         transitions.append(Transition("tick", ["READY"], ["READY"], action=[If(Binary("<", x, Var("p")), (
             Assign(x, Binary("+", x, Const(1))),))]))
     transitions.append(Transition("tick", ["BUSY"], ["BUSY"], guard=Binary("<", x, hi),
@@ -104,8 +106,8 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     return AtomType(
         name=name,
         annotations=[Annotation("scheduler", {"period": "period", "exec": "exec", "sleep": "sleep"})],
-        params=[DataParam("int", "p")] if core else [],
-        data=[DataDecl("int", "x", annotations=[library.CLOCK], exported=core and keep_core),
+        params=[DataParam("int", "p")] if edf else [],
+        data=[DataDecl("int", "x", annotations=[library.CLOCK], exported=edf),
               DataDecl("int", "lo"), DataDecl("int", "hi")],
         ports=ports,
         places=places,
@@ -146,8 +148,9 @@ def lock_type() -> AtomType:
 def delayed_timer_type(timer: AtomType) -> AtomType:
     """``timer`` whose first period opens at a tick in ``[first_lo, first_hi]`` (the task's ``delay``).
 
-    The first opening is a port of its own, ``first``, from a place of its own, ``START``, where time passes
-    up to ``first_hi``: a ``trigger`` would open the period the moment ``t`` reaches ``ticks``.
+    The first opening is port ``first``, not ``trigger``: with ``releases: together`` the periods that open
+    are above the grants (so that the policy chooses among every task released at an instant), which would
+    make the first opening urgent and take the earliest offset only.
     """
     t = Var("t")
     out = AtomType(
@@ -365,7 +368,7 @@ class PlatformBuilder:
             elif level.task_execs.get(path):  # a periodic task that runs no codel keeps its idle scheduler
                 scheduler = asm.atoms[path + ("scheduler",)]
                 scheduler.type = core_type.name if info.core else "ControlScheduler"
-                if info.core:
+                if info.core and keep:
                     scheduler.args = [Const(self.period_ticks(info))]
         self.activities()
         for c in self.codels:
