@@ -111,6 +111,14 @@ class _Reader(rules._Reader):
             return None
         return node.value
 
+    def choice(self, node: yaml.Node, what: str, choices: tuple[str, ...]) -> str | None:
+        """One of ``choices``; an error naming them (and the nearest) otherwise."""
+        text = self.scalar(node, what)
+        if text is not None and text not in choices:
+            self.error(node, f"{what} is '{text}'; expected {' or '.join(choices)}", _suggest(text, list(choices)))
+            return None
+        return text
+
     def duration(self, node: yaml.Node, what: str) -> int | None:
         text = self.scalar(node, what)
         if text is None:
@@ -216,20 +224,10 @@ class _Reader(rules._Reader):
                 self.error(fields["cores"], f"cores is '{text}'; expected a whole number from 1 to {MAX_CORES}")
             else:
                 out.cores = int(text)
-        if "policy" in fields:
-            policy = self.scalar(fields["policy"], "policy")
-            if policy is not None and policy not in POLICIES:
-                self.error(fields["policy"], f"policy is '{policy}'; expected {' or '.join(POLICIES)}",
-                           _suggest(policy, list(POLICIES)))
-            elif policy is not None:
-                out.policy = policy
-        if "releases" in fields:
-            releases = self.scalar(fields["releases"], "releases")
-            if releases is not None and releases not in RELEASES:
-                self.error(fields["releases"], f"releases is '{releases}'; expected {' or '.join(RELEASES)}",
-                           _suggest(releases, list(RELEASES)))
-            elif releases is not None:
-                out.releases = releases
+        for key, choices in (("policy", POLICIES), ("releases", RELEASES)):
+            value = self.choice(fields[key], key, choices) if key in fields else None
+            if value is not None:
+                setattr(out, key, value)
         if "best" in fields:
             node = fields["best"]
             if isinstance(node, yaml.ScalarNode) and node.value == "wcet":

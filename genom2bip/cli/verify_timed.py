@@ -40,13 +40,11 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
     if verify:
         time.add_argument("--schedulability", action="store_true",
                           help="check the period observers: is an overrun of each periodic task reachable?")
-        time.add_argument("--response-times", action="store_true",
-                          help="the largest response time of each periodic task (release to end of cycle) and of "
-                               "each service (request to final report), each with a trace that reaches it")
-    else:
-        time.add_argument("--response-times", action="store_true",
-                          help="add a response-time observer per periodic task and per service, which "
-                               "'verify MODEL.bip --timed --response-times' measures")
+    time.add_argument("--response-times", action="store_true",
+                      help="the largest response time of each periodic task (release to end of cycle) and of each "
+                           "service (request to final report), each with a trace that reaches it" if verify else
+                           "add a response-time observer per periodic task and per service, which "
+                           "'verify MODEL.bip --timed --response-times' measures")
     time.add_argument("--no-exceptions", action="store_true",
                       help="codels take their declared yields only: no exception is explored (timing as the "
                            "GenoM3 templates model it)")
