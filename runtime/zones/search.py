@@ -55,17 +55,16 @@ class Node:
 
     @property
     def zone(self) -> np.ndarray | None:
-        return None if self._zone is None else self._zone.astype(np.float64)
+        return _double(self._zone)
 
     @zone.setter
     def zone(self, m: np.ndarray | None) -> None:
-        self._zone = None if m is None else m.astype(np.float32)
+        self._zone = _single(m)
 
     @property
     def reached(self) -> np.ndarray | None:
         """The zone the step itself reached: ``own`` when others were merged into ``zone``."""
-        kept = self._own if self._own is not None else self._zone
-        return None if kept is None else kept.astype(np.float64)
+        return _double(self._own if self._own is not None else self._zone)
 
     @property
     def stored(self) -> np.ndarray | None:
@@ -74,11 +73,21 @@ class Node:
 
     @property
     def own(self) -> np.ndarray | None:
-        return None if self._own is None else self._own.astype(np.float64)
+        return _double(self._own)
 
     @own.setter
     def own(self, m: np.ndarray | None) -> None:
-        self._own = None if m is None else m.astype(np.float32)
+        self._own = _single(m)
+
+
+def _single(m: np.ndarray | None) -> np.ndarray | None:
+    """A zone as a node keeps it (single precision)."""
+    return None if m is None else m.astype(np.float32)
+
+
+def _double(m: np.ndarray | None) -> np.ndarray | None:
+    """A kept zone as dbm.py works on it (double precision)."""
+    return None if m is None else m.astype(np.float64)
 
 
 @dataclass
