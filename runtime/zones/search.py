@@ -80,6 +80,14 @@ class Node:
         self._own = _single(m)
 
 
+def _flat(bounds) -> list[int]:
+    """Bounds ``(i, j, c)`` as the C search reads them: their count, then each triple."""
+    out = [len(bounds)]
+    for i, j, c in bounds:
+        out += [i, j, int(c)]
+    return out
+
+
 def _single(m: np.ndarray | None) -> np.ndarray | None:
     """A zone as a node keeps it (single precision)."""
     return None if m is None else m.astype(np.float32)
@@ -104,10 +112,14 @@ class ZoneResult:
 
 
 class ZoneExplorer:
-    """Explores a timed model with zones; ``watch`` clocks get their largest value while their atom watches."""
+    """Explores a timed model with zones; ``watch`` clocks get their largest value while their atom watches.
+
+    ``engine``: ``c`` runs the search in C (runtime/zones/csearch.py) where a compiler is, ``python`` the
+    reference loop below; both store the same nodes in the same order.
+    """
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
-                 merge: bool = True) -> None:
+                 merge: bool = True, engine: str = "c") -> None:
         self.model: TimedModel = analyse(package, root)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
         from runtime.native.compiled import compile_space
@@ -141,6 +153,9 @@ class ZoneExplorer:
         self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
         self.merge = merge
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
+        self.engine = engine
+        self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
+        self._ids: dict[tuple, int] = {}
 
     # -- the discrete side ------------------------------------------------------------------------
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
@@ -384,6 +399,18 @@ class ZoneExplorer:
         """Breadth-first over symbolic states; observers checked and watched clocks maximised on the way."""
         progress = progress or null_progress()
         start = time.perf_counter()
+        lib = None
+        if self.engine == "c":
+            from runtime.zones.csearch import library
+
+            lib = library()
+        if lib is not None:
+            from runtime.zones.csearch import CSearch
+
+            result = CSearch(self, lib).run(ZoneResult(0, 0, 0, 0.0, True), max_states, progress, stop_at_violation)
+            progress.done()
+            result.seconds = time.perf_counter() - start
+            return result
         passed: dict[tuple, list[int]] = {}
         waiting: deque[int] = deque()
         result = ZoneResult(0, 0, 0, 0.0, True)
@@ -418,10 +445,7 @@ class ZoneExplorer:
 
         for sid in self.space.initial_ids:
             state = self.space.state(sid)
-            zone = dbm.zero(self.n)
-            for k, v in self.model.initial.items():
-                zone = dbm.reset(zone, k, v)
-            zone = self.forget(zone, state)
+            zone = self.forget(self.initial_zone(), state)
             for z, grown in self.elapse(zone, state):
                 add(state, z, -1, -1, [], grown)
         while waiting:
@@ -460,6 +484,79 @@ class ZoneExplorer:
         result.discrete = len(passed)
         result.seconds = time.perf_counter() - start
         return result
+
+    def initial_zone(self) -> np.ndarray:
+        """Every clock at its first value."""
+        zone = dbm.zero(self.n)
+        for k, v in self.model.initial.items():
+            zone = dbm.reset(zone, k, v)
+        return zone
+
+    def state_id(self, state: tuple) -> int:
+        """The number of a discrete state (given on first sight)."""
+        got = self._ids.get(state)
+        if got is None:
+            got = self._ids[state] = len(self.states)
+            self.states.append(state)
+        return got
+
+    def program(self, state: tuple, observers: dict[int, int]) -> list[int]:
+        """What the C search needs of a discrete state, flat (layout: zsearch.c's header): the clocks idle there,
+        where time may pass, the observers and response clocks it watches (``observers``: atom -> slot) and each
+        successor with its guard, resets and the regions where priorities block it (a successor blocked
+        everywhere is left out: it never fires).  Computed once per state; the caches it fills are let go."""
+        out: list[int] = []
+        idle = self.idle(state)
+        out += [len(idle), *idle]
+        succ = self.successors(state)
+        blocks = self.blocking(state, sorted({i for i, _ in succ}))
+        fixed = self.passing(state, blocks)
+        if fixed is None:
+            out.append(0)
+        else:
+            before, after, waits = fixed
+            out += [1, *_flat(before), *_flat(after), len(waits)]
+            for b, r, lower in waits:
+                out += [*_flat(b), int(lower is not None), *(lower or (0, 0)), r]
+        checks: list[int] = []
+        for atom, (watching, clock, bound) in self.model.observers.items():
+            fa = self.flat.atoms[atom]
+            if self.place_bit(state, atom) == fa.place_mask([watching]):
+                checks += [0, observers[atom], clock, value(bound, fa, state)]
+        for atom, (place, clock) in self.model.measures.items():
+            if self.place_bit(state, atom) == self.flat.atoms[atom].place_mask([place]):
+                checks += [1, 0, clock, 0]
+        out += [len(checks) // 4, *checks]
+        steps: list[int] = []
+        count = 0
+        for index, nxt in succ:
+            regions: list = []
+            blocked = False
+            for r in self.rules_of(index)[0]:
+                for b in blocks.region(r):
+                    if not b:
+                        blocked = True
+                        break
+                    regions.append(b)
+                if blocked:
+                    break
+            if blocked:
+                continue
+            need, resets = self.guard(index, state)
+            steps += [self.state_id(nxt), index, *_flat(need), len(resets)]
+            for c, v in resets:
+                steps += [c, v]
+            steps.append(len(regions))
+            for b in regions:
+                steps += _flat(b)
+            count += 1
+        out += [count, *steps]
+        self._succ.pop(state, None)
+        self._blocks.pop(state, None)
+        self._passing.pop(state, None)
+        for index, _ in succ:
+            self._guards.pop((index, state), None)
+        return out
 
     def memory(self) -> int:
         """Bytes the kept zones take (the bulk of a long search; the caches of discrete states come beside)."""

@@ -1,0 +1,692 @@
+/* The zone graph search of runtime/zones/search.py in C: the passed/waiting store, the zones and every
+ * operation on them.  dbm.c's functions are compiled in front of this file.
+ *
+ * The search knows discrete states by number only.  What it needs of one (its successors with their clock
+ * guards, resets and the regions where priorities block them; where time may pass there; the clocks nobody
+ * reads there; the observers and response clocks it watches) is its *program*, a flat array of int64 that
+ * ZoneExplorer.program() writes once per discrete state, asked for through a callback the first time the
+ * search needs it.  The order of every loop is search.py's, so both searches number the same nodes the same
+ * way (tests compare them).
+ *
+ * Program layout (every bound is a triple i, j, c: xi - xj <= c):
+ *   n_idle, idle clocks...
+ *   passes (0: time cannot pass here), [n_before, bounds..., n_after, bounds..., n_waits,
+ *       per wait: n, bounds..., kind (1: the lower bound k, c follow; 0: none), k, c, rule]
+ *   n_checks, per check: kind (0 observer, 1 response clock), slot, clock, bound
+ *   n_succ, per successor: next state, interaction, n_need, bounds..., n_resets, (clock, value)...,
+ *       n_blocks, per block: n, bounds...
+ */
+#include <stdint.h>
+#include <stdio.h>
+
+typedef int (*program_fn)(int64_t state);
+typedef int (*progress_fn)(int64_t nodes, int64_t transitions, int64_t waiting, int64_t memory, int64_t depth);
+
+/* A growable array of a plain type. */
+#define VEC(T) struct { T *a; int64_t n, cap; }
+#define PUSH(v, x) do { if ((v).n == (v).cap) { (v).cap = (v).cap ? 2 * (v).cap : 64; \
+    (v).a = realloc((v).a, (v).cap * sizeof(*(v).a)); if (!(v).a) return -9; } (v).a[(v).n++] = (x); } while (0)
+
+typedef struct {
+    int32_t state, parent, via, by, zone, own, members;  /* zone, own: slots; members: first of a chain, -1 */
+    int64_t guard;  /* offset of the step's bounds in the guard pool; their count is guard_len */
+    int32_t guard_len;
+    uint8_t grown, covered, expanded;
+} Node;
+
+typedef struct { int32_t from, target, ref; } Edge;  /* ref >= 0: a node; ref < 0: step -ref-1 */
+typedef struct { int32_t member, next; } Member;
+typedef struct { int32_t *a; int32_t n, cap; uint8_t seen; } Kept;
+
+typedef struct {
+    int d, nobs, nclocks, merge;
+    double *ceiling;
+    float *pool;            /* zone slots, d*d floats each */
+    int64_t slots, free_head;
+    VEC(int64_t) free_list;
+    VEC(Node) nodes;
+    VEC(Node) steps;        /* steps into a zone another node covers */
+    VEC(Edge) edges;
+    VEC(Member) members;
+    VEC(int64_t) guards;    /* bound triples */
+    VEC(int32_t) waiting;
+    int64_t head;
+    /* per discrete state */
+    VEC(int64_t *) prog;
+    VEC(Kept) kept;
+    int64_t discrete, transitions, merged, dropped;
+    int32_t *violation;     /* per observer slot: first node, -1 */
+    double *max_value;
+    int32_t *max_node;      /* per clock: node of the largest value, -1 */
+    int64_t err_arg;
+    double *tmp;            /* scratch zones */
+    int ntmp;
+} Ctx;
+
+static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
+
+void *zs_new(int d, const double *ceiling, int nobs, int nclocks, int merge)
+{
+    Ctx *x = calloc(1, sizeof(Ctx));
+    if (!x)
+        return NULL;
+    x->d = d, x->nobs = nobs, x->nclocks = nclocks, x->merge = merge;
+    x->ceiling = malloc(d * sizeof(double));
+    memcpy(x->ceiling, ceiling, d * sizeof(double));
+    x->violation = malloc((nobs + 1) * sizeof(int32_t));
+    for (int i = 0; i <= nobs; i++)
+        x->violation[i] = -1;
+    x->max_value = calloc(d, sizeof(double));
+    x->max_node = malloc(d * sizeof(int32_t));
+    for (int i = 0; i < d; i++)
+        x->max_node[i] = -1;
+    x->ntmp = 8;
+    x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
+    return x;
+}
+
+void zs_free(void *p)
+{
+    Ctx *x = p;
+    if (!x)
+        return;
+    for (int64_t i = 0; i < x->prog.n; i++)
+        free(x->prog.a[i]);
+    for (int64_t i = 0; i < x->kept.n; i++)
+        free(x->kept.a[i].a);
+    free(x->prog.a), free(x->kept.a), free(x->pool), free(x->free_list.a), free(x->nodes.a), free(x->steps.a);
+    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
+    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x);
+}
+
+/* -- zone slots (single precision: every bound an integer far below 2^24, or infinity) ---------------- */
+static int64_t slot_new(Ctx *x, const double *z)
+{
+    int64_t s, len = (int64_t)x->d * x->d;
+    if (x->free_list.n)
+        s = x->free_list.a[--x->free_list.n];
+    else {
+        if (x->slots % 1024 == 0) {
+            float *p = realloc(x->pool, (x->slots + 1024) * len * sizeof(float));
+            if (!p)
+                return -1;
+            x->pool = p;
+        }
+        s = x->slots++;
+    }
+    float *dst = x->pool + s * len;
+    for (int64_t k = 0; k < len; k++)
+        dst[k] = (float)z[k];
+    return s;
+}
+
+static void slot_load(Ctx *x, int64_t s, double *z)
+{
+    int64_t len = (int64_t)x->d * x->d;
+    const float *src = x->pool + s * len;
+    for (int64_t k = 0; k < len; k++)
+        z[k] = src[k];
+}
+
+static int slot_geq(Ctx *x, int64_t s, const double *z)  /* the stored zone includes z */
+{
+    int64_t len = (int64_t)x->d * x->d;
+    const float *a = x->pool + s * len;
+    for (int64_t k = 0; k < len; k++)
+        if (a[k] < z[k])
+            return 0;
+    return 1;
+}
+
+static int slot_leq(Ctx *x, int64_t s, const double *z)
+{
+    int64_t len = (int64_t)x->d * x->d;
+    const float *a = x->pool + s * len;
+    for (int64_t k = 0; k < len; k++)
+        if (a[k] > z[k])
+            return 0;
+    return 1;
+}
+
+static int slot_drop(Ctx *x, int64_t s)
+{
+    PUSH(x->free_list, s);
+    return 0;
+}
+
+/* -- zone operations that dbm.c does not have --------------------------------------------------------- */
+static int constrain_all(double *m, int d, const int64_t *b, int64_t n)
+{
+    for (int64_t k = 0; k < n; k++)
+        if (!z_constrain(m, d, (int)b[3 * k], (int)b[3 * k + 1], (double)b[3 * k + 2]))
+            return 0;
+    return 1;
+}
+
+static void z_up(double *m, int d)
+{
+    for (int i = 1; i < d; i++)
+        m[(int64_t)i * d] = INFINITY;
+}
+
+static void z_reset(double *m, int d, int i, double v)
+{
+    for (int a = 0; a < d; a++) {
+        m[(int64_t)i * d + a] = v + m[a];
+        m[(int64_t)a * d + i] = m[(int64_t)a * d] - v;
+    }
+    m[(int64_t)i * d + i] = 0;
+}
+
+/* Pieces of m minus other (integer complements), as dbm.py's subtract_bounds: each piece appended to *out
+ * (d*d doubles each), with the cut bounds that made it appended to *cuts and their count to *ncut. */
+typedef VEC(double) Doubles;
+typedef VEC(int64_t) Longs;
+
+static int subtract(const double *m, const double *other, int d, double *rest, double *piece,
+                    Doubles *out, Longs *cuts, Longs *ncut)
+{
+    int64_t len = (int64_t)d * d;
+    memcpy(rest, m, len * sizeof(double));
+    Longs kept = {0};  /* the bounds kept so far: each piece copies them, then its cut */
+    for (int i = 0; i < d; i++)
+        for (int j = 0; j < d; j++) {
+            double c = other[(int64_t)i * d + j];
+            if (i == j || c == INFINITY || rest[(int64_t)i * d + j] <= c)
+                continue;
+            memcpy(piece, rest, len * sizeof(double));
+            if (z_constrain(piece, d, j, i, -c - 1)) {
+                for (int64_t k = 0; k < len; k++)
+                    PUSH(*out, piece[k]);
+                for (int64_t k = 0; k < kept.n; k++)
+                    PUSH(*cuts, kept.a[k]);
+                PUSH(*cuts, j); PUSH(*cuts, i); PUSH(*cuts, (int64_t)(-c - 1));
+                PUSH(*ncut, kept.n / 3 + 1);
+            }
+            if (!z_constrain(rest, d, i, j, c))
+                goto done;
+            PUSH(kept, i); PUSH(kept, j); PUSH(kept, (int64_t)c);
+        }
+done:
+    free(kept.a);
+    return 0;
+}
+
+/* -- programs --------------------------------------------------------------------------------------- */
+static int64_t *program(Ctx *x, int64_t state, program_fn ask)
+{
+    while (x->prog.n <= state) {
+        int64_t *none = NULL;
+        Kept k = {0};
+        if (x->prog.n == x->prog.cap) {
+            x->prog.cap = x->prog.cap ? 2 * x->prog.cap : 1024;
+            x->prog.a = realloc(x->prog.a, x->prog.cap * sizeof(int64_t *));
+            x->kept.cap = x->prog.cap;
+            x->kept.a = realloc(x->kept.a, x->kept.cap * sizeof(Kept));
+            if (!x->prog.a || !x->kept.a)
+                return NULL;
+        }
+        x->prog.a[x->prog.n++] = none;
+        x->kept.a[x->kept.n++] = k;
+    }
+    if (!x->prog.a[state] && ask(state) != 0)
+        return NULL;
+    return x->prog.a[state];
+}
+
+int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
+{
+    Ctx *x = p;
+    if (state >= x->prog.n)
+        return -1;
+    int64_t *copy = malloc((n ? n : 1) * sizeof(int64_t));
+    if (!copy)
+        return -9;
+    memcpy(copy, words, n * sizeof(int64_t));
+    x->prog.a[state] = copy;
+    return 0;
+}
+
+/* Where the parts of a program start (the layout above). */
+typedef struct { const int64_t *idle, *pass, *checks, *succ; int64_t nidle; } Parts;
+
+static const int64_t *skip_bounds(const int64_t *p) { return p + 1 + 3 * p[0]; }
+
+static Parts parts(const int64_t *p)
+{
+    Parts q;
+    q.nidle = p[0], q.idle = p + 1;
+    p += 1 + p[0];
+    q.pass = p;
+    if (*p++) {
+        p = skip_bounds(p);
+        p = skip_bounds(p);
+        int64_t nw = *p++;
+        for (int64_t w = 0; w < nw; w++)
+            p = skip_bounds(p) + 4;
+    }
+    q.checks = p;
+    p += 1 + 4 * p[0];
+    q.succ = p;
+    return q;
+}
+
+/* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
+/* The pieces of z after time passes at the state of program pr, appended to out with their grown flags;
+ * returns the number of pieces, or -2 for a wait that is not one lower bound (err_arg: the rule). */
+static int64_t elapse(Ctx *x, const int64_t *pr, const double *z, Doubles *out, Longs *grown)
+{
+    int d = x->d;
+    int64_t len = (int64_t)d * d;
+    Parts q = parts(pr);
+    const int64_t *p = q.pass;
+    if (!*p++) {
+        for (int64_t k = 0; k < len; k++)
+            PUSH(*out, z[k]);
+        PUSH(*grown, 0);
+        return 1;
+    }
+    const int64_t *before = p, *after = skip_bounds(before), *w = skip_bounds(after);
+    int64_t nw = *w++;
+    Longs extra_before = {0}, extra_after = {0};
+    if (nw) {
+        double *reach = T(x, 4), *probe = T(x, 5);
+        memcpy(reach, z, len * sizeof(double));
+        z_up(reach, d);
+        int live = constrain_all(reach, d, before + 1, before[0]);
+        for (int64_t k = 0; k < nw; k++) {
+            const int64_t *b = w;
+            w = skip_bounds(w);
+            int64_t kind = w[0], clock = w[1], c = w[2], rule = w[3];
+            w += 4;
+            if (!live)
+                continue;
+            memcpy(probe, reach, len * sizeof(double));
+            if (!constrain_all(probe, d, b + 1, b[0]))
+                continue;
+            if (!kind) {
+                x->err_arg = rule;
+                free(extra_before.a), free(extra_after.a);
+                return -2;
+            }
+            PUSH(extra_before, clock); PUSH(extra_before, 0); PUSH(extra_before, -c - 1);
+            PUSH(extra_after, clock); PUSH(extra_after, 0); PUSH(extra_after, -c);
+        }
+    }
+    double *start = T(x, 4), *piece = T(x, 5);
+    memcpy(start, z, len * sizeof(double));
+    int ok = constrain_all(start, d, after + 1, after[0]) &&
+             constrain_all(start, d, extra_after.a, extra_after.n / 3);
+    int64_t count;
+    if (!ok) {
+        for (int64_t k = 0; k < len; k++)
+            PUSH(*out, z[k]);
+        PUSH(*grown, 0);
+        count = 1;
+    } else {
+        z_up(start, d);
+        constrain_all(start, d, after + 1, after[0]);
+        constrain_all(start, d, extra_after.a, extra_after.n / 3);
+        for (int64_t k = 0; k < len; k++)
+            PUSH(*out, start[k]);
+        PUSH(*grown, 1);
+        Longs cuts = {0}, ncut = {0};
+        int64_t before_n = out->n;
+        subtract(z, start, d, T(x, 6), piece, out, &cuts, &ncut);
+        count = 1 + (out->n - before_n) / len;
+        for (int64_t k = 1; k < count; k++)
+            PUSH(*grown, 0);
+        free(cuts.a), free(ncut.a);
+    }
+    free(extra_before.a), free(extra_after.a);
+    return count;
+}
+
+/* -- the store (search.py's add and merge_into) ----------------------------------------------------- */
+static int add_member(Ctx *x, Node *step, int32_t k)
+{
+    Member m = {k, -1};
+    if (step->members < 0) {
+        step->members = (int32_t)x->members.n;
+    } else {
+        int32_t t = step->members;
+        while (x->members.a[t].next >= 0)
+            t = x->members.a[t].next;
+        x->members.a[t].next = (int32_t)x->members.n;
+    }
+    PUSH(x->members, m);
+    return 0;
+}
+
+static int kept_push(Kept *k, int32_t v)
+{
+    if (k->n == k->cap) {
+        k->cap = k->cap ? 2 * k->cap : 4;
+        k->a = realloc(k->a, k->cap * sizeof(int32_t));
+        if (!k->a)
+            return -9;
+    }
+    k->a[k->n++] = v;
+    return 0;
+}
+
+static void kept_prune(Ctx *x, Kept *kept)
+{
+    int32_t w = 0;
+    for (int32_t i = 0; i < kept->n; i++)
+        if (!x->nodes.a[kept->a[i]].covered)
+            kept->a[w++] = kept->a[i];
+    kept->n = w;
+}
+
+static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
+{
+    int d = x->d;
+    int64_t len = (int64_t)d * d;
+    int32_t index = (int32_t)x->nodes.n;
+    double *other = T(x, 6), *hull = T(x, 7);
+    int grew = 1, count = 0;
+    while (grew) {
+        grew = 0;
+        for (int32_t i = 0; i < kept->n; i++) {
+            Node *o = &x->nodes.a[kept->a[i]];
+            if (o->expanded)
+                continue;
+            slot_load(x, o->zone, other);
+            if (z_union(hull, zone, other, d)) {
+                memcpy(zone, hull, len * sizeof(double));
+                if (add_member(x, step, kept->a[i]))
+                    return -9;
+                o->covered = 1, o->by = index;
+                grew = 1, count++;
+            }
+        }
+        kept_prune(x, kept);
+    }
+    return count;
+}
+
+/* Store (state, zone) reached from node parent by interaction via; zone is changed (extrapolated). */
+static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via, const int64_t *guard,
+               int64_t nguard, int grown)
+{
+    int d = x->d;
+    z_extrapolate(zone, d, x->ceiling);
+    Kept *kept = &x->kept.a[state];
+    if (!kept->seen)
+        kept->seen = 1, x->discrete++;
+    Node step = {(int32_t)state, parent, via, -1, -1, -1, -1, x->guards.n, (int32_t)nguard, (uint8_t)grown, 0, 0};
+    for (int64_t k = 0; k < 3 * nguard; k++)
+        PUSH(x->guards, guard[k]);
+    if (kept->n) {
+        for (int32_t i = 0; i < kept->n; i++)
+            if (slot_geq(x, x->nodes.a[kept->a[i]].zone, zone)) {
+                if (parent >= 0) {
+                    step.by = kept->a[i];
+                    Edge e = {parent, kept->a[i], (int32_t)(-x->steps.n - 1)};
+                    PUSH(x->steps, step);
+                    PUSH(x->edges, e);
+                }
+                return 0;
+            }
+        for (int32_t i = 0; i < kept->n; i++) {
+            Node *old = &x->nodes.a[kept->a[i]];
+            if (slot_leq(x, old->zone, zone)) {
+                old->covered = 1, old->by = (int32_t)x->nodes.n;
+                if (!old->expanded) {
+                    slot_drop(x, old->zone);
+                    old->zone = -1;
+                    x->dropped++;
+                }
+            }
+        }
+        kept_prune(x, kept);
+    }
+    if (x->merge && kept->n) {
+        double *own = T(x, 3);
+        memcpy(own, zone, (int64_t)d * d * sizeof(double));
+        int got = merge_into(x, &step, zone, kept);
+        if (got < 0)
+            return got;
+        x->merged += got;
+        if (step.members >= 0 && (step.own = (int32_t)slot_new(x, own)) < 0)
+            return -9;
+    }
+    if ((step.zone = (int32_t)slot_new(x, zone)) < 0)
+        return -9;
+    int32_t index = (int32_t)x->nodes.n;
+    PUSH(x->nodes, step);
+    if (parent >= 0) {
+        Edge e = {parent, index, index};
+        PUSH(x->edges, e);
+    }
+    if (kept_push(kept, index))
+        return -9;
+    PUSH(x->waiting, index);
+    return 0;
+}
+
+/* -- observers and response clocks (search.py's check) ------------------------------------------------ */
+static void check(Ctx *x, int32_t k, const int64_t *pr)
+{
+    int d = x->d;
+    Parts q = parts(pr);
+    const int64_t *c = q.checks;
+    int64_t n = *c++;
+    const float *z = x->pool + (int64_t)x->nodes.a[k].zone * d * d;
+    for (int64_t i = 0; i < n; i++, c += 4) {
+        double top = z[(int64_t)c[2] * d];
+        if (c[0] == 0) {
+            if (top > (double)c[3] && x->violation[c[1]] < 0)
+                x->violation[c[1]] = k;
+        } else if (x->max_node[c[2]] < 0 || top > x->max_value[c[2]]) {
+            x->max_value[c[2]] = top;
+            x->max_node[c[2]] = k;
+        }
+    }
+}
+
+/* Time passing at ``state`` from zone z (already reset and forgotten), every piece stored. */
+static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via, const int64_t *guard,
+                  int64_t nguard, program_fn ask)
+{
+    const int64_t *pr = program(x, state, ask);
+    if (!pr)
+        return -1;
+    Parts q = parts(pr);
+    if (q.nidle) {
+        double *src = T(x, 2);
+        memcpy(src, z, (int64_t)x->d * x->d * sizeof(double));
+        int idx[256];
+        for (int64_t k = 0; k < q.nidle; k++)
+            idx[k] = (int)q.idle[k];
+        z_free(z, src, x->d, idx, (int)q.nidle);
+    }
+    Doubles out = {0};
+    Longs grown = {0};
+    int64_t n = elapse(x, pr, z, &out, &grown);
+    int status = n < 0 ? (int)n : 0;
+    for (int64_t k = 0; k < n && !status; k++)
+        status = add(x, state, out.a + k * x->d * x->d, parent, via, guard, nguard, (int)grown.a[k]);
+    free(out.a), free(grown.a);
+    return status;
+}
+
+int zs_initial(void *p, int64_t state, const double *zone, program_fn ask)
+{
+    Ctx *x = p;
+    double *z = T(x, 1);
+    memcpy(z, zone, (int64_t)x->d * x->d * sizeof(double));
+    return arrive(x, state, z, -1, -1, NULL, 0, ask);
+}
+
+int64_t zs_memory(Ctx *x) { return (x->nodes.n - x->dropped) * (int64_t)x->d * x->d * 4; }
+
+/* The search.  Returns 0 complete, 1 max-states, 2 violated, 3 stopped by the progress callback, -1 the
+ * program callback failed (its exception is on the Python side), -2 an unsupported wait (err_arg), -9 memory. */
+int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, progress_fn progress,
+           int64_t every)
+{
+    Ctx *x = p;
+    int d = x->d;
+    int64_t len = (int64_t)d * d;
+    Doubles pieces = {0};
+    Longs cuts = {0}, ncut = {0}, need = {0};
+    int status = 0;
+    int64_t count = 0;
+    while (x->head < x->waiting.n) {
+        int32_t k = x->waiting.a[x->head++];
+        if (x->nodes.a[k].covered)
+            continue;
+        x->nodes.a[k].expanded = 1;
+        const int64_t *pr = program(x, x->nodes.a[k].state, ask);
+        if (!pr) {
+            status = -1;
+            break;
+        }
+        check(x, k, pr);
+        if (stop_at_violation) {
+            int any = 0;
+            for (int i = 0; i < x->nobs; i++)
+                any |= x->violation[i] >= 0;
+            if (any) {
+                status = 2;
+                break;
+            }
+        }
+        double *here = T(x, 0), *met = T(x, 1), *block = T(x, 2);
+        slot_load(x, x->nodes.a[k].zone, here);
+        const int64_t *s = parts(pr).succ;
+        int64_t nsucc = *s++;
+        for (int64_t t = 0; t < nsucc && !status; t++) {
+            int64_t nxt = s[0], via = s[1];
+            const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
+            int64_t nblocks = *bl++;
+            const int64_t *blocks = bl;
+            for (int64_t b = 0; b < nblocks; b++)
+                bl = skip_bounds(bl);
+            s = bl;
+            memcpy(met, here, len * sizeof(double));
+            if (!constrain_all(met, d, nb + 1, nb[0]))
+                continue;
+            /* allowed: the pieces of met outside every block, each with its cut bounds */
+            pieces.n = cuts.n = ncut.n = 0;
+            for (int64_t i = 0; i < len; i++)
+                PUSH(pieces, met[i]);
+            PUSH(ncut, 0);
+            const int64_t *b = blocks;
+            for (int64_t bi = 0; bi < nblocks && pieces.n; bi++) {
+                memcpy(block, met, len * sizeof(double));
+                int live = constrain_all(block, d, b + 1, b[0]);
+                b = skip_bounds(b);
+                if (!live)
+                    continue;
+                Doubles next = {0};
+                Longs ncuts = {0}, nn = {0};
+                int64_t off = 0;
+                for (int64_t pi = 0; pi * len < pieces.n; pi++) {
+                    Longs pc = {0}, pn = {0};
+                    subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn);
+                    int64_t o2 = 0;
+                    for (int64_t q = 0; q < pn.n; q++) {
+                        for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
+                            PUSH(ncuts, cuts.a[off + w]);
+                        for (int64_t w = 0; w < 3 * pn.a[q]; w++)
+                            PUSH(ncuts, pc.a[o2 + w]);
+                        o2 += 3 * pn.a[q];
+                        PUSH(nn, ncut.a[pi] + pn.a[q]);
+                    }
+                    off += 3 * ncut.a[pi];
+                    free(pc.a), free(pn.a);
+                }
+                free(pieces.a), free(cuts.a), free(ncut.a);
+                pieces = next, cuts = ncuts, ncut = nn;
+            }
+            int64_t off = 0;
+            for (int64_t pi = 0; pi * len < pieces.n && !status; pi++) {
+                double *z = T(x, 1);
+                memcpy(z, pieces.a + pi * len, len * sizeof(double));
+                for (int64_t r = 0; r < rs[0]; r++)
+                    z_reset(z, d, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
+                need.n = 0;
+                for (int64_t w = 0; w < 3 * nb[0]; w++)
+                    PUSH(need, nb[1 + w]);
+                for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
+                    PUSH(need, cuts.a[off + w]);
+                off += 3 * ncut.a[pi];
+                x->transitions++;
+                status = arrive(x, nxt, z, k, (int32_t)via, need.a, need.n / 3, ask);
+                /* arrive may move the program array: re-read nothing from it after this point */
+            }
+            /* T(x, 0) (here) is never used by arrive, so the next successor starts from the same zone */
+        }
+        if (status)
+            break;
+        if (max_states >= 0 && x->nodes.n >= max_states) {
+            status = 1;
+            break;
+        }
+        if (progress && ++count % every == 0 &&
+            progress(x->nodes.n, x->transitions, x->waiting.n - x->head, zs_memory(x), 0)) {
+            status = 3;
+            break;
+        }
+    }
+    free(pieces.a), free(cuts.a), free(ncut.a), free(need.a);
+    return status;
+}
+
+/* -- reading the result ---------------------------------------------------------------------------- */
+void zs_counts(void *p, int64_t *out)
+{
+    Ctx *x = p;
+    out[0] = x->nodes.n, out[1] = x->discrete, out[2] = x->transitions, out[3] = x->merged;
+    out[4] = x->dropped, out[5] = x->steps.n, out[6] = x->edges.n, out[7] = x->members.n, out[8] = x->guards.n;
+    out[9] = x->waiting.n - x->head, out[10] = x->err_arg, out[11] = zs_memory(x);
+}
+
+/* Node (steps: which=1) fields as int64 rows of 10: state parent via by zone own members guard guard_len
+ * grown|covered<<1|expanded<<2. */
+void zs_nodes(void *p, int which, int64_t *out)
+{
+    Ctx *x = p;
+    Node *a = which ? x->steps.a : x->nodes.a;
+    int64_t n = which ? x->steps.n : x->nodes.n;
+    for (int64_t i = 0; i < n; i++) {
+        int64_t *r = out + 10 * i;
+        r[0] = a[i].state, r[1] = a[i].parent, r[2] = a[i].via, r[3] = a[i].by, r[4] = a[i].zone;
+        r[5] = a[i].own, r[6] = a[i].members, r[7] = a[i].guard, r[8] = a[i].guard_len;
+        r[9] = a[i].grown | a[i].covered << 1 | a[i].expanded << 2;
+    }
+}
+
+void zs_edges(void *p, int32_t *out)
+{
+    Ctx *x = p;
+    memcpy(out, x->edges.a, x->edges.n * sizeof(Edge));
+}
+
+void zs_members(void *p, int32_t *out)
+{
+    Ctx *x = p;
+    memcpy(out, x->members.a, x->members.n * sizeof(Member));
+}
+
+void zs_guards(void *p, int64_t *out)
+{
+    Ctx *x = p;
+    memcpy(out, x->guards.a, x->guards.n * sizeof(int64_t));
+}
+
+void zs_zone(void *p, int64_t slot, double *out)
+{
+    slot_load(p, slot, out);
+}
+
+void zs_results(void *p, int32_t *violation, double *max_value, int32_t *max_node)
+{
+    Ctx *x = p;
+    memcpy(violation, x->violation, x->nobs * sizeof(int32_t));
+    memcpy(max_value, x->max_value, x->d * sizeof(double));
+    memcpy(max_node, x->max_node, x->d * sizeof(int32_t));
+}

@@ -1,0 +1,80 @@
+"""The zone search in C stores the nodes the Python search stores, in the same order, with the same steps between
+them: maxima, violations, traces and lassos then cannot tell the two apart."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from test_platform_responses import CASES, model_of
+from runtime.zones.csearch import library
+from runtime.zones.search import ZoneExplorer
+
+pytestmark = pytest.mark.skipif(library() is None, reason="the C zone search needs a C compiler (apt-get install gcc)")
+
+
+def _node(n) -> tuple:
+    zone = None if n.stored is None else n.stored.tobytes()
+    own = None if n._own is None else n._own.tobytes()
+    return (n.state, zone, own, n.parent, n.via, sorted(n.guard), n.grown, n.covered, n.by, n.members, n.expanded)
+
+
+def _explore(model, engine: str, **kw):
+    z = ZoneExplorer(model.package, model.root, engine=engine, merge=kw.pop("merge", True))
+    return z, z.explore(**kw)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+@pytest.mark.parametrize("merge", [True, False], ids=["merged", "apart"])
+def test_c_search_stores_what_the_python_search_stores(tmp_path, case, merge):
+    _, gen, defines, platform, mission = case
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    zp, rp = _explore(model, "python", merge=merge)
+    zc, rc = _explore(model, "c", merge=merge)
+    assert (rc.states, rc.discrete, rc.transitions, rc.merged, rc.complete) == \
+        (rp.states, rp.discrete, rp.transitions, rp.merged, rp.complete)
+    assert rc.violations == rp.violations
+    assert rc.maxima == rp.maxima
+    assert zc.dropped == zp.dropped
+    assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes]
+    assert [[(t, _node(s)) for t, s in edges] for edges in zc.out] == \
+        [[(t, _node(s)) for t, s in edges] for edges in zp.out]
+
+
+def test_the_c_search_stops_where_the_python_search_stops(tmp_path):
+    _, gen, defines, platform, mission = CASES[0]
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    _, rp = _explore(model, "python", max_states=7)
+    zc, rc = _explore(model, "c", max_states=7)
+    assert (rc.complete, rc.stopped, rc.states) == (False, "max-states", rp.states)
+    assert len(zc.nodes) == rc.states >= 7
+
+
+def test_a_violation_ends_the_c_search_when_asked(tmp_path):
+    # Pair on one core with every codel at its WCET overruns (test_platform_timing); the search stops at the node
+    # where the observer first sees it, as the Python search does.
+    model = model_of(tmp_path, CASES[0][1], {}, "cores: 1\npolicy: fixed-priority\nexecution:\n"
+                     "  Pair.fast.fast_step: [9 ms, 9 ms]\n  Pair.slow.slow_step: [9 ms, 9 ms]\n", None)
+    _, rp = _explore(model, "python", stop_at_violation=True)
+    _, rc = _explore(model, "c", stop_at_violation=True)
+    assert rp.violations, "the fixture is meant to overrun"
+    assert (rc.stopped, rc.violations, rc.states) == ("violated", rp.violations, rp.states)
+
+
+def test_an_exception_raised_while_a_program_is_written_reaches_the_caller(tmp_path, monkeypatch):
+    model = model_of(tmp_path, *CASES[0][1:])
+    z = ZoneExplorer(model.package, model.root)
+
+    def broken(state, observers):
+        raise RuntimeError("no program for this state")
+
+    monkeypatch.setattr(z, "program", broken)
+    with pytest.raises(RuntimeError, match="no program for this state"):
+        z.explore()
+
+
+def test_zones_come_back_as_the_search_stored_them(tmp_path):
+    model = model_of(tmp_path, *CASES[0][1:])
+    z, _ = _explore(model, "c")
+    for n in z.nodes:
+        if n.stored is not None:
+            assert n.stored.dtype == np.float32 and n.zone.shape == (z.n + 1, z.n + 1)
