@@ -14,7 +14,7 @@ pytestmark = pytest.mark.skipif(library() is None, reason="the C zone search nee
 
 def _node(n) -> tuple:
     zone = None if n.stored is None else n.stored.tobytes()
-    own = None if n._own is None else n._own.tobytes()
+    own = None if n.own is None else n.own.tobytes()
     return (n.state, zone, own, n.parent, n.via, sorted(n.guard), n.grown, n.covered, n.by, n.members, n.expanded)
 
 
@@ -60,16 +60,52 @@ def test_a_violation_ends_the_c_search_when_asked(tmp_path):
     assert (rc.stopped, rc.violations, rc.states) == ("violated", rp.violations, rp.states)
 
 
-def test_an_exception_raised_while_a_program_is_written_reaches_the_caller(tmp_path, monkeypatch):
+def test_every_program_written_in_c_is_the_one_python_writes(tmp_path):
+    # zprogram.c writes each discrete state's successors, guards, blocked regions, time passing and watched clocks
+    # on the compiled step's words; ZoneExplorer.program() is the reference.
+    compared = 0
+    for name, gen, defines, platform, mission in CASES:
+        model = model_of(tmp_path, gen, defines, platform, mission)
+        z, _ = _explore(model, "c")
+        assert z.search.compiled is not None, f"{name}: the model is meant to compile"
+        observers = z.search.observers
+        for k, state in enumerate(z.states):
+            written = z.search.program(k)
+            if written is not None:
+                assert written == z.program(state, observers), f"{name}: state {k}"
+                compared += 1
+    assert compared > 500
+
+
+def test_states_c_cannot_write_go_back_to_python(tmp_path, monkeypatch):
+    # An expression the C code cannot say exactly (here: every one) sends its states to ZoneExplorer.program().
+    from runtime.zones import ctables
+
+    monkeypatch.setattr(ctables.Code, "_add", lambda self, walk, e: ctables.UNSUPPORTED)
+    _, gen, defines, platform, mission = CASES[3]
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    zp, rp = _explore(model, "python")
+    zc, rc = _explore(model, "c")
+    asked = []
+    real = ZoneExplorer.program
+    monkeypatch.setattr(ZoneExplorer, "program", lambda self, *a: asked.append(1) or real(self, *a))
+    zc2, rc2 = _explore(model, "c")
+    assert asked, "no state went back to Python"
+    assert [_node(n) for n in zc2.nodes] == [_node(n) for n in zp.nodes]
+    assert (rc2.states, rc2.maxima, rc2.violations) == (rp.states, rp.maxima, rp.violations)
+
+
+def test_an_exception_in_a_callback_reaches_the_caller(tmp_path, monkeypatch):
+    from runtime.zones import ctables
+
     model = model_of(tmp_path, *CASES[0][1:])
-    z = ZoneExplorer(model.package, model.root)
 
-    def broken(state, observers):
-        raise RuntimeError("no program for this state")
+    def broken(*args):
+        raise RuntimeError("no row for this interaction")
 
-    monkeypatch.setattr(z, "program", broken)
-    with pytest.raises(RuntimeError, match="no program for this state"):
-        z.explore()
+    monkeypatch.setattr(ctables, "interaction_row", broken)
+    with pytest.raises(RuntimeError, match="no row for this interaction"):
+        ZoneExplorer(model.package, model.root).explore()
 
 
 def test_zones_come_back_as_the_search_stored_them(tmp_path):

@@ -13,8 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
+from runtime.zones.search import Node, _double
+
 HERE = Path(__file__).parent
-PROGRAM = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64)
+PROGRAM = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64)  # also the interaction callback
 PROGRESS = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64, ctypes.c_int64, ctypes.c_int64, ctypes.c_int64,
                             ctypes.c_int64)
 #: zs_run's statuses.
@@ -29,7 +31,7 @@ def library():
     cc = compiler()
     if cc is None:
         return None
-    source = (HERE / "dbm.c").read_text() + "\n" + (HERE / "zsearch.c").read_text()
+    source = "\n".join((HERE / name).read_text() for name in ("dbm.c", "zprogram.c", "zsearch.c"))
     try:
         lib = ctypes.CDLL(str(build(source, cc, what="zone search")), mode=ctypes.RTLD_LOCAL)
     except (BuildError, OSError):
@@ -44,7 +46,11 @@ def library():
             ("zs_edges", None, [p, ctypes.POINTER(ctypes.c_int32)]),
             ("zs_members", None, [p, ctypes.POINTER(ctypes.c_int32)]),
             ("zs_guards", None, [p, ctypes.POINTER(i64)]), ("zs_zone", None, [p, i64, dbl]),
-            ("zs_results", None, [p, ctypes.POINTER(ctypes.c_int32), dbl, ctypes.POINTER(ctypes.c_int32)])):
+            ("zs_results", None, [p, ctypes.POINTER(ctypes.c_int32), dbl, ctypes.POINTER(ctypes.c_int32)]),
+            ("zs_set_tables", i32, [p, ctypes.POINTER(i64), i64, p, i64, PROGRAM]), ("zs_set_step", None, [p, p]),
+            ("zs_intern", i64, [p, ctypes.POINTER(i64)]), ("zs_state_words", None, [p, i64, ctypes.POINTER(i64)]),
+            ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
+            ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -52,6 +58,10 @@ def library():
 
 def _dbl(a: np.ndarray):
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def _longs(a: np.ndarray):
+    return a.ctypes.data_as(ctypes.POINTER(ctypes.c_int64))
 
 
 class CSearch:
@@ -67,18 +77,68 @@ class CSearch:
             raise MemoryError("zone search: no memory for its context")
         self.error: BaseException | None = None
         self._program = PROGRAM(self._ask)
+        self._inter = PROGRAM(self._ask_interaction)
+        self.compiled = z.compiled
+        if self.compiled is not None:  # programs written in C on the step's words; Python's where C hands back
+            from runtime.zones.ctables import tables
+
+            self.width = self.compiled.width
+            cm = self.compiled.model
+            table, self.step_ids = tables(z, self.width, set(cm.floats) | set(cm.strings))
+            words = np.asarray(table, dtype=np.int64)
+            self._lib_of_step = self.compiled.lib
+            status = lib.zs_set_tables(self.ctx, _longs(words), len(words), self._step_pointer(),
+                                       self.compiled.budget, self._inter)
+            if status:
+                raise MemoryError("zone search: no memory for the model's tables")
+            z._intern = self._intern
 
     def __del__(self) -> None:
         if getattr(self, "ctx", None):
             self.lib.zs_free(self.ctx)
             self.ctx = None
 
+    def _step_pointer(self) -> int:
+        return ctypes.cast(self.compiled.lib.c_successors, ctypes.c_void_p).value
+
+    def _intern(self, state: tuple) -> int:
+        """The C search's number of an explorer state (ZoneExplorer.state_id while it runs)."""
+        from runtime.native.values import to_words
+
+        words = np.asarray(to_words(self.compiled.model, state), dtype=np.int64)
+        got = self.lib.zs_intern(self.ctx, _longs(words))
+        if got < 0:
+            raise MemoryError("zone search: no memory for a state")
+        return got
+
+    def state(self, state_id: int) -> tuple:
+        """An explorer state from the C search's words."""
+        if self.compiled is None:
+            return self.z.states[state_id]
+        words = (ctypes.c_int64 * self.width)()
+        self.lib.zs_state_words(self.ctx, state_id, words)
+        return self.compiled._typed(list(words))
+
     def _ask(self, state_id: int) -> int:
         """The program callback: never lets an exception into C (it is raised when the search returns)."""
         try:
-            words = np.asarray(self.z.program(self.z.states[state_id], self.observers), dtype=np.int64)
-            return self.lib.zs_set_program(self.ctx, state_id, words.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
-                                           len(words))
+            words = np.asarray(self.z.program(self.state(state_id), self.observers), dtype=np.int64)
+            if self.compiled is not None and self.compiled.lib is not self._lib_of_step:  # a field was widened
+                self._lib_of_step = self.compiled.lib
+                self.lib.zs_set_step(self.ctx, self._step_pointer())
+            return self.lib.zs_set_program(self.ctx, state_id, _longs(words), len(words))
+        except BaseException as e:  # noqa: BLE001 - re-raised by run()
+            self.error = e
+            return 1
+
+    def _ask_interaction(self, number: int) -> int:
+        """The interaction callback: what a number of the compiled step stands for."""
+        from runtime.zones.ctables import interaction_row
+
+        try:
+            row = np.asarray(interaction_row(self.z, number, self.compiled.interaction_index(number),
+                                             self.step_ids), dtype=np.int64)
+            return self.lib.zs_set_interaction(self.ctx, number, _longs(row), len(row))
         except BaseException as e:  # noqa: BLE001 - re-raised by run()
             self.error = e
             return 1
@@ -99,7 +159,8 @@ class CSearch:
         for sid in z.space.initial_ids:
             state = z.space.state(sid)
             zone = z.initial_zone()
-            status = lib.zs_initial(self.ctx, z.state_id(state), _dbl(zone), self._program)
+            status = lib.zs_initial(self.ctx, self._intern(state) if self.compiled else z.state_id(state), _dbl(zone),
+                                    self._program)
             self._raise(status, Unsupported)
         status = lib.zs_run(self.ctx, -1 if max_states is None else max_states, int(stop_at_violation),
                             self._program, callback, 64)
@@ -122,6 +183,15 @@ class CSearch:
                 result.maxima[clock] = (float(top[clock]), node[clock])
         return result
 
+    def program(self, state_id: int) -> list[int] | None:
+        """The program the search used for a state (None if it needed none)."""
+        n = self.lib.zs_program(self.ctx, state_id, None, 0)
+        if n < 0:
+            return None
+        out = (ctypes.c_int64 * n)()
+        self.lib.zs_program(self.ctx, state_id, out, n)
+        return list(out)
+
     def _raise(self, status: int, unsupported) -> None:
         if status == -1:
             error, self.error = self.error, None
@@ -135,44 +205,143 @@ class CSearch:
             raise MemoryError("zone search: out of memory")
 
     def _nodes(self, counts) -> None:
-        """The C search's nodes, steps into covered zones and edges as the explorer's ``nodes`` and ``out``."""
-        from runtime.zones.search import Node
-
-        z, lib = self.z, self.lib
+        """The C search's nodes, steps into covered zones and edges as the explorer's ``nodes`` and ``out``, read
+        from C as they are asked for (a lasso search walks them all; a trace a few)."""
+        lib = self.lib
         n_nodes, n_steps, n_edges, n_members, n_guards = counts[0], counts[5], counts[6], counts[7], counts[8]
-        guards = np.zeros(max(1, n_guards), dtype=np.int64)
-        lib.zs_guards(self.ctx, guards.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)))
-        members = np.zeros((max(1, n_members), 2), dtype=np.int32)
-        lib.zs_members(self.ctx, members.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
-        zone = np.zeros((self.d, self.d))
-
-        def load(slot: int):
-            lib.zs_zone(self.ctx, slot, _dbl(zone))
-            return zone.astype(np.float32)
-
-        def make(rows: np.ndarray) -> list:
-            out = []
-            for state, parent, via, by, slot, own, first, goff, glen, flags in rows.tolist():
-                g = guards[goff:goff + 3 * glen].tolist()
-                n = Node(z.states[state], None, parent, via, list(zip(g[0::3], g[1::3], g[2::3])), bool(flags & 1))
-                n._zone = load(slot) if slot >= 0 else None
-                n.covered, n.expanded, n.by = bool(flags & 2), bool(flags & 4), by
-                if own >= 0:
-                    n._own = load(own)
-                while first >= 0:
-                    n.members.append(int(members[first, 0]))
-                    first = int(members[first, 1])
-                out.append(n)
-            return out
-
+        self.guards = np.zeros(max(1, n_guards), dtype=np.int64)
+        lib.zs_guards(self.ctx, _longs(self.guards))
+        self.members = np.zeros((max(1, n_members), 2), dtype=np.int32)
+        lib.zs_members(self.ctx, self.members.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
         rows = np.zeros((max(1, n_nodes), 10), dtype=np.int64)
-        lib.zs_nodes(self.ctx, 0, rows.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)))
-        z.nodes = make(rows[:n_nodes])
+        lib.zs_nodes(self.ctx, 0, _longs(rows))
         srows = np.zeros((max(1, n_steps), 10), dtype=np.int64)
-        lib.zs_nodes(self.ctx, 1, srows.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)))
-        steps = make(srows[:n_steps])
+        lib.zs_nodes(self.ctx, 1, _longs(srows))
         edges = np.zeros((max(1, n_edges), 3), dtype=np.int32)
         lib.zs_edges(self.ctx, edges.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
-        z.out = [[] for _ in range(n_nodes)]
-        for frm, target, ref in edges[:n_edges].tolist():
-            z.out[frm].append((target, z.nodes[ref] if ref >= 0 else steps[-ref - 1]))
+        self.z.nodes = Nodes(self, rows[:n_nodes])
+        self.steps = Nodes(self, srows[:n_steps])
+        self.z.out = Out(self, edges[:n_edges], n_nodes)
+        if self.compiled is not None:
+            self.z.states = States(self)
+
+    def zone(self, slot: int) -> np.ndarray:
+        """A stored zone (single precision, as the search keeps it)."""
+        out = np.zeros((self.d, self.d))
+        self.lib.zs_zone(self.ctx, slot, _dbl(out))
+        return out.astype(np.float32)
+
+
+class States:
+    """The C search's discrete states as explorer states, decoded once each when asked for."""
+
+    def __init__(self, search: CSearch) -> None:
+        self.search, self.cache = search, {}
+
+    def __len__(self) -> int:
+        return self.search.lib.zs_nstates(self.search.ctx)
+
+    def __getitem__(self, k: int) -> tuple:
+        got = self.cache.get(k)
+        if got is None:
+            got = self.cache[k] = self.search.state(k)
+        return got
+
+    def __iter__(self):
+        return (self[k] for k in range(len(self)))
+
+
+class Nodes:
+    """Nodes (or steps into covered zones) of the C search as :class:`CNode`, made when asked for."""
+
+    def __init__(self, search: CSearch, rows: np.ndarray) -> None:
+        self.search, self.rows, self.cache = search, rows, {}
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __getitem__(self, k: int):
+        if k < 0:
+            k += len(self.rows)
+        got = self.cache.get(k)
+        if got is None:
+            got = self.cache[k] = CNode(self.search, self.rows[k].tolist())
+        return got
+
+    def __iter__(self):
+        return (self[k] for k in range(len(self.rows)))
+
+
+class Out:
+    """Per node, ``(node holding the successor, the step into it)``, as ZoneExplorer.out."""
+
+    def __init__(self, search: CSearch, edges: np.ndarray, n: int) -> None:
+        self.search, self.edges, self.n = search, edges, n
+        order = np.argsort(edges[:, 0], kind="stable") if len(edges) else np.zeros(0, dtype=np.int64)
+        self.sorted = edges[order]
+        self.starts = np.searchsorted(self.sorted[:, 0], np.arange(n + 1)) if len(edges) else np.zeros(n + 1, int)
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, k: int) -> list:
+        s = self.search
+        out = []
+        for _, target, ref in self.sorted[self.starts[k]:self.starts[k + 1]].tolist():
+            out.append((target, s.z.nodes[ref] if ref >= 0 else s.steps[-ref - 1]))
+        return out
+
+    def __iter__(self):
+        return (self[k] for k in range(self.n))
+
+
+class CNode(Node):
+    """A node of the C search: its state and zones read from C the first time they are asked for."""
+
+    __slots__ = ("_search", "_sid", "_slot", "_own_slot")
+
+    def __init__(self, search: CSearch, row: list) -> None:
+        state, parent, via, by, slot, own, first, goff, glen, flags = row
+        g = search.guards[goff:goff + 3 * glen].tolist()
+        super().__init__(None, None, parent, via, list(zip(g[0::3], g[1::3], g[2::3])), bool(flags & 1))
+        self._search, self._sid, self._slot, self._own_slot = search, state, slot, own
+        self.covered, self.expanded, self.by = bool(flags & 2), bool(flags & 4), by
+        while first >= 0:
+            self.members.append(int(search.members[first, 0]))
+            first = int(search.members[first, 1])
+
+    @property
+    def state(self) -> tuple:
+        return self._search.z.states[self._sid]
+
+    @state.setter
+    def state(self, value) -> None:
+        pass  # Node.__init__ sets it: here it always comes from the search
+
+    @property
+    def stored(self) -> np.ndarray | None:
+        if self._zone is None and self._slot >= 0:
+            self._zone = self._search.zone(self._slot)
+        return self._zone
+
+    @property
+    def zone(self) -> np.ndarray | None:
+        return _double(self.stored)
+
+    @zone.setter
+    def zone(self, m) -> None:
+        self._zone = m
+
+    @property
+    def own(self) -> np.ndarray | None:
+        if self._own is None and self._own_slot >= 0:
+            self._own = self._search.zone(self._own_slot)
+        return _double(self._own)
+
+    @own.setter
+    def own(self, m) -> None:
+        self._own = m
+
+    @property
+    def reached(self) -> np.ndarray | None:
+        return self.own if self._own_slot >= 0 else self.zone

@@ -156,6 +156,8 @@ class ZoneExplorer:
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
         self._ids: dict[tuple, int] = {}
+        self._intern = None  # while a C search keeps the states: its numbering
+        self.search = None  # the C search that ran (runtime/zones/csearch.py), if one did
 
     # -- the discrete side ------------------------------------------------------------------------
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
@@ -407,7 +409,8 @@ class ZoneExplorer:
         if lib is not None:
             from runtime.zones.csearch import CSearch
 
-            result = CSearch(self, lib).run(ZoneResult(0, 0, 0, 0.0, True), max_states, progress, stop_at_violation)
+            self.search = CSearch(self, lib)
+            result = self.search.run(ZoneResult(0, 0, 0, 0.0, True), max_states, progress, stop_at_violation)
             progress.done()
             result.seconds = time.perf_counter() - start
             return result
@@ -494,6 +497,8 @@ class ZoneExplorer:
 
     def state_id(self, state: tuple) -> int:
         """The number of a discrete state (given on first sight)."""
+        if self._intern is not None:
+            return self._intern(state)
         got = self._ids.get(state)
         if got is None:
             got = self._ids[state] = len(self.states)

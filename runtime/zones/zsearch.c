@@ -61,6 +61,13 @@ typedef struct {
     int64_t err_arg;
     double *tmp;            /* scratch zones */
     int ntmp;
+    /* with the compiled step: programs written in C (zprogram.c), states kept as its words */
+    Tables *tables;
+    VEC(int64_t) words;     /* W per state */
+    int64_t *hash;          /* open addressing: state + 1, 0 empty */
+    int64_t hcap;
+    int64_t *inter_key, **inter_val, icap, icount;
+    program_fn ask;
 } Ctx;
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
@@ -80,7 +87,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int nclocks, int merge)
     x->max_node = malloc(d * sizeof(int32_t));
     for (int i = 0; i < d; i++)
         x->max_node[i] = -1;
-    x->ntmp = 8;
+    x->ntmp = 9;
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
     return x;
 }
@@ -96,7 +103,162 @@ void zs_free(void *p)
         free(x->kept.a[i].a);
     free(x->prog.a), free(x->kept.a), free(x->pool), free(x->free_list.a), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
-    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x);
+    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
+    if (x->tables) {
+        x->tables->ninter = 0;
+        tables_free(x->tables);
+    }
+    for (int64_t i = 0; i < x->icap; i++)
+        free(x->inter_val ? x->inter_val[i] : NULL);
+    free(x->inter_key), free(x->inter_val), free(x->words.a), free(x->hash), free(x);
+}
+
+/* -- states as the compiled step's words ----------------------------------------------------------- */
+static uint64_t hash_words(const int64_t *w, int n)
+{
+    uint64_t h = 1469598103934665603ull;
+    for (int i = 0; i < n; i++) {
+        h ^= (uint64_t)w[i];
+        h *= 1099511628211ull;
+        h ^= h >> 29;
+    }
+    return h;
+}
+
+static int grow_states(Ctx *x, int64_t n)
+{
+    while (x->prog.n < n) {
+        if (x->prog.n == x->prog.cap) {
+            x->prog.cap = x->prog.cap ? 2 * x->prog.cap : 1024;
+            int64_t **a = realloc(x->prog.a, x->prog.cap * sizeof(int64_t *));
+            Kept *k = realloc(x->kept.a, x->prog.cap * sizeof(Kept));
+            if (!a || !k)
+                return -9;
+            x->prog.a = a, x->kept.a = k, x->kept.cap = x->prog.cap;
+        }
+        Kept none = {0};
+        x->prog.a[x->prog.n++] = NULL;
+        x->kept.a[x->kept.n++] = none;
+    }
+    return 0;
+}
+
+/* The number of the state with these words, given on first sight. */
+static int64_t intern(void *p, const int64_t *w)
+{
+    Ctx *x = p;
+    int W = x->tables->W;
+    int64_t n = x->words.n / W;
+    if (2 * (n + 1) > x->hcap) {
+        int64_t cap = x->hcap ? 2 * x->hcap : 4096;
+        int64_t *h = calloc(cap, sizeof(int64_t));
+        if (!h)
+            return -9;
+        for (int64_t s = 0; s < n; s++) {
+            uint64_t i = hash_words(x->words.a + s * W, W) & (cap - 1);
+            while (h[i])
+                i = (i + 1) & (cap - 1);
+            h[i] = s + 1;
+        }
+        free(x->hash);
+        x->hash = h, x->hcap = cap;
+    }
+    uint64_t i = hash_words(w, W) & (x->hcap - 1);
+    while (x->hash[i]) {
+        int64_t s = x->hash[i] - 1;
+        if (!memcmp(x->words.a + s * W, w, W * sizeof(int64_t)))
+            return s;
+        i = (i + 1) & (x->hcap - 1);
+    }
+    for (int k = 0; k < W; k++)
+        PUSH(x->words, w[k]);
+    x->hash[i] = n + 1;
+    if (grow_states(x, n + 1))
+        return -9;
+    return n;
+}
+
+int64_t zs_intern(void *p, const int64_t *w) { return intern(p, w); }
+
+void zs_state_words(void *p, int64_t state, int64_t *out)
+{
+    Ctx *x = p;
+    memcpy(out, x->words.a + state * x->tables->W, x->tables->W * sizeof(int64_t));
+}
+
+int64_t zs_nstates(void *p)
+{
+    Ctx *x = p;
+    return x->tables ? x->words.n / x->tables->W : x->prog.n;
+}
+
+int zs_set_tables(void *p, const int64_t *words, int64_t n, void *succ, int64_t budget, inter_fn ask_inter)
+{
+    Ctx *x = p;
+    x->tables = tables_read(words, n);
+    if (!x->tables)
+        return -9;
+    x->tables->succ = (succ_fn)succ, x->tables->budget = budget, x->tables->ask_inter = ask_inter;
+    return 0;
+}
+
+void zs_set_step(void *p, void *succ)
+{
+    Ctx *x = p;
+    x->tables->succ = (succ_fn)succ;
+}
+
+/* interaction rows by number (open addressing on the number) */
+static int64_t *inter_find(Ctx *x, int64_t number)
+{
+    if (!x->icap)
+        return NULL;
+    uint64_t i = ((uint64_t)number * 11400714819323198485ull) & (x->icap - 1);
+    while (x->inter_val[i]) {
+        if (x->inter_key[i] == number)
+            return x->inter_val[i];
+        i = (i + 1) & (x->icap - 1);
+    }
+    return NULL;
+}
+
+int zs_set_interaction(void *p, int64_t number, const int64_t *words, int64_t n)
+{
+    Ctx *x = p;
+    if (2 * (x->icount + 1) > x->icap) {
+        int64_t cap = x->icap ? 2 * x->icap : 256;
+        int64_t *k = calloc(cap, sizeof(int64_t));
+        int64_t **v = calloc(cap, sizeof(int64_t *));
+        if (!k || !v)
+            return -9;
+        for (int64_t j = 0; j < x->icap; j++)
+            if (x->inter_val[j]) {
+                uint64_t i = ((uint64_t)x->inter_key[j] * 11400714819323198485ull) & (cap - 1);
+                while (v[i])
+                    i = (i + 1) & (cap - 1);
+                k[i] = x->inter_key[j], v[i] = x->inter_val[j];
+            }
+        free(x->inter_key), free(x->inter_val);
+        x->inter_key = k, x->inter_val = v, x->icap = cap;
+    }
+    int64_t *row = malloc((n ? n : 1) * sizeof(int64_t));
+    if (!row)
+        return -9;
+    memcpy(row, words, n * sizeof(int64_t));
+    uint64_t i = ((uint64_t)number * 11400714819323198485ull) & (x->icap - 1);
+    while (x->inter_val[i])
+        i = (i + 1) & (x->icap - 1);
+    x->inter_key[i] = number, x->inter_val[i] = row, x->icount++;
+    return 0;
+}
+
+static int64_t *inter_row(void *p, Tables *t, int64_t number)
+{
+    Ctx *x = p;
+    int64_t *row = inter_find(x, number);
+    if (!row && t->ask_inter(number) == 0)
+        row = inter_find(x, number);
+    return row;
 }
 
 /* -- zone slots (single precision: every bound an integer far below 2^24, or infinity) ---------------- */
@@ -215,21 +377,28 @@ done:
 /* -- programs --------------------------------------------------------------------------------------- */
 static int64_t *program(Ctx *x, int64_t state, program_fn ask)
 {
-    while (x->prog.n <= state) {
-        int64_t *none = NULL;
-        Kept k = {0};
-        if (x->prog.n == x->prog.cap) {
-            x->prog.cap = x->prog.cap ? 2 * x->prog.cap : 1024;
-            x->prog.a = realloc(x->prog.a, x->prog.cap * sizeof(int64_t *));
-            x->kept.cap = x->prog.cap;
-            x->kept.a = realloc(x->kept.a, x->kept.cap * sizeof(Kept));
-            if (!x->prog.a || !x->kept.a)
-                return NULL;
+    if (grow_states(x, state + 1))
+        return NULL;
+    if (x->prog.a[state])
+        return x->prog.a[state];
+    if (x->tables) {
+        int W = x->tables->W;
+        int64_t *s = malloc(W * sizeof(int64_t));  /* interning successors may move the words */
+        if (!s)
+            return NULL;
+        memcpy(s, x->words.a + state * W, W * sizeof(int64_t));
+        L prog = {0};
+        int status = write_program(x, x->tables, s, x->d, T(x, 8), intern, &prog);
+        free(s);
+        if (!status) {
+            x->prog.a[state] = prog.a ? prog.a : calloc(1, sizeof(int64_t));
+            return x->prog.a[state];
         }
-        x->prog.a[x->prog.n++] = none;
-        x->kept.a[x->kept.n++] = k;
+        free(prog.a);
+        if (status != BACK)
+            return NULL;
     }
-    if (!x->prog.a[state] && ask(state) != 0)
+    if (ask(state) != 0)
         return NULL;
     return x->prog.a[state];
 }
@@ -689,4 +858,27 @@ void zs_results(void *p, int32_t *violation, double *max_value, int32_t *max_nod
     memcpy(violation, x->violation, x->nobs * sizeof(int32_t));
     memcpy(max_value, x->max_value, x->d * sizeof(double));
     memcpy(max_node, x->max_node, x->d * sizeof(int32_t));
+}
+
+/* The program of a state as the search used it (its length; copied when it fits in cap), -1 if none. */
+int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
+{
+    Ctx *x = p;
+    if (state >= x->prog.n || !x->prog.a[state])
+        return -1;
+    const int64_t *pr = x->prog.a[state];
+    Parts q = parts(pr);
+    const int64_t *s = q.succ;
+    int64_t n = *s++;
+    for (int64_t t = 0; t < n; t++) {
+        const int64_t *rs = skip_bounds(s + 2), *bl = rs + 1 + 2 * rs[0];
+        int64_t nb = *bl++;
+        for (int64_t b = 0; b < nb; b++)
+            bl = skip_bounds(bl);
+        s = bl;
+    }
+    int64_t len = s - pr;
+    if (len <= cap)
+        memcpy(out, pr, len * sizeof(int64_t));
+    return len;
 }

@@ -1,0 +1,681 @@
+/* Discrete states' programs (zsearch.c's header) written in C: ZoneExplorer.program() line for line, on the
+ * words of the compiled step (runtime/native), whose c_successors gives each state's successors.
+ *
+ * The model's clock side comes as one table of int64 (runtime/zones/ctables.py writes it): expressions as
+ * postfix code, atoms with their places (time passing there, invariants, clocks read), clock guards and resets
+ * of transitions, compound priorities with their guards and chains, observers and response clocks.  What an
+ * interaction number stands for (its engine index, ports and priorities) is asked of Python once per number.
+ * Whatever this file does not take (an expression outside the code, a marking of two places, a priority cycle,
+ * an error of the step) sends the state back to Python's program(), the reference, which computes it or
+ * raises the error it would raise anyway.
+ */
+#include <stdint.h>
+
+typedef int (*succ_fn)(const int64_t *s, int64_t *out, int64_t *via, int max, int64_t budget, int *ecode,
+                       int64_t *earg);
+typedef int (*inter_fn)(int64_t number);
+
+enum { OP_END, OP_CONST, OP_SLOT, OP_NEG, OP_ADD, OP_SUB, OP_MUL, OP_LT, OP_LE, OP_GT, OP_GE, OP_EQ, OP_NE,
+       OP_AND, OP_OR, OP_NOT };
+#define BACK 1  /* "send this state back to Python" */
+
+typedef struct {
+    const int64_t *code;
+    int W, n, natoms, ntimed, nrules, ntick, nobs, nmeas, nsteps;
+    const int64_t *atom_offset, *atom_nplaces;
+    const int64_t **place;   /* per atom, per place: ticks, discrete, natoms, atoms (clock op expr)..., nactive, ... */
+    int64_t *place_base;
+    const int64_t *clock_atom, *timed, *tick, *obs, *meas;
+    const int64_t **step;    /* natoms, (clock op expr)..., nresets, (clock expr)... */
+    const int64_t **rule;    /* kind, [ndiag triples | expr], nedges, edges... */
+    int64_t *blob;
+    /* interaction numbers: index, nports, per port: atom, nplaces, step per place...; nlow, lows, nhigh, highs */
+    int64_t **inter;
+    int64_t ninter;
+    succ_fn succ;
+    int64_t budget;
+    inter_fn ask_inter;
+} Tables;
+
+/* -- the table ------------------------------------------------------------------------------------ */
+static void tables_free(Tables *t)
+{
+    if (!t)
+        return;
+    for (int64_t i = 0; i < t->ninter; i++)
+        free(t->inter[i]);
+    free(t->inter), free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob), free(t);
+}
+
+static const int64_t *skip_atoms(const int64_t *p) { return p + 1 + 3 * p[0]; }
+
+static Tables *tables_read(const int64_t *words, int64_t len)
+{
+    Tables *t = calloc(1, sizeof(Tables));
+    if (!t)
+        return NULL;
+    t->blob = malloc(len * sizeof(int64_t));
+    memcpy(t->blob, words, len * sizeof(int64_t));
+    const int64_t *p = t->blob;
+    t->W = (int)*p++, t->n = (int)*p++, t->natoms = (int)*p++, t->ntimed = (int)*p++, t->nrules = (int)*p++;
+    t->ntick = (int)*p++, t->nobs = (int)*p++, t->nmeas = (int)*p++, t->nsteps = (int)*p++;
+    int64_t ncode = *p++;
+    t->code = p;
+    p += ncode;
+    t->atom_offset = p;
+    p += t->natoms;
+    t->atom_nplaces = p;
+    p += t->natoms;
+    t->place_base = malloc((t->natoms + 1) * sizeof(int64_t));
+    int64_t total = 0;
+    for (int a = 0; a < t->natoms; a++)
+        t->place_base[a] = total, total += t->atom_nplaces[a];
+    t->place = malloc((total + 1) * sizeof(int64_t *));
+    for (int64_t k = 0; k < total; k++) {
+        t->place[k] = p;
+        p += 2;  /* ticks, discrete */
+        p = skip_atoms(p);
+        p += 1 + p[0];  /* active clocks */
+    }
+    t->clock_atom = p;
+    p += t->n + 1;
+    t->timed = p;
+    p += t->ntimed;
+    t->step = malloc((t->nsteps + 1) * sizeof(int64_t *));
+    for (int k = 0; k < t->nsteps; k++) {
+        t->step[k] = p;
+        p = skip_atoms(p);
+        p += 1 + 2 * p[0];
+    }
+    t->rule = malloc((t->nrules + 1) * sizeof(int64_t *));
+    for (int r = 0; r < t->nrules; r++) {
+        t->rule[r] = p;
+        int64_t kind = *p++;
+        if (kind == 1)
+            p += 1 + 3 * p[0];
+        else if (kind == 2)
+            p++;
+        p += 1 + p[0];
+    }
+    t->tick = p;
+    p += t->ntick;
+    t->obs = p;
+    p += 5 * t->nobs;
+    t->meas = p;
+    return t;
+}
+
+int zs_set_interaction(void *p, int64_t number, const int64_t *words, int64_t n);
+
+/* -- expressions -------------------------------------------------------------------------------- */
+static int ev(const Tables *t, int64_t at, const int64_t *s, int64_t *out)
+{
+    if (at < 0)
+        return BACK;
+    int64_t st[64];
+    int sp = 0;
+    for (const int64_t *c = t->code + at;; ) {
+        int64_t op = *c++;
+        if (op == OP_END)
+            break;
+        if (op == OP_CONST || op == OP_SLOT) {
+            if (sp == 64)
+                return BACK;
+            st[sp++] = op == OP_CONST ? *c : s[*c];
+            c++;
+            continue;
+        }
+        if (op == OP_NEG || op == OP_NOT) {
+            if (sp < 1)
+                return BACK;
+            st[sp - 1] = op == OP_NEG ? -st[sp - 1] : !st[sp - 1];
+            continue;
+        }
+        if (sp < 2)
+            return BACK;
+        int64_t a = st[sp - 2], b = st[sp - 1], v;
+        switch (op) {
+        case OP_ADD: v = a + b; break;
+        case OP_SUB: v = a - b; break;
+        case OP_MUL: v = a * b; break;
+        case OP_LT: v = a < b; break;
+        case OP_LE: v = a <= b; break;
+        case OP_GT: v = a > b; break;
+        case OP_GE: v = a >= b; break;
+        case OP_EQ: v = a == b; break;
+        case OP_NE: v = a != b; break;
+        case OP_AND: v = a && b; break;
+        case OP_OR: v = a || b; break;
+        default: return BACK;
+        }
+        st[--sp - 1] = v;
+    }
+    if (sp != 1)
+        return BACK;
+    *out = st[0];
+    return 0;
+}
+
+/* -- small growable lists of int64 ---------------------------------------------------------------- */
+typedef struct { int64_t *a; int64_t n, cap; } L;
+
+static int lpush(L *l, int64_t v)
+{
+    if (l->n == l->cap) {
+        l->cap = l->cap ? 2 * l->cap : 32;
+        int64_t *a = realloc(l->a, l->cap * sizeof(int64_t));
+        if (!a)
+            return -9;
+        l->a = a;
+    }
+    l->a[l->n++] = v;
+    return 0;
+}
+
+static int lcat(L *l, const int64_t *v, int64_t n)
+{
+    for (int64_t i = 0; i < n; i++)
+        if (lpush(l, v[i]))
+            return -9;
+    return 0;
+}
+
+/* clock atoms (clock, op, expr) as bounds i j c appended to out (search.py's bounds) */
+static int bounds(const Tables *t, const int64_t *atoms, const int64_t *s, L *out)
+{
+    for (int64_t k = 0; k < atoms[0]; k++) {
+        int64_t clock = atoms[1 + 3 * k], op = atoms[2 + 3 * k], v;
+        if (ev(t, atoms[3 + 3 * k], s, &v))
+            return BACK;
+        switch (op) {
+        case 0: lpush(out, clock), lpush(out, 0), lpush(out, v - 1); break;
+        case 1: lpush(out, clock), lpush(out, 0), lpush(out, v); break;
+        case 2: lpush(out, 0), lpush(out, clock), lpush(out, -(v + 1)); break;
+        case 3: lpush(out, 0), lpush(out, clock), lpush(out, -v); break;
+        default:
+            lpush(out, clock), lpush(out, 0), lpush(out, v);
+            lpush(out, 0), lpush(out, clock), lpush(out, -v);
+        }
+    }
+    return 0;
+}
+
+/* the index of the one place marked in a marking, -1 when it is not exactly one */
+static int one_place(int64_t bits)
+{
+    if (bits <= 0 || (bits & (bits - 1)))
+        return -1;
+    return __builtin_ctzll((uint64_t)bits);
+}
+
+/* -- one state's program ------------------------------------------------------------------------ */
+typedef struct {
+    const Tables *t;
+    const int64_t *s;
+    int d;
+    double *scratch;
+    /* enabled interactions: engine index and their table rows, in engine order */
+    int64_t *index;
+    int64_t **row;
+    int64_t nen;
+    /* memo of regions: rule, acc, result (each result: a list of [n, triples...]) */
+    L memo_key, memo_val;  /* key: r, nacc, acc...; val: offset into regions pool per key */
+    L memo_off;
+    L pool;                /* results: count, then per region: n, triples... */
+    int depth;
+} Prog;
+
+static int feasible(Prog *g, const int64_t *b, int64_t n)
+{
+    int d = g->d;
+    double *m = g->scratch;
+    for (int i = 0; i < d; i++)
+        for (int j = 0; j < d; j++)
+            m[(int64_t)i * d + j] = i == 0 || i == j ? 0 : INFINITY;
+    for (int64_t k = 0; k < n; k++)
+        if (!z_constrain(m, d, (int)b[3 * k], (int)b[3 * k + 1], (double)b[3 * k + 2]))
+            return 0;
+    return 1;
+}
+
+/* the need bounds of enabled interaction e (its guard at this state, search.py's guard) */
+static int need_of(Prog *g, const int64_t *row, L *need, L *resets)
+{
+    const Tables *t = g->t;
+    const int64_t *p = row + 1;
+    int64_t nports = *p++;
+    for (int64_t k = 0; k < nports; k++) {
+        int64_t atom = p[0], nplaces = p[1];
+        const int64_t *steps = p + 2;
+        p += 2 + nplaces;
+        int pi = one_place(g->s[t->atom_offset[atom]]);
+        if (pi < 0 || pi >= nplaces || steps[pi] < 0)
+            continue;
+        const int64_t *st = t->step[steps[pi]];
+        if (bounds(t, st, g->s, need))
+            return BACK;
+        if (resets) {
+            const int64_t *rs = skip_atoms(st);
+            for (int64_t r = 0; r < rs[0]; r++) {
+                int64_t v;
+                if (ev(t, rs[2 + 2 * r], g->s, &v))
+                    return BACK;
+                lpush(resets, rs[1 + 2 * r]), lpush(resets, v);
+            }
+        }
+    }
+    return 0;
+}
+
+static const int64_t *lows(const int64_t *row)
+{
+    const int64_t *p = row + 1;
+    int64_t nports = *p++;
+    for (int64_t k = 0; k < nports; k++)
+        p += 2 + p[1];
+    return p;  /* nlow, lows..., nhigh, highs... */
+}
+
+static int cmp3(const void *a, const void *b)
+{
+    const int64_t *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+/* regions of rule r under acc (search.py's Blocking._region) appended to out as [n, triples...] each;
+ * *everywhere set when the result is [[]]. */
+static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *path, L *out, int *everywhere);
+
+static int memo_find(Prog *g, int64_t r, const int64_t *acc, int64_t nacc)
+{
+    for (int64_t k = 0, at = 0; k < g->memo_off.n; k++) {
+        const int64_t *key = g->memo_key.a + at;
+        if (key[0] == r && key[1] == nacc && !memcmp(key + 2, acc, 3 * nacc * sizeof(int64_t)))
+            return (int)k;
+        at += 2 + 3 * key[1];
+    }
+    return -1;
+}
+
+static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *path, L *out, int *everywhere)
+{
+    const Tables *t = g->t;
+    *everywhere = 0;
+    int hit = memo_find(g, r, acc0, nacc0);
+    if (hit >= 0) {
+        const int64_t *v = g->pool.a + g->memo_off.a[hit];
+        if (v[0] < 0) {
+            *everywhere = 1;
+            return 0;
+        }
+        int64_t at = 1;
+        for (int64_t k = 0; k < v[0]; k++) {
+            lcat(out, v + at, 1 + 3 * v[at]);
+            at += 1 + 3 * v[at];
+        }
+        return 0;
+    }
+    const int64_t *rule = t->rule[r];
+    L acc = {0}, mine = {0};
+    int status = 0, all = 0;
+    lcat(&acc, acc0, 3 * nacc0);
+    int64_t kind = rule[0];
+    const int64_t *edges;
+    if (kind == 1) {
+        lcat(&acc, rule + 2, 3 * rule[1]);
+        qsort(acc.a, acc.n / 3, 3 * sizeof(int64_t), cmp3);
+        int64_t w = 0;
+        for (int64_t k = 0; k < acc.n / 3; k++)
+            if (!w || cmp3(acc.a + 3 * k, acc.a + 3 * (w - 1))) {
+                memmove(acc.a + 3 * w, acc.a + 3 * k, 3 * sizeof(int64_t));
+                w++;
+            }
+        acc.n = 3 * w;
+        edges = rule + 2 + 3 * rule[1];
+        if (!feasible(g, acc.a, w))
+            goto store;
+    } else if (kind == 2) {
+        int64_t v;
+        if (ev(t, rule[1], g->s, &v)) {
+            status = BACK;
+            goto done;
+        }
+        edges = rule + 2;
+        if (!v)
+            goto store;
+    } else if (kind == 0) {
+        edges = rule + 1;
+    } else {
+        status = BACK;
+        goto done;
+    }
+    for (int64_t k = 0; k < path->n; k++)
+        if (path->a[k] == r) {
+            status = BACK;  /* a priority cycle: Python names it */
+            goto done;
+        }
+    for (int64_t e = 0; e < g->nen; e++) {
+        const int64_t *hl = lows(g->row[e]);
+        hl += 1 + hl[0];
+        int high = 0;
+        for (int64_t k = 0; k < hl[0]; k++)
+            high |= hl[1 + k] == r;
+        if (!high)
+            continue;
+        L need = {0};
+        lcat(&need, acc.a, acc.n);
+        if (need_of(g, g->row[e], &need, NULL)) {
+            free(need.a);
+            status = BACK;
+            goto done;
+        }
+        if (!need.n) {
+            free(need.a);
+            all = 1;
+            goto store;
+        }
+        lpush(&mine, need.n / 3);
+        lcat(&mine, need.a, need.n);
+        free(need.a);
+    }
+    lpush(path, r);
+    for (int64_t k = 0; k < edges[0] && !all; k++) {
+        L sub = {0};
+        int every;
+        status = region(g, edges[1 + k], acc.a, acc.n / 3, path, &sub, &every);
+        if (status) {
+            free(sub.a);
+            path->n--;
+            goto done;
+        }
+        if (every) {
+            all = 1;
+        } else {
+            for (int64_t at = 0; at < sub.n; at += 1 + 3 * sub.a[at]) {
+                if (!sub.a[at]) {
+                    all = 1;
+                    break;
+                }
+                lcat(&mine, sub.a + at, 1 + 3 * sub.a[at]);
+            }
+        }
+        free(sub.a);
+    }
+    path->n--;
+store:
+    {
+        /* keep the feasible ones, then remember */
+        L kept = {0};
+        int64_t count = 0;
+        if (!all)
+            for (int64_t at = 0; at < mine.n; at += 1 + 3 * mine.a[at])
+                if (feasible(g, mine.a + at + 1, mine.a[at])) {
+                    lcat(&kept, mine.a + at, 1 + 3 * mine.a[at]);
+                    count++;
+                }
+        lpush(&g->memo_key, r), lpush(&g->memo_key, nacc0), lcat(&g->memo_key, acc0, 3 * nacc0);
+        lpush(&g->memo_off, g->pool.n);
+        lpush(&g->pool, all ? -1 : count);
+        lcat(&g->pool, kept.a, kept.n);
+        if (all)
+            *everywhere = 1;
+        else
+            lcat(out, kept.a, kept.n);
+        free(kept.a);
+    }
+done:
+    free(acc.a), free(mine.a);
+    return status;
+}
+
+static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
+{
+    L path = {0};
+    int status = region(g, r, NULL, 0, &path, out, everywhere);
+    free(path.a);
+    return status;
+}
+
+/* Write the program of state s (words) into prog; BACK: let Python write it. Successor states are interned
+ * through ``intern`` (their numbers go into the program). */
+typedef int64_t (*intern_fn)(void *ctx, const int64_t *words);
+
+static int64_t *inter_row(void *ctx, Tables *t, int64_t number);
+
+static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *scratch, intern_fn intern, L *prog)
+{
+    int cap = 256, n;
+    int64_t *buf, *via;
+    int ecode;
+    int64_t earg;
+    for (;;) {
+        buf = malloc((size_t)cap * t->W * sizeof(int64_t));
+        via = malloc((size_t)cap * sizeof(int64_t));
+        if (!buf || !via) {
+            free(buf), free(via);
+            return -9;
+        }
+        n = t->succ(s, buf, via, cap, t->budget, &ecode, &earg);
+        if (n >= 0 || cap >= 65536 || ecode != 10)
+            break;
+        free(buf), free(via);
+        cap *= 16;
+    }
+    int status = 0;
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, {0}, 0};
+    int64_t *sidx = NULL;
+    int64_t **srow = NULL;
+    if (n < 0) {
+        status = BACK;  /* the step's own error, or a field to widen: Python's successors handle it */
+        goto out;
+    }
+    sidx = malloc((n + 1) * sizeof(int64_t));
+    srow = malloc((n + 1) * sizeof(int64_t *));
+    g.index = malloc((n + 1) * sizeof(int64_t));
+    g.row = malloc((n + 1) * sizeof(int64_t *));
+    for (int i = 0; i < n; i++) {
+        srow[i] = inter_row(ctx, t, via[i]);
+        if (!srow[i]) {
+            status = -1;
+            goto out;
+        }
+        sidx[i] = srow[i][0];
+    }
+    /* enabled: distinct engine indices, ascending (insertion sort: a state has few) */
+    for (int i = 0; i < n; i++) {
+        int64_t e = 0;
+        while (e < g.nen && g.index[e] < sidx[i])
+            e++;
+        if (e < g.nen && g.index[e] == sidx[i])
+            continue;
+        memmove(g.index + e + 1, g.index + e, (g.nen - e) * sizeof(int64_t));
+        memmove(g.row + e + 1, g.row + e, (g.nen - e) * sizeof(int64_t *));
+        g.index[e] = sidx[i], g.row[e] = srow[i], g.nen++;
+    }
+    /* idle clocks */
+    L idle = {0};
+    for (int k = 1; k <= t->n; k++) {
+        int64_t atom = t->clock_atom[k];
+        int pi = one_place(s[t->atom_offset[atom]]);
+        if (pi < 0 || pi >= t->atom_nplaces[atom]) {
+            free(idle.a);
+            status = BACK;
+            goto out;
+        }
+        const int64_t *pl = t->place[t->place_base[atom] + pi];
+        const int64_t *act = skip_atoms(pl + 2);
+        int on = 0;
+        for (int64_t a = 0; a < act[0]; a++)
+            on |= act[1 + a] == k;
+        if (!on)
+            lpush(&idle, k);
+    }
+    lpush(prog, idle.n), lcat(prog, idle.a, idle.n);
+    free(idle.a);
+    /* time passing (search.py's _passing_at) */
+    {
+        L before = {0}, after = {0}, waits = {0};
+        int passes = 1;
+        for (int a = 0; a < t->ntimed && passes; a++) {
+            int64_t atom = t->timed[a];
+            int pi = one_place(s[t->atom_offset[atom]]);
+            if (pi < 0 || pi >= t->atom_nplaces[atom]) {
+                status = BACK;
+                break;
+            }
+            const int64_t *pl = t->place[t->place_base[atom] + pi];
+            if (!pl[0]) {
+                passes = 0;
+                break;
+            }
+            if (pl[1] != -1) {
+                int64_t v;
+                if (ev(t, pl[1], s, &v)) {
+                    status = BACK;
+                    break;
+                }
+                if (!v) {
+                    passes = 0;
+                    break;
+                }
+            }
+            L b = {0};
+            if (bounds(t, pl + 2, s, &b)) {
+                free(b.a);
+                status = BACK;
+                break;
+            }
+            for (int64_t k = 0; k < b.n / 3; k++) {
+                if (b.a[3 * k + 1] != 0) {
+                    status = BACK;  /* time bounded from below: Python says where */
+                    break;
+                }
+                lpush(&before, b.a[3 * k]), lpush(&before, 0), lpush(&before, b.a[3 * k + 2]);
+                lpush(&after, b.a[3 * k]), lpush(&after, 0), lpush(&after, b.a[3 * k + 2] + 1);
+            }
+            free(b.a);
+            if (status)
+                break;
+        }
+        int64_t nwaits = 0;
+        for (int r = 0; r < t->ntick && passes && !status; r++) {
+            L reg = {0};
+            int every;
+            status = rule_region(&g, t->tick[r], &reg, &every);
+            if (!status && every)
+                passes = 0;
+            for (int64_t at = 0; !status && passes && at < reg.n; at += 1 + 3 * reg.a[at]) {
+                int64_t nb = reg.a[at];
+                const int64_t *b = reg.a + at + 1;
+                if (!nb) {
+                    passes = 0;
+                    break;
+                }
+                int64_t lower = -1;
+                for (int64_t k = 0; k < nb && lower < 0; k++)
+                    if (b[3 * k] == 0)
+                        lower = k;
+                lpush(&waits, nb), lcat(&waits, b, 3 * nb);
+                if (nb == 1 && lower >= 0) {
+                    lpush(&waits, 1), lpush(&waits, b[1]), lpush(&waits, b[2]);
+                } else {
+                    lpush(&waits, 0), lpush(&waits, 0), lpush(&waits, 0);
+                }
+                lpush(&waits, t->tick[r]);
+                nwaits++;
+            }
+            free(reg.a);
+        }
+        if (!status) {
+            if (!passes) {
+                lpush(prog, 0);
+            } else {
+                lpush(prog, 1);
+                lpush(prog, before.n / 3), lcat(prog, before.a, before.n);
+                lpush(prog, after.n / 3), lcat(prog, after.a, after.n);
+                lpush(prog, nwaits), lcat(prog, waits.a, waits.n);
+            }
+        }
+        free(before.a), free(after.a), free(waits.a);
+        if (status)
+            goto out;
+    }
+    /* observers and response clocks watched here */
+    {
+        L checks = {0};
+        for (int o = 0; o < t->nobs; o++) {
+            const int64_t *ob = t->obs + 5 * o;  /* atom, place, clock, bound, slot */
+            if (s[t->atom_offset[ob[0]]] != ((int64_t)1 << ob[1]))
+                continue;
+            int64_t v;
+            if (ev(t, ob[3], s, &v)) {
+                status = BACK;
+                break;
+            }
+            lpush(&checks, 0), lpush(&checks, ob[4]), lpush(&checks, ob[2]), lpush(&checks, v);
+        }
+        for (int o = 0; o < t->nmeas && !status; o++) {
+            const int64_t *m = t->meas + 3 * o;  /* atom, place, clock */
+            if (s[t->atom_offset[m[0]]] == ((int64_t)1 << m[1])) {
+                lpush(&checks, 1), lpush(&checks, 0), lpush(&checks, m[2]), lpush(&checks, 0);
+            }
+        }
+        if (!status)
+            lpush(prog, checks.n / 4), lcat(prog, checks.a, checks.n);
+        free(checks.a);
+        if (status)
+            goto out;
+    }
+    /* successors */
+    {
+        int64_t count_at = prog->n, count = 0;
+        lpush(prog, 0);
+        for (int i = 0; i < n && !status; i++) {
+            L regions = {0}, need = {0}, resets = {0};
+            int64_t nreg = 0;
+            int blocked = 0;
+            const int64_t *lw = lows(srow[i]);
+            for (int64_t k = 0; k < lw[0] && !blocked && !status; k++) {
+                L reg = {0};
+                int every;
+                status = rule_region(&g, lw[1 + k], &reg, &every);
+                if (!status && every)
+                    blocked = 1;
+                for (int64_t at = 0; !status && !blocked && at < reg.n; at += 1 + 3 * reg.a[at]) {
+                    if (!reg.a[at]) {
+                        blocked = 1;
+                        break;
+                    }
+                    lcat(&regions, reg.a + at, 1 + 3 * reg.a[at]);
+                    nreg++;
+                }
+                free(reg.a);
+            }
+            if (!status && !blocked) {
+                if (need_of(&g, srow[i], &need, &resets)) {
+                    status = BACK;
+                } else {
+                    int64_t id = intern(ctx, buf + (size_t)i * t->W);
+                    if (id < 0)
+                        status = (int)id;
+                    else {
+                        lpush(prog, id), lpush(prog, sidx[i]);
+                        lpush(prog, need.n / 3), lcat(prog, need.a, need.n);
+                        lpush(prog, resets.n / 2), lcat(prog, resets.a, resets.n);
+                        lpush(prog, nreg), lcat(prog, regions.a, regions.n);
+                        count++;
+                    }
+                }
+            }
+            free(regions.a), free(need.a), free(resets.a);
+        }
+        prog->a[count_at] = count;
+    }
+out:
+    free(buf), free(via), free(sidx), free(srow), free(g.index), free(g.row);
+    free(g.memo_key.a), free(g.memo_val.a), free(g.memo_off.a), free(g.pool.a);
+    return status;
+}
