@@ -25,17 +25,17 @@ STOPPED = {0: "", 1: "max-states", 2: "violated", 3: "interrupted"}
 
 @cache
 def library():
-    """zsearch.c (with dbm.c in front) compiled and loaded, or None without a compiler."""
-    from runtime.native.build import BuildError, build, compiler
+    """zsearch.c (with dbm.c and zprogram.c in front) compiled and loaded, or None without a compiler.
+
+    The text is fixed, not generated: a compiler that refuses it is a defect here, raised as BuildError.
+    """
+    from runtime.native.build import build, compiler
 
     cc = compiler()
     if cc is None:
         return None
     source = "\n".join((HERE / name).read_text() for name in ("dbm.c", "zprogram.c", "zsearch.c"))
-    try:
-        lib = ctypes.CDLL(str(build(source, cc, what="zone search")), mode=ctypes.RTLD_LOCAL)
-    except (BuildError, OSError):
-        return None
+    lib = ctypes.CDLL(str(build(source, cc, what="zone search")), mode=ctypes.RTLD_LOCAL)
     p, i32, i64, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64, ctypes.POINTER(ctypes.c_double)
     for name, res, args in (
             ("zs_new", p, [i32, dbl, i32, i32, i32]), ("zs_free", None, [p]),
@@ -163,7 +163,7 @@ class CSearch:
                                     self._program)
             self._raise(status, Unsupported)
         status = lib.zs_run(self.ctx, -1 if max_states is None else max_states, int(stop_at_violation),
-                            self._program, callback, 64)
+                            self._program, callback, 1024)
         self._raise(status, Unsupported)
         counts = (ctypes.c_int64 * 12)()
         lib.zs_counts(self.ctx, counts)

@@ -37,13 +37,12 @@ typedef struct {
 typedef struct { int32_t from, target, ref; } Edge;  /* ref >= 0: a node; ref < 0: step -ref-1 */
 typedef struct { int32_t member, next; } Member;
 typedef struct { int32_t *a; int32_t n, cap; uint8_t seen; } Kept;
+typedef struct { char *a; int64_t n, size; VEC(int64_t) free; } Pool;  /* zone slots of one width */
 
 typedef struct {
     int d, nobs, nclocks, merge;
     double *ceiling;
-    float *pool;            /* zone slots, d*d floats each */
-    int64_t slots, free_head;
-    VEC(int64_t) free_list;
+    Pool shorts, floats;    /* zone slots (see slot_new) */
     VEC(Node) nodes;
     VEC(Node) steps;        /* steps into a zone another node covers */
     VEC(Edge) edges;
@@ -63,11 +62,14 @@ typedef struct {
     int ntmp;
     /* with the compiled step: programs written in C (zprogram.c), states kept as its words */
     Tables *tables;
-    VEC(int64_t) words;     /* W per state */
+    VEC(uint8_t) bytes;     /* states' words, zigzag varints (most slots are small) */
+    VEC(int64_t) ends;      /* per state: where its bytes end */
+    uint8_t *enc;           /* scratch: one state encoded */
     int64_t *hash;          /* open addressing: state + 1, 0 empty */
     int64_t hcap;
     int64_t *inter_key, **inter_val, icap, icount;
     program_fn ask;
+    int64_t prog_words;     /* words held by programs */
 } Ctx;
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
@@ -88,6 +90,8 @@ void *zs_new(int d, const double *ceiling, int nobs, int nclocks, int merge)
     for (int i = 0; i < d; i++)
         x->max_node[i] = -1;
     x->ntmp = 9;
+    x->shorts.size = (int64_t)d * d * sizeof(int16_t);
+    x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
     return x;
 }
@@ -101,7 +105,8 @@ void zs_free(void *p)
         free(x->prog.a[i]);
     for (int64_t i = 0; i < x->kept.n; i++)
         free(x->kept.a[i].a);
-    free(x->prog.a), free(x->kept.a), free(x->pool), free(x->free_list.a), free(x->nodes.a), free(x->steps.a);
+    free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
+    free(x->floats.free.a), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
     if (x->tables) {
@@ -110,19 +115,59 @@ void zs_free(void *p)
     }
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
-    free(x->inter_key), free(x->inter_val), free(x->words.a), free(x->hash), free(x);
+    free(x->inter_key), free(x->inter_val), free(x->bytes.a), free(x->ends.a), free(x->enc), free(x->hash), free(x);
 }
 
-/* -- states as the compiled step's words ----------------------------------------------------------- */
-static uint64_t hash_words(const int64_t *w, int n)
+/* -- states as the compiled step's words, kept as zigzag varints ------------------------------------- */
+static uint64_t hash_bytes(const uint8_t *b, int64_t n)
 {
     uint64_t h = 1469598103934665603ull;
-    for (int i = 0; i < n; i++) {
-        h ^= (uint64_t)w[i];
+    for (int64_t i = 0; i < n; i++) {
+        h ^= b[i];
         h *= 1099511628211ull;
-        h ^= h >> 29;
     }
-    return h;
+    return h ^ (h >> 31);
+}
+
+static int64_t encode(const int64_t *w, int n, uint8_t *out)
+{
+    int64_t k = 0;
+    for (int i = 0; i < n; i++) {
+        uint64_t v = ((uint64_t)w[i] << 1) ^ (uint64_t)(w[i] >> 63);
+        while (v >= 0x80) {
+            out[k++] = (uint8_t)(v | 0x80);
+            v >>= 7;
+        }
+        out[k++] = (uint8_t)v;
+    }
+    return k;
+}
+
+static void decode(const uint8_t *b, int n, int64_t *w)
+{
+    for (int i = 0; i < n; i++) {
+        uint64_t v = 0;
+        int shift = 0;
+        while (*b & 0x80) {
+            v |= (uint64_t)(*b++ & 0x7f) << shift;
+            shift += 7;
+        }
+        v |= (uint64_t)*b++ << shift;
+        w[i] = (int64_t)(v >> 1) ^ -(int64_t)(v & 1);
+    }
+}
+
+static const uint8_t *state_bytes(const Ctx *x, int64_t s, int64_t *len)
+{
+    int64_t start = s ? x->ends.a[s - 1] : 0;
+    *len = x->ends.a[s] - start;
+    return x->bytes.a + start;
+}
+
+static void state_words(const Ctx *x, int64_t s, int64_t *w)
+{
+    int64_t len;
+    decode(state_bytes(x, s, &len), x->tables->W, w);
 }
 
 static int grow_states(Ctx *x, int64_t n)
@@ -148,14 +193,17 @@ static int64_t intern(void *p, const int64_t *w)
 {
     Ctx *x = p;
     int W = x->tables->W;
-    int64_t n = x->words.n / W;
+    int64_t n = x->ends.n, len;
+    if (!x->enc && !(x->enc = malloc(10 * (size_t)W + 1)))
+        return -9;
     if (2 * (n + 1) > x->hcap) {
         int64_t cap = x->hcap ? 2 * x->hcap : 4096;
         int64_t *h = calloc(cap, sizeof(int64_t));
         if (!h)
             return -9;
         for (int64_t s = 0; s < n; s++) {
-            uint64_t i = hash_words(x->words.a + s * W, W) & (cap - 1);
+            const uint8_t *b = state_bytes(x, s, &len);
+            uint64_t i = hash_bytes(b, len) & (cap - 1);
             while (h[i])
                 i = (i + 1) & (cap - 1);
             h[i] = s + 1;
@@ -163,15 +211,18 @@ static int64_t intern(void *p, const int64_t *w)
         free(x->hash);
         x->hash = h, x->hcap = cap;
     }
-    uint64_t i = hash_words(w, W) & (x->hcap - 1);
+    int64_t k = encode(w, W, x->enc);
+    uint64_t i = hash_bytes(x->enc, k) & (x->hcap - 1);
     while (x->hash[i]) {
         int64_t s = x->hash[i] - 1;
-        if (!memcmp(x->words.a + s * W, w, W * sizeof(int64_t)))
+        const uint8_t *b = state_bytes(x, s, &len);
+        if (len == k && !memcmp(b, x->enc, k))
             return s;
         i = (i + 1) & (x->hcap - 1);
     }
-    for (int k = 0; k < W; k++)
-        PUSH(x->words, w[k]);
+    for (int64_t j = 0; j < k; j++)
+        PUSH(x->bytes, x->enc[j]);
+    PUSH(x->ends, x->bytes.n);
     x->hash[i] = n + 1;
     if (grow_states(x, n + 1))
         return -9;
@@ -183,13 +234,13 @@ int64_t zs_intern(void *p, const int64_t *w) { return intern(p, w); }
 void zs_state_words(void *p, int64_t state, int64_t *out)
 {
     Ctx *x = p;
-    memcpy(out, x->words.a + state * x->tables->W, x->tables->W * sizeof(int64_t));
+    state_words(x, state, out);
 }
 
 int64_t zs_nstates(void *p)
 {
     Ctx *x = p;
-    return x->tables ? x->words.n / x->tables->W : x->prog.n;
+    return x->tables ? x->ends.n : x->prog.n;
 }
 
 int zs_set_tables(void *p, const int64_t *words, int64_t n, void *succ, int64_t budget, inter_fn ask_inter)
@@ -261,59 +312,122 @@ static int64_t *inter_row(void *p, Tables *t, int64_t number)
     return row;
 }
 
-/* -- zone slots (single precision: every bound an integer far below 2^24, or infinity) ---------------- */
+/* -- zone slots ------------------------------------------------------------------------------------
+ * A zone whose every finite bound lies within +-32766 is kept in 16 bits (infinity as 32767): a quarter of a
+ * double matrix.  Others are kept in single precision (every bound an integer far below 2^24).  A slot number
+ * says which: even numbers are 16-bit slots (number / 2), odd ones single precision ((number - 1) / 2). */
+#define SHORT_INF 32767
+
+static int64_t pool_take(Pool *p)
+{
+    if (p->free.n)
+        return p->free.a[--p->free.n];
+    if (p->n % 1024 == 0) {
+        char *a = realloc(p->a, (p->n + 1024) * p->size);
+        if (!a)
+            return -1;
+        p->a = a;
+    }
+    return p->n++;
+}
+
+static int fits_short(const double *z, int64_t len)
+{
+    for (int64_t k = 0; k < len; k++)
+        if (z[k] != INFINITY && (z[k] > SHORT_INF - 1 || z[k] < -(SHORT_INF - 1)))
+            return 0;
+    return 1;
+}
+
 static int64_t slot_new(Ctx *x, const double *z)
 {
-    int64_t s, len = (int64_t)x->d * x->d;
-    if (x->free_list.n)
-        s = x->free_list.a[--x->free_list.n];
-    else {
-        if (x->slots % 1024 == 0) {
-            float *p = realloc(x->pool, (x->slots + 1024) * len * sizeof(float));
-            if (!p)
-                return -1;
-            x->pool = p;
-        }
-        s = x->slots++;
+    int64_t len = (int64_t)x->d * x->d;
+    if (fits_short(z, len)) {
+        int64_t s = pool_take(&x->shorts);
+        if (s < 0)
+            return -1;
+        int16_t *dst = (int16_t *)x->shorts.a + s * len;
+        for (int64_t k = 0; k < len; k++)
+            dst[k] = z[k] == INFINITY ? SHORT_INF : (int16_t)z[k];
+        return 2 * s;
     }
-    float *dst = x->pool + s * len;
+    int64_t s = pool_take(&x->floats);
+    if (s < 0)
+        return -1;
+    float *dst = (float *)x->floats.a + s * len;
     for (int64_t k = 0; k < len; k++)
         dst[k] = (float)z[k];
-    return s;
+    return 2 * s + 1;
+}
+
+static double entry(const Ctx *x, int64_t s, int64_t k)
+{
+    int64_t len = (int64_t)x->d * x->d;
+    if (s & 1)
+        return ((const float *)x->floats.a)[(s >> 1) * len + k];
+    int16_t v = ((const int16_t *)x->shorts.a)[(s >> 1) * len + k];
+    return v == SHORT_INF ? INFINITY : v;
 }
 
 static void slot_load(Ctx *x, int64_t s, double *z)
 {
     int64_t len = (int64_t)x->d * x->d;
-    const float *src = x->pool + s * len;
-    for (int64_t k = 0; k < len; k++)
-        z[k] = src[k];
+    if (s & 1) {
+        const float *src = (const float *)x->floats.a + (s >> 1) * len;
+        for (int64_t k = 0; k < len; k++)
+            z[k] = src[k];
+    } else {
+        const int16_t *src = (const int16_t *)x->shorts.a + (s >> 1) * len;
+        for (int64_t k = 0; k < len; k++)
+            z[k] = src[k] == SHORT_INF ? INFINITY : src[k];
+    }
 }
 
 static int slot_geq(Ctx *x, int64_t s, const double *z)  /* the stored zone includes z */
 {
     int64_t len = (int64_t)x->d * x->d;
-    const float *a = x->pool + s * len;
+    if (!(s & 1)) {
+        const int16_t *a = (const int16_t *)x->shorts.a + (s >> 1) * len;
+        for (int64_t k = 0; k < len; k++)
+            if (a[k] != SHORT_INF && (z[k] == INFINITY || a[k] < z[k]))
+                return 0;
+        return 1;
+    }
     for (int64_t k = 0; k < len; k++)
-        if (a[k] < z[k])
+        if (entry(x, s, k) < z[k])
             return 0;
     return 1;
 }
 
-static int slot_leq(Ctx *x, int64_t s, const double *z)
+static int slot_leq(Ctx *x, int64_t s, const double *z)  /* z includes the stored zone */
 {
     int64_t len = (int64_t)x->d * x->d;
-    const float *a = x->pool + s * len;
+    if (!(s & 1)) {
+        const int16_t *a = (const int16_t *)x->shorts.a + (s >> 1) * len;
+        for (int64_t k = 0; k < len; k++)
+            if (z[k] != INFINITY && (a[k] == SHORT_INF || a[k] > z[k]))
+                return 0;
+        return 1;
+    }
     for (int64_t k = 0; k < len; k++)
-        if (a[k] > z[k])
+        if (entry(x, s, k) > z[k])
             return 0;
     return 1;
 }
 
 static int slot_drop(Ctx *x, int64_t s)
 {
-    PUSH(x->free_list, s);
+    if (s & 1)
+        PUSH(x->floats.free, s >> 1);
+    else
+        PUSH(x->shorts.free, s >> 1);
     return 0;
+}
+
+static int64_t zone_bytes(const Ctx *x)
+{
+    int64_t len = (int64_t)x->d * x->d;
+    return (x->shorts.n - x->shorts.free.n) * len * 2 + (x->floats.n - x->floats.free.n) * len * 4;
 }
 
 /* -- zone operations that dbm.c does not have --------------------------------------------------------- */
@@ -386,11 +500,12 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
         int64_t *s = malloc(W * sizeof(int64_t));  /* interning successors may move the words */
         if (!s)
             return NULL;
-        memcpy(s, x->words.a + state * W, W * sizeof(int64_t));
+        state_words(x, state, s);
         L prog = {0};
         int status = write_program(x, x->tables, s, x->d, T(x, 8), intern, &prog);
         free(s);
         if (!status) {
+            x->prog_words += prog.n;
             x->prog.a[state] = prog.a ? prog.a : calloc(1, sizeof(int64_t));
             return x->prog.a[state];
         }
@@ -413,6 +528,7 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
         return -9;
     memcpy(copy, words, n * sizeof(int64_t));
     x->prog.a[state] = copy;
+    x->prog_words += n;
     return 0;
 }
 
@@ -642,9 +758,9 @@ static void check(Ctx *x, int32_t k, const int64_t *pr)
     Parts q = parts(pr);
     const int64_t *c = q.checks;
     int64_t n = *c++;
-    const float *z = x->pool + (int64_t)x->nodes.a[k].zone * d * d;
+    int64_t slot = x->nodes.a[k].zone;
     for (int64_t i = 0; i < n; i++, c += 4) {
-        double top = z[(int64_t)c[2] * d];
+        double top = entry(x, slot, (int64_t)c[2] * d);
         if (c[0] == 0) {
             if (top > (double)c[3] && x->violation[c[1]] < 0)
                 x->violation[c[1]] = k;
@@ -689,7 +805,12 @@ int zs_initial(void *p, int64_t state, const double *zone, program_fn ask)
     return arrive(x, state, z, -1, -1, NULL, 0, ask);
 }
 
-int64_t zs_memory(Ctx *x) { return (x->nodes.n - x->dropped) * (int64_t)x->d * x->d * 4; }
+/* Bytes the search holds: zones, states' words, programs' words are counted as they are kept. */
+int64_t zs_memory(Ctx *x)
+{
+    return zone_bytes(x) + x->bytes.n + x->ends.n * 16 + x->prog_words * 8 + x->nodes.n * (int64_t)sizeof(Node)
+           + x->steps.n * (int64_t)sizeof(Node) + x->edges.n * (int64_t)sizeof(Edge) + x->guards.n * 8;
+}
 
 /* The search.  Returns 0 complete, 1 max-states, 2 violated, 3 stopped by the progress callback, -1 the
  * program callback failed (its exception is on the Python side), -2 an unsupported wait (err_arg), -9 memory. */
