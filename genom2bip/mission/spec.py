@@ -27,7 +27,7 @@ from typing import Any
 import yaml
 
 from genom2bip.durations import parse_duration
-from genom2bip.yamlfile import compose_file, span_of
+from genom2bip.yamlfile import compose_file, keyed, span_of
 from runtime.diagnostics import Reporter, Span
 
 STATUSES = ("ok", "rejected", "failed", "interrupted", "refused")
@@ -85,6 +85,17 @@ class _Reader:
     def error(self, node: yaml.Node, message: str) -> None:
         self.reporter.error(self.span(node), message)
 
+    def unique(self, node: yaml.Node, what: str) -> None:
+        """Report every key given twice in the mappings of ``node`` (a request's inputs, at any depth)."""
+        stack = [node]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, yaml.MappingNode):
+                keyed(self.path, item, self.reporter, what)
+                stack.extend(v for _, v in item.value)
+            elif isinstance(item, yaml.SequenceNode):
+                stack.extend(item.value)
+
     def number(self, node: yaml.Node, what: str) -> float | None:
         value = _plain(node)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
@@ -121,7 +132,7 @@ class _Reader:
         if not isinstance(node, yaml.MappingNode):
             self.error(node, "a step is a mapping: send, wait or await")
             return None
-        fields = {k.value: (k, v) for k, v in node.value}
+        fields = keyed(self.path, node, self.reporter, "step")
         kinds = [k for k in ("send", "wait", "await") if k in fields]
         if len(kinds) != 1:
             self.error(
@@ -151,14 +162,23 @@ class _Reader:
             ok = False
         step.target = text or ""
         if "with" in fields:
+            self.unique(fields["with"][1], "with")
             inputs = _plain(fields["with"][1])
             if not isinstance(inputs, dict):
                 self.error(fields["with"][1], "with: a mapping of the service's inputs expected")
                 ok = False
             step.inputs = inputs if isinstance(inputs, dict) else {}
         if "as" in fields:
-            step.name = str(fields["as"][1].value)
-            names.add(step.name)
+            node = fields["as"][1]
+            if not isinstance(node, yaml.ScalarNode) or not node.value:
+                self.error(node, "as: a name expected")
+                ok = False
+            elif node.value in names:
+                self.error(node, f"as: {node.value!r} names an earlier step already: await would not know which")
+                ok = False
+            else:
+                step.name = node.value
+                names.add(step.name)
         if "until" in fields:
             step.until = str(fields["until"][1].value)
             if step.until not in UNTIL:
@@ -183,7 +203,7 @@ class _Reader:
                 Span(str(self.path), 1, 1), "a mission file is a mapping with 'steps' (and 'mission', 'world')"
             )
             return None
-        fields = {k.value: (k, v) for k, v in root.value}
+        fields = keyed(self.path, root, self.reporter, "mission file")
         for key, (knode, _) in fields.items():
             if key not in ("mission", "world", "steps", "doc"):
                 self.error(knode, f"unknown key {key!r} (keys: doc, mission, steps, world)")
