@@ -151,3 +151,11 @@ def test_the_report_of_a_goal_without_numbers_names_it_and_draws_no_star():
     run = Run(Mission("m", ROOT / "m.yaml", None, [step]), None, [outcome])
     assert "  goal {'x': 'fast'}: not reached: e_bad" in report.text(run).splitlines()  # was a TypeError
     assert [(g["point"], g["distance_left"]) for g in report.goals(run)] == [(None, None)]
+
+
+def test_a_token_file_that_cannot_be_read_is_refused_before_the_run(tmp_path):
+    done = genom2bip("mission", _mission(tmp_path, SHORT), "--out", tmp_path / "out", "--token-file",
+                     tmp_path / "nope")
+    assert done.code == 2, done.out + done.err
+    assert done.err == f"genom2bip: error: --token-file {tmp_path / 'nope'}: No such file or directory\n"
+    assert not (tmp_path / "out").exists()
