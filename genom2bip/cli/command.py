@@ -54,11 +54,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     for stream in (sys.stdout, sys.stderr):  # a file name the terminal cannot show is escaped, not a crash
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
-    stdout, sys.stdout = sys.stdout, ClosedAware(sys.stdout)  # a reader gone: printing stops, the status stays
+    # a reader gone (`| head`, `2>&1 | head`): printing stops quietly, the exit status stays the command's own
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = ClosedAware(stdout), ClosedAware(stderr)
     try:
         return _run(argv, show_traceback)
     finally:
-        sys.stdout = stdout
+        sys.stdout, sys.stderr = stdout, stderr
 
 
 def _run(argv: list[str], show_traceback: bool) -> int:

@@ -34,16 +34,17 @@ checks:
 """
 
 
-def _closed_at_once(*argv, cwd=ROOT, env=None) -> tuple[int, str]:
-    """Run ``genom2bip ARGV`` with a stdout whose reader has gone before the first byte; its status and stderr."""
+def _closed_at_once(*argv, cwd=ROOT, both=False) -> tuple[int, str]:
+    """Run ``genom2bip ARGV`` with a stdout (``both``: and stderr, ``2>&1``) whose reader has gone before the first
+    byte; its status and (unless ``both``) its stderr."""
     read, write = os.pipe()
     child = subprocess.Popen([sys.executable, "-m", "genom2bip", *map(str, argv)], cwd=cwd, stdout=write,
-                             stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-                             env={**os.environ, "PYTHONPATH": str(ROOT), **(env or {})})
+                             stderr=write if both else subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+                             env={**os.environ, "PYTHONPATH": str(ROOT)})
     os.close(write)
     os.close(read)
     _, err = child.communicate(timeout=HANG)
-    return child.returncode, err
+    return child.returncode, err or ""
 
 
 def test_a_violation_stays_a_violation_when_the_output_is_closed(tmp_path):
@@ -56,6 +57,12 @@ def test_a_violation_stays_a_violation_when_the_output_is_closed(tmp_path):
     code, err = _closed_at_once("verify", PAIR, "--timed", "--platform", one)
     assert code == 4, err
     assert "Traceback" not in err and "Exception ignored" not in err and "BrokenPipe" not in err, err
+
+
+def test_a_violation_stays_a_violation_when_stdout_and_stderr_are_one_closed_pipe(tmp_path):
+    one = tmp_path / "one.yaml"
+    one.write_text("cores: 1\n")
+    assert _closed_at_once("verify", PAIR, "--timed", "--platform", one, both=True) == (4, "")
 
 
 def test_help_into_a_closed_output_is_quiet():
