@@ -72,7 +72,8 @@ def verb_mission(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     if world is not None:
         check_world(world)
-    why = unwritable(args.codel_times) if args.codel_times else None
+    why = (unwritable(args.codel_times) or output_problem(Path(args.codel_times).parent, [Path(args.codel_times).name])
+           if args.codel_times else None)
     if why:
         error(f"--codel-times {args.codel_times}: cannot write it: {why}")
         return EXIT_ERRORS

@@ -50,6 +50,15 @@ def test_an_out_where_nothing_can_be_made_is_refused_before_the_run(tmp_path):
     assert not os.path.exists("/proc/genom2bip-x")
 
 
+def test_codel_times_where_nothing_can_be_made_are_refused_before_the_run(tmp_path):
+    done = genom2bip("mission", _mission(tmp_path, SHORT), "--out", tmp_path / "out", "--codel-times",
+                     "/proc/genom2bip-times.json", "--quiet")
+    _not_run(done)
+    assert done.err.startswith("genom2bip: error: --codel-times /proc/genom2bip-times.json: cannot write it: "
+                               "nothing can be made in /proc: "), done.err
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_trace_file_that_is_a_directory_is_refused_before_the_run(tmp_path):
     out = tmp_path / "out"
     (out / "m.jsonl").mkdir(parents=True)
