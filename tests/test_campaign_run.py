@@ -181,7 +181,8 @@ def test_ctrl_c_writes_what_is_done_says_what_is_not_and_the_next_run_does_it(tm
             proc.communicate()
     assert proc.returncode == 130, err
     assert "interrupted: 3 jobs done in this run and written; 1 not done:" in err
-    assert "  gate deadlock deadlock freedom" in err and "run the same command again" in err
+    assert "  gate deadlock deadlock freedom [define.PERIOD=10]  (was running: stopped)\n" in err, err
+    assert "run the same command again" in err
     assert len(lines(out / "results.jsonl")) == 3
     gate.write_text("")
     again = campaign([path, "-o", out, "--workers", "2"], tmp_path, env={"GENOM2BIP_TEST_GATE": str(gate)})

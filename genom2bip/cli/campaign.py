@@ -187,6 +187,7 @@ def _report(campaign, jobs, out, run, todo, undone) -> int:
         why = "interrupted" if run.interrupted else "stopped: the output was closed (nobody reads the rest)"
         print(f"{why}: {ran} jobs done in this run and written; {len(undone)} not done:", file=sys.stderr)
         running = set(run.running)
+        undone = sorted(undone, key=lambda j: j.id not in running)  # those under way first: never cut off the list
         for job in undone[:10]:
             print(f"  {job.title}" + ("  (was running: stopped)" if job.id in running else ""), file=sys.stderr)
         if len(undone) > 10:
