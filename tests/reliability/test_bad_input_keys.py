@@ -56,6 +56,16 @@ def test_a_collection_as_a_key_of_a_mission_is_located_before_it_runs(tmp_path, 
     assert not (tmp_path / "out").exists()
 
 
+def test_a_collection_as_a_key_of_a_world_is_located_before_the_mission_runs(tmp_path):
+    world = tmp_path / "w.yaml"
+    world.write_text((DALA / "worlds" / "corridor.yaml").read_text() + MAP_KEY)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\nsteps:\n  - send: NDD.Stop\n")
+    done = genom2bip("mission", mission, "--world", world, "--out", tmp_path / "out", "--quiet")
+    _refused(done, world, "36:3", "a key is a single value (a name), not a mapping")
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_collection_as_a_key_of_a_campaign_file_is_located_in_the_same_words(tmp_path):
     campaign = tmp_path / "c.yaml"
     campaign.write_text("models: {}\nchecks: []\n" + LIST_KEY)
