@@ -5,7 +5,9 @@ from PyYAML: a file that is not UTF-8 text or not a regular file, one larger
 than :data:`MAX_YAML_BYTES`, a control character (a NUL byte), collections
 nested deeper than :data:`MAX_NESTING` (composing recurses), anchors and
 aliases expanding to more than :data:`MAX_NODES` values, a number that is
-not finite (``.nan``, ``.inf``, ``1e400``) or an integer of more than 64 bits.
+not finite (``.nan``, ``.inf``, ``1e400``) or an integer of more than 64 bits,
+a key that is a list or a mapping (``? [a]``: no reader could look it up).
+:func:`keyed` reports a key given twice, which PyYAML would merge without a word.
 """
 from __future__ import annotations
 
@@ -90,11 +92,41 @@ def _scalar_problem(node: yaml.ScalarNode) -> str | None:
     return None
 
 
+def _kind(node: yaml.Node) -> str:
+    return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping"
+
+
+def _keys_problems(path: Path, node: yaml.MappingNode, reporter: Reporter) -> bool:
+    """Report the keys of one mapping that are lists or mappings (no reader can look them up); False if any."""
+    ok = True
+    for key, _ in node.value:
+        if not isinstance(key, yaml.ScalarNode):
+            reporter.error(span_of(path, key), f"a key is a single value (a name), not {_kind(key)}")
+            ok = False
+    return ok
+
+
+def keyed(path: str | Path, node: yaml.MappingNode, reporter: Reporter, what: str) -> dict[str, tuple[yaml.Node,
+                                                                                                       yaml.Node]]:
+    """The (key, value) nodes of a mapping by key, each key given twice reported at its second place (PyYAML keeps
+    the last one without a word); keys are scalars once :func:`compose_file` has read the file."""
+    out: dict[str, tuple[yaml.Node, yaml.Node]] = {}
+    for key, value in node.value:
+        name = str(key.value)
+        if name in out:
+            reporter.error(span_of(path, key), f"{what}: key {name!r} given twice (first at line "
+                                               f"{out[name][0].start_mark.line + 1})")
+            continue
+        out[name] = (key, value)
+    return out
+
+
 def _values(path: Path, root: yaml.Node | None, reporter: Reporter) -> bool:
     """Check every value of the tree, aliases expanded up to MAX_NODES; False after reporting a problem."""
     stack = [root] if root is not None else []
     seen = 0
     ok = True
+    keyed: set[int] = set()  # the mappings whose keys were checked (an alias visits its node again)
     while stack:
         node = stack.pop()
         seen += 1
@@ -103,6 +135,9 @@ def _values(path: Path, root: yaml.Node | None, reporter: Reporter) -> bool:
                                                 "expanded", "an alias of a list of aliases doubles at each level")
             return False
         if isinstance(node, yaml.MappingNode):
+            if id(node) not in keyed:
+                keyed.add(id(node))
+                ok = _keys_problems(path, node, reporter) and ok
             stack.extend(v for pair in reversed(node.value) for v in reversed(pair))
         elif isinstance(node, yaml.SequenceNode):
             stack.extend(reversed(node.value))

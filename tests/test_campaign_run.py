@@ -88,11 +88,13 @@ def test_a_sweep_writes_a_line_per_job_a_table_a_picture_and_a_second_run_resume
     assert again.returncode == 4 and "9 jobs, 9 already in" in again.stdout and "0 to run" in again.stdout
     assert (out / "results.jsonl").read_bytes() == before
 
-    # a line cut by a kill: dropped, its job run again, every job once
+    # a line cut by a kill: kept aside as it was, its job run again, every job once
     cut = before[:-40]
     (out / "results.jsonl").write_bytes(cut)
     third = campaign([path, "-o", out, "--workers", "2"], tmp_path)
-    assert "1 unfinished line(s)" in third.stdout and "8 already in" in third.stdout and "1 to run" in third.stdout
+    assert f"note: 1 line(s) of {out / 'results.jsonl'} are not job records" in third.stdout, third.stdout
+    assert "8 already in" in third.stdout and "1 to run" in third.stdout
+    assert (out / "results.unreadable.jsonl").read_bytes() == cut[cut.rindex(b"\n") + 1:] + b"\n"
     assert sorted(r["job"] for r in lines(out / "results.jsonl")) == sorted(j.id for j in jobs)
 
 
@@ -179,7 +181,8 @@ def test_ctrl_c_writes_what_is_done_says_what_is_not_and_the_next_run_does_it(tm
             proc.communicate()
     assert proc.returncode == 130, err
     assert "interrupted: 3 jobs done in this run and written; 1 not done:" in err
-    assert "  gate deadlock deadlock freedom" in err and "run the same command again" in err
+    assert "  gate deadlock deadlock freedom [define.PERIOD=10]  (was running: stopped)\n" in err, err
+    assert "run the same command again" in err
     assert len(lines(out / "results.jsonl")) == 3
     gate.write_text("")
     again = campaign([path, "-o", out, "--workers", "2"], tmp_path, env={"GENOM2BIP_TEST_GATE": str(gate)})

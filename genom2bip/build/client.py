@@ -63,11 +63,18 @@ def _delay_ticks(seconds: float, tick_us: int) -> int:
 
 
 def check(mission: Mission, description, reporter: Reporter) -> None:
-    """Every service a mission sends exists in the description (errors at the step's line)."""
+    """Every service a mission sends exists in the description (errors at the step's line), and its inputs are
+    what the controller would take (errors at ``with:``, as ``genom2bip mission`` gives them)."""
+    from genom2bip.back.interface import Schemas, component_interface
+    from genom2bip.mission.inputs import check_inputs
+
     names = sorted(f"{c.name}.{s.name}" for c in description.components for s in c.services)
     for step in mission.steps:
         if step.kind == "send" and step.target not in names:
             reporter.error(step.span, f"client: no service {step.target} in the model", _suggest(step.target, names))
+    schemas = Schemas(description)
+    components = {c.name: component_interface(schemas, c) for c in description.components}
+    check_inputs(mission, {"components": components, "types": schemas.named}, reporter)
 
 
 def client_type(mission: Mission, tick_us: int, refusable: set[str]) -> tuple[AtomType, dict[str, str]]:

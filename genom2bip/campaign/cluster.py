@@ -67,6 +67,8 @@ class Run:
     written: list[dict[str, Any]] = field(default_factory=list)
     undone: list[Job] = field(default_factory=list)
     interrupted: bool = False
+    closed: bool = False  # stopped because the output's reader went away (``campaign FILE | head``)
+    running: list[str] = field(default_factory=list)  # the jobs under way when it stopped (ids)
     seconds: float = 0.0
     where: str = ""  # the cluster, in words
 
@@ -95,8 +97,10 @@ def describe(client, cluster) -> str:
     return f"{kind} {info.get('address', '?')}: {len(workers)} workers, {threads} threads"
 
 
-def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any]], display) -> Run:
-    """Submit every job, write each record as it comes back, tell ``display``; Ctrl-C stops with what is done.
+def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any]], display,
+        closed: Callable[[], bool] = lambda: False) -> Run:
+    """Submit every job, write each record as it comes back, tell ``display``; Ctrl-C stops with what is done, and
+    so does ``closed()`` becoming true (the output has lost its reader: nobody would see the rest).
 
     A job past its ``timeout`` is cancelled and recorded as such, and its worker restarted (the only way to stop
     a search in another process); the others go on.
@@ -104,6 +108,9 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
     from distributed import as_completed
 
     out = Run()
+    if closed():
+        out.closed, out.undone = True, sorted(jobs, key=lambda j: j.index)
+        return out
     token = uuid.uuid4().hex[:8]  # another run's keys never collide with this one's on a shared scheduler
     lock = threading.Lock()
     by_id = {job.id: job for job in jobs}
@@ -177,11 +184,17 @@ def run(jobs: list[Job], client, write: Callable[[dict[str, Any]], dict[str, Any
             elif record is not None:
                 with lock:
                     keep(job, record)
+            if remaining and closed():
+                out.closed = True
+                break
     except KeyboardInterrupt:
         out.interrupted = True
-        out.undone = sorted((j for j in remaining.values() if j.id not in recorded), key=lambda j: j.index)
-        client.cancel(list(remaining))
     finally:
+        if out.interrupted or out.closed:  # every job without a record, the one taken from ``remaining`` included
+            with lock:
+                out.undone = sorted((j for j in jobs if j.id not in recorded), key=lambda j: j.index)
+                out.running = [j.id for j in out.undone if j.id in started_at]
+            client.cancel(list(remaining))
         stop.set()
         if watchdog.is_alive():
             watchdog.join()

@@ -2,11 +2,14 @@
 ``jobs/<id>.json``, pictures beside them.  Written by the client alone, as each result comes back.
 
 Each line is appended and flushed to the disk before the next one, so a
-campaign killed at any moment keeps every result it announced; a line cut by
-the kill is dropped when the directory is opened again (and its job runs
-again).  A job's last line is its result: a job run again appends one, and
-the file is rewritten with one line per job when the campaign ends.  A lock
-keeps two campaigns from writing to one directory at once.
+campaign killed at any moment keeps every result it announced.  A line that
+is not a job's record as this module writes it (cut by a kill, edited by
+hand, written by something else) is never deleted: when the directory is
+opened it is moved, as it was, to ``results.unreadable.jsonl`` beside it, and
+its job runs again.  A job's last line is its result: a job run again
+appends one, and the file is rewritten with one line per job when the
+campaign ends.  A lock keeps two campaigns from writing to one directory at
+once.
 """
 from __future__ import annotations
 
@@ -20,6 +23,10 @@ from typing import Any
 from runtime.errors import Genom2bipError
 
 RESULTS = "results.jsonl"
+#: Where the lines of ``results.jsonl`` that are not a job's record are kept, as they were.
+UNREADABLE = "results.unreadable.jsonl"
+#: What a record's ``status`` may be: the worker's ``done`` and ``failed``, the client's ``crashed`` and ``timeout``.
+STATUSES = ("done", "failed", "crashed", "timeout")
 JOBS = "jobs"
 LOCK = ".lock"
 
@@ -34,12 +41,16 @@ class Output:
 
     directory: Path
     records: dict[str, dict[str, Any]] = field(default_factory=dict)
-    dropped: int = 0  # lines that were not whole records (a kill during a write)
+    dropped: int = 0  # lines that were not records (a kill during a write, an edit), moved to UNREADABLE
     _lock: Any = None
 
     @property
     def results(self) -> Path:
         return self.directory / RESULTS
+
+    @property
+    def unreadable(self) -> Path:
+        return self.directory / UNREADABLE
 
     @classmethod
     def peek(cls, directory: str | Path) -> dict[str, dict[str, Any]]:
@@ -82,23 +93,30 @@ class Output:
             _replace(self.results, "".join(json.dumps(r) + "\n" for r in self.records.values()))
 
     def _read(self, rewrite: bool = True) -> None:
-        """The whole records of ``results.jsonl``; a damaged line is dropped and the file rewritten without it."""
+        """The records of ``results.jsonl``; with ``rewrite``, a line that is not one is moved to
+        :data:`UNREADABLE` (appended there first, then the file rewritten without it)."""
         if not self.results.exists():
             return
-        lines = self.results.read_text(encoding="utf-8", errors="replace").splitlines(keepends=True)
-        kept = []
+        lines = self.results.read_text(encoding="utf-8", errors="surrogateescape").splitlines(keepends=True)
+        kept, aside = [], []
         for line in lines:
             try:
+                line.encode("utf-8")  # bytes that are not UTF-8 are kept aside as they were, never rewritten
                 record = json.loads(line) if line.endswith("\n") else None
-            except json.JSONDecodeError:
+            except (ValueError, RecursionError):  # JSONDecodeError, UnicodeEncodeError; 100,000 nested [
                 record = None
-            if not isinstance(record, dict) or not isinstance(record.get("job"), str):
-                self.dropped += 1
+            if record_problem(record) is not None:
+                aside.append(line if line.endswith("\n") else line + "\n")
                 continue
             self.records.pop(record["job"], None)  # the last line of a job is its result, in the order written
             self.records[record["job"]] = record
             kept.append(line)
-        if self.dropped and rewrite:
+        self.dropped = len(aside)
+        if aside and rewrite:
+            with open(self.unreadable, "a", encoding="utf-8", errors="surrogateescape") as f:
+                f.write("".join(aside))
+                f.flush()
+                os.fsync(f.fileno())
             _replace(self.results, "".join(kept))
 
     def write(self, record: dict[str, Any]) -> dict[str, Any]:
@@ -119,6 +137,35 @@ class Output:
         self.records.pop(record["job"], None)
         self.records[record["job"]] = line
         return line
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def record_problem(record: Any) -> str | None:
+    """Why ``record`` (a line of ``results.jsonl``, read) is not a job's record as :meth:`Output.write` writes it
+    and the summary, the pictures and a resumed run read it; None when it is one."""
+    if not isinstance(record, dict) or not isinstance(record.get("job"), str):
+        return "not a job's record"
+    if record.get("status") not in STATUSES:
+        return f"status: one of {', '.join(STATUSES)} expected"
+    if not isinstance(record.get("verdict"), str if record["status"] == "done" else (str, type(None))):
+        return "verdict: a word expected"
+    for key in ("message", "host", "worker", "limit", "result", "trace"):
+        if record.get(key) is not None and not isinstance(record[key], str):
+            return f"{key}: a string expected"
+    for key in ("seconds", "cpu_seconds", "peak_memory"):
+        if record.get(key) is not None and not _number(record[key]):
+            return f"{key}: a number expected"
+    figures, values = record.get("figures"), record.get("values")
+    if figures is not None and not (isinstance(figures, dict) and (
+            figures.get("states") is None or _number(figures["states"]))):
+        return "figures: a mapping expected"
+    if values is not None and not (isinstance(values, dict) and all(
+            _number(v) or isinstance(v, str) for v in values.values())):
+        return "values: a mapping of numbers or words expected"
+    return None
 
 
 def _replace(path: Path, text: str) -> None:

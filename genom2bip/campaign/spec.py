@@ -41,6 +41,7 @@ import yaml
 from genom2bip.campaign.axes import AxisKind, axis_kind
 from genom2bip.campaign.kinds import KINDS, METHODS, RESPONSE_OWNERS
 from genom2bip.campaign.params import ModelParams
+from genom2bip.filenames import name_problem
 from genom2bip.yamlfile import span_of
 from runtime.diagnostics import Reporter, Span
 
@@ -446,6 +447,12 @@ class _Reader:
         if "models" not in fields or "checks" not in fields:
             return None
         name = self.text(fields["campaign"][1], "campaign") if "campaign" in fields else self.path.stem
+        problem = name_problem(name) if name is not None else None
+        if problem:  # the name is a directory under out/: one plain component of a path
+            where = fields["campaign"][1] if "campaign" in fields else None
+            self.reporter.error(self.span(where) if where is not None else Span(str(self.path), 0, 0),
+                                f"campaign: {name!r} cannot name its output directory: {problem}")
+            return None
         doc = str(_plain(fields["doc"][1])) if "doc" in fields else ""
         models = self.models(fields["models"][1])
         options = self.options(fields["options"][1], "") if "options" in fields else {}

@@ -5,7 +5,7 @@ Exit status: 0 every job done and every check holds, 4 a check is violated
 (or meets a model error), 5 a job is inconclusive, failed, crashed or timed out, 1 bad
 input (the campaign file, a model, a property file: nothing is run or
 written), 130 interrupted (what is done is written; the same command runs the
-rest).
+rest), 141 stopped because the output was closed (``| head``: the same).
 """
 from __future__ import annotations
 
@@ -17,6 +17,8 @@ from genom2bip.cli.verbs import (
 )
 
 EXIT_INTERRUPTED = 130
+#: The output's reader went away (``campaign FILE | head``): the status of a process a closed pipe stops (SIGPIPE).
+EXIT_CLOSED = 141
 #: A job's answer -> the exit status it asks for.
 EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
 
@@ -111,13 +113,15 @@ def verb_campaign(args: argparse.Namespace) -> int:
         raise
     try:
         if out.dropped:
-            print(f"note: {out.dropped} unfinished line(s) of {out.results} dropped: those jobs run again")
+            print(f"note: {out.dropped} line(s) of {out.results} are not job records (cut short or edited): moved, "
+                  f"as they were, to {out.unreadable}; their jobs run again")
         todo = [j for j in jobs if j.id not in out.records
                 or (args.retry_failed and out.records[j.id].get("status") != "done")]
         print(f"campaign {campaign.name}: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {out.results}, "
               f"{len(todo)} to run", flush=True)
+        before = {j.id: out.records.get(j.id) for j in todo}  # a job is done in this run when its record changes
         run = _run(todo, client, out) if todo and client else None
-        return _report(campaign, jobs, out, run)
+        return _report(campaign, jobs, out, run, todo, [j for j in todo if out.records.get(j.id) is before[j.id]])
     finally:
         _close(client)
         out.close()
@@ -145,20 +149,25 @@ def _run(todo, connection, out):
     """The jobs on the cluster, each record written as it comes."""
     from genom2bip.campaign.cluster import describe, run
     from genom2bip.campaign.report import Display
+    from genom2bip.cli.pipes import output_closed
 
     client, cluster = connection
     display = Display(len(todo))
     try:
         print(describe(client, cluster), flush=True)
-        found = run(todo, client, out.write, display)
+        found = run(todo, client, out.write, display, closed=lambda: output_closed(sys.stdout))
         found.where = describe(client, cluster)
         return found
     finally:
         display.close()
 
 
-def _report(campaign, jobs, out, run) -> int:
-    """The summary table, the pictures, what an interruption left undone; the exit status."""
+def _report(campaign, jobs, out, run, todo, undone) -> int:
+    """The summary table, the pictures, what a stop left undone; the exit status.
+
+    ``undone``: the jobs of ``todo`` whose record did not change (counted from the records, as the table is,
+    so that the job taken from the cluster when Ctrl-C came is counted and listed too).
+    """
     from genom2bip.campaign.pictures import draw
     from genom2bip.campaign.report import summary, values_table
 
@@ -173,16 +182,19 @@ def _report(campaign, jobs, out, run) -> int:
     for path in draw(jobs, out.records, out.directory):
         print(f"picture: {path}")
     print(f"results: {out.results}")
-    if run is not None and run.interrupted:
-        print(f"interrupted: {len(run.written)} jobs done in this run and written; {len(run.undone)} not done:",
-              file=sys.stderr)
-        for job in run.undone[:10]:
-            print(f"  {job.title}", file=sys.stderr)
-        if len(run.undone) > 10:
-            print(f"  … and {len(run.undone) - 10} more", file=sys.stderr)
+    if run is not None and (run.interrupted or run.closed):
+        ran = len(todo) - len(undone)
+        why = "interrupted" if run.interrupted else "stopped: the output was closed (nobody reads the rest)"
+        print(f"{why}: {ran} jobs done in this run and written; {len(undone)} not done:", file=sys.stderr)
+        running = set(run.running)
+        undone = sorted(undone, key=lambda j: j.id not in running)  # those under way first: never cut off the list
+        for job in undone[:10]:
+            print(f"  {job.title}" + ("  (was running: stopped)" if job.id in running else ""), file=sys.stderr)
+        if len(undone) > 10:
+            print(f"  … and {len(undone) - 10} more", file=sys.stderr)
         print(f"run the same command again to run them (the {len(out.records)} results written are kept)",
               file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return EXIT_INTERRUPTED if run.interrupted else EXIT_CLOSED
     return max((EXITS.get(word, EXIT_INCONCLUSIVE) for word in counts), default=EXIT_OK)
 
 

@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Sequence
 
 from genom2bip.cli import call, campaign, check, generate, graph, mission, verify
-from genom2bip.cli.verbs import DEFAULT_VERB, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, Verb, error, exit_status, version
+from genom2bip.cli.pipes import ClosedAware
+from genom2bip.cli.verbs import DEFAULT_VERB, EXIT_INTERNAL, EXIT_USAGE, Verb, error, exit_status, version
 from runtime.errors import Genom2bipError
 
 #: Every verb of the command line, in the order ``--help`` lists them.
@@ -53,6 +54,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     for stream in (sys.stdout, sys.stderr):  # a file name the terminal cannot show is escaped, not a crash
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
+    # a reader gone (`| head`, `2>&1 | head`): printing stops quietly, the exit status stays the command's own
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = ClosedAware(stdout), ClosedAware(stderr)
+    try:
+        return _run(argv, show_traceback)
+    finally:
+        sys.stdout, sys.stderr = stdout, stderr
+
+
+def _run(argv: list[str], show_traceback: bool) -> int:
     parser = build_parser()
     if argv and not argv[0].startswith("-") and argv[0] not in VERBS and DEFAULT_VERB in VERBS:
         if not Path(argv[0]).exists():
@@ -71,8 +82,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("genom2bip: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        return EXIT_OK
     except Exception as exc:  # noqa: BLE001 - the last resort: one line, the traceback only when asked for
         if show_traceback:
             traceback.print_exc()

@@ -15,7 +15,7 @@ import argparse
 import os
 from pathlib import Path
 
-from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, error, verb
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, error, verb
 
 
 def _port(text: str) -> int:
@@ -41,6 +41,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="serve the live page (the level, requests, posters, the robot over the world) while "
                              "the mission runs, in real time; its address is printed")
     parser.add_argument("--port", type=_port, default=0, help="the port of --view's page (default: a free one)")
+    parser.add_argument("--token-file", metavar="FILE",
+                        help="the token every request to the controller must send, in the first line of FILE "
+                             "(default: the environment variable GENOM2BIP_TOKEN), as for `python -m PACKAGE run`")
     parser.add_argument("--quiet", action="store_true", help="print only the report")
     parser.add_argument("--codel-times", metavar="FILE",
                         help="record how long each codel runs (calls; longest, p99 and mean CPU and wall time), "
@@ -50,12 +53,17 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 @verb("mission", help="run a mission (requests, waits, expectations) on the controller in a simulated world",
       arguments=_arguments)
 def verb_mission(args: argparse.Namespace) -> int:
-    """Read the mission, run it, print the report, write the PNG and the JSON-lines trace."""
+    """Read and check the mission, its world, its inputs and its outputs; run it; write the trace, print the report,
+    draw the picture."""
     from genom2bip.mission import picture, report
+    from genom2bip.mission.inputs import check_inputs
+    from genom2bip.mission.outputs import output_problem
     from genom2bip.mission.session import load_package, run_mission, write_trace
     from genom2bip.mission.spec import read_mission
     from genom2bip.mission.world import check_world
     from runtime.controller.codel_times import unwritable, write_json
+    from runtime.diagnostics import Reporter
+    from runtime.services.run import UsageError, token_of
 
     mission = read_mission(args.mission)
     world = Path(args.world) if args.world else mission.world
@@ -64,7 +72,8 @@ def verb_mission(args: argparse.Namespace) -> int:
         return EXIT_ERRORS
     if world is not None:
         check_world(world)
-    why = unwritable(args.codel_times) if args.codel_times else None
+    why = (unwritable(args.codel_times) or output_problem(Path(args.codel_times).parent, [Path(args.codel_times).name])
+           if args.codel_times else None)
     if why:
         error(f"--codel-times {args.codel_times}: cannot write it: {why}")
         return EXIT_ERRORS
@@ -72,23 +81,45 @@ def verb_mission(args: argparse.Namespace) -> int:
         error("--live needs a display (DISPLAY is not set); the run is headless without it")
         return EXIT_ERRORS
     try:
+        token = token_of(argparse.Namespace(token=None, token_file=args.token_file))
+    except UsageError as exc:
+        error(str(exc))
+        return EXIT_USAGE
+    try:
         package = load_package(args.package)
     except (FileNotFoundError, ImportError) as exc:
         error(str(exc))
         return EXIT_ERRORS
+    reporter = Reporter()
+    check_inputs(mission, package.INTERFACE, reporter)
+    reporter.raise_if_errors()
+    out = Path(args.out)
+    trace, png = out / f"{mission.name}.jsonl", out / f"{mission.name}.png"
+    why = output_problem(out, [trace.name, png.name])
+    if why:  # said before the run: a run lost after the fact cannot be had again
+        error(f"--out {args.out}: the mission's trace and picture cannot be written there: {why}")
+        return EXIT_ERRORS
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
                       log=None if args.quiet else print, times=bool(args.codel_times),
-                      view=args.port if args.view else None)
+                      view=args.port if args.view else None, token=token)
+    written = []
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_trace(run, trace)  # first: the run's record, before anything that reads it could fail
+        written.append(str(trace))
+    except OSError as exc:
+        print(report.text(run))
+        error(f"cannot write the trace {trace}: {exc.strerror or exc}")
+        return EXIT_ERRORS
     print(report.text(run))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    trace = out / f"{mission.name}.jsonl"
-    write_trace(run, trace)
-    written = [str(trace)]
     if run.world is not None:
-        png = out / f"{mission.name}.png"
-        picture.draw(run, png)
-        written.insert(0, str(png))
+        try:
+            picture.draw(run, png)
+            written.insert(0, str(png))
+        except OSError as exc:
+            print("  wrote " + ", ".join(written))
+            error(f"cannot write the picture {png}: {exc.strerror or exc}")
+            return EXIT_ERRORS
     if run.codel_times is not None:
         try:
             write_json(args.codel_times, run.codel_times)

@@ -34,9 +34,9 @@ def draw(run: Run, path: Path):
     ax.plot([s.x for s in t], [s.y for s in t], color="tab:blue", linewidth=2, label="trajectory", zorder=3)
     ax.plot(t[0].x, t[0].y, "o", color="tab:green", markersize=9, label="start", zorder=4)
     ax.plot(t[-1].x, t[-1].y, "s", color="black", markersize=7, label="end", zorder=4)
-    for g in goals(run):
+    for g in (g for g in goals(run) if g["point"] is not None):
         ok = g["status"] == "ok"
-        ax.plot(g["goal"].get("x", 0), g["goal"].get("y", 0), "*", markersize=15, zorder=5,
+        ax.plot(*g["point"], "*", markersize=15, zorder=5,
                 color="gold" if ok else "magenta", markeredgecolor="black")
     ax.set_xlim(xmin - 0.2, xmax + 0.2)
     ax.set_ylim(ymin - 0.2, ymax + 0.2)

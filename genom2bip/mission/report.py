@@ -6,13 +6,18 @@ from itertools import pairwise
 from typing import Any
 
 from genom2bip.mission.session import Run
-from genom2bip.mission.spec import GOAL_SERVICE
+from genom2bip.mission.spec import GOAL_SERVICE, goal_point
 from runtime.controller.codel_times import table
 
 
 def distance_driven(run: Run) -> float:
     t = run.world.trajectory if run.world is not None else []
     return sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in pairwise(t))
+
+
+def _shown(goal: Any) -> str:
+    point = goal_point(goal)
+    return f"({point[0]:g}, {point[1]:g})" if point is not None else repr(goal)
 
 
 def goals(run: Run) -> list[dict[str, Any]]:
@@ -30,7 +35,8 @@ def goals(run: Run) -> list[dict[str, Any]]:
         if status == "rejected" and r.get("reason") == "rule":
             continue
         end = _pose_at(run, r.get("time"))
-        gap = math.hypot(goal.get("x", 0) - end[0], goal.get("y", 0) - end[1]) if end else None
+        point = goal_point(goal)
+        gap = math.hypot(point[0] - end[0], point[1] - end[1]) if end and point else None
         if status == "ok":
             when = f" at {r['time']:.1f} s" if r.get("time") is not None else ""
             within = f", {gap:.2f} m from it (GoTo ends within goal_tolerance)" if gap is not None else ""
@@ -47,8 +53,8 @@ def goals(run: Run) -> list[dict[str, Any]]:
         else:
             why = f"not reached: {status}"
         reason = (r.get("detail") or {}).get("reason") if status == "failed" else None
-        out.append({"goal": goal, "status": status, "why": why, "distance_left": gap, "request": o.request,
-                    "reason": reason})
+        out.append({"goal": goal, "point": point, "status": status, "why": why, "distance_left": gap,
+                    "request": o.request, "reason": reason})
     return out
 
 
@@ -73,10 +79,9 @@ def text(run: Run) -> str:
     """The report printed at the end of ``genom2bip mission``."""
     lines = [f"mission {run.mission.name}" + (f" in {run.world_path.name}" if run.world_path else "") + ":"]
     for g in goals(run):
-        gx, gy = g["goal"].get("x", 0), g["goal"].get("y", 0)
         left = f", {g['distance_left']:.2f} m from it" if g["distance_left"] is not None and g["status"] != "ok" else ""
         reason = f": {g['reason']}" if g["reason"] else ""
-        lines.append(f"  goal ({gx:g}, {gy:g}): {g['why']}{left}{reason}")
+        lines.append(f"  goal {_shown(g['goal'])}: {g['why']}{left}{reason}")
     if run.world is not None:
         collisions = run.world.collisions
         lines.append(f"  driven {distance_driven(run):.2f} m in {run.sim_time:.1f} s of robot time "

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from genom2bip.mission.runner import Outcome, Runner
-from genom2bip.mission.spec import GOAL_SERVICE, POSE_POSTER
+from genom2bip.mission.spec import GOAL_SERVICE, POSE_POSTER, goal_point
 from genom2bip.mission.spec import Mission
 from runtime.errors import Genom2bipError
 
@@ -95,19 +95,20 @@ def scene(mission: Mission, session, interface: dict[str, Any]) -> dict[str, Any
         else:
             for part in getattr(g, "geoms", [g]):
                 obstacles.append({"kind": "line", "points": [[round(x, 3), round(y, 3)] for x, y in part.coords]})
-    goals = list({(float(goal["x"]), float(goal["y"])): None for step in mission.steps
-                  if step.kind == "send" and step.target == GOAL_SERVICE
-                  and isinstance(goal := step.inputs.get("goal"), dict) and {"x", "y"} <= set(goal)})
+    goals = list({point: None for step in mission.steps if step.kind == "send" and step.target == GOAL_SERVICE
+                  and (point := goal_point(step.inputs.get("goal"))) is not None})
     return {"name": mission.name, "bounds": list(session.bounds()), "obstacles": obstacles,
             "goals": [{"x": x, "y": y} for x, y in goals], "pose": navigation_pose(interface)}
 
 
 def run_mission(mission: Mission, package, codels: str | None, world: Path | None, *, realtime: bool = False,
-                live: bool = False, log=None, times: bool = False, view: int | None = None) -> Run:
+                live: bool = False, log=None, times: bool = False, view: int | None = None,
+                token: str | None = None) -> Run:
     """Start the controller and its server, load the world, run the mission's steps, stop everything.
 
     ``times``: record how long each codel runs (``Run.codel_times``).
     ``view``: serve the live page on this port (0: a free one) with the world as its scene, in real time.
+    ``token``: what every request to the controller must send (the mission's own requests send it), as ``run``'s.
     """
     from runtime.controller import Controller
     from runtime.controller.timing import VirtualClock
@@ -125,7 +126,8 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
         raise WorldError(f"{world}: the simulator cannot load this world: {type(exc).__name__}: {exc}") from None
     shown = scene(mission, session, package.INTERFACE) if view is not None and session is not None else None
     try:
-        server = ServiceServer(controller, port=view or 0, scene=shown)  # bound here: a port taken stops the run now
+        # bound here: a port taken stops the run now
+        server = ServiceServer(controller, port=view or 0, token=token, scene=shown)
     except OSError as exc:
         if session is not None:
             session.close()
@@ -138,7 +140,7 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
     if view is not None:
         print(f"live view: {server.url}/live/ (for as long as the mission runs)", flush=True)
     try:
-        outcomes = Runner(Client(server.url, timeout=30), log).run(mission)
+        outcomes = Runner(Client(server.url, timeout=30, token=token or ""), log).run(mission)
     finally:
         server.stop()
         controller.stop()

@@ -19,6 +19,7 @@ steps:
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,7 +28,8 @@ from typing import Any
 import yaml
 
 from genom2bip.durations import parse_duration
-from genom2bip.yamlfile import compose_file, span_of
+from genom2bip.filenames import name_problem
+from genom2bip.yamlfile import compose_file, keyed, span_of
 from runtime.diagnostics import Reporter, Span
 
 STATUSES = ("ok", "rejected", "failed", "interrupted", "refused")
@@ -41,6 +43,16 @@ GOAL_SERVICE = "NDD.GoTo"
 #: The poster the live page draws over the world: POM's fused estimate, in the world's frame (RFLEX.Odo is in the
 #: odometry's own frame, and Aspect.Obs's origin is the map's).
 POSE_POSTER = {"poster": "POM.Pos", "path": "estimate"}
+
+
+def goal_point(goal: Any) -> tuple[float, float] | None:
+    """A goal's (x, y) when it has them as finite numbers, else None (a package whose schema says nothing takes
+    any value: the report, the picture and the live page then draw no star for it)."""
+    if not isinstance(goal, dict) or not {"x", "y"} <= set(goal):
+        return None
+    x, y = goal["x"], goal["y"]
+    numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in (x, y))
+    return (float(x), float(y)) if numbers else None
 
 
 @dataclass
@@ -57,6 +69,7 @@ class Step:
     timeout: float = DEFAULT_TIMEOUT
     seconds: float = 0.0
     after: float = 0.0  # send: seconds to wait once the previous step is over
+    inputs_span: Span | None = None  # send: where ``with:`` gives the inputs
 
     @property
     def where(self) -> str:
@@ -84,6 +97,31 @@ class _Reader:
 
     def error(self, node: yaml.Node, message: str) -> None:
         self.reporter.error(self.span(node), message)
+
+    def name(self, node: yaml.Node | None) -> str | None:
+        """The mission's name (``mission:``, else the file's): it names the files written, so one plain component
+        of a path; None after reporting why not."""
+        if node is not None and not isinstance(node, yaml.ScalarNode):
+            self.error(node, "mission: a name expected (it names the files written: NAME.png, NAME.jsonl)")
+            return None
+        name = node.value if node is not None else self.path.stem
+        problem = name_problem(name)
+        if problem:
+            self.reporter.error(self.span(node) if node is not None else Span(str(self.path), 0, 0),
+                                f"mission: {name!r} cannot name the files written: {problem}")
+            return None
+        return name
+
+    def unique(self, node: yaml.Node, what: str) -> None:
+        """Report every key given twice in the mappings of ``node`` (a request's inputs, at any depth)."""
+        stack = [node]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, yaml.MappingNode):
+                keyed(self.path, item, self.reporter, what)
+                stack.extend(v for _, v in item.value)
+            elif isinstance(item, yaml.SequenceNode):
+                stack.extend(item.value)
 
     def number(self, node: yaml.Node, what: str) -> float | None:
         value = _plain(node)
@@ -121,7 +159,7 @@ class _Reader:
         if not isinstance(node, yaml.MappingNode):
             self.error(node, "a step is a mapping: send, wait or await")
             return None
-        fields = {k.value: (k, v) for k, v in node.value}
+        fields = keyed(self.path, node, self.reporter, "step")
         kinds = [k for k in ("send", "wait", "await") if k in fields]
         if len(kinds) != 1:
             self.error(
@@ -151,14 +189,24 @@ class _Reader:
             ok = False
         step.target = text or ""
         if "with" in fields:
+            self.unique(fields["with"][1], "with")
             inputs = _plain(fields["with"][1])
             if not isinstance(inputs, dict):
                 self.error(fields["with"][1], "with: a mapping of the service's inputs expected")
                 ok = False
             step.inputs = inputs if isinstance(inputs, dict) else {}
+            step.inputs_span = self.span(fields["with"][1])
         if "as" in fields:
-            step.name = str(fields["as"][1].value)
-            names.add(step.name)
+            node = fields["as"][1]
+            if not isinstance(node, yaml.ScalarNode) or not node.value:
+                self.error(node, "as: a name expected")
+                ok = False
+            elif node.value in names:
+                self.error(node, f"as: {node.value!r} names an earlier step already: await would not know which")
+                ok = False
+            else:
+                step.name = node.value
+                names.add(step.name)
         if "until" in fields:
             step.until = str(fields["until"][1].value)
             if step.until not in UNTIL:
@@ -183,7 +231,7 @@ class _Reader:
                 Span(str(self.path), 1, 1), "a mission file is a mapping with 'steps' (and 'mission', 'world')"
             )
             return None
-        fields = {k.value: (k, v) for k, v in root.value}
+        fields = keyed(self.path, root, self.reporter, "mission file")
         for key, (knode, _) in fields.items():
             if key not in ("mission", "world", "steps", "doc"):
                 self.error(knode, f"unknown key {key!r} (keys: doc, mission, steps, world)")
@@ -195,7 +243,9 @@ class _Reader:
             world = Path(os.path.normpath(self.path.parent.absolute() / str(fields["world"][1].value)))
         names: set[str] = set()
         steps = [self.step(n, names) for n in fields["steps"][1].value]
-        name = str(fields["mission"][1].value) if "mission" in fields else self.path.stem
+        name = self.name(fields["mission"][1] if "mission" in fields else None)
+        if name is None:
+            return None
         return Mission(name, self.path, world, [s for s in steps if s is not None])
 
 

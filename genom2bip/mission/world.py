@@ -17,7 +17,7 @@ from typing import Any
 
 import yaml
 
-from genom2bip.yamlfile import compose_file, span_of
+from genom2bip.yamlfile import compose_file, keyed, span_of
 from runtime.diagnostics import Reporter, Span
 
 KEYS = ("world", "gui", "robot", "obstacle", "custom")
@@ -44,7 +44,7 @@ class _Checker:
         if not isinstance(node, yaml.MappingNode):
             self.error(node, where, expected)
             return None
-        return {str(k.value): (k, v) for k, v in node.value}
+        return keyed(self.path, node, self.reporter, where)
 
     def number(self, node: yaml.Node, where: str, low: float, high: float, *, above: bool = False,
                integer: bool = False) -> float | None:

@@ -63,9 +63,21 @@ def checked_inputs(svc: Service, inputs: Any, types: dict[str, Any], ids: dict[s
     """The inputs of a request to ``svc``, defaults filled in; :class:`RequestError` 422 names every problem."""
     if not isinstance(inputs, dict):
         raise RequestError(422, f"the parameters of {svc.label} must be a JSON object, not {type(inputs).__name__}")
-    params = [p for p in svc.spec["parameters"] if p["direction"] in ("in", "inout")]
+    values, errors = inputs_of(svc.label, svc.spec, inputs, types, ids)
+    if errors:
+        raise RequestError(422, f"bad request to {svc.label}: " + "; ".join(errors))
+    return values
+
+
+def inputs_of(label: str, spec: dict[str, Any], inputs: Any, types: dict[str, Any],
+              ids: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """The inputs of a request to the service ``label`` (its interface entry ``spec``), defaults filled in, and
+    every problem with them; the one check of a request's inputs, which a mission's steps also get before a run."""
+    if not isinstance(inputs, dict):
+        return {}, [f"the parameters of {label} must be a JSON object, not {type(inputs).__name__}"]
+    params = [p for p in spec["parameters"] if p["direction"] in ("in", "inout")]
     names = [p["name"] for p in params]
-    errors = [f"unknown parameter {k!r} (parameters of {svc.label}: {', '.join(names) or 'none'})"
+    errors = [f"unknown parameter {k!r} (parameters of {label}: {', '.join(names) or 'none'})"
               for k in inputs if k not in names]
     values: dict[str, Any] = {}
     for p in params:
@@ -85,9 +97,7 @@ def checked_inputs(svc: Service, inputs: Any, types: dict[str, Any], ids: dict[s
             if problem:
                 errors.append(f"parameter {p['name']!r} cannot be stored in ids member "
                               f"{p.get('member') or p['name']}: {problem}")
-    if errors:
-        raise RequestError(422, f"bad request to {svc.label}: " + "; ".join(errors))
-    return values
+    return values, errors
 
 
 def request_locals(svc: Service, values: dict[str, Any], types: dict[str, Any]) -> dict[str, Any]:
