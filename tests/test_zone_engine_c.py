@@ -114,3 +114,23 @@ def test_zones_come_back_as_the_search_stored_them(tmp_path):
     for n in z.nodes:
         if n.stored is not None:
             assert n.stored.dtype == np.float32 and n.zone.shape == (z.n + 1, z.n + 1)
+
+
+def test_lassos_of_the_c_search_are_those_of_the_python_search(tmp_path):
+    # The lasso search reads the C search's tables as arrays; the loops it yields must be the Python search's.
+    from runtime.zones.search import lassos
+
+    seen = 0
+    for name, gen, defines, platform, mission in CASES:
+        model = model_of(tmp_path, gen, defines, platform, mission)
+        zp, _ = _explore(model, "python")
+        zc, _ = _explore(model, "c")
+        for fa in zc.flat.atoms:
+            if "WATCH" not in fa.places:
+                continue
+            watch = fa.place_mask(["WATCH"])
+            ours = [(a, [_node(n) for n in loop]) for a, loop in lassos(zc, fa.offset, watch)]
+            theirs = [(a, [_node(n) for n in loop]) for a, loop in lassos(zp, fa.offset, watch)]
+            assert ours == theirs, f"{name}: {fa.name}"
+            seen += len(ours)
+    assert seen, "no case has a lasso: the comparison says nothing"

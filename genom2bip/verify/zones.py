@@ -190,7 +190,7 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
                                   message="never requested", **common)
     if inconclusive:
         return ResponseResult(subject_text, inconclusive, value_ticks=None, **common)
-    cycles = lassos(z, lambda n: n.state[offset] == watch)
+    cycles = lassos(z, offset, watch)
     first = next(cycles, None)
     if first is None:
         message = ("every request ends, after more than the cap" if atom.kind == "response" else

@@ -50,7 +50,8 @@ def library():
             ("zs_set_tables", i32, [p, ctypes.POINTER(i64), i64, p, i64, PROGRAM]), ("zs_set_step", None, [p, p]),
             ("zs_intern", i64, [p, ctypes.POINTER(i64)]), ("zs_state_words", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
-            ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64])):
+            ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
+            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -224,6 +225,26 @@ class CSearch:
         self.z.out = Out(self, edges[:n_edges], n_nodes)
         if self.compiled is not None:
             self.z.states = States(self)
+
+    def graph(self):
+        """The nodes and steps as arrays, for lassos."""
+        from runtime.zones.lassos import Graph
+
+        rows, srows = self.z.nodes.rows, self.steps.rows
+        e = self.z.out.edges
+        return Graph(rows[:, 1].copy(), (rows[:, 9] & 2) > 0, rows[:, 3].copy(), (rows[:, 9] & 1) > 0, rows[:, 4] >= 0,
+                     e[:, 0].astype(np.int64), e[:, 1].astype(np.int64), e[:, 2].astype(np.int64),
+                     (srows[:, 9] & 1) > 0, self.z.nodes.__getitem__, self.steps.__getitem__)
+
+    def node_words(self, offset: int) -> np.ndarray:
+        """Word ``offset`` of each node's state."""
+        rows = self.z.nodes.rows
+        if self.compiled is None:
+            return np.array([self.z.states[s][offset] for s in rows[:, 0].tolist()], dtype=np.int64)
+        ids = np.ascontiguousarray(rows[:, 0], dtype=np.int64)
+        out = np.zeros(len(ids), dtype=np.int64)
+        self.lib.zs_node_words(self.ctx, _longs(ids), len(ids), offset, _longs(out))
+        return out
 
     def zone(self, slot: int) -> np.ndarray:
         """A stored zone (single precision, as the search keeps it)."""

@@ -563,6 +563,18 @@ class ZoneExplorer:
             self._guards.pop((index, state), None)
         return out
 
+    def graph(self):
+        """The search's nodes and steps as arrays (runtime/zones/lassos.py's Graph)."""
+        from runtime.zones.lassos import python_graph
+
+        return self.search.graph() if self.search is not None else python_graph(self)
+
+    def node_words(self, offset: int) -> np.ndarray:
+        """Word ``offset`` of each node's discrete state."""
+        if self.search is not None:
+            return self.search.node_words(offset)
+        return np.array([n.state[offset] for n in self.nodes], dtype=np.int64)
+
     def memory(self) -> int:
         """Bytes the kept zones take (the bulk of a long search; the caches of discrete states come beside)."""
         return (len(self.nodes) - self.dropped) * (self.n + 1) ** 2 * 4
@@ -664,8 +676,9 @@ class Blocking:
         return out
 
 
-def lassos(z: ZoneExplorer, watching, limit: int = 200):
-    """Reachable cycles of symbolic states that all satisfy ``watching(node)``, in which time passes.
+def lassos(z: ZoneExplorer, offset: int, value: int, limit: int = 200):
+    """Reachable cycles of symbolic states whose word ``offset`` is ``value`` (an observer watching a request), in
+    which time passes.
 
     Yields each cycle's entry node and the steps once round it; nothing when every such run ends
     (runtime/zones/trace.py's ``paths_to`` gives the ways to the entry).  Cycles down the search's own tree come
@@ -673,91 +686,8 @@ def lassos(z: ZoneExplorer, watching, limit: int = 200):
     every step but the last taken from the zone it reached, so one round of it is a run of the model.  Then
     the cycles of the graph where a covered zone stands for the zone covering it (a cycle that closes on
     another branch of the tree): each is a cycle of the model's zones, though one round of it may need, after
-    a step into a covered zone, clock values only the covering zone holds.
+    a step into a covered zone, clock values only the covering zone holds (runtime/zones/lassos.py).
     """
-    def rep(k: int) -> int:
-        while z.nodes[k].covered and z.nodes[k].by >= 0:
-            k = z.nodes[k].by
-        return k
+    from runtime.zones.lassos import find
 
-    watch = [watching(m) for m in z.nodes]
-    yield from _tree_lassos(z, watch, rep, limit)
-    yield from _graph_lassos(z, watch, rep)
-
-
-def _tree_lassos(z: ZoneExplorer, watch: list[bool], rep, limit: int):
-    nodes = z.nodes
-    depth, top, inside = _tree(nodes, watch)
-    found = []
-    for u, edges in enumerate(z.out):
-        if len(found) >= limit:
-            break
-        if not watch[u]:
-            continue
-        for target, step in edges:
-            if step.stored is not None and target == rep(target):
-                continue  # a step into a zone of its own: the tree goes on below it
-            a = rep(target)
-            if not watch[a] or depth[a] < top[u] or not inside(u, a):
-                continue  # the entry must be an ancestor reached through watching states only
-            chain, k = [], u
-            while k != a:
-                chain.append(k)
-                k = nodes[k].parent
-            loop = [nodes[k] for k in reversed(chain)] + [step]
-            if any(n.grown for n in loop):  # else a cycle in zero time, where no request waits for ever
-                found.append((len(loop), a, loop))
-                break
-    for _, a, loop in sorted(found, key=lambda f: f[0]):
-        yield a, loop
-
-
-def _tree(nodes: list[Node], watch: list[bool]):
-    """Depths in the search's tree, the depth each watching run starts at, and an ancestor test (entry and exit
-    numbers of a depth-first walk), computed once rather than walking up from every state."""
-    n = len(nodes)
-    depth, top = [0] * n, [0] * n
-    children: list[list[int]] = [[] for _ in range(n)]
-    for u, m in enumerate(nodes):  # a parent is stored before its children
-        p = m.parent
-        depth[u] = depth[p] + 1 if p >= 0 else 0
-        top[u] = top[p] if p >= 0 and watch[p] and watch[u] else depth[u]
-        if p >= 0:
-            children[p].append(u)
-    enter, leave, clock = [0] * n, [0] * n, 0
-    for root in (u for u in range(n) if nodes[u].parent < 0):
-        stack = [(root, False)]
-        while stack:
-            u, done = stack.pop()
-            if done:
-                leave[u] = clock
-                continue
-            enter[u] = clock
-            clock += 1
-            stack.append((u, True))
-            stack.extend((c, False) for c in children[u])
-    return depth, top, lambda u, a: enter[a] <= enter[u] and leave[u] <= leave[a]
-
-
-def _graph_lassos(z: ZoneExplorer, watch: list[bool], rep):
-    import networkx as nx
-
-    graph = nx.DiGraph()
-    for k, edges in enumerate(z.out):
-        if not watch[k]:
-            continue
-        for target, step in edges:
-            t = rep(target)
-            if watch[t]:
-                a = rep(k)
-                if not graph.has_edge(a, t) or step.grown:
-                    graph.add_edge(a, t, step=step)
-    for component in nx.strongly_connected_components(graph):
-        if len(component) == 1:
-            (u,) = component
-            if not graph.has_edge(u, u):
-                continue
-        sub = graph.subgraph(component)
-        for a, b in [(a, b) for a, b, d in sub.edges(data=True) if d["step"].grown][:20]:
-            back = nx.shortest_path(sub, b, a) if a != b else [a]
-            yield a, [sub.edges[a, b]["step"]] + [sub.edges[x, y]["step"] for x, y in zip(back, back[1:])]
+    return find(z, z.node_words(offset) == value, limit)

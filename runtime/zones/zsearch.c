@@ -1003,3 +1003,15 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
         memcpy(out, pr, len * sizeof(int64_t));
     return len;
 }
+
+/* Word ``offset`` of each of the states ids[0..n) into out. */
+void zs_node_words(void *p, const int64_t *ids, int64_t n, int offset, int64_t *out)
+{
+    Ctx *x = p;
+    int64_t *w = malloc(x->tables->W * sizeof(int64_t));
+    for (int64_t i = 0; i < n; i++) {
+        state_words(x, ids[i], w);
+        out[i] = w[offset];
+    }
+    free(w);
+}

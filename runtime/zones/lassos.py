@@ -1,0 +1,163 @@
+"""Lassos of a finished zone search: cycles through states that all watch a request, in which time passes.
+
+They show a response time without bound.  The search's nodes are read as arrays (:class:`Graph`, from the C
+search's tables or from the Python search's nodes), so that a search of hundreds of thousands of nodes is walked
+in numpy and plain integers; Node objects are made only for the steps of the lassos found.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Graph:
+    """The search's tree and steps as arrays: per node its parent, whether it is covered and by whom, whether time
+    may have passed in its step, whether its zone is kept; per edge (``frm``, ``target``, ``ref``): ref >= 0 is
+    the node stored by the step, ref < 0 the step ``-ref - 1`` into a zone another node covers."""
+
+    parent: np.ndarray
+    covered: np.ndarray
+    by: np.ndarray
+    grown: np.ndarray
+    zoned: np.ndarray
+    frm: np.ndarray
+    target: np.ndarray
+    ref: np.ndarray
+    step_grown: np.ndarray
+    node: object  # k -> Node
+    step: object  # s -> Node (a step into a covered zone)
+
+
+def python_graph(z) -> Graph:
+    """The Graph of a search kept in Python (ZoneExplorer.nodes and out)."""
+    nodes = z.nodes
+    steps, frm, target, ref = [], [], [], []
+    for k, edges in enumerate(z.out):
+        for t, step in edges:
+            frm.append(k)
+            target.append(t)
+            if step is nodes[t]:
+                ref.append(t)
+            else:
+                ref.append(-len(steps) - 1)
+                steps.append(step)
+    return Graph(np.array([n.parent for n in nodes], dtype=np.int64), np.array([n.covered for n in nodes], bool),
+                 np.array([n.by for n in nodes], dtype=np.int64), np.array([n.grown for n in nodes], bool),
+                 np.array([n.stored is not None for n in nodes], bool), np.array(frm, dtype=np.int64),
+                 np.array(target, dtype=np.int64), np.array(ref, dtype=np.int64),
+                 np.array([s.grown for s in steps], bool), nodes.__getitem__, steps.__getitem__)
+
+
+def find(z, watch: np.ndarray, limit: int = 200):
+    """Lassos through nodes where ``watch`` (one bool per node) holds: see runtime/zones/search.py's lassos."""
+    g = z.graph()
+    n = len(g.parent)
+    rep = np.arange(n)
+    covered, by = g.covered.tolist(), g.by.tolist()
+    rl = rep.tolist()
+    for k in range(n - 1, -1, -1):  # a node is covered by one stored after it
+        if covered[k] and by[k] >= 0:
+            rl[k] = rl[by[k]]
+    rep = np.array(rl, dtype=np.int64)
+    yield from _tree_lassos(g, watch, rep, limit)
+    yield from _graph_lassos(g, watch, rep)
+
+
+def _tree(g: Graph, watch: np.ndarray):
+    """Depths in the search's tree, the depth each watching run starts at, entry and exit numbers of a depth-first
+    walk (an ancestor test), computed once rather than walking up from every state."""
+    parent, w = g.parent.tolist(), watch.tolist()
+    n = len(parent)
+    depth, top = [0] * n, [0] * n
+    children: list[list[int]] = [[] for _ in range(n)]
+    for u in range(n):  # a parent is stored before its children
+        p = parent[u]
+        if p >= 0:
+            depth[u] = depth[p] + 1
+            top[u] = top[p] if w[p] and w[u] else depth[u]
+            children[p].append(u)
+    enter, leave, clock = [0] * n, [0] * n, 0
+    for root in (u for u in range(n) if parent[u] < 0):
+        stack = [(root, False)]
+        while stack:
+            u, done = stack.pop()
+            if done:
+                leave[u] = clock
+                continue
+            enter[u] = clock
+            clock += 1
+            stack.append((u, True))
+            stack.extend((c, False) for c in children[u])
+    return np.array(depth), np.array(top), np.array(enter), np.array(leave)
+
+
+def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int):
+    if not len(g.frm):
+        return
+    depth, top, enter, leave = _tree(g, watch)
+    u, t, ref = g.frm, g.target, g.ref
+    real = ref >= 0
+    own = real & g.zoned[np.where(real, ref, 0)] & (rep[t] == t)  # into a zone of its own: the tree goes on
+    a = rep[t]
+    ok = watch[u] & ~own & watch[a] & (depth[a] >= top[u]) & (enter[a] <= enter[u]) & (leave[u] <= leave[a])
+    parent, grown = g.parent, g.grown
+    found, done = [], -1
+    for e in np.flatnonzero(ok).tolist():
+        k0 = int(u[e])
+        if k0 == done:
+            continue
+        if len(found) >= limit:
+            break
+        entry, r = int(a[e]), int(ref[e])
+        chain, k = [], k0
+        while k != entry:
+            chain.append(k)
+            k = int(parent[k])
+        step_grown = bool(grown[r]) if r >= 0 else bool(g.step_grown[-r - 1])
+        if step_grown or any(grown[c] for c in chain):  # else a cycle in zero time, where no request waits for ever
+            step = g.node(r) if r >= 0 else g.step(-r - 1)
+            found.append((len(chain) + 1, entry, [g.node(c) for c in reversed(chain)] + [step]))
+            done = k0
+    for _, entry, loop in sorted(found, key=lambda f: f[0]):
+        yield entry, loop
+
+
+def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
+    import networkx as nx
+
+    if not len(g.frm):
+        return
+    ru, rt = rep[g.frm], rep[g.target]
+    keep = np.flatnonzero(watch[g.frm] & watch[rt])
+    if not len(keep):
+        return
+    ref = g.ref
+    stepg = np.where(ref >= 0, g.grown[np.where(ref >= 0, ref, 0)],
+                     g.step_grown[np.where(ref < 0, -ref - 1, 0)] if len(g.step_grown) else False)
+    n = len(g.parent)
+    key = ru[keep] * n + rt[keep]
+    _, first = np.unique(key, return_index=True)
+    first = np.sort(first)  # edges in the order they were first met
+    label = {}  # (a, t) -> the edge whose step stands for it: the last one in which time passes, else the first
+    for i in first.tolist():
+        label[(int(ru[keep[i]]), int(rt[keep[i]]))] = int(keep[i])
+    for e in keep[stepg[keep]].tolist():
+        label[(int(ru[e]), int(rt[e]))] = e
+    graph = nx.DiGraph()
+    graph.add_edges_from((int(ru[keep[i]]), int(rt[keep[i]])) for i in first.tolist())
+
+    def step(e: int):
+        r = int(ref[e])
+        return g.node(r) if r >= 0 else g.step(-r - 1)
+
+    for component in nx.strongly_connected_components(graph):
+        if len(component) == 1:
+            (v,) = component
+            if not graph.has_edge(v, v):
+                continue
+        sub = graph.subgraph(component)
+        for a, b in [(a, b) for a, b in sub.edges() if stepg[label[(a, b)]]][:20]:
+            back = nx.shortest_path(sub, b, a) if a != b else [a]
+            yield a, [step(label[(a, b)])] + [step(label[(x, y)]) for x, y in zip(back, back[1:])]
