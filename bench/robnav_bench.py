@@ -33,6 +33,7 @@ that declares ``throw`` may also end in its exception.
 from __future__ import annotations
 
 import argparse
+import json
 import multiprocessing
 import re
 import resource
@@ -116,10 +117,29 @@ def platform_text(cores: int, execution: dict, offsets: dict, releases: str = "o
     return "\n".join(lines) + "\n"
 
 
-def client_text(requests: list[str], after: int) -> str:
+def client_text(requests: list[str], after: int, inputs: dict[str, dict] | None = None) -> str:
+    """The client mission; ``inputs``: each request's ``with:`` (none where absent)."""
     first = f"    after: {after} ms\n" if after else ""
-    steps = "".join(f"  - send: {r}\n{first if k == 0 else ''}    until: queued\n" for k, r in enumerate(requests))
+    given = inputs or {}
+    steps = "".join(f"  - send: {r}\n{first if k == 0 else ''}"
+                    + (f"    with: {json.dumps(given[r])}\n" if given.get(r) else "") + "    until: queued\n"
+                    for k, r in enumerate(requests))
     return f"mission: robnav-client\nsteps:\n{steps}"
+
+
+def request_inputs(description, requests: list[str]) -> dict[str, dict]:
+    """Zero values for each request's inputs that have no default: the artefact's client sends none (its model
+    has no data), and the controller refuses a request whose inputs are missing."""
+    from genom2bip.back.interface import interface_data, zero
+
+    data = interface_data(description, "robnav", "")
+    out = {}
+    for r in requests:
+        component, _, service = r.partition(".")
+        spec = data["components"][component]["services"][service]
+        out[r] = {p["name"]: zero(p["schema"], data.get("types", {})) for p in spec["parameters"]
+                  if p["direction"] in ("in", "inout") and p["source"] != "ids" and "default" not in p}
+    return out
 
 
 def run(paths, include, platform, client, exceptions, max_states, shown, queue) -> None:
@@ -182,7 +202,7 @@ def main() -> None:
     after = 0 if args.requests_at_start else ready
     out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
     out.mkdir(parents=True, exist_ok=True)
-    (out / "client.yaml").write_text(client_text(requests, after))
+    (out / "client.yaml").write_text(client_text(requests, after, request_inputs(description, requests)))
     print(f"{len(execution)} codel intervals, offsets {offsets}, client {' -> '.join(requests)}, "
           f"the first request at {after} ms")
     print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; "
