@@ -11,6 +11,8 @@ is the tick model's own, and the goal is checked on its last state.
 """
 from __future__ import annotations
 
+import weakref
+
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -170,6 +172,10 @@ def _shortest(n: int, edges: list[tuple[int, int, float]]) -> list[float]:
     raise ConcretizeError("the path's clock bounds have no solution")
 
 
+#: Per tick model, the successors of the states traces went through.
+_FIRED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]],
            space: StateSpace) -> tuple[list[TimedStep], tuple]:
     """``path`` (:func:`paths_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
@@ -195,9 +201,17 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
                 values[offset] = watching
         return z.space.canonical(tuple(values) + tuple(full[z.space.width:]))
 
+    fired = _FIRED.setdefault(space, {})  # the traces of one search share their beginnings
+
+    def fire_all(s: tuple) -> list:
+        got = fired.get(s)
+        if got is None:
+            got = fired[s] = space._fire_all(s)
+        return got
+
     def tick(s: tuple, count: int) -> tuple:
         for _ in range(count):
-            nxt = [n for inter, n, _ in space._fire_all(s) if inter.label == "tick"]
+            nxt = [n for inter, n, _ in fire_all(s) if inter.label == "tick"]
             if len(nxt) != 1:
                 raise ConcretizeError("time cannot pass where the zones said it could")
             s = nxt[0]
@@ -209,7 +223,7 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
         state = tick(state, wait)
         _, ports, label = z.interaction(n.via)
         target = n.state
-        for inter, nxt, made in space._fire_all(state):
+        for inter, nxt, made in fire_all(state):
             if inter.label == label and erased(nxt) == z.space.canonical(target):
                 out.append(TimedStep(wait, Step(inter.label, inter.index, tuple((c.name, p) for c, p in made),
                                                 tuple(c.describe(p) for c, p in made))))
