@@ -166,7 +166,7 @@ class CSearch:
         status = lib.zs_run(self.ctx, -1 if max_states is None else max_states, int(stop_at_violation),
                             self._program, callback, 1024)
         self._raise(status, Unsupported)
-        counts = (ctypes.c_int64 * 12)()
+        counts = (ctypes.c_int64 * 16)()
         lib.zs_counts(self.ctx, counts)
         result.states, result.discrete, result.transitions, result.merged = counts[0], counts[1], counts[2], counts[3]
         z.dropped = counts[4]
@@ -198,7 +198,7 @@ class CSearch:
             error, self.error = self.error, None
             raise error
         if status == -2:
-            counts = (ctypes.c_int64 * 12)()
+            counts = (ctypes.c_int64 * 16)()
             self.lib.zs_counts(self.ctx, counts)
             raise unsupported(f"priority {self.z.model.rules[counts[10]].name}: time waits for a clock condition "
                               "that is not one lower bound")

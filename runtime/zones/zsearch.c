@@ -933,6 +933,7 @@ void zs_counts(void *p, int64_t *out)
     out[0] = x->nodes.n, out[1] = x->discrete, out[2] = x->transitions, out[3] = x->merged;
     out[4] = x->dropped, out[5] = x->steps.n, out[6] = x->edges.n, out[7] = x->members.n, out[8] = x->guards.n;
     out[9] = x->waiting.n - x->head, out[10] = x->err_arg, out[11] = zs_memory(x);
+    out[12] = zone_bytes(x), out[13] = x->bytes.n + x->ends.n * 16, out[14] = x->prog_words * 8;
 }
 
 /* Node (steps: which=1) fields as int64 rows of 10: state parent via by zone own members guard guard_len
