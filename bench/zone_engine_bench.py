@@ -1,0 +1,105 @@
+"""The zone engine's speed: the C search beside the Python reference on the same models, in the same run.
+
+Run ``python bench/zone_engine_bench.py [--states N] [--full] [--robnav ARTEFACT_DIR]``.
+
+Both searches store the same nodes in the same order (tests/test_zone_engine_c.py), so the first N symbolic
+states of one are those of the other: each model is searched by both up to ``--states`` (default 20,000)
+and the figures are printed side by side with their ratio.  ``--full`` then searches each model to the end
+with the C engine alone (states, seconds, memory by kind).  Models:
+
+* DALA's sensing half on one core (the README's response-time check: RFLEX, LaserRF, POM, the sensing mission);
+* whole DALA, the five modules with their rules and the corridor mission as client, on one core and on two;
+* RobNav at 4 cores, with ``--robnav DIR`` (the public schedulability artefact, as bench/robnav_bench.py reads it).
+
+Times are the search alone (the model built and its step compiled beforehand), wall clock.
+"""
+from __future__ import annotations
+
+import argparse
+import ctypes
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from genom2bip.loading import TimeSettings  # noqa: E402
+from genom2bip.verify.model import build_model  # noqa: E402
+from genom2bip.verify.options import SearchOptions  # noqa: E402
+from runtime.zones.search import ZoneExplorer  # noqa: E402
+
+DALA = ROOT / "descriptions" / "dala"
+
+
+def dala_models():
+    sensing = [DALA / f"{m}.gen" for m in ("RFLEX", "LaserRF", "POM")]
+    yield "DALA sensing, 1 core", lambda: build_model(
+        sensing, time=TimeSettings(platform=DALA / "platforms/one-core.yaml", client=DALA / "missions/sensing.yaml",
+                                   responses=True))
+    for name, plat in (("1 core", "one-core"), ("2 cores", "two-cores")):
+        yield f"whole DALA, {name}", lambda plat=plat: build_model(
+            [DALA], time=TimeSettings(platform=DALA / f"platforms/{plat}.yaml", client=DALA / "missions/corridor.yaml",
+                                      responses=True))
+
+
+def robnav_model(artefact: Path):
+    import robnav_bench as rb
+    from genom2bip.parser import parse_paths
+
+    paths = [str(artefact / c / f"{c}.gen") for c in rb.COMPONENTS]
+    description = parse_paths(paths, [str(artefact)])
+    execution, offsets, requests, ready = rb.read_artefact((artefact / "robnav-artefact-edf.xta").read_text(),
+                                                           description)
+    out = Path(tempfile.mkdtemp(prefix="zone-bench-"))
+    (out / "client.yaml").write_text(rb.client_text(requests, ready, rb.request_inputs(description, requests)))
+    (out / "edf4.yaml").write_text(rb.platform_text(4, execution, offsets))
+    settings = TimeSettings(platform=out / "edf4.yaml", client=out / "client.yaml", responses=True, exceptions=False)
+    return build_model(paths, include_dirs=[str(artefact)], no_rules=True, time=settings)
+
+
+def search(model, engine: str, states: int | None) -> tuple[object, object, float]:
+    z = ZoneExplorer(model.package, model.root, SearchOptions().externs, engine=engine)
+    z.successors(z.space.state(z.space.initial_ids[0]))  # the compiled step built before the clock starts
+    start = time.perf_counter()
+    result = z.explore(max_states=states)
+    return z, result, time.perf_counter() - start
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--states", type=int, default=20_000, help="symbolic states both engines search (default 20,000)")
+    ap.add_argument("--full", action="store_true", help="then search each model to the end with the C engine")
+    ap.add_argument("--max-states", type=int, default=6_000_000, help="bound of the --full searches")
+    ap.add_argument("--robnav", type=Path, metavar="ARTEFACT_DIR")
+    args = ap.parse_args()
+    models = list(dala_models())
+    if args.robnav:
+        models.append(("RobNav, 4 cores", lambda: robnav_model(args.robnav)))
+    print(f"{'model':24} {'states':>9} {'Python s':>9} {'Python st/s':>12} {'C s':>8} {'C st/s':>10} {'ratio':>7}")
+    built = []
+    for name, make in models:
+        model = make()
+        built.append((name, model))
+        _, rp, tp = search(model, "python", args.states)
+        _, rc, tc = search(model, "c", args.states)
+        assert (rp.states, rp.transitions) == (rc.states, rc.transitions), name
+        print(f"{name:24} {rc.states:>9,} {tp:>9.2f} {rp.states / tp:>12,.0f} {tc:>8.2f} {rc.states / tc:>10,.0f} "
+              f"{tp / tc:>6.1f}x", flush=True)
+    if not args.full:
+        return
+    print(f"\n{'model (C, to the end)':24} {'states':>10} {'discrete':>10} {'complete':>8} {'s':>8} {'st/s':>8} "
+          f"{'zones MB':>9} {'states MB':>9} {'programs MB':>11}")
+    for name, model in built:
+        z, r, t = search(model, "c", args.max_states)
+        counts = (ctypes.c_int64 * 16)()
+        z.search.lib.zs_counts(z.search.ctx, counts)
+        mb = [counts[k] / 2 ** 20 for k in (12, 13, 14)]
+        print(f"{name:24} {r.states:>10,} {r.discrete:>10,} {str(r.complete):>8} {t:>8.1f} {r.states / t:>8,.0f} "
+              f"{mb[0]:>9.0f} {mb[1]:>9.0f} {mb[2]:>11.0f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
