@@ -52,8 +52,7 @@ def test_the_c_search_stops_where_the_python_search_stops(tmp_path):
 def test_a_violation_ends_the_c_search_when_asked(tmp_path):
     # Pair on one core with every codel at its WCET overruns (test_platform_timing); the search stops at the node
     # where the observer first sees it, as the Python search does.
-    model = model_of(tmp_path, CASES[0][1], {}, "cores: 1\npolicy: fixed-priority\nexecution:\n"
-                     "  Pair.fast.fast_step: [9 ms, 9 ms]\n  Pair.slow.slow_step: [9 ms, 9 ms]\n", None)
+    model = model_of(tmp_path, CASES[0][1], {}, OVERRUN, None)
     _, rp = _explore(model, "python", stop_at_violation=True)
     _, rc = _explore(model, "c", stop_at_violation=True)
     assert rp.violations, "the fixture is meant to overrun"
@@ -134,3 +133,45 @@ def test_lassos_of_the_c_search_are_those_of_the_python_search(tmp_path):
             assert ours == theirs, f"{name}: {fa.name}"
             seen += len(ours)
     assert seen, "no case has a lasso: the comparison says nothing"
+
+
+class _Seen(Exception):
+    pass
+
+
+OVERRUN = ("cores: 1\npolicy: fixed-priority\nexecution:\n  Pair.fast.fast_step: [9 ms, 9 ms]\n"
+           "  Pair.slow.slow_step: [9 ms, 9 ms]\n")
+
+
+@pytest.mark.parametrize("engine", ["python", "c"])
+def test_a_watcher_sees_a_violation_with_its_node_and_may_stop_the_search(tmp_path, engine):
+    # The watcher is how a caller tells a violation as soon as it is found: it sees the live result, the node of the
+    # violation is readable (a trace can be made from it), and raising from it stops the search there.
+    model = model_of(tmp_path, CASES[0][1], {}, OVERRUN, None)
+    _, full = _explore(model, "python")
+    z = ZoneExplorer(model.package, model.root, engine=engine)
+    seen = []
+
+    def watcher(result):
+        if result.violations:
+            (atom, node), = list(result.violations.items())[:1]
+            seen.append((atom, node, z.nodes[node].state, len(z.nodes)))
+            raise _Seen
+
+    z.watcher = watcher
+    with pytest.raises(_Seen):
+        z.explore()
+    assert seen and seen[0][:2] == next(iter(full.violations.items()))
+    assert seen[0][2] == z.nodes[seen[0][1]].state
+    assert seen[0][3] < full.states  # it stopped before the end
+
+
+def test_a_watcher_that_never_raises_changes_nothing(tmp_path):
+    model = model_of(tmp_path, CASES[0][1], {}, OVERRUN, None)
+    zp, rp = _explore(model, "python")
+    z = ZoneExplorer(model.package, model.root)
+    calls = []
+    z.watcher = lambda result: calls.append(len(result.violations))
+    rc = z.explore()
+    assert calls and (rc.states, rc.violations, rc.maxima) == (rp.states, rp.violations, rp.maxima)
+    assert [_node(n) for n in z.nodes] == [_node(n) for n in zp.nodes]

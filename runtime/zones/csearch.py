@@ -41,7 +41,7 @@ def library():
             ("zs_new", p, [i32, dbl, i32, i32, i32]), ("zs_free", None, [p]),
             ("zs_set_program", i32, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_initial", i32, [p, i64, dbl, PROGRAM]),
-            ("zs_run", i32, [p, i64, i32, PROGRAM, PROGRESS, i64]),
+            ("zs_run", i32, [p, i64, i32, PROGRAM, PROGRESS, i64, i32]),
             ("zs_counts", None, [p, ctypes.POINTER(i64)]), ("zs_nodes", None, [p, i32, ctypes.POINTER(i64)]),
             ("zs_edges", None, [p, ctypes.POINTER(ctypes.c_int32)]),
             ("zs_members", None, [p, ctypes.POINTER(ctypes.c_int32)]),
@@ -145,14 +145,23 @@ class CSearch:
             return 1
 
     def run(self, result, max_states: int | None, progress, stop_at_violation: bool):
+        """The search to its end (or its bound), ``result`` filled; the explorer's ``watcher``, if any, is given the
+        live result every 1,024 expanded states and at each violation found (the nodes so far readable), and may
+        raise to stop the search: its exception is raised here, once ``result`` and the nodes say where it
+        stopped."""
         from runtime.zones.model import Unsupported
 
         z, lib = self.z, self.lib
+        watcher = z.watcher
 
         def tick(nodes, transitions, waiting, memory, _depth) -> int:
             try:
                 progress.tick(nodes, transitions, waiting, lambda: memory)
-            except KeyboardInterrupt:
+                if watcher is not None:
+                    self._refresh(result, nodes=False)
+                    watcher(result)
+            except BaseException as e:  # noqa: BLE001 - raised once the search has stopped
+                self.error = e
                 return 1
             return 0
 
@@ -163,16 +172,35 @@ class CSearch:
             status = lib.zs_initial(self.ctx, self._intern(state) if self.compiled else z.state_id(state), _dbl(zone),
                                     self._program)
             self._raise(status, Unsupported)
-        status = lib.zs_run(self.ctx, -1 if max_states is None else max_states, int(stop_at_violation),
-                            self._program, callback, 1024)
+        while True:
+            status = lib.zs_run(self.ctx, -1 if max_states is None else max_states, int(stop_at_violation),
+                                self._program, callback, 1024, int(watcher is not None))
+            if status != 4:
+                break
+            self._refresh(result, nodes=True)
+            try:
+                watcher(result)
+            except BaseException as e:  # noqa: BLE001 - raised below, as from the progress callback
+                self.error, status = e, 3
+                break
+        if status == 3 and self.error is not None:
+            self._refresh(result, nodes=True)
+            result.complete, result.stopped = False, STOPPED[3]
+            error, self.error = self.error, None
+            raise error
         self._raise(status, Unsupported)
+        self._refresh(result, nodes=True)
+        if status:
+            result.complete, result.stopped = False, STOPPED[status]
+        return result
+
+    def _refresh(self, result, nodes: bool) -> None:
+        """``result`` as the search stands: counts, violations and maxima; with ``nodes``, the explorer's nodes."""
+        lib = self.lib
         counts = (ctypes.c_int64 * 16)()
         lib.zs_counts(self.ctx, counts)
         result.states, result.discrete, result.transitions, result.merged = counts[0], counts[1], counts[2], counts[3]
-        z.dropped = counts[4]
-        if status:
-            result.complete, result.stopped = False, STOPPED[status]
-        self._nodes(counts)
+        self.z.dropped = counts[4]
         violation = (ctypes.c_int32 * max(1, len(self.observers)))()
         top, node = np.zeros(self.d), (ctypes.c_int32 * self.d)()
         lib.zs_results(self.ctx, violation, _dbl(top), node)
@@ -182,7 +210,8 @@ class CSearch:
         for clock in range(1, self.d):
             if node[clock] >= 0:
                 result.maxima[clock] = (float(top[clock]), node[clock])
-        return result
+        if nodes:
+            self._nodes(counts)
 
     def program(self, state_id: int) -> list[int] | None:
         """The program the search used for a state (None if it needed none)."""

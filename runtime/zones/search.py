@@ -158,6 +158,9 @@ class ZoneExplorer:
         self._ids: dict[tuple, int] = {}
         self._intern = None  # while a C search keeps the states: its numbering
         self.search = None  # the C search that ran (runtime/zones/csearch.py), if one did
+        #: Told the live ZoneResult as the search goes (after each expanded state in Python; every 1,024 and at
+        #: each violation found in C, the nodes so far readable); it may raise to stop the search.
+        self.watcher = None
 
     # -- the discrete side ------------------------------------------------------------------------
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
@@ -458,6 +461,8 @@ class ZoneExplorer:
                 continue
             node.expanded = True
             self.check(k, result)
+            if self.watcher is not None:
+                self.watcher(result)
             if result.violations and stop_at_violation:
                 result.complete, result.stopped = False, "violated"
                 break

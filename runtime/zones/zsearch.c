@@ -70,6 +70,7 @@ typedef struct {
     int64_t *inter_key, **inter_val, icap, icount;
     program_fn ask;
     int64_t prog_words;     /* words held by programs */
+    int told;               /* violations found when zs_run last looked */
 } Ctx;
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
@@ -819,10 +820,12 @@ int64_t zs_memory(Ctx *x)
            + x->steps.n * (int64_t)sizeof(Node) + x->edges.n * (int64_t)sizeof(Edge) + x->guards.n * 8;
 }
 
-/* The search.  Returns 0 complete, 1 max-states, 2 violated, 3 stopped by the progress callback, -1 the
- * program callback failed (its exception is on the Python side), -2 an unsupported wait (err_arg), -9 memory. */
+/* The search, resumable: it goes on from where a previous call stopped.  Returns 0 complete, 1 max-states,
+ * 2 violated (stop_at_violation), 3 stopped by the progress callback, 4 a violation newly found (``notify``:
+ * after the node where it was seen is expanded, so that a next call goes on), -1 the program callback failed
+ * (its exception is on the Python side), -2 an unsupported wait (err_arg), -9 memory. */
 int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, progress_fn progress,
-           int64_t every)
+           int64_t every, int notify)
 {
     Ctx *x = p;
     int d = x->d;
@@ -842,15 +845,15 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             break;
         }
         check(x, k, pr);
-        if (stop_at_violation) {
-            int any = 0;
-            for (int i = 0; i < x->nobs; i++)
-                any |= x->violation[i] >= 0;
-            if (any) {
-                status = 2;
-                break;
-            }
+        int found = 0;
+        for (int i = 0; i < x->nobs; i++)
+            found += x->violation[i] >= 0;
+        if (stop_at_violation && found) {
+            status = 2;
+            break;
         }
+        int fresh = notify && found > x->told;
+        x->told = found;
         double *here = T(x, 0), *met = T(x, 1), *block = T(x, 2);
         slot_load(x, x->nodes.a[k].zone, here);
         const int64_t *s = parts(pr).succ;
@@ -921,6 +924,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             break;
         if (max_states >= 0 && x->nodes.n >= max_states) {
             status = 1;
+            break;
+        }
+        if (fresh) {
+            status = 4;
             break;
         }
         if (progress && ++count % every == 0 &&
