@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.zones.search import Node, _double
+from runtime.zones.node import Node, _double
 
 HERE = Path(__file__).parent
 PROGRAM = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64)  # also the interaction callback

@@ -20,7 +20,8 @@ import numpy as np
 
 from runtime.explore.space import StateSpace, Step
 from runtime.zones import dbm
-from runtime.zones.search import Node, ZoneExplorer
+from runtime.zones.node import Node
+from runtime.zones.search import ZoneExplorer
 
 
 class ConcretizeError(Exception):
