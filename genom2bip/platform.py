@@ -13,6 +13,8 @@ A platform file (``verify --timed --platform FILE``)::
       robloco.track:
         delay: [8 ms, 10 ms]     # the first period opens this long after start (overrides 'delay')
         priority: 10             # fixed-priority: 0 is the highest (overrides 'priority')
+      robmotion.plan:
+        suspend: 11 ms           # after each release the task waits this long before it asks for a core
 
 Codels are named ``Component.Owner.codel`` where the owner is the service or
 task whose automaton runs the codel.  Every problem is reported with the file,
@@ -39,7 +41,7 @@ POLICIES = ("edf", "fixed-priority")
 #: wakes them all), or each release seen in turn, the first taking a free core before the next is queued.
 RELEASES = ("together", "one-by-one")
 KEYS = ("cores", "policy", "releases", "best", "execution", "tasks")
-TASK_KEYS = ("delay", "priority")
+TASK_KEYS = ("delay", "priority", "suspend")
 #: More cores than this is a typing error, not a computer (each core is a value of the model's state).
 MAX_CORES = 256
 #: GenoM3 priorities go from 0 (highest) to 255 (lowest); a task without one is among the lowest.
@@ -61,6 +63,7 @@ class Interval:
 class TaskSettings:
     delay: Interval | None = None
     priority: int | None = None
+    suspend: Interval | None = None  # self-suspension after each release, before the task asks for a core
 
 
 @dataclass
@@ -245,12 +248,19 @@ class _Reader(rules._Reader):
         tasks = self.mapping(fields["tasks"], "tasks") if "tasks" in fields else []
         for k, v in tasks or []:
             key = self.task(k)
-            settings = self.task_settings(v, str(k.value))
+            settings = self.task_settings(v, str(k.value), self.ir_task(key))
             if key is not None and settings is not None:
                 out.tasks[key] = settings
         return out
 
-    def task_settings(self, node: yaml.Node, name: str) -> TaskSettings | None:
+    def ir_task(self, key: tuple[str, str] | None) -> ir.Task | None:
+        """The description's task named by ``key`` (None when the key was wrong)."""
+        if key is None:
+            return None
+        component = next(c for c in self.description.components if c.name == key[0])
+        return next(t for t in component.tasks if t.name == key[1])
+
+    def task_settings(self, node: yaml.Node, name: str, task: ir.Task | None) -> TaskSettings | None:
         items = self.mapping(node, f"task {name}")
         if items is None:
             return None
@@ -258,6 +268,8 @@ class _Reader(rules._Reader):
         for k, v in items:
             if k.value == "delay":
                 out.delay = self.interval(v, f"delay of {name}")
+            elif k.value == "suspend":
+                out.suspend = self.suspension(v, name, task)
             elif k.value == "priority":
                 text = self.scalar(v, f"priority of {name}")
                 if text is not None and (not (text.isascii() and text.isdigit()) or int(text) > LOWEST_PRIORITY):
@@ -267,6 +279,23 @@ class _Reader(rules._Reader):
             else:
                 self.error(k, f"task {name}: unknown key '{k.value}'", _suggest(k.value, list(TASK_KEYS)))
         return out
+
+
+    def suspension(self, node: yaml.Node, name: str, task: ir.Task | None) -> Interval | None:
+        """``suspend``: a duration or interval shorter than the task's period (a periodic task's only)."""
+        span = self.interval(node, f"suspend of {name}")
+        if span is None or task is None:
+            return None
+        if task.period is None:
+            self.error(node, f"suspend of {name}: task {name} has no period",
+                       "a task suspends after each release of its period; a task without period has none")
+            return None
+        period = round(task.period.seconds * 1e6)
+        if span.worst_us >= period:
+            self.error(node, f"suspend of {name}: {span.worst_us / 1000:g} ms is not shorter than its period, "
+                             f"{period / 1000:g} ms", "a task that suspends for a whole period never runs in time")
+            return None
+        return span
 
 
 def load_platform(path: Path, description: ir.Description, reporter: Reporter) -> Platform | None:
