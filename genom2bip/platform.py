@@ -44,6 +44,10 @@ KEYS = ("cores", "policy", "releases", "best", "execution", "tasks")
 TASK_KEYS = ("delay", "priority", "suspend")
 #: More cores than this is a typing error, not a computer (each core is a value of the model's state).
 MAX_CORES = 256
+#: A codel's worst case or a task's delay past this many periods (of its task, else the longest one) is refused:
+#: no task means it, and the search would follow every period of the others through it.  Past one period it is
+#: accepted with a warning (an overrun that the check finds and reports).
+MAX_PERIODS = 100
 #: GenoM3 priorities go from 0 (highest) to 255 (lowest); a task without one is among the lowest.
 LOWEST_PRIORITY = 255
 
@@ -243,7 +247,8 @@ class _Reader(rules._Reader):
         for k, v in execution or []:
             key = self.codel(k)
             span = self.interval(v, f"execution of {k.value}")
-            if key is not None and span is not None:
+            if key is not None and span is not None and self.sensible(v, f"execution of {k.value}", span,
+                                                                      self.owner_task(key)):
                 out.execution[key] = span
         tasks = self.mapping(fields["tasks"], "tasks") if "tasks" in fields else []
         for k, v in tasks or []:
@@ -268,6 +273,8 @@ class _Reader(rules._Reader):
         for k, v in items:
             if k.value == "delay":
                 out.delay = self.interval(v, f"delay of {name}")
+                if out.delay is not None and not self.sensible(v, f"delay of {name}", out.delay, task):
+                    out.delay = None
             elif k.value == "suspend":
                 out.suspend = self.suspension(v, name, task)
             elif k.value == "priority":
@@ -280,6 +287,32 @@ class _Reader(rules._Reader):
                 self.error(k, f"task {name}: unknown key '{k.value}'", _suggest(k.value, list(TASK_KEYS)))
         return out
 
+
+    def owner_task(self, key: tuple[str, str, str]) -> ir.Task | None:
+        """The task that runs codel ``key``'s owner: the task itself, or a service's (None: the control task)."""
+        component = next(c for c in self.description.components if c.name == key[0])
+        tasks = {t.name: t for t in component.tasks}
+        if key[1] in tasks:
+            return tasks[key[1]]
+        service = next((s for s in component.services if s.name == key[1]), None)
+        return tasks.get(service.task) if service is not None and service.task else None
+
+    def sensible(self, node: yaml.Node, what: str, span: Interval, task: ir.Task | None) -> bool:
+        """A duration within :data:`MAX_PERIODS` periods of ``task`` (else of the longest period): an error past
+        them, a warning past one period; False when refused."""
+        periods = [round(t.period.seconds * 1e6) for c in self.description.components for t in c.tasks if t.period]
+        own = task is not None and task.period is not None
+        period = round(task.period.seconds * 1e6) if own else max(periods, default=0)
+        if not period or span.worst_us <= period:
+            return True
+        whose = f"the period of {task.name}" if own else "the longest period"
+        if span.worst_us > MAX_PERIODS * period:
+            self.error(node, f"{what}: {span.worst_us / 1000:g} ms is more than {MAX_PERIODS} times {whose} "
+                             f"({period / 1000:g} ms)", "a duration in ms of the order of the periods is expected")
+            return False
+        self.reporter.warning(self.span(node), f"{what}: {span.worst_us / 1000:g} ms is longer than {whose} "
+                                               f"({period / 1000:g} ms)")
+        return True
 
     def suspension(self, node: yaml.Node, name: str, task: ir.Task | None) -> Interval | None:
         """``suspend``: a duration or interval shorter than the task's period (a periodic task's only)."""
