@@ -25,6 +25,12 @@ verification API, one process per ``nc`` (for its peak memory).
 Printed per ``nc``: whether task ``track`` keeps its period, the largest
 response time of each task beside the published one, states, seconds, MB.
 
+``--suspension 0-50`` runs the artefact's suspension study instead: the task
+whose manager has a ``delay`` state in ``robnav-artefact-edf-suspension.xta``
+(plan) waits ``sd`` ms once granted its core, keeping it, before its codels
+(``suspend: {for: SD ms, after: grant}``), one row per ``sd`` beside the
+artefact's ``res.csv``.
+
 The artefact's templates give codels no exception: they take their declared
 yields only.  The default here is the same (``--no-exceptions``);
 ``--exceptions`` keeps genom2bip's default, where every codel of a service
@@ -134,7 +140,7 @@ def platform_text(cores: int, execution: dict, offsets: dict, releases: str = "o
     lines += [f"  {key}: [{lo} ms, {hi} ms]" for key, (lo, hi) in execution.items()]
     tasks = {t: [f"    delay: [{lo} ms, {hi} ms]"] for t, (lo, hi) in offsets.items()}
     for task, ms in (suspend or {}).items():
-        tasks.setdefault(task, []).append(f"    suspend: {ms} ms")
+        tasks.setdefault(task, []).append(f"    suspend: {{for: {ms} ms, after: grant}}")
     if tasks:
         lines.append("tasks:")
         for task, settings in tasks.items():
@@ -258,7 +264,8 @@ def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "client.yaml").write_text(client_text(requests, 0 if args.requests_at_start else ready))
     order = ["robloco.odo", "robloco.track", "robmap.fuse", "roblaser.scan", "robmotion.plan"]
-    print(f"{task} suspends sd ms after each release; nc = {', '.join(map(str, cores))}; files in {out}")
+    print(f"{task} waits sd ms once granted its core, keeping it (the artefact's 'delay' state); "
+          f"nc = {', '.join(map(str, cores))}; files in {out}")
     print("response times in ms, genom2bip / published (res.csv, nc = 4)")
     print(f"{'nc':>3} {'sd':>3}  {'track ok':8} " + " ".join(f"{t.split('.')[1]:>9}" for t in order)
           + f" {'states':>9} {'time':>7}")

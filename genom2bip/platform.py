@@ -40,6 +40,10 @@ POLICIES = ("edf", "fixed-priority")
 #: How the tasks released at one instant meet the cores: all queued before a core is granted (one timer interrupt
 #: wakes them all), or each release seen in turn, the first taking a free core before the next is queued.
 RELEASES = ("together", "one-by-one")
+#: When a task's suspension starts: at its release (it asks for a core after), or once its core is granted (it keeps
+#: the core, idle, through the suspension: the RobNav artefact's delay in the manager of a task).
+SUSPEND_AFTER = ("release", "grant")
+SUSPEND_KEYS = ("for", "after")
 KEYS = ("cores", "policy", "releases", "best", "execution", "tasks")
 TASK_KEYS = ("delay", "priority", "suspend")
 #: More cores than this is a typing error, not a computer (each core is a value of the model's state).
@@ -68,6 +72,7 @@ class TaskSettings:
     delay: Interval | None = None
     priority: int | None = None
     suspend: Interval | None = None  # self-suspension after each release, before the task asks for a core
+    suspend_after: str = "release"  # or "grant": the suspension comes once the core is granted, which it keeps
 
 
 @dataclass
@@ -253,7 +258,7 @@ class _Reader(rules._Reader):
         tasks = self.mapping(fields["tasks"], "tasks") if "tasks" in fields else []
         for k, v in tasks or []:
             key = self.task(k)
-            settings = self.task_settings(v, str(k.value), self.ir_task(key))
+            settings = self.task_settings(v, str(k.value), self.ir_task(key), out.policy)
             if key is not None and settings is not None:
                 out.tasks[key] = settings
         return out
@@ -265,7 +270,7 @@ class _Reader(rules._Reader):
         component = next(c for c in self.description.components if c.name == key[0])
         return next(t for t in component.tasks if t.name == key[1])
 
-    def task_settings(self, node: yaml.Node, name: str, task: ir.Task | None) -> TaskSettings | None:
+    def task_settings(self, node: yaml.Node, name: str, task: ir.Task | None, policy: str) -> TaskSettings | None:
         items = self.mapping(node, f"task {name}")
         if items is None:
             return None
@@ -275,6 +280,22 @@ class _Reader(rules._Reader):
                 out.delay = self.interval(v, f"delay of {name}")
                 if out.delay is not None and not self.sensible(v, f"delay of {name}", out.delay, task):
                     out.delay = None
+            elif k.value == "suspend" and isinstance(v, yaml.MappingNode):
+                items = dict((key.value, (key, value)) for key, value in self.mapping(v, f"suspend of {name}") or [])
+                for key, _ in items.values():
+                    if key.value not in SUSPEND_KEYS:
+                        self.error(key, f"suspend of {name}: unknown key '{key.value}'",
+                                   _suggest(key.value, list(SUSPEND_KEYS)) or "keys are for, after")
+                if "after" in items:
+                    out.suspend_after = self.choice(items["after"][1], f"suspend of {name}: after",
+                                                    SUSPEND_AFTER) or "release"
+                    if out.suspend_after == "grant" and policy != "edf":
+                        self.error(items["after"][1], f"suspend of {name}: after grant needs policy edf",
+                                   "under fixed priority a task is granted a core for each codel")
+                if "for" not in items:
+                    self.error(v, f"suspend of {name} has no 'for'", "write e.g. {for: 11 ms, after: grant}")
+                else:
+                    out.suspend = self.suspension(items["for"][1], name, task)
             elif k.value == "suspend":
                 out.suspend = self.suspension(v, name, task)
             elif k.value == "priority":

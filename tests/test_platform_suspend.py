@@ -51,6 +51,17 @@ def test_a_suspended_task_is_not_there_to_take_the_core(tmp_path, capsys):
     assert verdicts(out)["Pair.fast"] == "overrun"
 
 
+@pytest.mark.parametrize("after,fast", [("release", 12), ("grant", 14)])
+def test_a_suspension_after_the_grant_keeps_the_core_idle(tmp_path, capsys, after, fast):
+    """One core, EDF, fast suspends 2 ms.  After its release, slow takes the core meanwhile: fast runs 6..12.
+    After its grant, fast may hold the core idle 0..2, or wait for slow and then suspend 6..8, running 8..14."""
+    path = platform_file(tmp_path, f"cores: 1\npolicy: edf\ntasks:\n  Pair.fast:\n"
+                                   f"    suspend: {{for: 2 ms, after: {after}}}\n")
+    code, out, _ = verify(capsys, PAIR, "--timed", "--platform", path, "--response-times")
+    assert code == 4
+    assert response_ms(out)["Pair.fast"] == fast
+
+
 def test_the_bip_text_shows_the_suspension(tmp_path, capsys):
     path = platform_file(tmp_path, TWO_CORES + "tasks:\n  Pair.slow:\n    suspend: 3 ms\n")
     out_dir = tmp_path / "gen"
@@ -79,6 +90,12 @@ BAD = [
     ("tasks:\n  Pair.slow:\n    suspend: [1 ms, 12 ms]\n", 3, 14,
      "suspend of Pair.slow: 12 ms is not shorter than its period, 10 ms"),
     ("tasks:\n  Pair.slow:\n    suspnd: 1 ms\n", 3, 5, "task Pair.slow: unknown key 'suspnd'"),
+    ("tasks:\n  Pair.slow:\n    suspend: {for: 1 ms, after: start}\n", 3, 33,
+     "suspend of Pair.slow: after is 'start'; expected release or grant"),
+    ("tasks:\n  Pair.slow:\n    suspend: {fr: 1 ms}\n", 3, 15, "suspend of Pair.slow: unknown key 'fr'"),
+    ("tasks:\n  Pair.slow:\n    suspend: {after: grant}\n", 3, 14, "suspend of Pair.slow has no 'for'"),
+    ("tasks:\n  Pair.slow:\n    suspend: {for: 20 ms}\n", 3, 20,
+     "suspend of Pair.slow: 20 ms is not shorter than its period, 10 ms"),
 ]
 
 
@@ -97,6 +114,14 @@ def test_a_bad_suspension_is_located_and_nothing_is_written(tmp_path, capsys, te
     assert f"{path}:{line}:{column}: error: {message}" in capsys.readouterr().err
     assert sorted(p.name for p in out_dir.iterdir()) == ["kept.txt"]
     assert path.read_text() == TWO_CORES + text
+
+
+def test_a_suspension_after_the_grant_needs_edf(tmp_path, capsys):
+    path = platform_file(tmp_path, "cores: 1\npolicy: fixed-priority\ntasks:\n  Pair.slow:\n"
+                                   "    suspend: {for: 1 ms, after: grant}\n")
+    code, _, err = verify(capsys, PAIR, "--timed", "--platform", path)
+    assert code == 1
+    assert f"{path}:5:33: error: suspend of Pair.slow: after grant needs policy edf" in err, err
 
 
 def test_a_task_without_period_cannot_suspend(tmp_path, capsys):

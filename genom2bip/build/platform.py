@@ -116,28 +116,31 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     )
 
 
-def suspending_type(t: AtomType) -> AtomType:
-    """Scheduler ``t`` that, after each release, waits ``[s_lo, s_hi]`` ticks (SUSPENDED) before asking for a core.
+def suspending_type(t: AtomType, on_grant: bool = False) -> AtomType:
+    """Scheduler ``t`` that waits ``[s_lo, s_hi]`` ticks (SUSPENDED) after each release, before it asks for a core;
+    ``on_grant``: once granted its core, before its first codel, keeping the core (the artefact's delay).
 
-    ``x`` counts from the release through the suspension and on while READY, so an EDF deadline stays a
-    period after the release.  ``back`` (the suspension's end) is not urgent: time stops at ``s_hi``, as it does
-    for a codel's end.
+    After a release, ``x`` counts from the release through the suspension and on while READY, so an EDF
+    deadline stays a period after the release.  ``back`` (the suspension's end) is not urgent: time stops at
+    ``s_hi``, as it does for a codel's end.
     """
     x, lo, hi = Var("x"), Var("s_lo"), Var("s_hi")
-    period = next(tr for tr in t.transitions if tr.port == "period")
-    transitions = [Transition("period", ["SLEEP"], ["SUSPENDED"], action=list(period.action)),
-                   Transition("back", ["SUSPENDED"], list(period.targets), guard=Binary(">=", x, lo)),
-                   Transition("tick", ["SUSPENDED"], ["SUSPENDED"], guard=Binary("<", x, hi),
-                              action=[Assign(x, Binary("+", x, Const(1)))])]
+    step = next(tr for tr in t.transitions if tr.port == ("grant" if on_grant else "period"))
+    wait = Transition("tick", ["SUSPENDED"], ["SUSPENDED"], guard=Binary("<", x, hi),
+                      action=[Assign(x, Binary("+", x, Const(1)))])
+    transitions = [Transition(step.port, list(step.sources), ["SUSPENDED"], action=[Assign(x, Const(0))]),
+                   Transition("back", ["SUSPENDED"], list(step.targets), guard=Binary(">=", x, lo)), wait]
     ready = [tr for tr in t.transitions if tr.port == "tick" and tr.sources == ["READY"] and not tr.action]
+    if on_grant:
+        ready = []
     # a clock that stands still while READY is one the zones cannot read there (the ranks of 'back' read it)
     transitions += [Transition("tick", ["READY"], ["READY"], action=[If(Binary("<", x, hi), (
         Assign(x, Binary("+", x, Const(1))),))]) for _ in ready]
-    transitions += [tr for tr in t.transitions if tr is not period and not any(tr is r for r in ready)]
+    transitions += [tr for tr in t.transitions if tr is not step and not any(tr is r for r in ready)]
     data = [DataDecl(d.type, d.name, annotations=list(d.annotations), exported=True) if d.name == "x" else d
             for d in t.data]
     return AtomType(
-        name="Suspending" + t.name,
+        name=("SuspendingOnGrant" if on_grant else "Suspending") + t.name,
         annotations=list(t.annotations),
         params=list(t.params) + [DataParam("int", "s_lo"), DataParam("int", "s_hi")],
         data=data,
@@ -425,11 +428,13 @@ class PlatformBuilder:
             settings = self.platform.tasks.get((level.task_of[path][0], info.task.name)) if info.task else None
             if settings is None or settings.suspend is None or not level.task_execs.get(path) or not info.core:
                 continue
-            name = "Suspending" + core_type.name
+            on_grant = settings.suspend_after == "grant"
+            name = ("SuspendingOnGrant" if on_grant else "Suspending") + core_type.name
             if name not in level.atom_types:
-                level.atom_types[name] = suspending_type(core_type)
-                level.docs.setdefault(name, "A task's scheduler that suspends after each release before it asks "
-                                            "for a core (the platform's 'suspend').")
+                level.atom_types[name] = suspending_type(core_type, on_grant)
+                level.docs.setdefault(name, "A task's scheduler that suspends after each release " + (
+                    "once granted its core, keeping it," if on_grant else "") + " before it runs its codels "
+                    "(the platform's 'suspend').")
             scheduler = asm.atoms[path + ("scheduler",)]
             scheduler.type = name
             lo, hi = settings.suspend.best_us // self.tick, -(-settings.suspend.worst_us // self.tick)
@@ -438,7 +443,8 @@ class PlatformBuilder:
             self.resumes[path] = asm.wire(Wire(level._rendezvous(ends), ends, "back", path, f"{info.label}:back",
                                                comment=f"the task asks for a core after its suspension, "
                                                        f"{settings.suspend}"))
-            self.suspend_ticks[path] = hi
+            if not on_grant:  # a task suspended with its core is not waiting for one: no grant waits for it
+                self.suspend_ticks[path] = hi
 
     def activities(self) -> None:
         """Every activity: a codel runs between ``exec_<q>`` and ``end_<q>``; ``quiet`` where no codel can run."""
@@ -616,7 +622,7 @@ class PlatformBuilder:
                 name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
                 self.asm.rank(Rank(name, self.grants[i.path], w, owner=(),
                                    comment="the tasks released at an instant are all there to choose from"))
-        for path, w in self.resumes.items():  # the end of a suspension, once it can wait no longer
+        for path, w in ((p, w) for p, w in self.resumes.items() if p in self.suspend_ticks):  # once it must end
             forced = Binary(">=", self.asm.expose(path + ("scheduler",), "x"), Const(self.suspend_ticks[path]))
             for i in tasks:
                 name = f"{'_'.join(i.path)}_grant_after_{'_'.join(path)}_back"
