@@ -15,7 +15,9 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
+from typing import Callable
 
 from runtime.engine.source import dumped
 
@@ -27,6 +29,17 @@ LEVELS = ("0", "1", "2", "3")
 PARALLEL_FLAGS = ("-DPARALLEL", "-pthread")
 #: Added when the C text is dumped (GENOM2BIP_DUMP): line tables for gdb and perf; the code is the same.
 DEBUG_FLAGS = ("-g",)
+
+
+#: Told when a compile starts and when it ends (one line each): the command line prints it on stderr where it shows
+#: progress, so that a first run is not a silent minute.  None: nothing is told (a library, a test, a campaign).
+notice: Callable[[str], None] | None = None
+
+
+def tell(fn: Callable[[str], None] | None) -> None:
+    """Who hears of compiles (:data:`notice`); None for no one."""
+    global notice
+    notice = fn
 
 
 class BuildError(Exception):
@@ -85,6 +98,10 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
         _write(c_file, source.encode("utf-8"))
     if lib.exists():
         return lib
+    level = next((f for f in opts if f.startswith("-O")), "")
+    if notice is not None:
+        notice(f"{what}: compiling {len(source) // 1024:,} KB of C ({Path(cc).name} {level}) ...")
+    start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="genom2bip-c-") as tmp:
         so = Path(tmp) / "model.so"
         proc = subprocess.run([cc, *opts, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
@@ -92,6 +109,8 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
         if proc.returncode != 0:
             raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{proc.stderr[-4000:]}")
         _write(lib, so.read_bytes())
+    if notice is not None:
+        notice(f"{what}: compiled in {time.perf_counter() - start:.1f} s (kept in {out_dir} for the next run)")
     return lib
 
 

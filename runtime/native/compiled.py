@@ -112,8 +112,17 @@ class CompiledSpace:
         self.model = model
 
     def _widen(self, slot: int) -> None:
-        """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits."""
-        self.widths[slot] = min(64, 2 * self.lib.c_width(slot))
+        """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits, for it and for
+        the variables of the same name in other atoms (the same data of another instance of a type mostly grows
+        alike: one rebuild instead of one per instance, each a compile of the whole step)."""
+        wider = min(64, 2 * self.lib.c_width(slot))
+        slots = self.space.slots
+        name = slots[slot].name if slot < len(slots) else None
+        for k, s in enumerate(slots):
+            if k != slot and name is not None and s.kind == "int" and s.name == name and s.domain is None \
+                    and s.live != 0 and self.lib.c_width(k) < wider:
+                self.widths[k] = wider
+        self.widths[slot] = wider
         self.build()
 
     # -- one step -------------------------------------------------------------------------------
