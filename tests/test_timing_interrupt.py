@@ -70,3 +70,33 @@ def test_one_ctrl_c_prints_what_was_found_and_stops_the_whole_command(tmp_path):
     assert "interrupted: not run: deadlock, property ok" in out
     assert "explored:" not in out and "deadlocks:" not in out and "property ok" not in out.replace("property ok\n", "")
     assert "Traceback" not in err
+
+
+def test_one_ctrl_c_during_an_untimed_search_stops_the_properties_after_it(tmp_path):
+    """DALA's whole level explores for minutes: one SIGINT once progress shows; the properties are not started."""
+    dala = ROOT / "descriptions/dala"
+    props = tmp_path / "p.mcl"
+    props.write_text("a: deadlock free;\nb: deadlock free;\n")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "verify", str(dala), "--deadlock", "--property",
+                             str(props), "--progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env, cwd=tmp_path)
+    lines: queue.Queue = queue.Queue()
+    for stream, name in ((proc.stdout, "out"), (proc.stderr, "err")):
+        threading.Thread(target=_lines, args=(stream, lines, name), daemon=True).start()
+    seen: dict[str, list[str]] = {"out": [], "err": []}
+    try:
+        _until(lines, seen, lambda s: any(x.startswith("states ") for x in s["err"]))
+        assert proc.poll() is None, "".join(seen["out"] + seen["err"])
+        proc.send_signal(signal.SIGINT)
+        code = proc.wait(timeout=PATIENCE)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    _until(lines, seen, lambda s: False)
+    _until(lines, seen, lambda s: False)
+    out, err = "".join(seen["out"]), "".join(seen["err"])
+    assert code == 5, out + err
+    assert "explored: " in out and "interrupted" in out
+    assert "interrupted: not run: property a, property b" in out, out
+    assert "Traceback" not in err

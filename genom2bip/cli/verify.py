@@ -240,7 +240,9 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         from genom2bip.cli.verify_spin import run_spin
         return run_spin(space, args, options, listener, deadlock, properties)
     worst = max(compositional, _run_explorer(space, args, options, listener, deadlock, properties))
-    if observers:
+    if observers and getattr(args, "_interrupted", False):
+        print("interrupted: not run: the timing observers")
+    elif observers:
         from genom2bip.cli.verify_timed import check_observers
         worst = max(worst, check_observers(model, observers, space, options, listener))
     return worst
@@ -321,14 +323,19 @@ def _run_explorer(space, args, options, listener, deadlock: bool, properties) ->
                                                  args, sources))
         if not exploration.result.complete and worst == EXIT_OK:
             worst = EXIT_INCONCLUSIVE
+        args._interrupted = exploration.result.stopped_by == "interrupted"
         if lts:
             if not exploration.result.complete:
                 error("the LTS is not complete (a limit stopped the exploration): not exported")
                 worst = max(worst, EXIT_INCONCLUSIVE)
             else:
                 worst = max(worst, _export_lts(space, args))
-    for item in properties:
+    for k, item in enumerate(properties):
+        if getattr(args, "_interrupted", False):  # one Ctrl-C stops the whole command, after what was found
+            print(f"interrupted: not run: {', '.join(f'property {p.name}' for p in properties[k:])}")
+            break
         found = check_property(space, item, options, listener)
+        args._interrupted = found.limit == "interrupted"
         print(f"property {found.subject}")
         stats = (f"{found.method}, {found.figures.states:,} states, {found.figures.seconds:.2f} s"
                  if found.method else "")
