@@ -43,3 +43,18 @@ def test_a_compile_is_said_on_stderr_with_its_time_when_progress_is_shown(tmp_pa
     assert "compiling" not in err  # the cache holds it: nothing compiled, nothing said
     code, _, err = verify(capsys, PAIR, "--timed", "--platform", path, "--quiet")
     assert "compil" not in err
+
+
+def test_a_step_called_state_by_state_is_built_at_O0_and_the_c_search_at_O2(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("GENOM2BIP_OPT", raising=False)  # the levels users get
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path / "cache"))
+
+    def levels(err: str) -> list[str]:
+        return [x.rsplit("(", 1)[1] for x in err.splitlines() if x.startswith("genom2bip: compiled step: pair ")
+                and x.endswith(") ...")]
+
+    path = platform_file(tmp_path, "cores: 2\n")
+    code, _, err = verify(capsys, PAIR, "--timed", "--platform", path, "--progress")  # clock zones: single steps
+    assert code == 0 and levels(err) == ["gcc -O0) ..."], err
+    code, out, err = verify(capsys, PAIR, "--deadlock", "--progress")  # the C search
+    assert "explored:" in out and levels(err)[-1] == "gcc -O2) ...", err

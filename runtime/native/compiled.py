@@ -21,7 +21,7 @@ from runtime.explore.choices import Choice, codel_choices
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.search import ExploreResult, Finding
 from runtime.explore.space import StateSpace, Step
-from runtime.native.build import PROGRESS, BuildError, Result, build, compiler, load
+from runtime.native.build import PROGRESS, STEP_LEVEL, BuildError, Result, build, compiler, load
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
 from runtime.native.values import from_words, to_words
@@ -96,6 +96,7 @@ class CompiledSpace:
         self.bools = [s.index for s in space.slots if s.kind == "bool"]
         self.kinds = {s.index: s.kind for s in space.slots}
         self.parallel = False  # the loaded library is the threaded build
+        self.searching = False  # the loaded library runs the C search (built at -O2), not single steps (-O0)
         self.lossiness = None
 
     def build(self, parallel: bool | None = None) -> None:
@@ -107,7 +108,8 @@ class CompiledSpace:
             self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors, self.wide_numbers)
         flat = self.engine.flat
-        self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}"))
+        self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}",
+                              None if self.searching else STEP_LEVEL))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
 
@@ -185,7 +187,8 @@ class CompiledSpace:
             return 1 if interrupt.hit or timed.hit else 0
 
         callback = PROGRESS(report)
-        if (workers > 1) != self.parallel:
+        if (workers > 1) != self.parallel or not self.searching:  # the search's own build: threaded, at -O2
+            self.searching = True
             self.build(parallel=workers > 1)
         previous = _catch_interrupt(interrupt)
         start = time.perf_counter()
