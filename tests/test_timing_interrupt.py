@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 
 from platformkit import FIXTURES, ROOT, platform_file
 
@@ -26,9 +27,12 @@ def _lines(stream, into: queue.Queue, name: str) -> None:
 
 
 def _until(lines: queue.Queue, seen: dict[str, list[str]], done) -> None:
-    """Read both streams' lines until ``done(seen)`` holds (or one stream ends)."""
+    """Read both streams' lines until ``done(seen)`` holds (or one stream ends); an error past :data:`PATIENCE`."""
+    end = time.monotonic() + PATIENCE
     while not done(seen):
-        name, line = lines.get(timeout=PATIENCE)
+        left = end - time.monotonic()
+        assert left > 0, "never came:\n" + "".join(seen["out"] + seen["err"][-5:])
+        name, line = lines.get(timeout=left)
         if line is None:
             return
         seen[name].append(line)

@@ -55,7 +55,7 @@ class Printer(Listener):
         """A timing observer's violation, printed with its trace as soon as the search finds it."""
         from genom2bip.cli.verify_timed import print_zone_verdict
 
-        print_zone_verdict(result)
+        print_zone_verdict(result, early=True)
         self.told.add(result.observer)
 
     def so_far(self, text: str) -> None:

@@ -171,8 +171,9 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
     return worst
 
 
-def print_zone_verdict(found) -> int:
-    """One observer's verdict from a zone search (a violation with its timed trace); its exit status."""
+def print_zone_verdict(found, early: bool = False) -> int:
+    """One observer's verdict from a zone search (a violation with its timed trace); its exit status.  ``early``:
+    a violation found while the search goes on (when is said)."""
     from genom2bip.verify import Verdict
 
     what = "overrun" if found.kind == "overrun" else "violation"
@@ -181,8 +182,10 @@ def print_zone_verdict(found) -> int:
               f"states, {found.figures.seconds:.2f} s)")
         return EXIT_OK
     if found.verdict is Verdict.VIOLATED:
-        print(f"{found.subject}: {what} reachable" + (f" ({len(found.trace)} steps):" if found.trace else
-                                                      f" ({found.message})"))
+        when = (f"found after {found.figures.states:,} symbolic states, {found.figures.seconds:.1f} s; "
+                if early else "")
+        print(f"{found.subject}: {what} reachable" + (f" ({when}{len(found.trace)} steps):" if found.trace else
+                                                      f" ({when}{found.message})"))
         if found.trace is not None:
             timed_trace(found.trace)
         sys.stdout.flush()

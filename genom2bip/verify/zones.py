@@ -149,6 +149,7 @@ class _Watch:
         self.listener, self.progress, self.where = listener, progress, where
         self.by_index = {where[2][a.path].index: a for a in atoms}
         self.deadline = time.monotonic() + options.time_limit if options.time_limit else None
+        self.start = time.perf_counter()
         self.next_line = time.monotonic() + SO_FAR_PERIOD
         self.result = None
         self.hit = False  # Ctrl-C was pressed once
@@ -192,11 +193,13 @@ class _Watch:
 
     def violation(self, atom, node: int, states: int) -> ObserverResult:
         """The verdict of an observer whose ERROR the search reached at ``node``, with its trace."""
+        seconds = time.perf_counter() - self.start
         space, tick, by_path = self.where
         clock = self.z.model.observers[by_path[atom.path].index][1]
         trace, message = _trace_to(self.z, node, [(0, clock, -(atom.bound + 1))], space, tick)
         return ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message,
-                              figures=Figures(states=states), method="zones, found on the way", observer=atom.path,
+                              figures=Figures(states=states, seconds=seconds),
+                              method="zones, found on the way", observer=atom.path,
                               kind=atom.kind, bound_ticks=atom.bound, tick_us=tick)
 
     def so_far(self, result) -> str:
