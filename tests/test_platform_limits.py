@@ -91,3 +91,40 @@ def test_a_wcet_scale_far_beyond_every_period_is_refused():
     with pytest.raises(InputError):
         apply_variant(description, Variant(wcet_scale=float("nan")))
     assert apply_variant(description, Variant(wcet_scale=1000)) is not description
+
+
+def test_a_running_search_tells_its_violations_and_its_maxima_so_far(tmp_path, monkeypatch):
+    """Through the listener: each overrun (with its trace) while the search goes on, and the largest response
+    times reached so far, as lower bounds; the search stops at its budget with those values kept."""
+    import io
+
+    from genom2bip.verify import zones
+    from genom2bip.verify.options import Listener
+    from runtime.explore import Progress
+
+    class Heard(Listener):
+        def __init__(self) -> None:
+            self.found_at, self.lines = [], []
+
+        def progress(self):
+            return Progress(stream=io.StringIO(), force=True)
+
+        def found(self, result) -> None:
+            self.found_at.append((result.observer, result.figures.states, result.trace is not None))
+
+        def so_far(self, text: str) -> None:
+            self.lines.append(text)
+
+    monkeypatch.setattr(zones, "SO_FAR_PERIOD", 0.0)
+    path = platform_file(tmp_path, "cores: 1\nexecution:\n  Anomaly.mid.mid_step: [0 ms, 1 s]\n")
+    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(path), responses=True))
+    heard = Heard()
+    results = check_timing(model, ("overrun",), responses=True, options=SearchOptions(max_states=3000),
+                           listener=heard)
+    assert sorted(o for o, _, _ in heard.found_at) == ["Anomaly.high.overrun", "Anomaly.low.overrun",
+                                                       "Anomaly.mid.overrun"]
+    assert all(traced and states < 3000 for _, states, traced in heard.found_at)  # told before the search ended
+    assert heard.lines and "Anomaly.mid ≥ " in heard.lines[0]
+    assert any("Anomaly.mid > 80 ms" in line for line in heard.lines)  # past its cap (4 periods)
+    mid = next(r for r in results if getattr(r, "owner", "") == "Anomaly.mid")
+    assert mid.verdict.value == "inconclusive" and mid.limit == "max-states" and mid.message == zones.ABOVE_CAP
