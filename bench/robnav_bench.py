@@ -25,6 +25,12 @@ verification API, one process per ``nc`` (for its peak memory).
 Printed per ``nc``: whether task ``track`` keeps its period, the largest
 response time of each task beside the published one, states, seconds, MB.
 
+``--suspension 0-50`` runs the artefact's suspension study instead: the task
+whose manager has a ``delay`` state in ``robnav-artefact-edf-suspension.xta``
+(plan) waits ``sd`` ms once granted its core, keeping it, before its codels
+(``suspend: {for: SD ms, after: grant}``), one row per ``sd`` beside the
+artefact's ``res.csv``.
+
 The artefact's templates give codels no exception: they take their declared
 yields only.  The default here is the same (``--no-exceptions``);
 ``--exceptions`` keeps genom2bip's default, where every codel of a service
@@ -107,13 +113,39 @@ def read_artefact(xta: str, description) -> tuple[dict[str, tuple[int, int]], di
     return execution, offsets, requests, ready
 
 
-def platform_text(cores: int, execution: dict, offsets: dict, releases: str = "one-by-one") -> str:
+def suspending_task(xta: str) -> str | None:
+    """``Component.task`` whose manager waits in a ``delay`` state (the artefact's suspension model), if any."""
+    for name, body in PROCESS.findall(xta):
+        manager = re.fullmatch(r"Manager_(\w+?)_(\w+)", name)
+        if manager and re.search(r"\bdelay\s*\{", body):
+            return f"{manager.group(2)}.{manager.group(1)}"
+    return None
+
+
+def published_by_sd(path: Path) -> dict[int, dict[str, int]]:
+    """The artefact's res.csv: the largest response time per task (ms) at nc = 4, per suspension delay ``sd``."""
+    names = {"odo": "robloco.odo", "track": "robloco.track", "fuse": "robmap.fuse", "scan": "roblaser.scan",
+             "plan": "robmotion.plan"}
+    rows = [line.strip().strip(";").split(";") for line in path.read_text().splitlines() if line.strip()]
+    head = [h.replace("MRT ", "") for h in rows[0]]
+    out = {}
+    for row in rows[1:]:
+        values = dict(zip(head, row))
+        out[int(values["sd"])] = {names[k]: int(v) for k, v in values.items() if k in names}
+    return out
+
+
+def platform_text(cores: int, execution: dict, offsets: dict, releases: str = "one-by-one",
+                  suspend: dict[str, int] | None = None) -> str:
     lines = [f"cores: {cores}", "policy: edf", f"releases: {releases}", "execution:"]
     lines += [f"  {key}: [{lo} ms, {hi} ms]" for key, (lo, hi) in execution.items()]
-    if offsets:
+    tasks = {t: [f"    delay: [{lo} ms, {hi} ms]"] for t, (lo, hi) in offsets.items()}
+    for task, ms in (suspend or {}).items():
+        tasks.setdefault(task, []).append(f"    suspend: {{for: {ms} ms, after: grant}}")
+    if tasks:
         lines.append("tasks:")
-        for task, (lo, hi) in offsets.items():
-            lines += [f"  {task}:", f"    delay: [{lo} ms, {hi} ms]"]
+        for task, settings in tasks.items():
+            lines += [f"  {task}:"] + settings
     return "\n".join(lines) + "\n"
 
 
@@ -187,14 +219,16 @@ def main() -> None:
     ap.add_argument("--releases", choices=("one-by-one", "together"), default="one-by-one",
                     help="tasks released at one instant: one by one, the first taking a free core before the next is "
                          "queued, as in the artefact's model (default); or all queued before a core is granted")
+    ap.add_argument("--suspension", metavar="SD",
+                    help="suspension delays in ms of the task whose manager suspends in "
+                         "robnav-artefact-edf-suspension.xta (a range 0-50 or a list 0,11,30): one row per value, "
+                         "beside the artefact's res.csv")
     args = ap.parse_args()
     from genom2bip.parser import parse_paths
 
-    if "-" in args.cores:
-        lo, hi = map(int, args.cores.split("-"))
-        cores = list(range(lo, hi + 1))
-    else:
-        cores = [int(c) for c in args.cores.split(",")]
+    cores = _numbers(args.cores)
+    if args.suspension is not None:
+        return suspension_rows(args, cores, _numbers(args.suspension))
     paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
     description = parse_paths(paths, [str(args.artefact)])
     execution, offsets, requests, ready = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(),
@@ -224,6 +258,57 @@ def main() -> None:
     holds = [nc for nc, g in rows if _track_ok(g)]
     print(f"track keeps its period with {', '.join(map(str, holds)) or 'none'} of the cores tried "
           f"({', '.join(str(nc) for nc, _ in rows)}); published: from {PUBLISHED_SCHEDULABLE_FROM} on")
+
+
+def _numbers(text: str) -> list[int]:
+    """``1-5`` or ``3,4``."""
+    if "-" in text:
+        lo, hi = map(int, text.split("-"))
+        return list(range(lo, hi + 1))
+    return [int(c) for c in text.split(",")]
+
+
+def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
+    """One run per suspension delay (and nc), the largest response times beside res.csv's row of that delay."""
+    from genom2bip.parser import parse_paths
+
+    paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
+    description = parse_paths(paths, [str(args.artefact)])
+    execution, offsets, requests, ready = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(),
+                                                        description)
+    task = suspending_task((args.artefact / "robnav-artefact-edf-suspension.xta").read_text())
+    if task is None:
+        raise SystemExit("robnav-artefact-edf-suspension.xta: no manager with a 'delay' state")
+    published = published_by_sd(args.artefact / "res.csv") if (args.artefact / "res.csv").exists() else {}
+    out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "client.yaml").write_text(client_text(requests, 0 if args.requests_at_start else ready))
+    order = ["robloco.odo", "robloco.track", "robmap.fuse", "roblaser.scan", "robmotion.plan"]
+    print(f"{task} waits sd ms once granted its core, keeping it (the artefact's 'delay' state); "
+          f"nc = {', '.join(map(str, cores))}; files in {out}")
+    print("response times in ms, genom2bip / published (res.csv, nc = 4)")
+    print(f"{'nc':>3} {'sd':>3}  {'track ok':8} " + " ".join(f"{t.split('.')[1]:>9}" for t in order)
+          + f" {'states':>9} {'time':>7}")
+    ctx = multiprocessing.get_context("spawn")
+    for nc in cores:
+        for sd in delays:
+            platform = out / f"edf{nc}-sd{sd}.yaml"
+            platform.write_text(platform_text(nc, execution, offsets, args.releases, {task: sd} if sd else None))
+            queue = ctx.Queue()
+            proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
+                                                 args.exceptions, args.max_states, args.progress, queue))
+            proc.start()
+            got = queue.get()
+            proc.join()
+            ref = published.get(sd, {}) if nc == 4 else {}
+            cells = []
+            for t in order:
+                value = got["responses"].get(t)
+                mine = "inf" if value == "inf" else ("?" if value is None else f"{value:g}")
+                cells.append(f"{mine + '/' + str(ref[t]) if t in ref else mine:>9}")
+            track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
+            print(f"{nc:>3} {sd:>3}  {track:8} " + " ".join(cells)
+                  + f" {got.get('states', 0):>9,} {got['seconds']:>6.1f}s", flush=True)
 
 
 def _track_ok(got: dict) -> bool:

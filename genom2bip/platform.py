@@ -13,6 +13,8 @@ A platform file (``verify --timed --platform FILE``)::
       robloco.track:
         delay: [8 ms, 10 ms]     # the first period opens this long after start (overrides 'delay')
         priority: 10             # fixed-priority: 0 is the highest (overrides 'priority')
+      robmotion.plan:
+        suspend: 11 ms           # after each release the task waits this long before it asks for a core
 
 Codels are named ``Component.Owner.codel`` where the owner is the service or
 task whose automaton runs the codel.  Every problem is reported with the file,
@@ -38,10 +40,18 @@ POLICIES = ("edf", "fixed-priority")
 #: How the tasks released at one instant meet the cores: all queued before a core is granted (one timer interrupt
 #: wakes them all), or each release seen in turn, the first taking a free core before the next is queued.
 RELEASES = ("together", "one-by-one")
+#: When a task's suspension starts: at its release (it asks for a core after), or once its core is granted (it keeps
+#: the core, idle, through the suspension: the RobNav artefact's delay in the manager of a task).
+SUSPEND_AFTER = ("release", "grant")
+SUSPEND_KEYS = ("for", "after")
 KEYS = ("cores", "policy", "releases", "best", "execution", "tasks")
-TASK_KEYS = ("delay", "priority")
+TASK_KEYS = ("delay", "priority", "suspend")
 #: More cores than this is a typing error, not a computer (each core is a value of the model's state).
 MAX_CORES = 256
+#: A codel's worst case or a task's delay past this many periods (of its task, else the longest one) is refused:
+#: no task means it, and the search would follow every period of the others through it.  Past one period it is
+#: accepted with a warning (an overrun that the check finds and reports).
+MAX_PERIODS = 100
 #: GenoM3 priorities go from 0 (highest) to 255 (lowest); a task without one is among the lowest.
 LOWEST_PRIORITY = 255
 
@@ -61,6 +71,8 @@ class Interval:
 class TaskSettings:
     delay: Interval | None = None
     priority: int | None = None
+    suspend: Interval | None = None  # self-suspension after each release, before the task asks for a core
+    suspend_after: str = "release"  # or "grant": the suspension comes once the core is granted, which it keeps
 
 
 @dataclass
@@ -240,17 +252,25 @@ class _Reader(rules._Reader):
         for k, v in execution or []:
             key = self.codel(k)
             span = self.interval(v, f"execution of {k.value}")
-            if key is not None and span is not None:
+            if key is not None and span is not None and self.sensible(v, f"execution of {k.value}", span,
+                                                                      self.owner_task(key)):
                 out.execution[key] = span
         tasks = self.mapping(fields["tasks"], "tasks") if "tasks" in fields else []
         for k, v in tasks or []:
             key = self.task(k)
-            settings = self.task_settings(v, str(k.value))
+            settings = self.task_settings(v, str(k.value), self.ir_task(key), out.policy)
             if key is not None and settings is not None:
                 out.tasks[key] = settings
         return out
 
-    def task_settings(self, node: yaml.Node, name: str) -> TaskSettings | None:
+    def ir_task(self, key: tuple[str, str] | None) -> ir.Task | None:
+        """The description's task named by ``key`` (None when the key was wrong)."""
+        if key is None:
+            return None
+        component = next(c for c in self.description.components if c.name == key[0])
+        return next(t for t in component.tasks if t.name == key[1])
+
+    def task_settings(self, node: yaml.Node, name: str, task: ir.Task | None, policy: str) -> TaskSettings | None:
         items = self.mapping(node, f"task {name}")
         if items is None:
             return None
@@ -258,6 +278,26 @@ class _Reader(rules._Reader):
         for k, v in items:
             if k.value == "delay":
                 out.delay = self.interval(v, f"delay of {name}")
+                if out.delay is not None and not self.sensible(v, f"delay of {name}", out.delay, task):
+                    out.delay = None
+            elif k.value == "suspend" and isinstance(v, yaml.MappingNode):
+                items = dict((key.value, (key, value)) for key, value in self.mapping(v, f"suspend of {name}") or [])
+                for key, _ in items.values():
+                    if key.value not in SUSPEND_KEYS:
+                        self.error(key, f"suspend of {name}: unknown key '{key.value}'",
+                                   _suggest(key.value, list(SUSPEND_KEYS)) or "keys are for, after")
+                if "after" in items:
+                    out.suspend_after = self.choice(items["after"][1], f"suspend of {name}: after",
+                                                    SUSPEND_AFTER) or "release"
+                    if out.suspend_after == "grant" and policy != "edf":
+                        self.error(items["after"][1], f"suspend of {name}: after grant needs policy edf",
+                                   "under fixed priority a task is granted a core for each codel")
+                if "for" not in items:
+                    self.error(v, f"suspend of {name} has no 'for'", "write e.g. {for: 11 ms, after: grant}")
+                else:
+                    out.suspend = self.suspension(items["for"][1], name, task)
+            elif k.value == "suspend":
+                out.suspend = self.suspension(v, name, task)
             elif k.value == "priority":
                 text = self.scalar(v, f"priority of {name}")
                 if text is not None and (not (text.isascii() and text.isdigit()) or int(text) > LOWEST_PRIORITY):
@@ -267,6 +307,49 @@ class _Reader(rules._Reader):
             else:
                 self.error(k, f"task {name}: unknown key '{k.value}'", _suggest(k.value, list(TASK_KEYS)))
         return out
+
+
+    def owner_task(self, key: tuple[str, str, str]) -> ir.Task | None:
+        """The task that runs codel ``key``'s owner: the task itself, or a service's (None: the control task)."""
+        component = next(c for c in self.description.components if c.name == key[0])
+        tasks = {t.name: t for t in component.tasks}
+        if key[1] in tasks:
+            return tasks[key[1]]
+        service = next((s for s in component.services if s.name == key[1]), None)
+        return tasks.get(service.task) if service is not None and service.task else None
+
+    def sensible(self, node: yaml.Node, what: str, span: Interval, task: ir.Task | None) -> bool:
+        """A duration within :data:`MAX_PERIODS` periods of ``task`` (else of the longest period): an error past
+        them, a warning past one period; False when refused."""
+        periods = [round(t.period.seconds * 1e6) for c in self.description.components for t in c.tasks if t.period]
+        own = task is not None and task.period is not None
+        period = round(task.period.seconds * 1e6) if own else max(periods, default=0)
+        if not period or span.worst_us <= period:
+            return True
+        whose = f"the period of {task.name}" if own else "the longest period"
+        if span.worst_us > MAX_PERIODS * period:
+            self.error(node, f"{what}: {span.worst_us / 1000:g} ms is more than {MAX_PERIODS} times {whose} "
+                             f"({period / 1000:g} ms)", "a duration in ms of the order of the periods is expected")
+            return False
+        self.reporter.warning(self.span(node), f"{what}: {span.worst_us / 1000:g} ms is longer than {whose} "
+                                               f"({period / 1000:g} ms)")
+        return True
+
+    def suspension(self, node: yaml.Node, name: str, task: ir.Task | None) -> Interval | None:
+        """``suspend``: a duration or interval shorter than the task's period (a periodic task's only)."""
+        span = self.interval(node, f"suspend of {name}")
+        if span is None or task is None:
+            return None
+        if task.period is None:
+            self.error(node, f"suspend of {name}: task {name} has no period",
+                       "a task suspends after each release of its period; a task without period has none")
+            return None
+        period = round(task.period.seconds * 1e6)
+        if span.worst_us >= period:
+            self.error(node, f"suspend of {name}: {span.worst_us / 1000:g} ms is not shorter than its period, "
+                             f"{period / 1000:g} ms", "a task that suspends for a whole period never runs in time")
+            return None
+        return span
 
 
 def load_platform(path: Path, description: ir.Description, reporter: Reporter) -> Platform | None:

@@ -14,6 +14,11 @@ from genom2bip.ir import Description, Duration
 from genom2bip.loading import InputError
 
 
+#: The largest WCET factor: past it a WCET is no longer one of a robot's codels, and the search follows every
+#: period of the other tasks through it.
+MAX_WCET_SCALE = 1000
+
+
 @dataclass(frozen=True)
 class Variant:
     """What changes: every WCET (declared, and the default of those that declare none) times ``wcet_scale``,
@@ -36,8 +41,8 @@ def apply_variant(description: Description, variant: Variant) -> Description:
     """A copy of ``description`` with the variant's figures; :class:`InputError` names a task it cannot change."""
     if variant.identity:
         return description
-    if variant.wcet_scale < 0:
-        raise InputError([f"wcet scale {variant.wcet_scale:g}: a factor of 0 or more expected"])
+    if not 0 <= variant.wcet_scale <= MAX_WCET_SCALE:  # NaN too
+        raise InputError([f"wcet scale {variant.wcet_scale:g}: a factor from 0 to {MAX_WCET_SCALE} expected"])
     out = copy.deepcopy(description)
     tasks = {f"{c.name}.{t.name}": t for c in out.components for t in c.tasks}
     wrong = []

@@ -85,6 +85,8 @@ def test_the_file_s_shape(tmp_path, text, line, token, message):
     ("{check: deadlock, model: cruise, vary: {default-wcet: [1 ms, fast]}}", "fast",
      "default-wcet: a duration expected (e.g. 10 ms, 1 s, 500 us), got 'fast'"),
     ("{check: deadlock, model: cruise, vary: {wcet-scale: [1, 1.0]}}", "[1,", "wcet-scale: a value is given twice"),
+    ("{check: deadlock, model: cruise, vary: {wcet-scale: [1.0e+300]}}", "1.0e",
+     "wcet-scale: a factor from 0 to 1000 expected"),
     ("{check: deadlock, model: cruise, vary: {period.loop: [1 ms]}}", "period", "a task Module.task expected"),
     ("{check: deadlock, model: cruise, vary: {period.Cruise.nope: [5 ms]}}", "period",
      "period of Cruise.nope: no task Cruise.nope (tasks: Cruise.loop)"),

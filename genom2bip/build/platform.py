@@ -116,6 +116,41 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     )
 
 
+def suspending_type(t: AtomType, on_grant: bool = False) -> AtomType:
+    """Scheduler ``t`` that waits ``[s_lo, s_hi]`` ticks (SUSPENDED) after each release, before it asks for a core;
+    ``on_grant``: once granted its core, before its first codel, keeping the core (the artefact's delay).
+
+    After a release, ``x`` counts from the release through the suspension and on while READY, so an EDF
+    deadline stays a period after the release.  ``back`` (the suspension's end) is not urgent: time stops at
+    ``s_hi``, as it does for a codel's end.
+    """
+    x, lo, hi = Var("x"), Var("s_lo"), Var("s_hi")
+    step = next(tr for tr in t.transitions if tr.port == ("grant" if on_grant else "period"))
+    wait = Transition("tick", ["SUSPENDED"], ["SUSPENDED"], guard=Binary("<", x, hi),
+                      action=[Assign(x, Binary("+", x, Const(1)))])
+    transitions = [Transition(step.port, list(step.sources), ["SUSPENDED"], action=[Assign(x, Const(0))]),
+                   Transition("back", ["SUSPENDED"], list(step.targets), guard=Binary(">=", x, lo)), wait]
+    ready = [tr for tr in t.transitions if tr.port == "tick" and tr.sources == ["READY"] and not tr.action]
+    if on_grant:
+        ready = []
+    # a clock that stands still while READY is one the zones cannot read there (the ranks of 'back' read it)
+    transitions += [Transition("tick", ["READY"], ["READY"], action=[If(Binary("<", x, hi), (
+        Assign(x, Binary("+", x, Const(1))),))]) for _ in ready]
+    transitions += [tr for tr in t.transitions if tr is not step and not any(tr is r for r in ready)]
+    data = [DataDecl(d.type, d.name, annotations=list(d.annotations), exported=True) if d.name == "x" else d
+            for d in t.data]
+    return AtomType(
+        name=("SuspendingOnGrant" if on_grant else "Suspending") + t.name,
+        annotations=list(t.annotations),
+        params=list(t.params) + [DataParam("int", "s_lo"), DataParam("int", "s_hi")],
+        data=data,
+        ports=list(t.ports) + [PortDecl(library.PORT, "back", exported=True)],
+        places=list(t.places) + ["SUSPENDED"],
+        initial=t.initial,
+        transitions=transitions,
+    )
+
+
 def cores_type() -> AtomType:
     """The platform's cores, all alike: a count of free ones (two cores swapped are the same state)."""
     free = Var("free")
@@ -279,6 +314,8 @@ class PlatformBuilder:
         self.codels: list[Codel] = []
         self.urgent: list[Wire] = []  # time may not pass while one of these is possible
         self.grants: dict[tuple[str, ...], Wire] = {}
+        self.resumes: dict[tuple[str, ...], Wire] = {}  # tasks that suspend: the end of their suspension
+        self.suspend_ticks: dict[tuple[str, ...], int] = {}  # and its longest, in ticks
 
     # -- reading the level ----------------------------------------------------------------------
     def collect(self) -> None:
@@ -370,6 +407,7 @@ class PlatformBuilder:
                 scheduler.type = core_type.name if info.core else "ControlScheduler"
                 if info.core and keep:
                     scheduler.args = [Const(self.period_ticks(info))]
+        self.suspensions(core_type)
         self.activities()
         for c in self.codels:
             c.interval = self.interval(c)
@@ -382,6 +420,31 @@ class PlatformBuilder:
         # A period ends when its activities are quiet, which covers 'no codel can run': the untimed ranks go.
         sleeps = {id(w) for w in asm.wires if w.label and w.label.endswith(":sleep")}
         asm.ranks = [r for r in asm.ranks if id(r.low) not in sleeps]
+
+    def suspensions(self, core_type: AtomType) -> None:
+        """Tasks that suspend (``suspend``): a suspending scheduler, and ``back`` that queues them for a core."""
+        level, asm = self.level, self.asm
+        for path, info in self.tasks.items():
+            settings = self.platform.tasks.get((level.task_of[path][0], info.task.name)) if info.task else None
+            if settings is None or settings.suspend is None or not level.task_execs.get(path) or not info.core:
+                continue
+            on_grant = settings.suspend_after == "grant"
+            name = ("SuspendingOnGrant" if on_grant else "Suspending") + core_type.name
+            if name not in level.atom_types:
+                level.atom_types[name] = suspending_type(core_type, on_grant)
+                level.docs.setdefault(name, "A task's scheduler that suspends after each release " + (
+                    "once granted its core, keeping it," if on_grant else "") + " before it runs its codels "
+                    "(the platform's 'suspend').")
+            scheduler = asm.atoms[path + ("scheduler",)]
+            scheduler.type = name
+            lo, hi = settings.suspend.best_us // self.tick, -(-settings.suspend.worst_us // self.tick)
+            scheduler.args = list(scheduler.args) + [Const(lo), Const(hi)]
+            ends = [End(path + ("scheduler",), "back")]
+            self.resumes[path] = asm.wire(Wire(level._rendezvous(ends), ends, "back", path, f"{info.label}:back",
+                                               comment=f"the task asks for a core after its suspension, "
+                                                       f"{settings.suspend}"))
+            if not on_grant:  # a task suspended with its core is not waiting for one: no grant waits for it
+                self.suspend_ticks[path] = hi
 
     def activities(self) -> None:
         """Every activity: a codel runs between ``exec_<q>`` and ``end_<q>``; ``quiet`` where no codel can run."""
@@ -559,6 +622,12 @@ class PlatformBuilder:
                 name = f"{'_'.join(i.path)}_grant_after_{'_'.join(w.owner)}_{w.name}"
                 self.asm.rank(Rank(name, self.grants[i.path], w, owner=(),
                                    comment="the tasks released at an instant are all there to choose from"))
+        for path, w in ((p, w) for p, w in self.resumes.items() if p in self.suspend_ticks):  # once it must end
+            forced = Binary(">=", self.asm.expose(path + ("scheduler",), "x"), Const(self.suspend_ticks[path]))
+            for i in tasks:
+                name = f"{'_'.join(i.path)}_grant_after_{'_'.join(path)}_back"
+                self.asm.rank(Rank(name, self.grants[i.path], w, owner=(), guard=forced,
+                                   comment="a suspension that can last no longer ends before a core is granted"))
         for w in (w for w in self.asm.wires if id(w) in firsts):  # a first release: at the latest instant of its delay
             timer = next(e.atom for e in w.ends if isinstance(e, End) and e.port == "first")
             forced = Binary(">=", self.exposed_t(timer), self.asm.atoms[timer].args[-1])

@@ -381,6 +381,7 @@ def _constants(level, options: TimeOptions, execs, timers) -> list[int]:
     if platform is not None:
         out += [us for span in platform.execution.values() for us in (span.best_us, span.worst_us)]
         out += [us for t in platform.tasks.values() if t.delay for us in (t.delay.best_us, t.delay.worst_us)]
+        out += [us for t in platform.tasks.values() if t.suspend for us in (t.suspend.best_us, t.suspend.worst_us)]
         out += [round(t.delay.seconds * 1e6) for _, t in level.task_of.values() if t is not None and t.delay]
         if isinstance(platform.best, int):
             out.append(platform.best)

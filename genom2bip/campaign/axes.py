@@ -38,8 +38,10 @@ def _number(value: Any) -> float | int:
 
 def _factor(value: Any) -> float | int:
     value = _number(value)
-    if value < 0:
-        raise ValueError("a factor of 0 or more expected")
+    from genom2bip.variants import MAX_WCET_SCALE
+
+    if not 0 <= value <= MAX_WCET_SCALE:  # NaN too
+        raise ValueError(f"a factor from 0 to {MAX_WCET_SCALE} expected")
     return value
 
 

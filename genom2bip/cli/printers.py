@@ -49,6 +49,17 @@ class Printer(Listener):
 
     def __init__(self, args) -> None:
         self.args = args
+        self.told: set[str] = set()  # the observers whose violation was printed as soon as found
+
+    def found(self, result) -> None:
+        """A timing observer's violation, printed with its trace as soon as the search finds it."""
+        from genom2bip.cli.verify_timed import print_zone_verdict
+
+        print_zone_verdict(result, early=True)
+        self.told.add(result.observer)
+
+    def so_far(self, text: str) -> None:
+        print(f"so far: {text}", file=sys.stderr, flush=True)
 
     def progress(self):
         return progress(self.args)

@@ -40,6 +40,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="stop the search past MB megabytes (default: half the machine's memory)")
     search.add_argument("--max-states", type=int, metavar="N", help="stop after N states")
     search.add_argument("--max-depth", type=int, metavar="N", help="do not expand states deeper than N steps")
+    search.add_argument("--time-limit", metavar="DURATION",
+                        help="clock zones (--timed on a platform): stop the search after DURATION (e.g. 10 min) and "
+                             "report the verdicts found and the response times reached so far, as lower bounds")
     search.add_argument("--dfs", action="store_true", help="depth-first (traces are then not shortest)")
     search.add_argument("--requests", type=int, metavar="N",
                         help="each service receives at most N requests (default: any number, one at a time)")
@@ -107,6 +110,14 @@ def _check_options(args) -> None:
         if value is not None and value < 0:
             error(f"--{name.replace('_', '-')} must be >= 0")
             raise Failure(EXIT_USAGE)
+    if args.time_limit is not None:
+        from genom2bip.durations import parse_duration
+
+        us = parse_duration(args.time_limit)
+        if not us:
+            error(f"--time-limit: '{args.time_limit}' is not a positive duration (e.g. 30 s, 10 min)")
+            raise Failure(EXIT_USAGE)
+        args.time_limit_s = us / 1e6
     if args.spin_cores < 1:
         error("--spin-cores must be >= 1")
         raise Failure(EXIT_USAGE)
@@ -150,6 +161,9 @@ def verb_verify(args: argparse.Namespace) -> int:
         error(f"{model.title}: {exc}")
         return EXIT_ERRORS
     options, listener = search_options(args), Printer(args)
+    if (args.progress or sys.stderr.isatty()) and not args.quiet:  # a compile is said where progress is shown
+        from runtime.native.build import tell
+        tell(lambda text: print(f"genom2bip: {text}", file=sys.stderr, flush=True))
     if args.method == "explore":
         return _explore(model, args, options, listener, EXIT_OK)
     localized = None
@@ -202,8 +216,12 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
             print(f"model {model.title}")
         from genom2bip.cli.verify_timed import platform_line
         platform_line(model)
-        worst = check_timing_zones(model, observers, responses, options, listener)
-        if not (deadlock or properties or args.aut or args.dot or args.promela):
+        worst, stopped = check_timing_zones(model, observers, responses, options, listener)
+        left = (["deadlock"] if deadlock else []) + [f"property {p.name}" for p in properties]
+        left += [f"--{k} export" for k in ("aut", "dot", "promela") if getattr(args, k)]
+        if stopped == "interrupted" and left:  # one Ctrl-C stops the whole command, after what was found
+            print(f"interrupted: not run: {', '.join(left)}")
+        if stopped == "interrupted" or not left:
             return max(compositional, worst)
         observers, responses = set(), False
         compositional = max(compositional, worst)
@@ -222,7 +240,9 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         from genom2bip.cli.verify_spin import run_spin
         return run_spin(space, args, options, listener, deadlock, properties)
     worst = max(compositional, _run_explorer(space, args, options, listener, deadlock, properties))
-    if observers:
+    if observers and getattr(args, "_interrupted", False):
+        print("interrupted: not run: the timing observers")
+    elif observers:
         from genom2bip.cli.verify_timed import check_observers
         worst = max(worst, check_observers(model, observers, space, options, listener))
     return worst
@@ -303,14 +323,19 @@ def _run_explorer(space, args, options, listener, deadlock: bool, properties) ->
                                                  args, sources))
         if not exploration.result.complete and worst == EXIT_OK:
             worst = EXIT_INCONCLUSIVE
+        args._interrupted = exploration.result.stopped_by == "interrupted"
         if lts:
             if not exploration.result.complete:
                 error("the LTS is not complete (a limit stopped the exploration): not exported")
                 worst = max(worst, EXIT_INCONCLUSIVE)
             else:
                 worst = max(worst, _export_lts(space, args))
-    for item in properties:
+    for k, item in enumerate(properties):
+        if getattr(args, "_interrupted", False):  # one Ctrl-C stops the whole command, after what was found
+            print(f"interrupted: not run: {', '.join(f'property {p.name}' for p in properties[k:])}")
+            break
         found = check_property(space, item, options, listener)
+        args._interrupted = found.limit == "interrupted"
         print(f"property {found.subject}")
         stats = (f"{found.method}, {found.figures.states:,} states, {found.figures.seconds:.2f} s"
                  if found.method else "")

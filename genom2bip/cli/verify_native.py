@@ -48,4 +48,4 @@ def search_options(args: argparse.Namespace):
                          store=args.store, bits=args.bits, spin_cores=args.spin_cores,
                          spin_bitstate=args.spin_bitstate, spin_hash_bits=args.spin_hash_bits,
                          spin_swarm=args.spin_swarm, spin_dir=args.spin_dir, solver=args.solver,
-                         check_states=args.check_states)
+                         check_states=args.check_states, time_limit=getattr(args, "time_limit_s", None))

@@ -171,33 +171,65 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
     return worst
 
 
-def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
+def print_zone_verdict(found, early: bool = False) -> int:
+    """One observer's verdict from a zone search (a violation with its timed trace); its exit status.  ``early``:
+    a violation found while the search goes on (when is said)."""
+    from genom2bip.verify import Verdict
+
+    what = "overrun" if found.kind == "overrun" else "violation"
+    if found.verdict is Verdict.HOLDS:
+        print(f"{found.subject}: no {what} reachable ({found.method}, {found.figures.states:,} symbolic "
+              f"states, {found.figures.seconds:.2f} s)")
+        return EXIT_OK
+    if found.verdict is Verdict.VIOLATED:
+        when = (f"found after {found.figures.states:,} symbolic states, {found.figures.seconds:.1f} s; "
+                if early else "")
+        print(f"{found.subject}: {what} reachable" + (f" ({when}{len(found.trace)} steps):" if found.trace else
+                                                      f" ({when}{found.message})"))
+        if found.trace is not None:
+            timed_trace(found.trace)
+        sys.stdout.flush()
+        return EXIT_VIOLATED
+    print(f"{found.subject}: inconclusive ({_stopped_by(found.limit or found.message)})")
+    return EXIT_INCONCLUSIVE
+
+
+#: Why a search stopped early, in words.
+STOPPED = {"interrupted": "interrupted by Ctrl-C", "time-limit": "past --time-limit", "max-states": "at --max-states",
+           "max-memory": "at --max-memory"}
+
+
+def _stopped_by(limit: str) -> str:
+    return STOPPED.get(limit, limit)
+
+
+def check_timing_zones(model, kinds, responses: bool, options, listener) -> tuple[int, str]:
     """The observers of ``kinds`` and, with ``responses``, the response times, by one zone exploration; printed as
-    the tick explorer prints verdicts, the response times as a table with a trace each; the worst exit status."""
+    the tick explorer prints verdicts (a violation as soon as found, when the listener prints it), the response
+    times as a table with a trace each; the worst exit status, and why the search stopped early ("" if it did
+    not, or because every verdict was known)."""
     from genom2bip.verify import Verdict, tick_us
     from genom2bip.verify.zones import ResponseResult, check_timing
 
     tick = tick_us(model.package)
     if tick:
-        print(f"time: one tick is {tick / 1000:g} ms; explored with clock zones")
+        print(f"time: one tick is {tick / 1000:g} ms; explored with clock zones", flush=True)
     results = check_timing(model, kinds, responses, options, listener)
+    told = getattr(listener, "told", set())
+    limit = next((r.limit for r in results if r.verdict is Verdict.INCONCLUSIVE and r.limit), "")
+    if limit:
+        states = results[0].figures
+        print(f"search stopped ({_stopped_by(limit)}) after {states.states:,} symbolic states, {states.seconds:.2f} s: "
+              "the verdicts known so far, the response times reached so far (lower bounds)")
     worst = EXIT_OK
     for found in results:
         if isinstance(found, ResponseResult):
             continue
-        what = "overrun" if found.kind == "overrun" else "violation"
-        if found.verdict is Verdict.HOLDS:
-            print(f"{found.subject}: no {what} reachable ({found.method}, {found.figures.states:,} symbolic "
-                  f"states, {found.figures.seconds:.2f} s)")
-        elif found.verdict is Verdict.VIOLATED:
-            print(f"{found.subject}: {what} reachable" + (f" ({len(found.trace)} steps):" if found.trace else
-                                                          f" ({found.message})"))
-            if found.trace is not None:
-                timed_trace(found.trace)
-            worst = EXIT_VIOLATED
-        else:
-            print(f"{found.subject}: inconclusive ({found.limit or found.message})")
-            worst = max(worst, EXIT_INCONCLUSIVE)
+        if found.observer in told and found.verdict is Verdict.VIOLATED:
+            print(f"{found.subject}: {'overrun' if found.kind == 'overrun' else 'violation'} reachable (trace above)")
+            worst = _worse(worst, EXIT_VIOLATED)
+            continue
+        worst = _worse(worst, print_zone_verdict(found))
     times = [r for r in results if isinstance(r, ResponseResult)]
     if responses and not times:
         print("response times: the model has no response-time observer (a .bip carries them when generated with "
@@ -220,18 +252,29 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> int:
             elif r.message and r.verdict is not Verdict.INCONCLUSIVE and r.message != _response_value(r):
                 print(f"{owner}: {r.message}")
         if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
-            worst = max(worst, EXIT_INCONCLUSIVE)
-    return worst
+            worst = _worse(worst, EXIT_INCONCLUSIVE)
+    return worst, limit
+
+
+def _worse(a: int, b: int) -> int:
+    """The exit status of two verdicts: a violation found is an answer, whatever stayed inconclusive beside it."""
+    return EXIT_VIOLATED if EXIT_VIOLATED in (a, b) else max(a, b)
 
 
 def _response_value(r) -> str:
     """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms`` (the campaign's value, worded)."""
-    from genom2bip.verify.zones import UNTIL_STOPPED, response_value
+    from genom2bip.verify import Verdict
+    from genom2bip.verify.zones import ABOVE_CAP, UNTIL_STOPPED, response_value
 
+    if r.verdict is Verdict.INCONCLUSIVE and r.value_ticks is not None:  # reached so far: a lower bound
+        return f"≥ {r.value_ms:g} ms so far ({_stopped_by(r.limit)})"
     value = response_value(r)
     if isinstance(value, float | int):
         return f"{value:g} ms"
-    return {"inconclusive": f"inconclusive ({r.limit})", "unbounded": "no bound: a request can wait for ever",
+    if r.verdict is Verdict.INCONCLUSIVE and r.message == ABOVE_CAP:
+        return f"more than {r.ms(r.cap_ticks):g} ms so far ({_stopped_by(r.limit)})"
+    return {"inconclusive": f"inconclusive ({_stopped_by(r.limit)})",
+            "unbounded": "no bound: a request can wait for ever",
             "until stopped": UNTIL_STOPPED,
             "bounded, not measured": "every request ends (not measured: its codels can cycle)"}.get(value, value)
 

@@ -31,6 +31,7 @@ class SearchOptions:
     max_states: int | None = None
     max_depth: int | None = None
     max_memory_mb: int | None = None  # None: half the machine's memory
+    time_limit: float | None = None  # seconds a zone search may take; past them it stops and says what it found
     dfs: bool = False
     requests: int | None = None  # each service receives at most N requests (None: any number, one at a time)
     reduce: bool = True  # reset dead variables
@@ -76,6 +77,12 @@ class Listener:
 
     def note(self, text: str) -> None:
         """A remark on how the check runs (a fallback, a reduction, a lossy store)."""
+
+    def found(self, result) -> None:
+        """A verdict known while the search goes on (a timing observer violated, with its trace)."""
+
+    def so_far(self, text: str) -> None:
+        """What a running search has found so far (the largest response times reached: lower bounds)."""
 
     def unbounded(self, max_bytes: int) -> None:
         """A search starts with no bound on states or depth: it runs until complete or ``max_bytes``."""

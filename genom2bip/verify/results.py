@@ -25,7 +25,7 @@ class Verdict(str, Enum):
 
 
 #: The limits that stop a search before an answer (the ``limit`` of an inconclusive result).
-LIMITS = ("max-states", "max-depth", "max-memory", "interrupted")
+LIMITS = ("max-states", "max-depth", "max-memory", "interrupted", "time-limit")
 
 
 @dataclass

@@ -9,8 +9,13 @@ zones and not ticks for these models.
 """
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import itertools
 import math
+import signal
+import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, ClassVar
@@ -22,6 +27,8 @@ from genom2bip.verify.timing import observers, subject
 
 #: Response-time observers: a clock up to a cap, or a pending request (a service whose codels can cycle).
 RESPONSE_KINDS = ("response", "pending")
+#: A response time not decided when the search stopped, but already past the observer's cap.
+ABOVE_CAP = "above the cap so far"
 #: Why a service has no bound when only an interruption ends it (a tracking service that pauses for ever).
 UNTIL_STOPPED = "runs until stopped: once started, no final report without an interruption"
 
@@ -90,26 +97,164 @@ def _steps(timed_steps) -> tuple[list, list[int]]:
 
 def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = False,
                  options: SearchOptions | None = None, listener: Listener | None = None) -> list[CheckResult]:
-    """Every observer of ``kinds`` and, with ``responses``, every response time, from one zone exploration."""
+    """Every observer of ``kinds`` and, with ``responses``, every response time, from one zone exploration.
+
+    A violation is told to ``listener`` as soon as the search finds it (with its trace); the search ends when
+    every observer asked for is violated and no response time is asked for.  Past ``options.time_limit``, or at
+    the first Ctrl-C (the second stops at once), it stops: the verdicts found are kept, the others are
+    inconclusive, and each response time reached so far is kept as a lower bound (``limit`` says why).
+    """
     from runtime.explore import StateSpace
 
     options = options or SearchOptions()
+    listener = listener or Listener()
     z = explorer(model, options)
-    start = time.perf_counter()
-    result = z.explore(max_states=options.max_states, progress=(listener or Listener()).progress())
-    figures = Figures(states=result.states, transitions=result.transitions, seconds=time.perf_counter() - start)
-    method = f"zones, {result.discrete:,} discrete states"
     tick = tick_us(model.package)
     space = StateSpace(model.package, model.root, options.externs, None, True, set())
     by_path = {fa.name: fa for fa in z.flat.atoms}
+    atoms = observers(model, kinds)
+    progress = listener.progress()
+    watch = _Watch(z, model, atoms, responses, options, listener, progress, (space, tick, by_path))
+    start = time.perf_counter()
+    with watch.interrupts():
+        try:
+            result = z.explore(max_states=options.max_states, progress=progress)
+        except _Stop as stop:
+            progress.done()
+            result = watch.stopped(stop.reason, time.perf_counter() - start)
+        return _results(z, model, result, atoms, responses, watch, start, (space, tick, by_path))
+
+
+#: Seconds between two lines of what a search has found so far (with --progress).
+SO_FAR_PERIOD = 5.0
+
+
+class _Stop(Exception):
+    """Raised in the search by :class:`_Watch`: a budget is spent, Ctrl-C was pressed, or all is decided."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
+
+
+class _Watch:
+    """Looks at a zone search as it goes: violations told as found, budgets, Ctrl-C, lines so far.
+
+    It is the explorer's ``watcher``, which sees the search's live result (runtime/zones/search.py); the search
+    itself is not changed.
+    """
+
+    def __init__(self, z, model, atoms, responses, options, listener, progress, where) -> None:
+        self.z, self.model, self.atoms, self.responses = z, model, atoms, responses
+        self.listener, self.progress, self.where = listener, progress, where
+        self.by_index = {where[2][a.path].index: a for a in atoms}
+        self.deadline = time.monotonic() + options.time_limit if options.time_limit else None
+        self.start = time.perf_counter()
+        self.next_line = time.monotonic() + SO_FAR_PERIOD
+        self.result = None
+        self.hit = False  # Ctrl-C was pressed once
+        self.told: dict[str, ObserverResult] = {}  # observer -> its violation, told as found
+        self.shown = ""
+        self.clocks = {}  # response clock -> (owner, cap)
+        names = _owners(model)
+        for atom in observers(model, ("response",)) if responses else []:
+            owner = names.get(atom.path) or atom.path.rsplit(".", 1)[0]
+            self.clocks[z.model.measures[where[2][atom.path].index][1]] = (owner, atom.bound)
+        z.watcher = self.seen
+
+    def seen(self, result) -> None:
+        self.result = result
+        for index, node in result.violations.items():
+            atom = self.by_index.get(index)
+            if atom is not None and atom.path not in self.told:
+                self.told[atom.path] = found = self.violation(atom, node, len(self.z.nodes))
+                self.progress.done()
+                self.listener.found(found)
+        if self.atoms and len(self.told) == len(self.atoms) and not self.responses:
+            raise _Stop("decided")
+        if self.hit:
+            raise _Stop("interrupted")
+        now = time.monotonic()
+        if self.deadline is not None and now >= self.deadline:
+            raise _Stop("time-limit")
+        if now >= self.next_line and self.progress.on:
+            self.next_line = now + SO_FAR_PERIOD
+            line = self.so_far(result)
+            if line and line != self.shown:
+                self.shown = line
+                self.progress.done()
+                self.listener.so_far(line)
+
+    def violation(self, atom, node: int, states: int) -> ObserverResult:
+        """The verdict of an observer whose ERROR the search reached at ``node``, with its trace."""
+        seconds = time.perf_counter() - self.start
+        space, tick, by_path = self.where
+        clock = self.z.model.observers[by_path[atom.path].index][1]
+        trace, message = _trace_to(self.z, node, [(0, clock, -(atom.bound + 1))], space, tick)
+        return ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message,
+                              figures=Figures(states=states, seconds=seconds),
+                              method="zones, found on the way", observer=atom.path,
+                              kind=atom.kind, bound_ticks=atom.bound, tick_us=tick)
+
+    def so_far(self, result) -> str:
+        """``A.x ≥ 40 ms, B.y ≥ 12 ms``: the largest response times reached, lower bounds while the search runs."""
+        tick = self.where[1]
+        parts = []
+        for clock, (owner, cap) in self.clocks.items():
+            top = result.maxima.get(clock, (-1.0, -1))[0]
+            if top > cap:
+                parts.append(f"{owner} > {cap * tick / 1000:g} ms")
+            elif top >= 0:
+                parts.append(f"{owner} ≥ {top * tick / 1000:g} ms")
+        return ", ".join(parts)
+
+    def stopped(self, reason: str, seconds: float):
+        """The search's result where :class:`_Stop` left it."""
+        from runtime.zones.search import ZoneResult
+
+        result = self.result or ZoneResult(0, 0, 0, 0.0, False)
+        result.complete, result.stopped = False, reason
+        result.states, result.seconds = len(self.z.nodes), seconds
+        result.discrete = len({n.state for n in self.z.nodes})
+        return result
+
+    @contextlib.contextmanager
+    def interrupts(self):
+        """Ctrl-C: the first stops the search after what it found is reported; the second stops at once."""
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+
+        def handler(signum, frame) -> None:
+            if self.hit:
+                raise KeyboardInterrupt
+            self.hit = True
+            print("\ngenom2bip: stopping: what was found so far follows (Ctrl-C again stops at once)",
+                  file=sys.stderr, flush=True)
+
+        previous = signal.signal(signal.SIGINT, handler)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _results(z, model, result, atoms, responses, watch, start, where) -> list[CheckResult]:
+    """The verdicts and response times of a search that ended (complete or not)."""
+    space, tick, by_path = where
+    figures = Figures(states=result.states, transitions=result.transitions, seconds=time.perf_counter() - start)
+    method = f"zones, {result.discrete:,} discrete states"
     out: list[CheckResult] = []
-    inconclusive = Verdict.INCONCLUSIVE if not result.complete else None
-    for atom in observers(model, kinds):
+    decided = result.stopped == "decided"
+    inconclusive = Verdict.INCONCLUSIVE if not result.complete and not decided else None
+    for atom in atoms:
         fa = by_path[atom.path]
         node = result.violations.get(fa.index)
         common = dict(figures=figures, method=method, observer=atom.path, kind=atom.kind, bound_ticks=atom.bound,
                       tick_us=tick)
-        if node is not None:
+        if atom.path in watch.told:  # told as found: the same verdict and trace, with the whole search's figures
+            out.append(dataclasses.replace(watch.told[atom.path], figures=figures, method=method))
+        elif node is not None:
             clock = z.model.observers[fa.index][1]
             trace, message = _trace_to(z, node, [(0, clock, -(atom.bound + 1))], space, tick)
             out.append(ObserverResult(subject(atom, tick), Verdict.VIOLATED, trace=trace, message=message, **common))
@@ -189,7 +334,9 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
             return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, value_ticks=None,
                                   message="never requested", **common)
     if inconclusive:
-        return ResponseResult(subject_text, inconclusive, value_ticks=None, **common)
+        above = atom.kind == "response" and node >= 0
+        return ResponseResult(subject_text, inconclusive, value_ticks=None, message=ABOVE_CAP if above else "",
+                              **common)
     cycles = lassos(z, offset, watch)
     first = next(cycles, None)
     if first is None:

@@ -15,7 +15,9 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
+from typing import Callable
 
 from runtime.engine.source import dumped
 
@@ -27,6 +29,17 @@ LEVELS = ("0", "1", "2", "3")
 PARALLEL_FLAGS = ("-DPARALLEL", "-pthread")
 #: Added when the C text is dumped (GENOM2BIP_DUMP): line tables for gdb and perf; the code is the same.
 DEBUG_FLAGS = ("-g",)
+
+
+#: Told when a compile starts and when it ends (one line each): the command line prints it on stderr where it shows
+#: progress, so that a first run is not a silent minute.  None: nothing is told (a library, a test, a campaign).
+notice: Callable[[str], None] | None = None
+
+
+def tell(fn: Callable[[str], None] | None) -> None:
+    """Who hears of compiles (:data:`notice`); None for no one."""
+    global notice
+    notice = fn
 
 
 class BuildError(Exception):
@@ -41,9 +54,17 @@ def compiler() -> str | None:
     return None
 
 
-def flags(parallel: bool = False) -> tuple[str, ...]:
-    """gcc's flags: :data:`FLAGS` with the level of ``GENOM2BIP_OPT`` if set, the threaded build's if ``parallel``."""
-    level = os.environ.get("GENOM2BIP_OPT", "").strip()
+#: The level of a step only called one state at a time from Python (the zone explorer's, a trace's): its compile
+#: is what costs, not its speed (RobNav nc = 4, cold: 2.1 s of gcc at -O0, 5.6 s at -O2, the same 6.5 s of search;
+#: docs/verification.md, *Compiled exploration*).  The C search itself is built at -O2 (DALA's deadlock search
+#: runs twice as fast there).
+STEP_LEVEL = "0"
+
+
+def flags(parallel: bool = False, level: str | None = None) -> tuple[str, ...]:
+    """gcc's flags: :data:`FLAGS` at ``level`` (None: -O2), ``GENOM2BIP_OPT``'s level if set (whatever the use),
+    the threaded build's if ``parallel``."""
+    level = os.environ.get("GENOM2BIP_OPT", "").strip() or level
     if level and level not in LEVELS:
         raise BuildError(f"GENOM2BIP_OPT={level!r}: expected one of {', '.join(LEVELS)} (gcc's -O level)")
     base = tuple(f"-O{level}" if f == "-O2" and level else f for f in FLAGS)
@@ -62,14 +83,15 @@ def _headers() -> str:
     return "".join((HERE / n).read_text() for n in ("prelude.h", "odometer.h", "search.c"))
 
 
-def build(source: str, cc: str, parallel: bool = False, what: str = "compiled step") -> Path:
+def build(source: str, cc: str, parallel: bool = False, what: str = "compiled step", level: str | None = None) -> Path:
     """The shared library for ``source``, compiled now or found in the cache; ``parallel``: the threaded build.
 
     The C text is kept next to the library (``step-<key>.c``) and compiled from there, so a profiler or a
-    debugger finds the lines it was built from.  With ``GENOM2BIP_DUMP=DIR`` it is written to DIR instead
+    debugger finds the lines it was built from (``level``: gcc's, see :func:`flags`).  With ``GENOM2BIP_DUMP=DIR``
+    it is written to DIR instead
     (named after ``what``) and compiled from that file with ``-g``: gdb and perf then show its lines.
     """
-    opts = flags(parallel)
+    opts = flags(parallel, level)
     dump = dumped(source, what, ".c")
     if dump is not None:
         opts += DEBUG_FLAGS
@@ -85,6 +107,10 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
         _write(c_file, source.encode("utf-8"))
     if lib.exists():
         return lib
+    level = next((f for f in opts if f.startswith("-O")), "")
+    if notice is not None:
+        notice(f"{what}: compiling {len(source) // 1024:,} KB of C ({Path(cc).name} {level}) ...")
+    start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="genom2bip-c-") as tmp:
         so = Path(tmp) / "model.so"
         proc = subprocess.run([cc, *opts, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
@@ -92,6 +118,8 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
         if proc.returncode != 0:
             raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{proc.stderr[-4000:]}")
         _write(lib, so.read_bytes())
+    if notice is not None:
+        notice(f"{what}: compiled in {time.perf_counter() - start:.1f} s (kept in {out_dir} for the next run)")
     return lib
 
 

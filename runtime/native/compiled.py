@@ -21,7 +21,7 @@ from runtime.explore.choices import Choice, codel_choices
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.search import ExploreResult, Finding
 from runtime.explore.space import StateSpace, Step
-from runtime.native.build import PROGRESS, BuildError, Result, build, compiler, load
+from runtime.native.build import PROGRESS, STEP_LEVEL, BuildError, Result, build, compiler, load
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
 from runtime.native.values import from_words, to_words
@@ -96,6 +96,7 @@ class CompiledSpace:
         self.bools = [s.index for s in space.slots if s.kind == "bool"]
         self.kinds = {s.index: s.kind for s in space.slots}
         self.parallel = False  # the loaded library is the threaded build
+        self.searching = False  # the loaded library runs the C search (built at -O2), not single steps (-O0)
         self.lossiness = None
 
     def build(self, parallel: bool | None = None) -> None:
@@ -107,13 +108,23 @@ class CompiledSpace:
             self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors, self.wide_numbers)
         flat = self.engine.flat
-        self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}"))
+        self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}",
+                              None if self.searching else STEP_LEVEL))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
 
     def _widen(self, slot: int) -> None:
-        """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits."""
-        self.widths[slot] = min(64, 2 * self.lib.c_width(slot))
+        """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits, for it and for
+        the variables of the same name in other atoms (the same data of another instance of a type mostly grows
+        alike: one rebuild instead of one per instance, each a compile of the whole step)."""
+        wider = min(64, 2 * self.lib.c_width(slot))
+        slots = self.space.slots
+        name = slots[slot].name if slot < len(slots) else None
+        for k, s in enumerate(slots):
+            if k != slot and name is not None and s.kind == "int" and s.name == name and s.domain is None \
+                    and s.live != 0 and self.lib.c_width(k) < wider:
+                self.widths[k] = wider
+        self.widths[slot] = wider
         self.build()
 
     # -- one step -------------------------------------------------------------------------------
@@ -176,7 +187,8 @@ class CompiledSpace:
             return 1 if interrupt.hit or timed.hit else 0
 
         callback = PROGRESS(report)
-        if (workers > 1) != self.parallel:
+        if (workers > 1) != self.parallel or not self.searching:  # the search's own build: threaded, at -O2
+            self.searching = True
             self.build(parallel=workers > 1)
         previous = _catch_interrupt(interrupt)
         start = time.perf_counter()
