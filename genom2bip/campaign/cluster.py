@@ -76,6 +76,9 @@ def connect(spec: ClusterSpec):
     import dask
     from distributed import Client, LocalCluster
 
+    from genom2bip.campaign.frames import bound_frames
+
+    bound_frames()  # a peer announcing exabytes is refused before they are allocated
     if spec.scheduler:
         return Client(spec.scheduler, security=spec.security(), timeout=spec.connect_timeout), None
     workers = spec.workers or os.cpu_count() or 1

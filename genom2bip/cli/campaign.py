@@ -17,6 +17,8 @@ from genom2bip.cli.verbs import (
 )
 
 EXIT_INTERRUPTED = 130
+#: Seconds --connect-timeout may wait at most: a day.
+MAX_CONNECT_TIMEOUT = 86400.0
 #: A job's answer -> the exit status it asks for.
 EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
 
@@ -71,10 +73,29 @@ def _cluster(args: argparse.Namespace):
     if any(tls) and not (all(tls) and args.scheduler):
         error("TLS takes --scheduler tls://HOST:PORT with --tls-ca-file, --tls-cert and --tls-key together")
         raise Failure(EXIT_USAGE)
-    if args.connect_timeout <= 0:
-        error("--connect-timeout must be positive")
+    if not 0 < args.connect_timeout <= MAX_CONNECT_TIMEOUT:  # also refuses nan and inf
+        error(f"--connect-timeout: a number of seconds above 0 and at most {MAX_CONNECT_TIMEOUT:g} (a day) expected, "
+              f"got {args.connect_timeout:g}")
         raise Failure(EXIT_USAGE)
+    if args.scheduler:
+        _check_scheduler(args.scheduler)
     return ClusterSpec(args.scheduler, args.workers, args.listen, *tls, connect_timeout=args.connect_timeout)
+
+
+def _check_scheduler(address: str) -> None:
+    """A usage error unless ``address`` is [tcp://]HOST:PORT or tls://HOST:PORT, as Dask itself reads it."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)  # HOST:PORT alone is tcp://, as for Dask
+        if scheme not in ("tcp", "tls"):
+            raise ValueError(f"the scheme is {scheme}://")
+        host, port = parse_host_port(location)
+        if not host or not 0 < int(port) < 65536:
+            raise ValueError("a host and a port from 1 to 65535 are needed")
+    except (ValueError, TypeError) as exc:
+        error(f"--scheduler {address!r}: tcp://HOST:PORT or tls://HOST:PORT expected ({exc})")
+        raise Failure(EXIT_USAGE) from None
 
 
 @verb("campaign", help="run a campaign of checks (a YAML file) on Dask workers: JSON lines, a table, pictures",
