@@ -2,52 +2,16 @@
 a Dask scheduler is refused (exit 1) before the client allocates what its bytes announce; nothing is written."""
 from __future__ import annotations
 
-import socket
 import struct
-import threading
 
 import pytest
 
 from badinputkit import DALA, genom2bip, tree
+from liars import Liar
 
 pytestmark = pytest.mark.reliability
 
 CAMPAIGN = DALA / "campaign.yaml"
-
-
-class Liar:
-    """A TCP server on 127.0.0.1 that answers every connection with ``reply`` (at most ``limit`` connections)."""
-
-    def __init__(self, reply: bytes, limit: int = 50) -> None:
-        self.reply, self.limit, self.served = reply, limit, 0
-        self.sock = socket.create_server(("127.0.0.1", 0))
-        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
-        self.thread = threading.Thread(target=self._serve, daemon=True)
-        self.thread.start()
-
-    def _serve(self) -> None:
-        while self.served < self.limit:
-            try:
-                conn, _ = self.sock.accept()
-            except OSError:  # closed: the test is over
-                return
-            self.served += 1
-            with conn:
-                try:
-                    conn.sendall(self.reply)
-                    conn.shutdown(socket.SHUT_WR)
-                    while conn.recv(65536):  # until the client hangs up
-                        pass
-                except OSError:
-                    pass
-
-    def close(self) -> None:
-        try:
-            self.sock.shutdown(socket.SHUT_RDWR)  # wakes the accept() in progress (close alone would not)
-        except OSError:
-            pass
-        self.sock.close()
-        self.thread.join()
 
 
 @pytest.mark.parametrize("reply", [
@@ -55,15 +19,13 @@ class Liar:
     b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nok",  # a web server: its first 8 bytes as a length
 ], ids=["exabytes", "http"])
 def test_a_server_that_is_not_a_scheduler_is_refused_before_its_length_is_allocated(tmp_path, reply):
-    liar = Liar(reply)
-    try:
-        done = genom2bip("campaign", CAMPAIGN, "-o", tmp_path / "out", "--scheduler", liar.address,
+    with Liar(reply) as liar:
+        address = f"tcp://127.0.0.1:{liar.port}"
+        done = genom2bip("campaign", CAMPAIGN, "-o", tmp_path / "out", "--scheduler", address,
                          "--connect-timeout", "10")
-    finally:
-        liar.close()
     assert liar.served >= 1  # the client did reach it
     assert done.code == 1, done.err
-    assert done.err.startswith(f"genom2bip: error: cannot reach the Dask scheduler {liar.address}: the peer "
+    assert done.err.startswith(f"genom2bip: error: cannot reach the Dask scheduler {address}: the peer "
                                "announced a message of "), done.err
     assert "more than the 256 MB a Dask scheduler sends: not a Dask scheduler\n" in done.err, done.err
     assert "internal error" not in done.err and "MemoryError" not in done.err
