@@ -10,6 +10,7 @@ rest).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from genom2bip.cli.verbs import (
@@ -17,6 +18,9 @@ from genom2bip.cli.verbs import (
 )
 
 EXIT_INTERRUPTED = 130
+#: Local workers per core at most: a job keeps its core busy, so more only adds processes (10,000 of them ran out
+#: of file descriptors before running a job).
+WORKERS_PER_CORE = 4
 #: Seconds --connect-timeout may wait at most: a day.
 MAX_CONNECT_TIMEOUT = 86400.0
 #: A job's answer -> the exit status it asks for.
@@ -65,6 +69,11 @@ def _cluster(args: argparse.Namespace):
 
     if args.workers is not None and args.workers < 1:
         error("--workers must be >= 1")
+        raise Failure(EXIT_USAGE)
+    cores = os.cpu_count() or 1
+    if args.workers is not None and args.workers > WORKERS_PER_CORE * cores:
+        error(f"--workers {args.workers}: at most {WORKERS_PER_CORE * cores} on this machine ({WORKERS_PER_CORE} per "
+              f"core, {cores} cores): each worker is a process that searches on a core of its own")
         raise Failure(EXIT_USAGE)
     if args.scheduler and (args.workers is not None or args.listen != "127.0.0.1"):
         error("--workers and --listen belong to the local cluster: drop them with --scheduler")
