@@ -130,6 +130,7 @@ def verb_campaign(args: argparse.Namespace) -> int:
         print(f"{len(jobs)} jobs")
         return EXIT_OK
     directory = Path(args.output) if args.output else Path("out") / campaign.name
+    Output.check(directory)  # before a cluster is started: its results could not be kept
     done = Output.peek(directory)
     todo = [j for j in jobs if j.id not in done
             or (args.retry_failed and done[j.id].get("status") != "done")]
