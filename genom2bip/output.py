@@ -230,6 +230,7 @@ def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) 
     try:
         remaining = leftovers(out, name)
         staging = Path(tempfile.mkdtemp(prefix=f".{name}.new.", dir=out))
+        os.chmod(staging, _directory_mode(target))  # mkdtemp makes it 0700 whatever the umask
         # The marker goes first: a staging directory left by a killed run is then recognised and cleared.
         (staging / MARKER).write_bytes(encode(marker_text(data)))
         for file_name, content in data.items():
@@ -247,6 +248,16 @@ def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) 
                 directory.rmdir()
         raise
     return Written(target, kept, remaining)
+
+
+def _directory_mode(target: Path) -> int:
+    """The permissions of the package directory being replaced, else what the umask gives a new directory."""
+    try:
+        return stat.S_IMODE(os.stat(target).st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o777 & ~umask
 
 
 def _missing_parents(out: Path) -> list[Path]:

@@ -10,8 +10,9 @@ on its own and must never import the generator.
 """
 from __future__ import annotations
 
+import os
+import stat
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from runtime.errors import Genom2bipError
 
@@ -50,7 +51,7 @@ class Diagnostic:
         head = f"{self.span}: {self.severity}: {self.message}"
         lines = [head]
         text = self.source_line
-        if text is None and sources is not None:
+        if text is None and sources is not None and self.span.line > 0:
             text = sources.line(self.span.file, self.span.line)
         if text is not None and self.span.line > 0:
             col = max(self.span.column, 1)
@@ -86,23 +87,52 @@ def _clipped(text: str, col: int) -> tuple[str, int]:
     return shown, col
 
 
+#: Bytes of a file read to quote one of its lines: above every input a reader accepts (a description and its
+#: includes: 2 MB), so that a message about a huge or endless file never reads it all.
+MAX_QUOTED_FILE_BYTES = 16 * 1024 * 1024
+
+
+def _read_quotable(file: str) -> list[str] | None:
+    """The lines of ``file`` when it is a regular file of at most MAX_QUOTED_FILE_BYTES; None otherwise.
+
+    A device (``/dev/zero``) or a FIFO is never read: it is opened without waiting for a writer and
+    refused on what ``fstat`` says, so that printing an error about it neither hangs nor fills memory.
+    """
+    try:
+        if not stat.S_ISREG(os.stat(file).st_mode):  # not even opened: opening a FIFO wakes its writer
+            return None
+        fd = os.open(file, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError:
+        return None
+    with os.fdopen(fd, "rb") as f:
+        try:
+            info = os.fstat(fd)
+            if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_QUOTED_FILE_BYTES:
+                return None
+            data = f.read(MAX_QUOTED_FILE_BYTES + 1)
+        except OSError:
+            return None
+    if len(data) > MAX_QUOTED_FILE_BYTES:  # it grew while being read
+        return None
+    return data.decode("utf-8", errors="replace").splitlines()
+
+
 class SourceCache:
-    """Reads source lines lazily so that diagnostics can quote them."""
+    """Reads source lines lazily so that diagnostics can quote them; never more than a bounded regular file."""
 
     def __init__(self) -> None:
-        self._texts: dict[str, list[str]] = {}
+        self._texts: dict[str, list[str] | None] = {}
 
     def add(self, file: str, text: str) -> None:
         self._texts[file] = text.splitlines()
 
     def line(self, file: str, line: int) -> str | None:
+        if line <= 0:  # the file as a whole: nothing to quote, nothing to read
+            return None
         if file not in self._texts:
-            try:
-                self._texts[file] = Path(file).read_text(encoding="utf-8", errors="replace").splitlines()
-            except OSError:
-                return None
+            self._texts[file] = _read_quotable(file)
         lines = self._texts[file]
-        if 1 <= line <= len(lines):
+        if lines is not None and 1 <= line <= len(lines):
             return lines[line - 1]
         return None
 

@@ -242,6 +242,16 @@ def scheduler_type() -> AtomType:
     return base
 
 
+def idle_scheduler_type() -> AtomType:
+    """The scheduler of a periodic task that runs no codel: a period opens and closes at once, time passes while it
+    sleeps.  :func:`scheduler_type` without ``exec`` behaves so too (``busy`` stays 0), but its tick would still
+    change discrete data, which clock zones do not take; this one has no data."""
+    base = library.idle_scheduler_type(library.scheduler_type())
+    base.ports = [*base.ports, PortDecl(library.PORT, "tick", exported=True)]
+    base.transitions = [*base.transitions, Transition("tick", ["SLEEP"], ["SLEEP"])]
+    return base
+
+
 def _observer_type(name: str, kind: str, opening: str, closing: str, bound: str, watching: str,
                    either_order: bool) -> AtomType:
     """An observer: ``opening`` starts clock ``c``, ``closing`` stops it, ``c > bound`` is ERROR.
@@ -669,7 +679,7 @@ def apply(level, options: TimeOptions) -> Timing:
             urgent = platform.apply(level, options.platform, tick, options.default_wcet_us)
             urgent += [w for w in level.asm.wires if w.label and w.label.rsplit(":", 1)[1] in REPORTS]
         if "IdleScheduler" in level.atom_types:
-            level.atom_types["IdleScheduler"] = library.idle_scheduler_type(scheduler_type())
+            level.atom_types["IdleScheduler"] = idle_scheduler_type()
         ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
         if options.client is not None:
             from genom2bip.build import client
@@ -714,7 +724,7 @@ def apply(level, options: TimeOptions) -> Timing:
         ctype, at = observed(wire.type, len(ends))
         wire.ends = list(wire.ends)[:at] + ends + list(wire.ends)[at:]
         wire.type = level._connector(ctype)
-    if options.ticks:
+    if options.ticks and ticking:  # no timed atom at all (a component with no task): time changes nothing
         passing = level.asm.wire(Wire(level._rendezvous(ticking), ticking, TICK, (), TICK,
                                       comment="time passes by one tick for every timed atom at once"))
         for w in urgent:

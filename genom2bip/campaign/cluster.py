@@ -78,13 +78,23 @@ def connect(spec: ClusterSpec):
     import dask
     from distributed import Client, LocalCluster
 
+    from genom2bip.campaign.frames import bound_frames
+
+    bound_frames()  # a peer announcing exabytes is refused before they are allocated
     if spec.scheduler:
         return Client(spec.scheduler, security=spec.security(), timeout=spec.connect_timeout), None
     workers = spec.workers or os.cpu_count() or 1
-    with dask.config.set({"distributed.scheduler.allowed-failures": LOCAL_ALLOWED_FAILURES}):
+    # No dashboard: Dask's scheduler and workers start an HTTP server whatever dashboard_address says (the
+    # scheduler on 8787 when free); with no routes they serve nothing, and the scheduler's is stopped at once.
+    with dask.config.set({"distributed.scheduler.allowed-failures": LOCAL_ALLOWED_FAILURES,
+                          "distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=spec.listen,
-                               scheduler_port=0, dashboard_address=None, silence_logs=logging.CRITICAL,
+                               scheduler_port=0, dashboard_address=f"{spec.listen}:0", silence_logs=logging.CRITICAL,
+                               scheduler_kwargs={"dashboard": False},
                                preload=["genom2bip.campaign.session"])  # each worker in a session of its own
+    http = getattr(cluster.scheduler, "http_server", None)
+    if http is not None:
+        http.stop()
     return Client(cluster), cluster
 
 

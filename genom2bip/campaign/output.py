@@ -60,15 +60,36 @@ class Output:
             out._read(rewrite=False)
         return out.records
 
+    @staticmethod
+    def check(directory: str | Path) -> None:
+        """OutputError when ``directory`` cannot be the output, found without creating or changing anything: so
+        that the cluster is not started for a campaign whose results could not be kept."""
+        directory = Path(directory)
+        if os.path.lexists(directory) and not directory.is_dir():
+            raise OutputError(f"{directory}: not a directory")
+        for name, kind in ((RESULTS, "a file"), (JOBS, "a directory"), (LOCK, "a file")):
+            _check_kind(directory / name, kind)
+        missing = _missing_parents(directory)
+        existing = missing[-1].parent if missing else directory
+        if not existing.is_dir():
+            raise OutputError(f"{directory}: cannot be used as the output directory: {existing} is not a directory")
+        if not os.access(existing, os.W_OK | os.X_OK):
+            raise OutputError(f"{directory}: cannot be used as the output directory: {existing} cannot be written")
+
     @classmethod
     def open(cls, directory: str | Path) -> "Output":
         """Create or reopen ``directory``: lock it, read the records it holds, drop a line a kill cut short."""
         directory = Path(directory)
-        if directory.exists() and not directory.is_dir():
-            raise OutputError(f"{directory}: not a directory")
-        directory.mkdir(parents=True, exist_ok=True)
-        (directory / JOBS).mkdir(exist_ok=True)
-        lock = open(directory / LOCK, "a+")
+        cls.check(directory)
+        created = [directory / JOBS] * (not os.path.lexists(directory / JOBS)) + _missing_parents(directory)
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+            (directory / JOBS).mkdir(exist_ok=True)
+            lock = open(directory / LOCK, "a+")
+        except OSError as exc:
+            for made in created:  # what this call made, newest first; nothing of what was there
+                _remove_empty(made)
+            raise OutputError(f"{directory}: cannot be used as the output directory: {_why(exc)}") from None
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
@@ -97,7 +118,10 @@ class Output:
         :data:`UNREADABLE` (appended there first, then the file rewritten without it)."""
         if not self.results.exists():
             return
-        lines = self.results.read_text(encoding="utf-8", errors="surrogateescape").splitlines(keepends=True)
+        try:
+            lines = self.results.read_text(encoding="utf-8", errors="surrogateescape").splitlines(keepends=True)
+        except OSError as exc:
+            raise OutputError(f"cannot read {self.results}: {_why(exc)}") from None
         kept, aside = [], []
         for line in lines:
             try:
@@ -120,7 +144,10 @@ class Output:
             _replace(self.results, "".join(kept))
 
     def write(self, record: dict[str, Any]) -> dict[str, Any]:
-        """Write one job's record: its whole result to ``jobs/<id>.json`` first, then its line; the line written."""
+        """Write one job's record: its whole result to ``jobs/<id>.json`` first, then its line; the line written.
+
+        A write that fails (a full disk) raises OutputError and leaves ``results.jsonl`` as it was before it:
+        no line cut half-way, no temporary file."""
         result = record.pop("result", None)
         line = dict(record)
         line["result"] = line["trace"] = None
@@ -130,10 +157,19 @@ class Output:
             line["result"] = str(path)
             line["trace"] = str(path) if result.get("trace") else None
         text = json.dumps(line, sort_keys=False) + "\n"
-        with open(self.results, "a", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
+        try:
+            with open(self.results, "ab") as f:
+                size = f.tell()
+                try:
+                    f.write(text.encode("utf-8"))
+                    f.flush()
+                    os.fsync(f.fileno())
+                except OSError:
+                    f.truncate(size)  # the line cut by the failure goes; the lines before it stay
+                    raise
+        except OSError as exc:
+            raise OutputError(f"cannot write {self.results}: {_why(exc)}; the results written before are kept, "
+                              "the same command runs the rest") from None
         self.records.pop(record["job"], None)
         self.records[record["job"]] = line
         return line
@@ -169,10 +205,48 @@ def record_problem(record: Any) -> str | None:
 
 
 def _replace(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (a temporary file renamed over it)."""
+    """Write ``text`` to ``path`` atomically (a temporary file renamed over it); on a failure (a full disk) the
+    temporary file is removed, ``path`` is left as it was and OutputError says why."""
     partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    with open(partial, "w", encoding="utf-8") as f:
-        f.write(text)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(partial, path)
+    try:
+        with open(partial, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(partial, path)
+    except OSError as exc:
+        partial.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {path}: {_why(exc)}; it is left as it was") from None
+
+
+def _why(exc: OSError) -> str:
+    return exc.strerror or str(exc)
+
+
+def _check_kind(path: Path, kind: str) -> None:
+    """OutputError unless ``path`` is absent or is ``kind`` ("a file", "a directory")."""
+    if not os.path.lexists(path):
+        return
+    if path.is_symlink() and not path.exists():
+        raise OutputError(f"{path}: a link to nothing where the campaign keeps {kind}")
+    if kind == "a directory" and not path.is_dir():
+        raise OutputError(f"{path}: not a directory (the campaign keeps each job's result in it): move it away")
+    if kind == "a file" and not path.is_file():
+        raise OutputError(f"{path}: not a regular file (the campaign keeps {path.name} there): move it away")
+
+
+def _missing_parents(directory: Path) -> list[Path]:
+    """The directories ``mkdir(parents=True)`` would make for ``directory``, newest first."""
+    missing = []
+    for path in [directory, *directory.parents]:
+        if os.path.lexists(path):
+            break
+        missing.append(path)
+    return missing
+
+
+def _remove_empty(path: Path) -> None:
+    try:
+        path.rmdir()
+    except OSError:
+        pass

@@ -2,6 +2,7 @@
 search cost there (states), one row and one line per check; figures a kind of check gives (response times) too."""
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 from typing import Any
@@ -82,7 +83,15 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     axes[-1].set_xlabel(f"{key}" + (f" ({kind.unit})" if kind.unit else ""))
     fig.tight_layout()
     path = directory / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', key)}.png"
-    fig.savefig(path, dpi=110)
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:  # a picture cut by a full disk is never left: written aside, then renamed over the old one
+        fig.savefig(partial, dpi=110, format="png")
+        os.replace(partial, path)
+    except OSError as exc:
+        partial.unlink(missing_ok=True)
+        from genom2bip.campaign.output import OutputError
+
+        raise OutputError(f"cannot write {path}: {exc.strerror or exc}; it is left as it was") from None
     return path
 
 

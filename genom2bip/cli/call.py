@@ -15,6 +15,10 @@ from typing import Any
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, error, verb
 
 
+#: Seconds --timeout may wait at most: a week (no --timeout waits as long as needed).
+MAX_TIMEOUT = 7 * 86400.0
+
+
 def parse_assignments(items: list[str]) -> dict[str, Any]:
     """``["goal.x=1", "name=foo"]`` → ``{"goal": {"x": 1}, "name": "foo"}``."""
     out: dict[str, Any] = {}
@@ -49,14 +53,25 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--timeout", type=float, metavar="SECONDS", help="with --wait: give up after this long")
 
 
+def shown(text: object) -> str:
+    """``text`` safe for a terminal: control characters (escape sequences, a carriage return) written as escapes."""
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in str(text))
+
+
 def _listing(client) -> str:
+    """The components and their services; a reply of another shape is a BadReply, its text made safe to print."""
+    from runtime.services.client import BadReply
+
     lines = []
-    for comp in client.components():
-        lines.append(f"{comp['name']}: {comp.get('doc') or ''}".rstrip(": "))
-        for svc in client.component(comp["name"])["services"]:
-            inputs = " ".join(f"{p['name']}" + ("" if p["required"] else f"={json.dumps(p.get('default'))}")
-                              for p in svc["inputs"])
-            lines.append(f"  {comp['name']}.{svc['name']} ({svc['kind']}) {inputs}".rstrip())
+    try:
+        for comp in client.components():
+            lines.append(f"{shown(comp['name'])}: {shown(comp.get('doc') or '')}".rstrip(": "))
+            for svc in client.component(comp["name"])["services"]:
+                inputs = " ".join(shown(p["name"]) + ("" if p["required"] else f"={json.dumps(p.get('default'))}")
+                                  for p in svc["inputs"])
+                lines.append(f"  {shown(comp['name'])}.{shown(svc['name'])} ({shown(svc['kind'])}) {inputs}".rstrip())
+    except (KeyError, TypeError, AttributeError):
+        raise BadReply("the components listed are not of the interface's shape") from None
     return "\n".join(lines)
 
 
@@ -64,8 +79,11 @@ def _listing(client) -> str:
       arguments=_arguments)
 def verb_call(args: argparse.Namespace) -> int:
     """Send one request; with --wait print its final report; exit 0 when it ended ok."""
-    from runtime.services.client import Client, ServiceError, parse_target
+    from runtime.services.client import BadReply, Client, ServiceError, parse_target
 
+    if args.timeout is not None and not 0 <= args.timeout <= MAX_TIMEOUT:  # also refuses nan and inf
+        error(f"--timeout: a number of seconds from 0 to {MAX_TIMEOUT:g} (a week) expected, got {args.timeout:g}")
+        return EXIT_USAGE
     try:
         client = Client(args.url)
         if args.target is None:
@@ -80,7 +98,10 @@ def verb_call(args: argparse.Namespace) -> int:
         error(str(exc))
         return EXIT_USAGE
     except ServiceError as exc:
-        error(f"{args.url}: {exc.message}")
+        error(f"{args.url}: {shown(exc.message)}")
+        return EXIT_ERRORS
+    except BadReply as exc:
+        error(f"{args.url}: not a services interface: {exc}")
         return EXIT_ERRORS
     except OSError as exc:
         error(f"cannot reach {args.url}: {exc.strerror or exc}")
@@ -92,14 +113,17 @@ def verb_call(args: argparse.Namespace) -> int:
             return EXIT_OK
         report = client.wait(rid, args.timeout)
     except ServiceError as exc:
-        error(f"{args.target}: {exc.message}")
+        error(f"{args.target}: {shown(exc.message)}")
+        return EXIT_ERRORS
+    except BadReply as exc:
+        error(f"{args.url}: not a services interface: {exc}")
         return EXIT_ERRORS
     except TimeoutError as exc:
-        error(str(exc))
+        error(shown(exc))
         return EXIT_ERRORS
     except OSError as exc:
         error(f"cannot reach {args.url}: {exc.strerror or exc}")
         return EXIT_ERRORS
-    json.dump(report, sys.stdout, indent=2)
+    json.dump(report, sys.stdout, indent=2)  # ASCII: a control character in it is written as an escape
     sys.stdout.write("\n")
-    return EXIT_OK if report["status"] == "ok" else EXIT_ERRORS
+    return EXIT_OK if report.get("status") == "ok" else EXIT_ERRORS

@@ -10,6 +10,7 @@ rest), 141 stopped because the output was closed (``| head``: the same).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from genom2bip.cli.verbs import (
@@ -19,6 +20,11 @@ from genom2bip.cli.verbs import (
 EXIT_INTERRUPTED = 130
 #: The output's reader went away (``campaign FILE | head``): the status of a process a closed pipe stops (SIGPIPE).
 EXIT_CLOSED = 141
+#: Local workers per core at most: a job keeps its core busy, so more only adds processes (10,000 of them ran out
+#: of file descriptors before running a job).
+WORKERS_PER_CORE = 4
+#: Seconds --connect-timeout may wait at most: a day.
+MAX_CONNECT_TIMEOUT = 86400.0
 #: A job's answer -> the exit status it asks for.
 EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
 
@@ -66,6 +72,11 @@ def _cluster(args: argparse.Namespace):
     if args.workers is not None and args.workers < 1:
         error("--workers must be >= 1")
         raise Failure(EXIT_USAGE)
+    cores = os.cpu_count() or 1
+    if args.workers is not None and args.workers > WORKERS_PER_CORE * cores:
+        error(f"--workers {args.workers}: at most {WORKERS_PER_CORE * cores} on this machine ({WORKERS_PER_CORE} per "
+              f"core, {cores} cores): each worker is a process that searches on a core of its own")
+        raise Failure(EXIT_USAGE)
     if args.scheduler and (args.workers is not None or args.listen != "127.0.0.1"):
         error("--workers and --listen belong to the local cluster: drop them with --scheduler")
         raise Failure(EXIT_USAGE)
@@ -73,10 +84,29 @@ def _cluster(args: argparse.Namespace):
     if any(tls) and not (all(tls) and args.scheduler):
         error("TLS takes --scheduler tls://HOST:PORT with --tls-ca-file, --tls-cert and --tls-key together")
         raise Failure(EXIT_USAGE)
-    if args.connect_timeout <= 0:
-        error("--connect-timeout must be positive")
+    if not 0 < args.connect_timeout <= MAX_CONNECT_TIMEOUT:  # also refuses nan and inf
+        error(f"--connect-timeout: a number of seconds above 0 and at most {MAX_CONNECT_TIMEOUT:g} (a day) expected, "
+              f"got {args.connect_timeout:g}")
         raise Failure(EXIT_USAGE)
+    if args.scheduler:
+        _check_scheduler(args.scheduler)
     return ClusterSpec(args.scheduler, args.workers, args.listen, *tls, connect_timeout=args.connect_timeout)
+
+
+def _check_scheduler(address: str) -> None:
+    """A usage error unless ``address`` is [tcp://]HOST:PORT or tls://HOST:PORT, as Dask itself reads it."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)  # HOST:PORT alone is tcp://, as for Dask
+        if scheme not in ("tcp", "tls"):
+            raise ValueError(f"the scheme is {scheme}://")
+        host, port = parse_host_port(location)
+        if not host or not 0 < int(port) < 65536:
+            raise ValueError("a host and a port from 1 to 65535 are needed")
+    except (ValueError, TypeError) as exc:
+        error(f"--scheduler {address!r}: tcp://HOST:PORT or tls://HOST:PORT expected ({exc})")
+        raise Failure(EXIT_USAGE) from None
 
 
 @verb("campaign", help="run a campaign of checks (a YAML file) on Dask workers: JSON lines, a table, pictures",
@@ -102,6 +132,7 @@ def verb_campaign(args: argparse.Namespace) -> int:
         print(f"{len(jobs)} jobs")
         return EXIT_OK
     directory = Path(args.output) if args.output else Path("out") / campaign.name
+    Output.check(directory)  # before a cluster is started: its results could not be kept
     done = Output.peek(directory)
     todo = [j for j in jobs if j.id not in done
             or (args.retry_failed and done[j.id].get("status") != "done")]

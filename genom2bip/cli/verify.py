@@ -187,6 +187,13 @@ def verb_verify(args: argparse.Namespace) -> int:
     return compositional
 
 
+def _response_observers(model) -> list:
+    """The response-time observers the model was built with."""
+    from genom2bip.verify.zones import observers
+
+    return list(observers(model, ("response", "pending")))
+
+
 def _explore(model, args: argparse.Namespace, options, listener, compositional: int) -> int:
     """``--method explore`` (and the second half of ``both``): one state space for every check asked for."""
     from genom2bip.cli.verify_localized import print_warnings
@@ -205,7 +212,10 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
     deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers or responses)
     load_externs(args.externs)
     zones = bool(observers or responses) and _zones(model, args)
-    if responses and not zones:  # response times are the zone explorer's: ticks would print nothing for them
+    if responses and not zones and not _response_observers(model):  # no clock at all: no task, no service
+        print(f"response times: none to measure ({model.title} has no periodic task and no service)")
+        responses = False
+    elif responses and not zones:  # response times are the zone explorer's: ticks would print nothing for them
         error("--response-times: response times are measured with clock zones; "
               + ("drop --time-search ticks" if getattr(args, "time_search", None) == "ticks" else
                  "this model is not one clock zones take (see the note above)"))

@@ -33,6 +33,10 @@ def parse_file(path) -> Package:
     sources = SourceCache()
     reporter = Reporter(sources)
     try:
+        if path.exists() and not path.is_file():  # a device or a FIFO: reading it would never end or never start
+            reporter.error(Span(filename, 0, 0), "cannot read BIP2 file: not a regular file (a device, a pipe or "
+                                                 "a directory)")
+            reporter.raise_if_errors()
         data = path.read_bytes()
     except OSError as err:
         reporter.error(Span(filename, 0, 0), f"cannot read BIP2 file: {err}")

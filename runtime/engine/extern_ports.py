@@ -126,6 +126,8 @@ def read_events(path: str | Path) -> list[Event]:
     """Events from a JSON-lines file: ``{"port": "A.p1", "values": [3], "after": 0}`` per line (values and
     after optional); blank lines and lines starting with ``#`` are skipped."""
     events = []
+    if Path(path).exists() and not Path(path).is_file():  # a device or a FIFO: reading would never end or start
+        raise EngineError(f"{path}: cannot read events: not a regular file (a device, a pipe or a directory)")
     try:
         lines = Path(path).read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as err:

@@ -35,6 +35,47 @@ class ServiceError(Exception):
         self.message = message
 
 
+class BadReply(Exception):
+    """What answered is not a services interface: not HTTP, a body too large, not JSON, or not of the shape asked."""
+
+
+#: Bytes of one answer's body: the largest the interface sends (a component's description, a page of requests) is
+#: tens of kB; a server streaming without end is cut here, not read until memory runs out.
+MAX_REPLY_BYTES = 16 * 1024 * 1024
+
+
+def _read_body(response: http.client.HTTPResponse) -> bytes:
+    """The body of ``response``, at most MAX_REPLY_BYTES (BadReply beyond: the connection cannot be reused)."""
+    length = response.getheader("Content-Length")
+    if length is not None and length.strip().isdigit() and int(length) > MAX_REPLY_BYTES:
+        raise BadReply(f"the reply announces {int(length):,} bytes, more than the {MAX_REPLY_BYTES // 1024 // 1024} MB "
+                       "a services interface sends")
+    raw = response.read(MAX_REPLY_BYTES + 1)
+    if len(raw) > MAX_REPLY_BYTES:
+        raise BadReply(f"the reply goes on past {MAX_REPLY_BYTES // 1024 // 1024} MB, more than a services interface "
+                       "sends")
+    return raw
+
+
+def _decode(raw: bytes) -> Any:
+    """The JSON of a body (None when empty); BadReply when it is not JSON or nests too deep to be read."""
+    if not raw:
+        return None
+    try:
+        return json.loads(raw)
+    except RecursionError:
+        raise BadReply("the reply's JSON nests too deep to be read") from None
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise BadReply("the reply is not JSON") from None
+
+
+def _expect(payload: Any, kind: type, what: str) -> Any:
+    """``payload`` when it is a ``kind``; else BadReply naming ``what`` was expected."""
+    if not isinstance(payload, kind) or isinstance(payload, bool):
+        raise BadReply(f"{what} expected in the reply, got {type(payload).__name__}")
+    return payload
+
+
 class Client:
     """Talks to one controller's services interface at ``url`` (``http://127.0.0.1:PORT``).
 
@@ -75,25 +116,29 @@ class Client:
             try:
                 conn.request(method, path, body=data, headers=headers)
                 response = conn.getresponse()
-                raw = response.read()
+                raw = _read_body(response)
                 break
             except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError):
                 conn.close()  # a kept-alive connection the server had closed: once more on a new one
                 self._local.conn = None
                 if attempt == 2:
                     raise
-            except OSError:
+            except http.client.HTTPException as exc:  # not HTTP: a status line or headers that cannot be read
+                conn.close()
+                self._local.conn = None
+                raise BadReply(f"the reply is not HTTP ({type(exc).__name__})") from None
+            except (OSError, BadReply):
                 conn.close()
                 self._local.conn = None
                 raise
-        try:
-            payload = json.loads(raw) if raw else None
-        except json.JSONDecodeError:
-            payload = {"error": raw.decode(errors="replace")}
         if response.status >= 400:
+            try:
+                payload = _decode(raw)
+            except BadReply:
+                payload = {"error": raw.decode(errors="replace")}
             message = payload.get("error", str(payload)) if isinstance(payload, dict) else str(payload)
-            raise ServiceError(response.status, message)
-        return payload
+            raise ServiceError(response.status, str(message))
+        return _decode(raw)
 
     @staticmethod
     def _service_path(component: str, service: str) -> str:
@@ -120,7 +165,8 @@ class Client:
     def send(self, component: str, service: str, inputs: dict[str, Any] | None = None, **kw: Any) -> int:
         """Send a request; returns its id. Inputs as a dict and/or keyword arguments."""
         body = {**(inputs or {}), **kw}
-        return self._call("POST", self._service_path(component, service), body)["id"]
+        reply = _expect(self._call("POST", self._service_path(component, service), body), dict, "a request")
+        return _expect(reply.get("id"), int, "a request id")
 
     def request(self, request_id: int, wait: float | None = None) -> dict[str, Any]:
         """The request with its reports (``status``, ``final``, ``reports``); ``wait`` s for the final one."""
@@ -133,12 +179,12 @@ class Client:
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             left = 30.0 if deadline is None else min(30.0, deadline - time.monotonic())
-            req = self.request(request_id, wait=max(left, 0.0) or None)
-            if req["final"] is not None:
-                return req["final"]
+            req = _expect(self.request(request_id, wait=max(left, 0.0) or None), dict, "a request")
+            if req.get("final") is not None:
+                return _expect(req["final"], dict, "a final report")
             if deadline is not None and time.monotonic() >= deadline:
                 raise TimeoutError(f"request {request_id} has no final report after {timeout} s "
-                                   f"(status {req['status']})")
+                                   f"(status {req.get('status')})")
 
     def call(self, component: str, service: str, inputs: dict[str, Any] | None = None,
              timeout: float | None = None, **kw: Any) -> dict[str, Any]:

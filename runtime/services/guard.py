@@ -24,6 +24,7 @@ from __future__ import annotations
 import hmac
 import ipaddress
 import json
+import re
 from typing import Any, Awaitable, Callable
 
 #: The environment variable the server and the client take the token from.
@@ -46,11 +47,17 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-def host_name(header: str) -> str:
-    """``"127.0.0.1:8080"`` → ``"127.0.0.1"``, ``"[::1]:8080"`` → ``"::1"``."""
-    if header.startswith("["):
-        return header[1:].split("]", 1)[0]
-    return header.rsplit(":", 1)[0] if header.count(":") == 1 else header
+#: A Host header as RFC 9110 writes it: a name or an IPv4 address, or an IPv6 address in brackets; then a port.
+_HOST = re.compile(r"(?:\[(?P<v6>[0-9A-Fa-f:.]+)\]|(?P<name>[A-Za-z0-9._-]+))(?::[0-9]{1,5})?")
+
+
+def host_name(header: str) -> str | None:
+    """``"127.0.0.1:8080"`` → ``"127.0.0.1"``, ``"[::1]:8080"`` → ``"::1"``; None when it is not a Host header at all
+    (``127.0.0.1:1@evil.com`` names no host a browser would send)."""
+    match = _HOST.fullmatch(header)
+    if match is None:
+        return None
+    return match["v6"] or match["name"]
 
 
 def is_page(method: str, path: str, accept: str) -> bool:
@@ -95,7 +102,9 @@ class Guard:
                 return 400, f"repeated {SINGLE[name]} header: refused (a request names it once)"
             raw[name] = v
         host = raw.get(b"host", b"").decode("latin-1")
-        if self.loopback and not is_loopback(host_name(host)):
+        if host and host_name(host) is None:
+            return 400, f"Host {host!r} is not a host name, an address or either with a port: refused"
+        if self.loopback and not is_loopback(host_name(host) or ""):
             return 403, (f"Host {host!r} is not this server: a controller on the loopback answers only to "
                          f"{', '.join(LOOPBACK_NAMES)} (a guard against DNS rebinding)")
         origin = raw.get(b"origin")
