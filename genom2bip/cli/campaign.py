@@ -13,12 +13,10 @@ import argparse
 import sys
 
 from genom2bip.cli.verbs import (
-    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error, print_diagnostics, verb,
+    EXIT_CLOSED, EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error,
+    print_diagnostics, verb,
 )
 
-EXIT_INTERRUPTED = 130
-#: The output's reader went away (``campaign FILE | head``): the status of a process a closed pipe stops (SIGPIPE).
-EXIT_CLOSED = 141
 #: A job's answer -> the exit status it asks for.
 EXITS = {"holds": EXIT_OK, "violated": EXIT_VIOLATED, "error": EXIT_VIOLATED}
 

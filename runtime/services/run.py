@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from runtime.exits import EXIT_VIOLATED
 from runtime.model import Package
 from runtime.services.guard import TOKEN_ENV
 from runtime.services.protocol import MAX_CONNECTIONS, READ_TIMEOUT
@@ -221,7 +222,7 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
     console.close(LAST_WORDS)
     if controller.error:
         print(f"{prog}: {controller.error}", file=sys.stderr)
-        return 2
+        return EXIT_VIOLATED
     return status
 
 
