@@ -29,7 +29,8 @@ def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m runtime", description="BIP engine: run a BIP2 model.",
                                  epilog=epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="execute a model, choosing among enabled interactions by a policy")
+    table = {"epilog": epilog(), "formatter_class": argparse.RawDescriptionHelpFormatter}
+    run = sub.add_parser("run", help="execute a model, choosing among enabled interactions by a policy", **table)
     run.add_argument("model", help="the .bip file (package P lives in P.bip)")
     run.add_argument("--root", default="System()", help="root instance, e.g. 'System()' or 'Sys(3)'")
     add_run_options(run)
@@ -42,7 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--random-time", action="store_true",
                      help="timed models: plan each interaction at a random instant of its window (seeded by --seed), "
                           "as the Verimag engine does, instead of the earliest")
-    explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)")
+    explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)",
+                             **table)
     explore.add_argument("model", help="the .bip file")
     explore.add_argument("--root", default="System()", help="root instance")
     explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")

@@ -25,7 +25,7 @@ TABLE: tuple[tuple[int, str], ...] = (
                     "real time not held"),
     (EXIT_INCONCLUSIVE, "inconclusive: a limit (states, time) stopped the search before an answer"),
     (EXIT_INTERRUPTED, "interrupted by Ctrl-C (or SIGTERM), after saying what was known"),
-    (EXIT_CLOSED, "stopped because nobody reads the output any more (campaign | head)"),
+    (EXIT_CLOSED, "stopped because nobody reads the output any more (a campaign piped into head)"),
 )
 
 
