@@ -96,3 +96,30 @@ def test_readme_line_runs(line, folder):
     assert "Traceback" not in done.stderr and "internal error" not in done.stderr, done.stderr
     if why is not None:
         assert done.stdout.startswith("usage: "), done.stdout[:500]
+
+
+def tutorial() -> list[tuple[str, int]]:
+    """The shell lines of docs/tutorial.md, in order, each with the exit status its comment gives (default 0)."""
+    text = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
+    lines = []
+    for block in re.findall(r"```sh\n(.*?)```", text, re.S):
+        for line in block.splitlines():
+            command, _, comment = line.partition(" #")
+            status = re.search(r"\bexit (\d+)", comment)
+            if command.strip():
+                lines.append((command.strip(), int(status.group(1)) if status else 0))
+    return lines
+
+
+def test_every_command_of_the_tutorial_runs_in_order(tmp_path):
+    """One fresh folder for the whole walk: each step uses what the one before made (out/gen, out/nowcet.gen)."""
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    steps = tutorial()
+    assert len(steps) >= 10 and any(status == 4 for _, status in steps)
+    for line, status in steps:
+        script = f'genom2bip() {{ "{sys.executable}" -m genom2bip "$@"; }}\npython() {{ "{sys.executable}" "$@"; }}\n'
+        done = subprocess.run(["bash", "-c", script + line], cwd=tmp_path, env=env, capture_output=True, text=True,
+                              timeout=BOUND)
+        assert done.returncode == status, f"{line}\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}"
+        assert "Traceback" not in done.stderr and "internal error" not in done.stderr, done.stderr
