@@ -101,7 +101,7 @@ def why(record: dict[str, Any] | None) -> str:
     if answer == "inconclusive":
         limit = record.get("limit")
         text = f"stopped by {limit}" if limit else ""
-        if message and (not limit or limit not in message[0]):
+        if message and message[0] != limit:
             text = f"{text}: {message[0]}" if text else message[0]
         text = text or "stopped before an answer"
     else:
