@@ -70,11 +70,22 @@ def describe(package: Package, root: str, interface: dict | None = None) -> str:
 
 def main(package: Package, root: str, argv: list[str] | None = None, prog: str = "controller",
          interface: dict | None = None, origin: str | None = None) -> int:
-    """Entry point of ``python -m <generated package>``; returns the exit status.
+    """Entry point of ``python -m <generated package>``; returns the exit status (runtime/exits.py).
 
     ``interface`` is the package's INTERFACE, ``origin`` its ``__file__``
-    (the codels directory is also looked for from there).
+    (the codels directory is also looked for from there).  An output closed
+    by its reader (``describe | head``) ends the command quietly with 141.
     """
+    from runtime.exits import closed_output
+
+    try:
+        return _main(package, root, argv, prog, interface, origin)
+    except BrokenPipeError:
+        return closed_output()
+
+
+def _main(package: Package, root: str, argv: list[str] | None, prog: str, interface: dict | None,
+          origin: str | None) -> int:
     from runtime.cli import execute
     from runtime.engine import Engine, EngineError
 

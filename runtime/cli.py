@@ -21,7 +21,9 @@ import sys
 import traceback
 
 from runtime.diagnostics import DiagnosticError
-from runtime.exits import EXIT_ERRORS, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK, EXIT_VIOLATED, epilog
+from runtime.exits import (
+    EXIT_ERRORS, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK, EXIT_VIOLATED, closed_output, epilog,
+)
 from runtime.timed_cli import explore_command, is_timed, run_timed_command
 
 
@@ -144,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # `python -m runtime run M.bip | head`: the reader has what it wanted
+        return closed_output()
     except Exception as exc:  # noqa: BLE001 - a bug: one line, the traceback only when asked for
         if os.environ.get("GENOM2BIP_TRACEBACK", "") not in ("", "0"):
             traceback.print_exc()

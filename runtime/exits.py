@@ -32,3 +32,15 @@ TABLE: tuple[tuple[int, str], ...] = (
 def epilog() -> str:
     """The table as the last paragraph of a ``--help`` (argparse.RawDescriptionHelpFormatter keeps its lines)."""
     return "exit status:\n" + "\n".join(f"  {code:>3}  {meaning}" for code, meaning in TABLE)
+
+
+def closed_output() -> int:
+    """stdout's reader went away (``| head``): what is left to print goes nowhere, no traceback; EXIT_CLOSED."""
+    import os
+    import sys
+
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+    return EXIT_CLOSED

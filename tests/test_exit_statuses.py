@@ -140,3 +140,23 @@ def test_runtime_130_interrupted(monkeypatch, capsys):
     monkeypatch.setattr(runtime_cli, "run_command", stop)
     assert runtime(["run", MODEL]) == 130
     assert capsys.readouterr().err == "interrupted\n"
+
+
+@pytest.mark.parametrize("argv", [["-m", "gen.dala", "describe"],
+                                  ["-m", "runtime", "run", MODEL, "--root", "System()", "--limit", "50"]],
+                         ids=["gen.dala describe", "runtime run"])
+def test_141_an_output_closed_by_its_reader_ends_quietly(argv):
+    """``... | head``: the pipe's reader is gone before the first line (closed before the command starts)."""
+    import os
+    import subprocess
+    import sys
+
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        done = subprocess.run([sys.executable, *argv], cwd=ROOT, stdout=write, stderr=subprocess.PIPE, text=True,
+                              env={**os.environ, "PYTHONPATH": f"{ROOT / 'gen'}{os.pathsep}{ROOT}"}, timeout=300)
+    finally:
+        os.close(write)
+    assert done.returncode == 141, done.stderr
+    assert "Traceback" not in done.stderr and "BrokenPipeError" not in done.stderr, done.stderr
