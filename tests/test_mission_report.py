@@ -144,3 +144,10 @@ def test_a_refused_goto_has_no_invented_goal_and_no_distance(tmp_path):
     goals = [line for line in lines if line.startswith("  goal ")]
     assert len(goals) == 3 and not any("(0, 0)" in line for line in goals)  # the GoTo sent without a goal: none
     assert goals[2] == "  goal (1, 1): refused: NDD::e_no_goal"
+    refused = report.goals(_goal_run(tmp_path))[2]
+    assert refused["distance_left"] is None and not refused["reached"]  # where the robot was is not its distance
+
+
+def test_the_picture_counts_as_reached_only_the_goals_within_their_tolerance(tmp_path):
+    reached = [g["reached"] for g in report.goals(_goal_run(tmp_path))]
+    assert reached == [False, True, False]  # the first GoTo ended ok 1.70 m away: not reached

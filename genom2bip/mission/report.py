@@ -50,8 +50,9 @@ def goals(run: Run) -> list[dict[str, Any]]:
         status = r.get("status")
         if status == "rejected" and r.get("reason") == "rule":
             continue
-        end = run.goal_ends.get(o.request) if o.request is not None else None
-        end = end or (_pose_at(run, r.get("time")) if status not in ("rejected", "error") else None)
+        refused = status in ("rejected", "error")  # it never drove: no distance
+        end = None if refused or o.request is None else run.goal_ends.get(o.request)
+        end = end or (_pose_at(run, r.get("time")) if not refused else None)
         gap = math.hypot(point[0] - end[0], point[1] - end[1]) if end and point else None
         tolerance = goal_tolerance(run, index)
         reached = False
