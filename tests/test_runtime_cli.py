@@ -62,6 +62,22 @@ def test_call_sends_a_request_and_prints_its_final_report(running, capsys):
     assert queued["status"] == "queued" and queued["url"] == f"{url}/requests/{queued['id']}"
 
 
+def test_call_exits_by_the_table_failed_4_and_no_final_report_yet_5(capsys):
+    from runkit import navigation_ready, ndd_settings, serving_dala
+
+    with serving_dala() as (_, server, client):  # a controller of its own: this test leaves it navigating
+        url = server.url
+        navigation_ready(client)
+        ndd_settings(client)
+        # the stub nddPlan throws e_blocked for a goal at x = 13: the request failed, what the run found
+        goal = ["goal.x=13", "goal.y=0", "goal.theta=0"]
+        assert genom2bip_main(["call", url, "NDD.GoTo", *goal, "--wait", "--timeout", "60"]) == 4
+        assert json.loads(capsys.readouterr().out)["exception"] == "NDD::e_blocked"
+        # a goal at x = 1000 is never reached (the stub): no final report within the time given, no answer yet
+        assert genom2bip_main(["call", url, "NDD.GoTo", "goal.x=1000", *goal[1:], "--wait", "--timeout", "0.5"]) == 5
+        assert "has no final report after 0.5 s" in capsys.readouterr().err
+
+
 def test_call_reports_bad_requests_and_unreachable_servers(running, capsys):
     _, url, _ = running
     assert genom2bip_main(["call", url, "NDD.SetSpeed", "max_speed.v=fast"]) == 1
