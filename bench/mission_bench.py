@@ -27,7 +27,8 @@ def main() -> None:
     cpu = time.process_time() - cpu
     print(f"mission {mission.name}: {run.sim_time:.1f} s robot time in {run.wall_time:.1f} s wall clock "
           f"({run.sim_time / run.wall_time:.2f}x real time), {cpu:.1f} s CPU ({run.sim_time / cpu:.2f} robot s "
-          f"per CPU s); expectations met: {run.ok}; events: {len(run.events)}")
+          f"per CPU s); expectations met: {run.expectations_met}; real time held: {run.real_time_held}; "
+          f"events: {len(run.events)}")
     from runtime.controller import Controller
 
     c = Controller(package.package(), package.ROOT, package.INTERFACE, str(ROOT / "descriptions/dala/codels"))

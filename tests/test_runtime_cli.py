@@ -62,6 +62,22 @@ def test_call_sends_a_request_and_prints_its_final_report(running, capsys):
     assert queued["status"] == "queued" and queued["url"] == f"{url}/requests/{queued['id']}"
 
 
+def test_call_exits_by_the_table_failed_4_and_no_final_report_yet_5(capsys):
+    from runkit import navigation_ready, ndd_settings, serving_dala
+
+    with serving_dala() as (_, server, client):  # a controller of its own: this test leaves it navigating
+        url = server.url
+        navigation_ready(client)
+        ndd_settings(client)
+        # the stub nddPlan throws e_blocked for a goal at x = 13: the request failed, what the run found
+        goal = ["goal.x=13", "goal.y=0", "goal.theta=0"]
+        assert genom2bip_main(["call", url, "NDD.GoTo", *goal, "--wait", "--timeout", "60"]) == 4
+        assert json.loads(capsys.readouterr().out)["exception"] == "NDD::e_blocked"
+        # a goal at x = 1000 is never reached (the stub): no final report within the time given, no answer yet
+        assert genom2bip_main(["call", url, "NDD.GoTo", "goal.x=1000", *goal[1:], "--wait", "--timeout", "0.5"]) == 5
+        assert "has no final report after 0.5 s" in capsys.readouterr().err
+
+
 def test_call_reports_bad_requests_and_unreachable_servers(running, capsys):
     _, url, _ = running
     assert genom2bip_main(["call", url, "NDD.SetSpeed", "max_speed.v=fast"]) == 1
@@ -287,7 +303,7 @@ def test_a_codel_raising_system_exit_fails_its_request_and_the_controller_runs_o
     (2, "[{rid}] tick.Work: interrupted tick.Work: the controller stopped; codel tickWork did not return after the "
         "controller was told to stop: interrupted", 0),  # a Python loop: interrupted
     (3, "[{rid}] tick.Work: interrupted tick.Work: the controller stopped (codel tickWork of tick.Work (request "
-        "{rid}) did not return within 3 s of the stop: abandoned)", 2),  # blocked in time.sleep: given up on
+        "{rid}) did not return within 3 s of the stop: abandoned)", 4),  # blocked in time.sleep: given up on
 ], ids=["loop", "blocked"])
 def test_ctrl_c_stops_within_a_bounded_time_whatever_the_codel_under_way_does(launch, tick_package, add, line,
                                                                          status):
@@ -306,7 +322,7 @@ def test_a_second_ctrl_c_exits_at_once_saying_what_it_interrupted(launch, tick_p
     client, rid = running_work(url, 3)
     queued = client.send("tick", "Work", add=1)
     out, err = stopped(proc, signals=2, between=0.3)
-    assert proc.returncode == 130  # the exit at once: the stop would wait 3 s for the codel, then exit 2
+    assert proc.returncode == 130  # the exit at once: the stop would wait 3 s for the codel, then exit 4
     assert f"second Ctrl-C: exiting at once; interrupted: codel tickWork of tick.Work (request {rid}); " \
            f"2 request(s) left without a final report: {rid}, {queued}" in err, err
     assert "Traceback" not in err

@@ -34,8 +34,29 @@ def draw(jobs: list[Job], records: dict[str, dict[str, Any]], directory: Path) -
     return [_axis_picture(key, jobs, records, directory) for key in numeric_axes(jobs)]
 
 
+#: Where a legend goes: beside its panel, right of the data, never over it.
+OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0, "fontsize": 7}
+
+
 def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]], directory: Path) -> Path:
-    """Top: a row per check, the answer at each value; below: states (log) per check; then a kind's own figures."""
+    """The picture of ``key`` written to ``directory``; its path."""
+    fig = figure(key, jobs, records)
+    path = directory / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', key)}.png"
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:  # a picture cut by a full disk is never left: written aside, then renamed over the old one
+        fig.savefig(partial, dpi=110, format="png", bbox_inches="tight")  # the legends beside the panels kept in
+        os.replace(partial, path)
+    except OSError as exc:
+        partial.unlink(missing_ok=True)
+        from genom2bip.campaign.output import OutputError
+
+        raise OutputError(f"cannot write {path}: {exc.strerror or exc}; it is left as it was") from None
+    return path
+
+
+def figure(key: str, jobs: list[Job], records: dict[str, dict[str, Any]]):
+    """Top: a row per check, the answer at each value; below: states (log) per check; then a kind's own figures.
+    Legends stand right of their panel (:data:`OUTSIDE`), so that no line or point is hidden under one."""
     from matplotlib.figure import Figure  # the object API: no pyplot state, no window
 
     kind, _ = axis_kind(key)
@@ -74,7 +95,7 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
     states.set_ylabel("states")
     states.grid(alpha=0.3)
     if len(names) <= 12 and states.lines:
-        states.legend(fontsize=7, loc="best", framealpha=0.7)
+        states.legend(**OUTSIDE)
     if extra:
         _draw_figures(axes[2], extra)
     if all(float(x).is_integer() for points in series.values() for x, _ in points):
@@ -82,23 +103,15 @@ def _axis_picture(key: str, jobs: list[Job], records: dict[str, dict[str, Any]],
         axes[-1].xaxis.set_major_locator(MaxNLocator(integer=True))  # cores: 1, 2, 3, not 1.2
     axes[-1].set_xlabel(f"{key}" + (f" ({kind.unit})" if kind.unit else ""))
     fig.tight_layout()
-    path = directory / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', key)}.png"
-    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:  # a picture cut by a full disk is never left: written aside, then renamed over the old one
-        fig.savefig(partial, dpi=110, format="png")
-        os.replace(partial, path)
-    except OSError as exc:
-        partial.unlink(missing_ok=True)
-        from genom2bip.campaign.output import OutputError
-
-        raise OutputError(f"cannot write {path}: {exc.strerror or exc}; it is left as it was") from None
-    return path
+    return fig
 
 
 def _draw_figures(ax, extra: dict[str, list[tuple[float, float | str]]]) -> None:
     """A line per figure (a task's response time) through its numbers; a value that is a word (``unbounded``) is a
     triangle on the top edge, in the line's colour, with the word beside it."""
     top = 0.0
+    last = max((x for points in extra.values() for x, _ in points), default=0.0)
+    said: dict[float, int] = {}  # words already written at an x: the next goes under them
     for n, (name, points) in enumerate(extra.items()):
         numbers = sorted((x, y) for x, y in points if not isinstance(y, str))
         words = [(x, y) for x, y in points if isinstance(y, str)]
@@ -110,12 +123,14 @@ def _draw_figures(ax, extra: dict[str, list[tuple[float, float | str]]]) -> None
         for k, (x, word) in enumerate(words):
             ax.plot([x], [1], marker="^", color=colour, markersize=9, linestyle="", clip_on=False,
                     transform=ax.get_xaxis_transform(), label=None if numbers or k else f"{name} ({word})")
-            ax.annotate(word, (x, 1), xycoords=ax.get_xaxis_transform(), xytext=(6, -3),
-                        textcoords="offset points", fontsize=7, color=colour)
+            below = said[x] = said.get(x, -1) + 1
+            right = x >= last  # at the last value the word goes left of its mark, away from the legend
+            ax.annotate(word, (x, 1), xycoords=ax.get_xaxis_transform(), xytext=(-8 if right else 6, -10 - 9 * below),
+                        textcoords="offset points", fontsize=7, color=colour, ha="right" if right else "left")
     ax.set_ylabel("response time (ms)")
     ax.set_ylim(0, top * 1.2 or 1)  # room under the top edge, where the words are
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best", framealpha=0.7)
+    ax.legend(**OUTSIDE)
 
 
 def _figures(jobs, records, key, kind) -> dict[str, list[tuple[float, float | str]]]:

@@ -85,11 +85,35 @@ class Display:
         self._clear()
 
 
+#: Columns the reason of a job that did not answer takes in the table (results.jsonl has the whole message).
+WHY = 72
+
+
+def why(record: dict[str, Any] | None) -> str:
+    """Why a job gave no answer, in a few words: the limit that stopped an inconclusive search (with what it had
+    reached), the first line of a failure's message; "-" for a job that holds or is violated."""
+    if record is None:
+        return "not run yet"
+    answer = outcome(record)
+    if answer in ("holds", "violated"):
+        return "-"
+    message = (record.get("message") or "").strip().splitlines()
+    if answer == "inconclusive":
+        limit = record.get("limit")
+        text = f"stopped by {limit}" if limit else ""
+        if message and message[0] != limit:
+            text = f"{text}: {message[0]}" if text else message[0]
+        text = text or "stopped before an answer"
+    else:
+        text = message[0] if message else answer
+    return text if len(text) <= WHY else text[:WHY - 3] + "..."
+
+
 def summary(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | None = None) -> Counter:
-    """The table of every job (model, check, method, target, point, answer, states, seconds, memory, host); the
-    answers counted."""
+    """The table of every job (model, check, method, target, point, answer, states, seconds, memory, host, and why
+    a job gave no answer); the answers counted."""
     out = out or sys.stdout
-    header = ("model", "check", "method", "target", "point", "answer", "states", "seconds", "memory", "host")
+    header = ("model", "check", "method", "target", "point", "answer", "states", "seconds", "memory", "host", "why")
     rows = []
     counts: Counter = Counter()
     for job in sorted(jobs, key=lambda j: j.index):
@@ -101,7 +125,7 @@ def summary(jobs: list[Job], records: dict[str, dict[str, Any]], out: TextIO | N
         point = " ".join(f"{k}={v}" for k, v in job.point) or "-"
         rows.append((job.model, job.check, job.method, job.target, point, answer,
                      _states(record) if record else "-", f"{seconds:.2f}" if seconds is not None else "-",
-                     human_bytes(memory) if memory else "-", (record or {}).get("host") or "-"))
+                     human_bytes(memory) if memory else "-", (record or {}).get("host") or "-", why(record)))
     widths = [max(len(str(r[i])) for r in (header, *rows)) for i in range(len(header))]
     right = {6, 7, 8}
     for row in (header, *rows):

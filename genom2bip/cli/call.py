@@ -12,7 +12,11 @@ import json
 import sys
 from typing import Any
 
-from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, error, verb
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, error, verb
+
+#: A final report's status -> the exit status (runtime/exits.py): refused is the request not taken (its inputs, a
+#: rule), as an input is refused; failed and interrupted are what the run found.
+CALL_EXITS = {"ok": EXIT_OK, "rejected": EXIT_ERRORS, "failed": EXIT_VIOLATED, "interrupted": EXIT_VIOLATED}
 
 
 #: Seconds --timeout may wait at most: a week (no --timeout waits as long as needed).
@@ -78,7 +82,8 @@ def _listing(client) -> str:
 @verb("call", help="send a request to a running controller's services interface (and wait for its report)",
       arguments=_arguments)
 def verb_call(args: argparse.Namespace) -> int:
-    """Send one request; with --wait print its final report; exit 0 when it ended ok."""
+    """Send one request; with --wait print its final report; exit 0 when it ended ok, 1 rejected, 4 failed or
+    interrupted, 5 no final report within --timeout."""
     from runtime.services.client import BadReply, Client, ServiceError, parse_target
 
     if args.timeout is not None and not 0 <= args.timeout <= MAX_TIMEOUT:  # also refuses nan and inf
@@ -118,12 +123,12 @@ def verb_call(args: argparse.Namespace) -> int:
     except BadReply as exc:
         error(f"{args.url}: not a services interface: {exc}")
         return EXIT_ERRORS
-    except TimeoutError as exc:
+    except TimeoutError as exc:  # no answer yet: the request goes on in the controller
         error(shown(exc))
-        return EXIT_ERRORS
+        return EXIT_INCONCLUSIVE
     except OSError as exc:
         error(f"cannot reach {args.url}: {exc.strerror or exc}")
         return EXIT_ERRORS
     json.dump(report, sys.stdout, indent=2)  # ASCII: a control character in it is written as an escape
     sys.stdout.write("\n")
-    return EXIT_OK if report.get("status") == "ok" else EXIT_ERRORS
+    return CALL_EXITS.get(report.get("status"), EXIT_VIOLATED)

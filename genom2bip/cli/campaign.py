@@ -14,12 +14,10 @@ import os
 import sys
 
 from genom2bip.cli.verbs import (
-    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error, print_diagnostics, verb,
+    EXIT_CLOSED, EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, error,
+    print_diagnostics, verb,
 )
 
-EXIT_INTERRUPTED = 130
-#: The output's reader went away (``campaign FILE | head``): the status of a process a closed pipe stops (SIGPIPE).
-EXIT_CLOSED = 141
 #: Local workers per core at most: a job keeps its core busy, so more only adds processes (10,000 of them ran out
 #: of file descriptors before running a job).
 WORKERS_PER_CORE = 4

@@ -6,7 +6,8 @@ caret) or any other :class:`~runtime.errors.Genom2bipError` are a message on
 stderr and exit code 1 (:func:`~genom2bip.cli.verbs.exit_status`, the one place
 that maps them); bad usage exits 2; an unexpected
 exception is a bug, reported on one "internal error" line with exit code 3
-(``--traceback`` shows where).
+(``--traceback`` shows where).  The whole table, shared with ``python -m runtime``,
+is runtime/exits.py; every ``--help`` ends with it.
 """
 from __future__ import annotations
 
@@ -19,8 +20,11 @@ from typing import Sequence
 
 from genom2bip.cli import call, campaign, check, generate, graph, mission, verify
 from genom2bip.cli.pipes import ClosedAware
-from genom2bip.cli.verbs import DEFAULT_VERB, EXIT_INTERNAL, EXIT_USAGE, Verb, error, exit_status, version
+from genom2bip.cli.verbs import (
+    DEFAULT_VERB, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_USAGE, Verb, error, exit_status, version,
+)
 from runtime.errors import Genom2bipError
+from runtime.exits import epilog
 
 #: Every verb of the command line, in the order ``--help`` lists them.
 VERBS: dict[str, Verb] = {fn.verb.name: fn.verb for fn in (
@@ -32,16 +36,19 @@ VERBS: dict[str, Verb] = {fn.verb.name: fn.verb for fn in (
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="genom2bip",
-        description="GenoM module descriptions to BIP component models: check, generate, run, verify.")
+        description="GenoM module descriptions to BIP component models: check, generate, run, verify.",
+        epilog=epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     parser.add_argument("--traceback", action="store_true",
                         help="on an internal error, print the whole traceback (also GENOM2BIP_TRACEBACK=1)")
     sub = parser.add_subparsers(dest="verb", metavar="COMMAND")
     sub.required = True
     for v in VERBS.values():
-        p = sub.add_parser(v.name, help=v.help, description=v.help)
+        p = sub.add_parser(v.name, help=v.help, description=v.help,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
         if v.arguments is not None:
             v.arguments(p)
+        p.epilog = (p.epilog + "\n\n" if p.epilog else "") + epilog()  # a verb's own words, then the one table
         p.set_defaults(run=v.run)
     return parser
 
@@ -81,7 +88,7 @@ def _run(argv: list[str], show_traceback: bool) -> int:
         return exit_status(exc)
     except KeyboardInterrupt:
         print("genom2bip: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the last resort: one line, the traceback only when asked for
         if show_traceback:
             traceback.print_exc()

@@ -7,7 +7,8 @@ the report and writes the trajectory picture and the trace (``--out``);
 ``--codel-times FILE`` records how long each codel ran, writes it to FILE and
 prints it after the report.  ``--view`` serves the live page meanwhile, the
 robot drawn over the world.
-Exit status 0 when every expectation of the mission is met, 1 otherwise.
+Exit status 0 when every expectation of the mission is met and real time held (no period missed or overrun, no
+codel past its bound), 4 otherwise (the table of runtime/exits.py), 1 when an input cannot be used.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import argparse
 import os
 from pathlib import Path
 
-from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, error, verb
+from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, error, verb
 
 
 def _port(text: str) -> int:
@@ -129,4 +130,4 @@ def verb_mission(args: argparse.Namespace) -> int:
             return EXIT_ERRORS
         written.append(args.codel_times)
     print("  wrote " + ", ".join(written))
-    return EXIT_OK if run.ok else EXIT_ERRORS
+    return EXIT_OK if run.ok else EXIT_VIOLATED

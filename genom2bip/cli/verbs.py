@@ -26,9 +26,9 @@ from genom2bip.loading import InputError, UsageError
 from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache
 from runtime.errors import Genom2bipError
 
-EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
-#: ``verify``: a deadlock, a violated property or a model error was found; a limit stopped the search first.
-EXIT_VIOLATED, EXIT_INCONCLUSIVE = 4, 5
+from runtime.exits import (  # noqa: F401 - the one table (runtime/exits.py), shared with python -m runtime
+    EXIT_CLOSED, EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED,
+)
 
 #: The verb run when the first argument is not a verb (``genom2bip descriptions/dala -o gen/``).
 DEFAULT_VERB = "generate"

@@ -35,7 +35,7 @@ def draw(run: Run, path: Path):
     ax.plot(t[0].x, t[0].y, "o", color="tab:green", markersize=9, label="start", zorder=4)
     ax.plot(t[-1].x, t[-1].y, "s", color="black", markersize=7, label="end", zorder=4)
     for g in (g for g in goals(run) if g["point"] is not None):
-        ok = g["status"] == "ok"
+        ok = g["reached"]
         ax.plot(*g["point"], "*", markersize=15, zorder=5,
                 color="gold" if ok else "magenta", markeredgecolor="black")
     ax.set_xlim(xmin - 0.2, xmax + 0.2)
@@ -43,7 +43,7 @@ def draw(run: Run, path: Path):
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    reached = sum(1 for g in goals(run) if g["status"] == "ok")
+    reached = sum(1 for g in goals(run) if g["reached"])
     ax.set_title(f"{run.mission.name}: {reached}/{len(goals(run))} goals reached (stars: gold reached, magenta not)",
                  fontsize=9)
     ax.legend(loc="upper right", fontsize=7)

@@ -20,41 +20,69 @@ def _shown(goal: Any) -> str:
     return f"({point[0]:g}, {point[1]:g})" if point is not None else repr(goal)
 
 
-def goals(run: Run) -> list[dict[str, Any]]:
-    """Each GoTo accepted: its goal, whether it was reached, why not, and how far from it the robot ended.
+def goal_tolerance(run: Run, before: int) -> float | None:
+    """The ``goal_tolerance`` of the last NDD.SetParams the mission sent, and that ended ok, before step ``before``."""
+    tolerance = None
+    for o in run.outcomes[:before]:
+        if o.step.kind == "send" and o.step.target == "NDD.SetParams" and o.report.get("status") == "ok":
+            params = o.step.inputs.get("params")
+            value = params.get("goal_tolerance") if isinstance(params, dict) else None
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                tolerance = float(value)
+    return tolerance
 
-    A GoTo a rule rejected is no goal of the drive: the report lists it with the rejected requests.
+
+def goals(run: Run) -> list[dict[str, Any]]:
+    """Each GoTo the mission sent with a goal: the goal, whether it was reached, why not, how far the robot ended.
+
+    A GoTo a rule rejected is no goal of the drive: the report lists it with the rejected requests.  A GoTo sent
+    without a goal has none to report (no default is made one), and a refused one has no distance: it never drove.
+    "Reached" is said only when the robot truly ended within the tolerance NDD was given: a GoTo that ended ok
+    farther than that is "not reached", with both figures.
     """
     out = []
-    for o in run.outcomes:
-        if o.step.kind != "send" or o.step.target != GOAL_SERVICE:
+    for index, o in enumerate(run.outcomes):
+        if o.step.kind != "send" or o.step.target != GOAL_SERVICE or "goal" not in o.step.inputs:
             continue
-        goal = o.step.inputs.get("goal", {})
+        goal = o.step.inputs["goal"]
+        point = goal_point(goal)
         r = final_report(run, o.request) or o.report
         status = r.get("status")
         if status == "rejected" and r.get("reason") == "rule":
             continue
-        end = _pose_at(run, r.get("time"))
-        point = goal_point(goal)
+        refused = status in ("rejected", "error")  # it never drove: no distance
+        end = None if refused or o.request is None else run.goal_ends.get(o.request)
+        end = end or (_pose_at(run, r.get("time")) if not refused else None)
         gap = math.hypot(point[0] - end[0], point[1] - end[1]) if end and point else None
+        tolerance = goal_tolerance(run, index)
+        reached = False
         if status == "ok":
             when = f" at {r['time']:.1f} s" if r.get("time") is not None else ""
-            within = f", {gap:.2f} m from it (GoTo ends within goal_tolerance)" if gap is not None else ""
-            why = f"reached{when}{within}"
+            if gap is None:
+                why = f"GoTo ended ok{when} (where the robot is, is not known)"
+            elif tolerance is None:
+                why = f"GoTo ended ok{when}, {gap:.2f} m from it (no goal_tolerance was set by the mission)"
+            elif gap <= tolerance:
+                why, reached = f"reached{when}, {gap:.2f} m from it (within goal_tolerance {tolerance:g} m)", True
+            else:
+                why = (f"not reached: GoTo ended ok{when}, but {gap:.2f} m from it, beyond goal_tolerance "
+                       f"{tolerance:g} m")
         elif status == "failed":
             detail = r.get("detail") or {}
             where = detail.get("where") or {}
             at = f" at ({where.get('x', 0):.2f}, {where.get('y', 0):.2f})" if where else ""
             why = f"not reached: {r.get('exception')}{at}"
         elif status == "rejected":
-            why = f"not reached: rejected by {r.get('rule') or r.get('exception') or r.get('reason')}"
+            why = f"refused: {r.get('rule') or r.get('exception') or r.get('reason')}"
+        elif status == "error":
+            why = f"refused: {r.get('message')}"
         elif status == "interrupted":
             why = f"not reached: interrupted by {r.get('by')}"
         else:
             why = f"not reached: {status}"
         reason = (r.get("detail") or {}).get("reason") if status == "failed" else None
         out.append({"goal": goal, "point": point, "status": status, "why": why, "distance_left": gap,
-                    "request": o.request, "reason": reason})
+                    "request": o.request, "reason": reason, "reached": reached, "tolerance": tolerance})
     return out
 
 
@@ -75,11 +103,43 @@ def _pose_at(run: Run, t: float | None) -> tuple[float, float] | None:
     return s.x, s.y
 
 
+def timing_lines(run: Run) -> list[str]:
+    """Each task's periods, those missed and those that overran, its codels past their bound, against the run's
+    length; then one line: did real time hold?"""
+    if not run.timing:
+        return []
+    codels: dict[str, int] = {}
+    for e in run.events:
+        if e.get("event") == "codel_overrun":
+            owner = e.get("task") or e.get("service") or "?"
+            codels[owner] = codels.get(owner, 0) + 1
+    lines = [f"  timing over {run.sim_time:.1f} s of controller time ({run.clock} clock):"]
+    width = max(len(t["task"]) for t in run.timing)
+    lines.append(f"    {'task':<{width}}   period   periods   missed   overran   codels late")
+    for t in run.timing:
+        due = t["periods"] + t["missed"]  # those it ran and those it skipped: the run's length over the period
+        lines.append(f"    {t['task']:<{width}}  {t['period_ms']:>4g} ms  {due:>8}  {t['missed']:>7}  "
+                     f"{t['overruns']:>8}  {codels.get(t['task'], 0):>12}")
+    others = {k: v for k, v in codels.items() if k not in {t["task"] for t in run.timing}}
+    for owner, n in sorted(others.items()):
+        lines.append(f"    {owner}: {n} codel(s) past their bound")
+    missed = sum(t["missed"] for t in run.timing)
+    overran = sum(t["overruns"] for t in run.timing)
+    late = sum(codels.values())
+    if run.real_time_held:
+        lines.append(f"  real time held: no period missed or overrun, no codel late ({len(run.timing)} task(s))")
+    else:
+        lines.append(f"  real time NOT held: {missed} period(s) missed, {overran} overran, "
+                     f"{late} codel(s) late (past their WCET, else their task's period)")
+    return lines
+
+
 def text(run: Run) -> str:
     """The report printed at the end of ``genom2bip mission``."""
     lines = [f"mission {run.mission.name}" + (f" in {run.world_path.name}" if run.world_path else "") + ":"]
     for g in goals(run):
-        left = f", {g['distance_left']:.2f} m from it" if g["distance_left"] is not None and g["status"] != "ok" else ""
+        left = f", {g['distance_left']:.2f} m from it" if g["distance_left"] is not None and g["status"] not in (
+            "ok", "rejected", "error") else ""
         reason = f": {g['reason']}" if g["reason"] else ""
         lines.append(f"  goal {_shown(g['goal'])}: {g['why']}{left}{reason}")
     if run.world is not None:
@@ -108,8 +168,15 @@ def text(run: Run) -> str:
         for o in rejected) or "none"))
     if run.error:
         lines.append(f"  controller: {run.error}")
+    lines += timing_lines(run)
     failed = sum(1 for o in run.outcomes if not o.ok)
-    lines.append("  every expectation met" if not failed and not run.error else f"  {failed} step(s) not as expected")
+    if failed or run.error:
+        lines.append(f"  {failed} step(s) not as expected" + ("" if run.real_time_held else "; real time not held"))
+    elif run.real_time_held:
+        lines.append("  every expectation met")
+    else:
+        lines.append("  every step ended as expected, but real time did not hold: the mission fails "
+                     "(what a late controller did is not what the robot would do on time)")
     if run.codel_times is not None:
         lines.append(f"  codel times ({run.codel_times['clock']} clock; cpu: the codel thread's CPU time, "
                      "wall: wall time):")

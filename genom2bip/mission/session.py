@@ -49,10 +49,25 @@ class Run:
     wall_time: float = 0.0
     error: str | None = None
     codel_times: dict[str, Any] | None = None  # how long each codel ran (runtime.controller.codel_times), if asked
+    timing: list[dict[str, Any]] = field(default_factory=list)  # each task's periods, missed, overruns (Timer.stats)
+    clock: str = "virtual"  # the controller's clock: virtual (as fast as it can) or real
+    goal_ends: dict[int, tuple[float, float]] = field(default_factory=dict)  # true (x, y) at each GoTo's final report
+
+    @property
+    def real_time_held(self) -> bool:
+        """No period missed, none overran, no codel ran past its bound: the run kept the timing the model has."""
+        return not any(t["missed"] or t["overruns"] for t in self.timing) and not any(
+            e.get("event") == "codel_overrun" for e in self.events)
+
+    @property
+    def expectations_met(self) -> bool:
+        return self.error is None and all(o.ok for o in self.outcomes)
 
     @property
     def ok(self) -> bool:
-        return self.error is None and all(o.ok for o in self.outcomes)
+        """Every expectation met *and* real time held: a run that did not keep its periods proves nothing of the
+        robot on time, whatever its requests ended with (docs/missions.md, *The report*)."""
+        return self.expectations_met and self.real_time_held
 
 
 def load_package(directory: str | Path):
@@ -101,14 +116,15 @@ def scene(mission: Mission, session, interface: dict[str, Any]) -> dict[str, Any
             "goals": [{"x": x, "y": y} for x, y in goals], "pose": navigation_pose(interface)}
 
 
-def run_mission(mission: Mission, package, codels: str | None, world: Path | None, *, realtime: bool = False,
+def run_mission(mission: Mission, package, codels: Any, world: Path | None, *, realtime: bool = False,
                 live: bool = False, log=None, times: bool = False, view: int | None = None,
-                token: str | None = None) -> Run:
+                token: str | None = None, clock: Any = None) -> Run:
     """Start the controller and its server, load the world, run the mission's steps, stop everything.
 
     ``times``: record how long each codel runs (``Run.codel_times``).
     ``view``: serve the live page on this port (0: a free one) with the world as its scene, in real time.
     ``token``: what every request to the controller must send (the mission's own requests send it), as ``run``'s.
+    ``clock``: the controller's clock (default: a new virtual clock, or the real one as said above).
     """
     from runtime.controller import Controller
     from runtime.controller.timing import VirtualClock
@@ -118,7 +134,8 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
 
     codels = find_codels(package.INTERFACE, codels, str(Path(package.__file__).parent))
     controller = Controller(package.package(), package.ROOT, package.INTERFACE, codels,
-                            clock=None if realtime or live or view is not None else VirtualClock(), times=times)
+                            clock=clock or (None if realtime or live or view is not None else VirtualClock()),
+                            times=times)
     sim_world = world_module(controller)
     try:
         session = sim_world.load(world, display=live) if sim_world is not None and world is not None else None
@@ -134,6 +151,9 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
         raise ViewError(f"--port {view}: cannot serve the live page there: {exc.strerror or exc}") from None
     events: list[dict[str, Any]] = []
     controller.subscribe(lambda e: events.append(e) if e["event"] in EVENTS else None)
+    goal_ends: dict[int, tuple[float, float]] = {}
+    if session is not None:
+        controller.subscribe(lambda e: _goal_end(e, session, goal_ends))
     started = time.perf_counter()
     controller.start()
     server.start()
@@ -145,10 +165,21 @@ def run_mission(mission: Mission, package, codels: str | None, world: Path | Non
         server.stop()
         controller.stop()
     run = Run(mission, world, outcomes, events, session, sim_time=controller.clock.now() - controller.started_at,
-              wall_time=time.perf_counter() - started, error=controller.error, codel_times=controller.codel_times())
+              wall_time=time.perf_counter() - started, error=controller.error, codel_times=controller.codel_times(),
+              timing=controller.timers.stats(), clock="virtual" if controller.clock.virtual else "real",
+              goal_ends=goal_ends)
     if session is not None:
         session.close()
     return run
+
+
+def _goal_end(event: dict[str, Any], session, ends: dict[int, tuple[float, float]]) -> None:
+    """At a GoTo's final report, where the robot truly is (the world's last sample): the report's distance to the
+    goal is measured there, not at the trajectory sample of the same time, which lags when periods were missed."""
+    if (event.get("event") == "report" and event.get("final")
+            and f"{event.get('component')}.{event.get('service')}" == GOAL_SERVICE and session.trajectory):
+        last = session.trajectory[-1]
+        ends[event["request"]] = (last.x, last.y)
 
 
 def write_trace(run: Run, path: Path) -> None:

@@ -89,8 +89,20 @@ class JsonlTracer(Tracer):
             self.file.flush()
 
 
+#: Columns a step's line may take: the values and the list of alternatives are cut to fit (``--trace`` has all).
+WIDTH = 120
+
+
+def _cut(text: str, room: int) -> str:
+    return text if len(text) <= room else text[:max(0, room - 3)] + "..."
+
+
 class ConsoleTracer(Tracer):
-    """``[   3] label  x=1`` per step, the enabled ones when there is a choice, the state at a deadlock."""
+    """``[   3] label  x=1`` per step, the enabled ones when there is a choice, the state at a deadlock.
+
+    A line stays within :data:`WIDTH` columns: long values are cut with ``...``, and the alternatives are only
+    counted when their labels would not fit (a level of five modules has thirty); ``--trace FILE`` keeps them all.
+    """
 
     def __init__(self, stream: TextIO | None = None, show_enabled: bool = True) -> None:
         self.stream = stream or sys.stdout
@@ -101,9 +113,10 @@ class ConsoleTracer(Tracer):
                          for port, vals in values.items() if vals)
         line = f"[{n:5d}] {chosen.label}"
         if data:
-            line += f"  {data}"
+            line += "  " + _cut(data, max(20, WIDTH - len(line) - 24))
         if self.show_enabled and len(enabled) > 1:
-            line += f"    (of {len(enabled)}: {', '.join(i.label for i in enabled)})"
+            every = f"    (of {len(enabled)}: {', '.join(i.label for i in enabled)})"
+            line += every if len(line) + len(every) <= WIDTH else f"    (1 of {len(enabled)} enabled)"
         print(line, file=self.stream)
 
     def finish(self, summary) -> None:

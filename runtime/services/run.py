@@ -18,7 +18,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from runtime.exits import EXIT_VIOLATED
 from runtime.model import Package
+from runtime.services.digest import KINDS as DIGESTED
+from runtime.services.digest import OverrunDigest
 from runtime.services.guard import TOKEN_ENV
 from runtime.services.protocol import MAX_CONNECTIONS, READ_TIMEOUT
 
@@ -194,11 +197,13 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
     print(f"services interface on {server.url}/ (OpenAPI: {server.url}/openapi.json, live page: {server.url}/live/); "
           "Ctrl-C stops", flush=True)
     console = Console(sys.stdout, prog=prog)
+    digest = OverrunDigest()
     if not args.quiet:
         def show(event: dict[str, Any]) -> None:
-            text = _line(event)
-            if text:
-                console.line(text)
+            lines = digest.take(event)  # overruns counted, or a count due now
+            for text in lines if event["event"] in DIGESTED else [*lines, _line(event)]:
+                if text:
+                    console.line(text)
         controller.subscribe(show)
 
     def ended() -> None:
@@ -213,7 +218,7 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
         pass
     controller.stop(timeout=0 if controller.error else STOP_GRACE + INTERRUPT_GRACE)  # abandoned: no wait
     undo()
-    for line in _summary(controller, console):
+    for line in digest.flush() + _summary(controller, console):
         console.line(line)
     status = 0
     if args.codel_times and not _write_times(controller, args.codel_times, prog, console):
@@ -221,7 +226,7 @@ def run_controller(package: Package, root: str, interface: dict[str, Any] | None
     console.close(LAST_WORDS)
     if controller.error:
         print(f"{prog}: {controller.error}", file=sys.stderr)
-        return 2
+        return EXIT_VIOLATED
     return status
 
 
@@ -245,6 +250,8 @@ def _summary(controller, console) -> list[str]:
     dropped = f"; {console.dropped} output lines dropped (the output was not read)" if console.dropped else ""
     lines = [f"stopped after {controller.steps} steps; requests: {done}{dropped}"]
     lines += [f"still running, abandoned: {what}" for what in controller.abandoned_codels()]
+    lines += [f"task {t['task']}: {t['missed']} of {t['periods'] + t['missed']} periods missed, {t['overruns']} "
+              f"overran" for t in controller.timers.stats() if t["missed"] or t["overruns"]]
     times = controller.codel_times()
     if times is not None:
         from runtime.controller.codel_times import table
