@@ -5,6 +5,7 @@ binding, model error at a step) is a message on stderr and a non-zero exit
 status, never a traceback: 1 for bad input, 2 for a model error during the run,
 5 when an atom invariant fails, 6 when an event reaches an extern port with
 policy ``error`` that cannot take it (the Verimag engine's statuses).
+``reach`` decides reachability of labels in a TChecker file (runtime/tchecker/cli.py).
 A run that ends in a deadlock or at the step limit exits with 0.
 A timed model (clocks, invariants: runtime/timed_cli.py) exits as the Verimag
 engine does: 0 also on a time-lock, 5 when an invariant fails, 7 when a
@@ -41,6 +42,9 @@ def _parser() -> argparse.ArgumentParser:
     explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")
     explore.add_argument("--max-states", type=int, default=1_000_000, help="stop after this many states")
     explore.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions")
+    from runtime.tchecker.cli import add_parser as add_reach
+
+    add_reach(sub)
     run.add_argument("--no-maximal-progress", action="store_true",
                      help="offer every enabled interaction of a connector, not only the maximal ones")
     run.add_argument("--events", metavar="FILE",
@@ -132,6 +136,10 @@ def main(argv: list[str] | None = None) -> int:
             return run_command(args)
         if args.command == "explore":
             return explore_command(args, sys.stdout, sys.stderr)
+        if args.command == "reach":
+            from runtime.tchecker.cli import reach_command
+
+            return reach_command(args, sys.stdout, sys.stderr)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

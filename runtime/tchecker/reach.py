@@ -33,6 +33,7 @@ class Reach:
     exact: bool  # the verdict is dense time's (False: unreachable on the grid only)
     trace: list[tuple[Fraction, str]] = field(default_factory=list)  # (delay before, global edge)
     trace_note: str = ""
+    unknown_labels: list[str] = field(default_factory=list)  # carried by no location
 
 
 def load(path: str | Path, grid: int | None = None) -> tuple[System, Translation]:
@@ -95,6 +96,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     out = Reach(verdict, result.states, result.discrete, result.transitions, seconds, z.memory(),
                 resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, tr.scale,
                 verdict == "reachable" or system.strict is None)
+    out.unknown_labels = unknown
     if found is not None and want_trace:
         out.trace, out.trace_note = _trace(z, tr, found)
     return out
