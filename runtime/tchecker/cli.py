@@ -23,6 +23,8 @@ def add_parser(sub) -> None:
                        help="read strict clock constraints on a time grid of 1/N ('x < c' as 'x <= c - 1/N'); "
                             "required when the file has one")
     reach.add_argument("--max-states", type=_positive, default=None, help="stop after this many symbolic states")
+    reach.add_argument("--time-limit", type=_positive, default=None, metavar="SECONDS",
+                       help="stop the search after this many seconds (verdict unknown)")
     reach.add_argument("--no-trace", action="store_true", help="do not compute a trace to the labels")
 
 
@@ -39,12 +41,14 @@ def _positive(text: str) -> int:
 def reach_command(args, out, err) -> int:
     from runtime.diagnostics import DiagnosticError
     from runtime.engine import EngineError
+    from runtime.explore.progress import Progress
     from runtime.tchecker.reach import reach
     from runtime.zones.model import Unsupported
 
     labels = [x.strip() for x in args.labels.split(",") if x.strip()]
     try:
-        r = reach(args.model, labels, args.grid, args.max_states, want_trace=not args.no_trace)
+        r = reach(args.model, labels, args.grid, args.max_states, Progress(err), not args.no_trace,
+                  args.time_limit)
     except DiagnosticError as e:
         print(e.render(), file=err)
         return 1
@@ -56,10 +60,12 @@ def reach_command(args, out, err) -> int:
               "they are not reachable", file=err)
     what = ",".join(labels) if labels else "(no label)"
     verdict = r.verdict
+    if verdict == "unknown":
+        verdict += f" (stopped at the {'time limit' if r.stopped == 'time-limit' else 'state limit'})"
     if verdict == "unreachable" and not r.exact:
         verdict += f" (on the 1/{r.grid} time grid: the model has strict clock constraints)"
     print(f"verdict: {what} {verdict}", file=out)
-    print(f"stored states: {r.states:,} ({r.discrete:,} discrete)", file=out)
+    print(f"stored states: {r.states:,} ({r.kept:,} not covered at the end, {r.discrete:,} discrete)", file=out)
     print(f"visited transitions: {r.transitions:,}", file=out)
     print(f"time: {r.seconds:.3f} s", file=out)
     print(f"memory: {r.peak_rss / 2**20:.1f} MiB peak (zones kept: {r.zone_bytes / 2**20:.2f} MiB)", file=out)

@@ -25,6 +25,7 @@ class Reach:
     verdict: str  # "reachable", "unreachable", "unknown" (stopped at a limit)
     states: int  # symbolic states stored
     discrete: int  # distinct discrete states among them
+    kept: int  # stored states no larger zone came to cover
     transitions: int  # symbolic transitions computed
     seconds: float
     zone_bytes: int  # the zones kept
@@ -33,6 +34,7 @@ class Reach:
     exact: bool  # the verdict is dense time's (False: unreachable on the grid only)
     trace: list[tuple[Fraction, str]] = field(default_factory=list)  # (delay before, global edge)
     trace_note: str = ""
+    stopped: str = ""  # "max-states" or "time-limit" when the verdict is unknown
     unknown_labels: list[str] = field(default_factory=list)  # carried by no location
 
 
@@ -66,10 +68,38 @@ class _Goal:
         return all(any(state[off] == bit for off, bit in where) for where in self.need)
 
 
+class _OutOfTime(Exception):
+    def __init__(self, transitions: int) -> None:
+        super().__init__("time limit")
+        self.transitions = transitions
+
+
+def _deadline(seconds: float | None, show):
+    """A progress that also stops the search (by raising) once ``seconds`` have passed."""
+    from runtime.explore.progress import Progress, null_progress
+
+    shown = show or null_progress()
+    if seconds is None:
+        return shown
+    end = time.monotonic() + seconds
+
+    class Deadline(Progress):
+        def tick(self, states, transitions, frontier, memory, depth=None):
+            shown.tick(states, transitions, frontier, memory, depth)
+            if time.monotonic() > end:
+                raise _OutOfTime(transitions)
+
+        def done(self):
+            shown.done()
+
+    return Deadline(enabled=False)
+
+
 def reach(path: str | Path, labels: list[str], grid: int | None = None, max_states: int | None = None,
-          progress=None, want_trace: bool = True) -> Reach:
-    """Is a configuration whose locations carry every label of ``labels`` reachable?"""
-    from runtime.zones.search import ZoneExplorer
+          progress=None, want_trace: bool = True, time_limit: float | None = None) -> Reach:
+    """Is a configuration whose locations carry every label of ``labels`` reachable?  ``unknown`` when the
+    search stops at ``max_states`` or after ``time_limit`` seconds."""
+    from runtime.zones.search import ZoneExplorer, ZoneResult
 
     system, tr = load(path, grid)
     unknown = [lab for lab in labels if lab not in system.labels()]
@@ -84,7 +114,12 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     start = time.perf_counter()
     z = Explorer(tr.package, tr.root)
     z.goal = _Goal(z, tr, labels)
-    result = z.explore(max_states=max_states, progress=progress, stop_at_violation=True)
+    try:
+        result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)
+    except _OutOfTime as stop:
+        (progress or _deadline(None, None)).done()
+        result = ZoneResult(len(z.nodes), len({n.state for n in z.nodes}), stop.transitions, 0.0, False,
+                            "time-limit")
     seconds = time.perf_counter() - start
     found = result.violations.get(-1)
     if found is not None:
@@ -93,10 +128,12 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
         verdict = "unreachable"
     else:
         verdict = "unknown"
-    out = Reach(verdict, result.states, result.discrete, result.transitions, seconds, z.memory(),
+    kept = sum(1 for n in z.nodes if not n.covered)
+    out = Reach(verdict, result.states, result.discrete, kept, result.transitions, seconds, z.memory(),
                 resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, tr.scale,
                 verdict == "reachable" or system.strict is None)
     out.unknown_labels = unknown
+    out.stopped = result.stopped
     if found is not None and want_trace:
         out.trace, out.trace_note = _trace(z, tr, found)
     return out
