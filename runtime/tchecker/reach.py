@@ -139,6 +139,32 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     return out
 
 
+Configuration = tuple[tuple[str, ...], tuple[tuple[str, int], ...]]
+
+
+def configurations(path: str | Path, grid: int | None = None) -> set[Configuration]:
+    """The reachable configurations of a TChecker file without their clocks: each process's location (in file
+    order) and the integer variables (as the engine keeps them: a variable no guard reads any more may be reset,
+    docs/verification.md, *Dead-variable reduction*).  What ``tck-reach -C graph`` lists, to compare with it."""
+    from runtime.zones.search import ZoneExplorer
+
+    system, tr = load(path, grid)
+    z = ZoneExplorer(tr.package, tr.root)
+    z.explore()
+    atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
+    where = {(tr.atoms[p], place): loc for (p, loc), place in tr.places.items()}
+    g = atoms.get("Globals")
+    out = set()
+    for n in z.nodes:
+        locs = []
+        for p in system.processes:
+            fa = atoms[tr.atoms[p]]
+            locs.append(where[(tr.atoms[p], fa.places[int(n.state[fa.offset]).bit_length() - 1])])
+        ints = tuple((v, int(n.state[g.slot(tr.variables[v])])) for v in system.ints) if g else ()
+        out.add((tuple(locs), ints))
+    return out
+
+
 def _trace(z, tr: Translation, node: int) -> tuple[list[tuple[Fraction, str]], str]:
     from runtime.explore.space import StateSpace
     from runtime.zones.trace import ConcretizeError, paths_to, replay

@@ -64,6 +64,7 @@ class Translation:
     places: dict[tuple[str, str], str]  # (process, location) -> place
     labels: dict[str, set[tuple[str, str]]] = field(default_factory=dict)  # label -> {(atom, place)}
     edges: int = 0  # global edges (connectors besides tick)
+    variables: dict[str, str] = field(default_factory=dict)  # integer variable -> its name in Globals
 
 
 def _ident(name: str, taken: set[str]) -> str:
@@ -251,7 +252,8 @@ class _Builder:
             for loc in p.locations.values():
                 for lab in loc.labels:
                     labels.setdefault(lab, set()).add((self.atoms[p.name], self.places[(p.name, loc.name)]))
-        return Translation(package, ROOT, self.scale, dict(self.atoms), dict(self.places), labels, len(connectors))
+        return Translation(package, ROOT, self.scale, dict(self.atoms), dict(self.places), labels, len(connectors),
+                           dict(self.vars))
 
 
 def _connector(name: str, refs: list[PortRef], label: str):
