@@ -58,13 +58,13 @@ def reach_command(args, out, err) -> int:
     if r.unknown_labels:
         print(f"{args.model}: warning: no location carries label(s) {', '.join(r.unknown_labels)}: "
               "they are not reachable", file=err)
-    what = ",".join(labels) if labels else "(no label)"
     verdict = r.verdict
     if verdict == "unknown":
         verdict += f" (stopped at the {'time limit' if r.stopped == 'time-limit' else 'state limit'})"
     if verdict == "unreachable" and not r.exact:
         verdict += f" (on the 1/{r.grid} time grid: the model has strict clock constraints)"
-    print(f"verdict: {what} {verdict}", file=out)
+    print(f"labels: {','.join(labels)}" if labels else "labels: none (the whole zone graph is explored)", file=out)
+    print(f"verdict: {verdict}", file=out)
     print(f"stored states: {r.states:,} ({r.kept:,} not covered at the end, {r.discrete:,} discrete)", file=out)
     print(f"visited transitions: {r.transitions:,}", file=out)
     print(f"time: {r.seconds:.3f} s", file=out)
