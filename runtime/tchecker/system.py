@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from runtime.diagnostics import Span
-from runtime.tchecker.syntax import Declaration, Node, Source, parse_expression, parse_statements
+from runtime.tchecker.syntax import KINDS, Declaration, Node, Source, parse_expression, parse_statements
 
 _FLIP = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "=="}
 
@@ -121,9 +121,11 @@ class _Checker:
             self.fail(Span(self.src.file, 1, 1), "empty file: expected 'system:NAME' first")
         if decls[0].kind != "system":
             self.fail(decls[0].span, "the first declaration must be 'system:NAME'")
-        name = self.fields(decls[0], 1)[0].text
+        name = self.identifier(self.fields(decls[0], 1)[0])
         for d in decls[1:]:
             getattr(self, "decl_" + d.kind)(d)
+        if not self.processes:
+            self.fail(decls[0].span, "the system has no process", hint="declare one with 'process:NAME'")
         for p in self.processes.values():
             initial = [loc for loc in p.locations.values() if loc.initial]
             if not initial:
@@ -155,13 +157,18 @@ class _Checker:
             self.fail(d.attributes[0].span, f"'{d.kind}' declarations take no attributes")
 
     def fresh(self, f, what: str) -> str:
-        name = f.text
+        name = self.identifier(f)
         if name in self.arrays or name in self.events and what == "event" or name in self.processes and \
                 what == "process":
             self.fail(f.span, f"'{name}' is declared twice")
-        if not name[0].isalpha() and name[0] != "_":
-            self.fail(f.span, f"'{name}' is not an identifier")
         return name
+
+    def identifier(self, f) -> str:
+        if f.text in KINDS:
+            self.fail(f.span, f"'{f.text}' is a keyword, not a name", hint="keywords: " + ", ".join(KINDS))
+        if not (f.text[0].isalpha() or f.text[0] == "_"):
+            self.fail(f.span, f"'{f.text}' is not an identifier")
+        return f.text
 
     def number(self, f, low: int | None = None) -> int:
         try:
@@ -218,7 +225,7 @@ class _Checker:
         p = self.process(pf)
         if lf.text in p.locations:
             self.fail(lf.span, f"location '{lf.text}' of process {p.name} is declared twice")
-        loc = Location(p.name, lf.text, span=lf.span)
+        loc = Location(p.name, self.identifier(lf), span=lf.span)
         for a in d.attributes:
             if a.key in ("initial", "committed", "urgent"):
                 setattr(loc, a.key, True)

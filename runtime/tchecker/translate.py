@@ -53,6 +53,7 @@ PORT = "Port"
 GLOBALS = "Globals"
 COMMITTED = "committed__"
 ROOT = "Net()"
+UNUSED = "unused_clock__"
 
 
 @dataclass
@@ -130,6 +131,8 @@ class _Builder:
         taken: set[str] = set()
         self.clock_names = {c: _ident(c, taken) for c in p.clocks} | getattr(self, "clock_names", {})
         mine = [self.clock_names[c] for c in p.clocks]
+        if not self.s.clocks and name == next(iter(self.s.processes)):
+            mine = [UNUSED]  # the zone engine needs one clock: a finite-state model gets one no guard reads
         transitions = []
         for e in p.edges:
             guard = self.clock_guard(e)
