@@ -260,7 +260,10 @@ class _Checker:
                         if self.mentions_clock(s.args[1]):
                             self.fail(s.span, f"unsupported: clock {target} set from a clock",
                                       hint="the engine resets a clock to a constant")
-                        e.resets.append((target, self.constant(s.args[1], f"the value clock {target} is set to")))
+                        value = self.constant(s.args[1], f"the value clock {target} is set to")
+                        if value < 0:
+                            self.fail(s.args[1].span, f"clock {target} set to {value}: clocks are never negative")
+                        e.resets.append((target, value))
                         self.own(target, p.name, s.args[0].span)
                     else:
                         e.assigns.append((target, self.int_expr(s.args[1])))
