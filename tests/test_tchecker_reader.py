@@ -40,6 +40,18 @@ def test_fischer_enters_cs_strictly_after_k_with_a_replayed_trace(grid, wait):
     assert [delay for delay, _ in r.trace] == [0, 0, wait]
 
 
+def test_a_coarse_grid_can_miss_what_dense_time_reaches_and_says_so(capsys):
+    # grid.tck: reachable in dense time (tck-reach agrees), with delays of 1/3; a grid of 1/2 misses it
+    path = FIXTURES / "grid.tck"
+    for grid in (1, 2):
+        code, out, _ = run(capsys, path, "-l", "done", "--grid", grid)
+        assert code == 0
+        assert f"verdict: unreachable (on the 1/{grid} time grid: the model has strict clock constraints)" in out
+    r = reach(path, ["done"], 3)
+    assert r.verdict == "reachable" and r.exact
+    assert [d for d, _ in r.trace] == [Fraction(1, 3), Fraction(1, 3)]
+
+
 def test_fischer_configurations_are_tcheckers(tmp_path):
     # what tck-reach -C graph lists for this file: 18 configurations; never both in cs, never cs with id == 0
     got = configurations(FIXTURES / "fischer2.tck", 2)
