@@ -145,10 +145,13 @@ def main(argv: list[str] | None = None) -> int:
             if labels == every and mine.verdict != "unknown" and reach.states and reach.states <= args.compare_up_to:
                 agree = configurations_agree(args.tck_reach, f, args.grid, args.time_limit)
                 bad += agree.startswith("NO")
+            more = "+" if mine.verdict == "unknown" else ""  # stopped: our figures are lower bounds
             print(f"| {f.stem} | {labels or '(none)'} | {verdict} | {cell(reach.states, ',')} "
-                  f"| {cell(cov.states, ',')} | {cell(mine.states, ',')}{'+' if mine.verdict == 'unknown' else ''} "
-                  f"| {ratio(mine.states, cov.states)} | {cell(reach.seconds, '.3f')} | {cell(cov.seconds, '.3f')} "
-                  f"| {cell(mine.seconds, '.1f')} | {ratio(mine.seconds, cov.seconds)} | {cell(cov.rss_mib, '.1f')} "
+                  f"| {cell(cov.states, ',')} | {cell(mine.states, ',')}{more} "
+                  f"| {'>' if more else ''}{ratio(mine.states, cov.states)} | {cell(reach.seconds, '.3f')} "
+                  f"| {cell(cov.seconds, '.3f')} "
+                  f"| {cell(mine.seconds, '.1f')}{more} | {'>' if more else ''}{ratio(mine.seconds, cov.seconds)} "
+                  f"| {cell(cov.rss_mib, '.1f')} "
                   f"| {cell(mine.rss_mib, '.1f')} | {agree or '—'} |", flush=True)
             if mine.verdict == "error":
                 print(f"  ours: {mine.note}", file=sys.stderr)
