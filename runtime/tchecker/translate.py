@@ -95,6 +95,10 @@ class _Builder:
             names: set[str] = set()
             for loc in p.locations:
                 self.places[(p.name, loc)] = _ident(loc, names)
+        self.clock_names: dict[str, str] = {}
+        for p in system.processes.values():
+            taken: set[str] = {UNUSED}
+            self.clock_names.update({c: _ident(c, taken) for c in p.clocks})
         names = {COMMITTED}
         self.vars = {v: _ident(v, names) for v in system.ints}
         self.committed = any(loc.committed for p in system.processes.values() for loc in p.locations.values())
@@ -128,8 +132,6 @@ class _Builder:
     # -- atoms ------------------------------------------------------------------------------------
     def process_type(self, name: str) -> AtomType:
         p = self.s.processes[name]
-        taken: set[str] = set()
-        self.clock_names = {c: _ident(c, taken) for c in p.clocks} | getattr(self, "clock_names", {})
         mine = [self.clock_names[c] for c in p.clocks]
         if not self.s.clocks and name == next(iter(self.s.processes)):
             mine = [UNUSED]  # the zone engine needs one clock: a finite-state model gets one no guard reads
