@@ -118,6 +118,15 @@ def test_a_sync_vector_moves_its_processes_together_and_only_together():
                                                           ("l1", "m2", "s0", "t0")}
 
 
+def test_a_sync_runs_its_statements_in_the_order_it_lists_the_processes(tmp_path):
+    path = tmp_path / "order.tck"
+    path.write_text("system:order\nevent:a\nint:1:0:2:0:n\n"
+                    "process:P1\nlocation:P1:l0{initial:}\nlocation:P1:l1{}\nedge:P1:l0:l1:a{do:n=1}\n"
+                    "process:P2\nlocation:P2:m0{initial:}\nlocation:P2:m1{}\nedge:P2:m0:m1:a{do:n=2}\n"
+                    "sync:P2@a:P1@a\n")
+    assert configurations(path) == {(("l0", "m0"), (("n", 0),)), (("l1", "m1"), (("n", 1),))}
+
+
 def test_an_assignment_out_of_its_domain_disables_the_edge():
     path = FIXTURES / "bounded.tck"
     assert reach(path, ["one"]).verdict == "reachable"

@@ -38,7 +38,7 @@ class Reach:
     unknown_labels: list[str] = field(default_factory=list)  # carried by no location
 
 
-def load(path: str | Path, grid: int | None = None) -> tuple[System, Translation]:
+def load(path: str | Path, grid: int | None = None, keep_integers: bool = False) -> tuple[System, Translation]:
     """Read, check and translate a TChecker file; strict clock constraints need ``grid`` (a located error else)."""
     src, decls = read(path)
     system = check(src, decls)
@@ -48,7 +48,7 @@ def load(path: str | Path, grid: int | None = None) -> tuple[System, Translation
                              "an unreachable one then holds on that time grid)")
     if grid is not None and grid < 1:
         raise DiagnosticError([])  # pragma: no cover - the command line checks it first
-    return system, translate(system, grid or 1)
+    return system, translate(system, grid or 1, keep_integers)
 
 
 class _Goal:
@@ -144,11 +144,11 @@ Configuration = tuple[tuple[str, ...], tuple[tuple[str, int], ...]]
 
 def configurations(path: str | Path, grid: int | None = None) -> set[Configuration]:
     """The reachable configurations of a TChecker file without their clocks: each process's location (in file
-    order) and the integer variables (as the engine keeps them: a variable no guard reads any more may be reset,
-    docs/verification.md, *Dead-variable reduction*).  What ``tck-reach -C graph`` lists, to compare with it."""
+    order) and the integer variables, every one kept (no dead-variable reduction).  What ``tck-reach -C graph``
+    lists, to compare with it."""
     from runtime.zones.search import ZoneExplorer
 
-    system, tr = load(path, grid)
+    system, tr = load(path, grid, keep_integers=True)
     z = ZoneExplorer(tr.package, tr.root)
     z.explore()
     atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}

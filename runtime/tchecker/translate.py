@@ -7,7 +7,8 @@
   urgent nor committed, guarded by the invariant, advances them;
 * the integer variables live in one atom, ``Globals``, with a port per global
   edge that reads or writes them: its transition carries the integer guards,
-  the assignments in order, and the bounds every assigned variable must stay
+  the assignments in order (a sync vector's edges in the order it lists
+  them), and the bounds every assigned variable must stay
   within (TChecker does not take an edge that would leave them);
 * every global edge (an asynchronous edge, or one edge per process of a sync
   vector) is a rendezvous connector of those ports; one ``tick`` rendezvous
@@ -80,14 +81,15 @@ def _ident(name: str, taken: set[str]) -> str:
     return out
 
 
-def translate(system: System, scale: int = 1) -> Translation:
-    """The package and root of ``system``; strict clock constraints need ``scale`` > 1 (checked by the caller)."""
-    return _Builder(system, scale).build()
+def translate(system: System, scale: int = 1, keep_integers: bool = False) -> Translation:
+    """The package and root of ``system``, clock constants times ``scale``.  ``keep_integers``: every integer
+    variable is kept in every state (exported), where the explorer would reset one no guard reads any more."""
+    return _Builder(system, scale, keep_integers).build()
 
 
 class _Builder:
-    def __init__(self, system: System, scale: int) -> None:
-        self.s, self.scale = system, scale
+    def __init__(self, system: System, scale: int, keep_integers: bool) -> None:
+        self.s, self.scale, self.keep = system, scale, keep_integers
         taken = {GLOBALS}
         self.atoms = {p: _ident(p, taken) for p in system.processes}
         self.places: dict[tuple[str, str], str] = {}
@@ -209,13 +211,12 @@ class _Builder:
 
     # -- the network ------------------------------------------------------------------------------
     def global_edges(self) -> list[list[Edge]]:
-        """Asynchronous edges one by one, then each sync vector's tuples of edges (processes in file order)."""
+        """Asynchronous edges one by one, then each sync vector's tuples of edges, in the order the sync lists its
+        processes (the order TChecker runs their statements in)."""
         synced = {(p, ev) for sync in self.s.syncs for p, ev in sync.parts}
         out = [[e] for p in self.s.processes.values() for e in p.edges if (p.name, e.event) not in synced]
-        order = {p: k for k, p in enumerate(self.s.processes)}
         for sync in self.s.syncs:
-            parts = sorted(sync.parts, key=lambda pe: order[pe[0]])
-            choices = [[e for e in self.s.processes[p].edges if e.event == ev] for p, ev in parts]
+            choices = [[e for e in self.s.processes[p].edges if e.event == ev] for p, ev in sync.parts]
             out += [list(t) for t in itertools.product(*choices)]
         return out
 
@@ -236,7 +237,7 @@ class _Builder:
             connectors.append((f"c{k}", refs, label))
         components = [ComponentInstance(t.name, self.atoms[p]) for t, p in zip(types, self.s.processes)]
         if g_transitions:
-            data = [DataDecl("int", self.vars[v], Const(iv.init)) for v, iv in self.s.ints.items()]
+            data = [DataDecl("int", self.vars[v], Const(iv.init), exported=self.keep) for v, iv in self.s.ints.items()]
             init = [Assign(Var(self.vars[v]), Const(iv.init)) for v, iv in self.s.ints.items()]
             if self.committed:
                 n = sum(p.initial.committed for p in self.s.processes.values())
