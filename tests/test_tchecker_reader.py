@@ -180,6 +180,7 @@ BAD = [
      "process P has several initial locations"),
     ("a strict constraint without a grid", HEAD + "edge:P:l0:l1:a{provided: x < 2}\n", 7, 26,
      "strict clock constraint: the zone engine's bounds are integers"),
+    ("a division", HEAD + "int:1:0:3:0:n\nedge:P:l0:l1:a{do: n = n / 2}\n", 8, 24, "unsupported operator '/'"),
     ("a negative clock", HEAD + "edge:P:l0:l1:a{do: x = -1}\n", 7, 24, "clock x set to -1: clocks are never negative"),
     ("an unknown location", HEAD + "edge:P:l0:l9:a\n", 7, 11, "unknown location 'l9' of process P"),
 ]
