@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -37,10 +38,24 @@ class Run:
     note: str = ""
 
 
+def limited(cmd: list[str], timeout: float | None = None, **kw) -> subprocess.CompletedProcess:
+    """``cmd`` under :data:`SMALL_PARENT` in a session of its own: at ``timeout`` the whole group is killed (the
+    tool is a grandchild, which killing ``sh`` alone would leave running)."""
+    p = subprocess.Popen(SMALL_PARENT + cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True, **kw)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        raise
+    return subprocess.CompletedProcess(cmd, p.returncode, out, err)
+
+
 def tchecker(binary: str, algorithm: str, model: Path, labels: str, timeout: float) -> Run:
     cmd = [binary, "-a", algorithm] + (["-l", labels] if labels else []) + [str(model)]
     try:
-        p = subprocess.run(SMALL_PARENT + cmd, capture_output=True, text=True, timeout=timeout)
+        p = limited(cmd, timeout)
     except subprocess.TimeoutExpired:
         return Run("unknown", None, None, timeout, None, "time limit")
     got = dict(line.split(" ", 1) for line in p.stdout.splitlines() if " " in line)
@@ -56,7 +71,7 @@ def ours(model: Path, labels: str, grid: int, time_limit: int) -> Run:
            str(time_limit), "--no-trace"] + (["--labels", labels] if labels else [])
     start = time.perf_counter()
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    p = subprocess.run(SMALL_PARENT + cmd, capture_output=True, text=True, cwd=ROOT, env=env)
+    p = limited(cmd, time_limit + 600, cwd=ROOT, env=env)  # it stops itself at time_limit; this is a safety net
     wall = time.perf_counter() - start
     if p.returncode not in (0, 3, 4):
         return Run("error", None, None, wall, None, p.stderr.strip().splitlines()[0][:200] if p.stderr else "")
@@ -79,8 +94,7 @@ def configurations_agree(binary: str, model: Path, grid: int, timeout: float) ->
     from runtime.tchecker.system import check
 
     try:
-        p = subprocess.run([binary, "-a", "reach", "-C", "graph", str(model)], capture_output=True, text=True,
-                           timeout=timeout)
+        p = limited([binary, "-a", "reach", "-C", "graph", str(model)], timeout)
     except subprocess.TimeoutExpired:
         return ""
     system = check(*read(model))
@@ -102,6 +116,11 @@ def ratio(a: float | None, b: float | None) -> str:
 
 def cell(v, fmt: str) -> str:
     return "—" if v is None else format(v, fmt)
+
+
+def seconds(r: Run) -> str:
+    """tck-reach's time, or the limit it ran past."""
+    return f">{r.seconds:.0f} (limit)" if r.verdict == "unknown" else cell(r.seconds, ".3f")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -148,8 +167,8 @@ def main(argv: list[str] | None = None) -> int:
             more = "+" if mine.verdict == "unknown" else ""  # stopped: our figures are lower bounds
             print(f"| {f.stem} | {labels or '(none)'} | {verdict} | {cell(reach.states, ',')} "
                   f"| {cell(cov.states, ',')} | {cell(mine.states, ',')}{more} "
-                  f"| {'>' if more else ''}{ratio(mine.states, cov.states)} | {cell(reach.seconds, '.3f')} "
-                  f"| {cell(cov.seconds, '.3f')} "
+                  f"| {'>' if more else ''}{ratio(mine.states, cov.states)} | {seconds(reach)} "
+                  f"| {seconds(cov)} "
                   f"| {cell(mine.seconds, '.1f')}{more} | {'>' if more else ''}{ratio(mine.seconds, cov.seconds)} "
                   f"| {cell(cov.rss_mib, '.1f')} "
                   f"| {cell(mine.rss_mib, '.1f')} | {agree or '—'} |", flush=True)
