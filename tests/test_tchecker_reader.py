@@ -7,6 +7,8 @@ from fractions import Fraction
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from runtime.cli import main
 from runtime.tchecker.reach import configurations, reach
@@ -127,6 +129,13 @@ def test_a_sync_runs_its_statements_in_the_order_it_lists_the_processes(tmp_path
     assert configurations(path) == {(("l0", "m0"), (("n", 0),)), (("l1", "m1"), (("n", 1),))}
 
 
+def test_an_integer_no_edge_touches_keeps_its_initial_value(tmp_path):
+    path = tmp_path / "still.tck"
+    path.write_text("system:still\nevent:a\nint:1:0:3:2:k\nprocess:P\nlocation:P:l0{initial:}\n"
+                    "location:P:l1{}\nedge:P:l0:l1:a\n")
+    assert configurations(path) == {(("l0",), (("k", 2),)), (("l1",), (("k", 2),))}
+
+
 def test_an_assignment_out_of_its_domain_disables_the_edge():
     path = FIXTURES / "bounded.tck"
     assert reach(path, ["one"]).verdict == "reachable"
@@ -210,3 +219,30 @@ def test_a_missing_or_binary_file_is_an_input_error(capsys, tmp_path):
     code, out, err = run(capsys, binary)
     assert (code, out) == (1, "")
     assert err.startswith(f"{binary}:2:1: error: not a UTF-8 text file")
+
+
+# -- malformed input never escapes as a traceback ------------------------------------------------------------
+
+_PIECES = ["system:s\n", "process:P\n", "event:a\n", "clock:1:x\n", "int:1:0:3:0:n\n", "location:P:l0{initial:}\n",
+           "location:P:l1{invariant: x <= 2}\n", "edge:P:l0:l1:a{provided: x > 1 && n == 0 : do: n = n + 1; x = 0}\n",
+           "sync:P@a:P@a\n", "{", "}", ":", "@", "?", "#", "\n", " ", "x", "<=", "&&", "(", ")", "[", "]", "-", "1",
+           "committed:", "urgent:", "labels:", "do:", "provided:", "=", ";", "!", "\t", "é", "\r\n",
+           "int:0:5:1:9:m\n", "clock:0:y\n", "clock:2:z\n", "edge:P:l0:l0:a{do: z[1] = 0; z[n] = 1}\n",
+           "location:P:l2{urgent: : committed:}\n", "edge:P:l1:l2:a{provided: x - x < 1}\n", "n", "z[2]", "a", "P",
+           "edge:P:l1:l0:a{provided: n}\n", "edge:P:l1:l0:a{do: n = 9}\n", "location:P:l3{invariant: n}\n"]
+_HEAD = "system:s\nevent:a\nprocess:P\nclock:1:x\nint:1:0:3:0:n\n"
+
+
+@given(st.booleans(), st.lists(st.sampled_from(_PIECES), max_size=30))
+@settings(max_examples=300, deadline=None, derandomize=True)
+def test_any_text_is_read_or_refused_with_a_located_error(tmp_path_factory, head, pieces):
+    from runtime.diagnostics import DiagnosticError
+    from runtime.tchecker.reach import load
+
+    path = tmp_path_factory.mktemp("fuzz") / "f.tck"
+    path.write_text((_HEAD if head else "") + "".join(pieces), encoding="utf-8")
+    try:
+        load(path, 2)
+    except DiagnosticError as e:
+        assert all(d.span.file == str(path) for d in e.diagnostics)
+        assert e.render().startswith(str(path))

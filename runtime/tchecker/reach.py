@@ -160,7 +160,10 @@ def configurations(path: str | Path, grid: int | None = None) -> set[Configurati
         for p in system.processes:
             fa = atoms[tr.atoms[p]]
             locs.append(where[(tr.atoms[p], fa.places[int(n.state[fa.offset]).bit_length() - 1])])
-        ints = tuple((v, int(n.state[g.slot(tr.variables[v])])) for v in system.ints) if g else ()
+        if g is None:  # no edge reads or writes an integer: each keeps its initial value
+            ints = tuple((v, iv.init) for v, iv in system.ints.items())
+        else:
+            ints = tuple((v, int(n.state[g.slot(tr.variables[v])])) for v in system.ints)
         out.add((tuple(locs), ints))
     return out
 
