@@ -136,6 +136,15 @@ def test_an_integer_no_edge_touches_keeps_its_initial_value(tmp_path):
     assert configurations(path) == {(("l0",), (("k", 2),)), (("l1",), (("k", 2),))}
 
 
+def test_a_weak_constraint_takes_part_wherever_its_process_has_an_edge_of_the_event():
+    path = FIXTURES / "weak.tck"
+    assert reach(path, ["moved"]).verdict == "unreachable"  # Q must go along, and its target forbids x >= 3
+    r = reach(path, ["early"])
+    assert r.verdict == "reachable" and r.trace == [(0, "P@c(l0->l2),Q@c(q0->q2)")]
+    assert configurations(path) == {(("l0", "q0", "r0"), ()), (("l2", "q2", "r0"), ())}
+    # were R's absence ignored (R must not block), or Q free to stay out, moved would be reachable
+
+
 def test_an_assignment_out_of_its_domain_disables_the_edge():
     path = FIXTURES / "bounded.tck"
     assert reach(path, ["one"]).verdict == "reachable"
@@ -172,8 +181,9 @@ BAD = [
     ("an unknown declaration", HEAD + "proces:Q\n", 7, 1, "unknown declaration 'proces'"),
     ("a keyword as a name", HEAD.replace("system:s", "system:sync"), 1, 8, "'sync' is a keyword, not a name"),
     ("an unknown variable", HEAD + "edge:P:l0:l1:a{provided: z == 1}\n", 7, 26, "unknown variable 'z'"),
-    ("weak synchronisation", HEAD + "process:R\nlocation:R:r{initial:}\nsync:P@a:R@a?\n", 9, 13,
-     "unsupported: weak synchronisation 'p@e?'"),
+    ("a guard on a weakly synchronised edge", HEAD + "process:R\nlocation:R:r{initial:}\n"
+     "edge:R:r:r:a{provided: x <= 1}\nsync:P@a:R@a?\n", 9, 14,
+     "a guard on an edge of R's weakly synchronised event 'a'"),
     ("a diagonal constraint", HEAD + "clock:1:y\nedge:P:l0:l1:a{provided: x - y <= 1}\n", 8, 26,
      "unsupported: diagonal clock constraint"),
     ("a clock of two processes", HEAD + "edge:P:l0:l1:a{provided: x <= 1}\nprocess:R\nlocation:R:r{initial:}\n"

@@ -1,7 +1,7 @@
 """A TChecker file's declarations checked into a network of timed automata (names resolved, every use declared).
 
 What the zone engine cannot take is refused here, at its place in the file:
-weak synchronisation (``p@e?``), diagonal clock constraints (``x - y < c``),
+guards on weakly synchronised edges (as tck-reach refuses them), diagonal clock constraints (``x - y < c``),
 clocks compared with integer variables, clock-to-clock assignments, invariants
 on integer variables, clocks shared by several processes, several initial
 locations in one process, ``/``, ``%``, conditional terms and ``if``/``while``/
@@ -60,6 +60,7 @@ class Edge:
     resets: list[tuple[str, int]] = field(default_factory=list)
     assigns: list[tuple[str, Node]] = field(default_factory=list)  # integer assignments, in order
     span: Span | None = None
+    guard_span: Span | None = None  # of its ``provided`` attribute
 
 
 @dataclass
@@ -77,8 +78,9 @@ class Process:
 
 @dataclass
 class Sync:
-    parts: list[tuple[str, str]]  # (process, event), strong
+    parts: list[tuple[str, str]]  # (process, event)
     span: Span
+    weak: set[str] = field(default_factory=set)  # the processes of ``p@e?`` constraints
 
 
 @dataclass
@@ -138,6 +140,14 @@ class _Checker:
                 if not _holds(0, b.op, b.bound):
                     self.fail(b.span, f"the initial location's invariant is false at time 0: {b.clock} {b.op} "
                                       f"{b.bound}")
+        weak = {(p, ev) for sync in self.syncs for p, ev in sync.parts if p in sync.weak}
+        for p in self.processes.values():
+            for e in p.edges:
+                if (p.name, e.event) in weak and (e.clocks or any(_variables(g) for g in e.guard)):
+                    self.fail(e.guard_span, f"a guard on an edge of {p.name}'s weakly synchronised event "
+                                            f"'{e.event}'", hint="tck-reach refuses it too (a constant guard aside): "
+                                                                 "whether a guarded edge makes its process take "
+                                                                 "part is not defined")
         for clock, (proc, _) in self.owner.items():
             self.processes[proc].clocks.append(clock)
         return System(name, self.src.file, self.processes, self.events, self.ints,
@@ -246,6 +256,7 @@ class _Checker:
         e = Edge(p.name, len(p.edges), sf.text, tf.text, ef.text, span=d.span)
         for a in d.attributes:
             if a.key == "provided":
+                e.guard_span = a.span
                 for c in _conjuncts(parse_expression(self.src, a)):
                     if self.mentions_clock(c):
                         e.clocks.append(self.clock_bound(c, p.name))
@@ -271,24 +282,23 @@ class _Checker:
 
     def decl_sync(self, d: Declaration) -> None:
         self.no_attributes(d)
-        parts, fs, k = [], d.fields, 0
+        parts, weak, fs, k = [], set(), d.fields, 0
         while k < len(fs):
             if k + 2 >= len(fs) or fs[k + 1].text != "@":
                 self.fail(fs[k].span, "expected 'process@event' in a sync", hint="sync:P1@a:P2@b")
             p = self.process(fs[k])
             if fs[k + 2].text not in self.events:
                 self.fail(fs[k + 2].span, f"unknown event '{fs[k + 2].text}'", hint=_known(self.events))
-            if k + 3 < len(fs) and fs[k + 3].text == "?":
-                self.fail(fs[k + 3].span, "unsupported: weak synchronisation 'p@e?'",
-                          hint="BIP's strong rendezvous is what the engine takes; write the vectors with and "
-                               "without the process as strong syncs")
             if any(q == p.name for q, _ in parts):
                 self.fail(fs[k].span, f"process {p.name} appears twice in one sync")
             parts.append((p.name, fs[k + 2].text))
             k += 3
+            if k < len(fs) and fs[k].text == "?":
+                weak.add(p.name)
+                k += 1
         if len(parts) < 2:
             self.fail(d.span, "a sync needs at least two processes")
-        self.syncs.append(Sync(parts, d.span))
+        self.syncs.append(Sync(parts, d.span, weak))
 
     # -- expressions ------------------------------------------------------------------------------
     def lvalue(self, n: Node) -> str:
@@ -375,6 +385,11 @@ class _Checker:
         if n.op == "int":
             return n
         return Node(n.op, [self.int_expr(a) for a in n.args], n.span)
+
+
+def _variables(n: Node) -> bool:
+    """``n`` reads a variable (a guard that is not a constant)."""
+    return n.op == "var" or any(_variables(a) for a in n.args if isinstance(a, Node))
 
 
 def _conjuncts(n: Node) -> list[Node]:

@@ -13,6 +13,9 @@
 * every global edge (an asynchronous edge, or one edge per process of a sync
   vector) is a rendezvous connector of those ports; one ``tick`` rendezvous
   joins every process: time passes for all or for none;
+* a weak constraint ``p@e?`` is met by one of p's ``e`` edges, or by p's
+  ``absent`` port, a self-loop of each location no ``e`` edge leaves: p takes
+  part whenever it has an ``e`` edge where it is, as TChecker instantiates it;
 * committed locations: ``Globals`` counts the processes in one, and a global
   edge with no committed source waits for the count to be zero.
 
@@ -145,6 +148,12 @@ class _Builder:
             action = [Assign(Var(self.clock_var(c)), Const(v * self.scale)) for c, v in e.resets]
             transitions.append(Transition(f"e{e.index}", [self.places[(name, e.source)]],
                                           [self.places[(name, e.target)]], _and(guard), action))
+        absent = {port: ev for (q, ev), port in self.absent.items() if q == name}
+        for port, ev in absent.items():  # a self-loop where no ``ev`` edge leaves: the weak constraint is not met
+            for loc in p.locations.values():
+                if not any(e.source == loc.name and e.event == ev for e in p.edges):
+                    place = self.places[(name, loc.name)]
+                    transitions.append(Transition(port, [place], [place]))
         advance = [Assign(Var(c), Binary("+", Var(c), Const(1))) for c in mine]
         for loc in p.locations.values():
             if loc.urgent or loc.committed:
@@ -160,7 +169,7 @@ class _Builder:
             name=f"Process_{self.atoms[name]}",
             data=[DataDecl("int", c, annotations=[clock]) for c in mine],
             ports=[PortDecl(PORT, f"e{e.index}", exported=True) for e in p.edges]
-            + [PortDecl(PORT, "tick", exported=True)],
+            + [PortDecl(PORT, port, exported=True) for port in absent] + [PortDecl(PORT, "tick", exported=True)],
             places=[self.places[(name, loc)] for loc in p.locations],
             initial=InitialTransition([self.places[(name, p.initial.name)]],
                                       [Assign(Var(c), Const(0)) for c in mine]),
@@ -210,23 +219,41 @@ class _Builder:
         return Binary("!=", e, Const(0)) if boolean else e
 
     # -- the network ------------------------------------------------------------------------------
-    def global_edges(self) -> list[list[Edge]]:
+    def global_edges(self) -> list[tuple[list[Edge], list[tuple[str, str]]]]:
         """Asynchronous edges one by one, then each sync vector's tuples of edges, in the order the sync lists its
-        processes (the order TChecker runs their statements in)."""
+        processes (the order TChecker runs their statements in).  A weak constraint ``p@e?`` is met by one of
+        p's ``e`` edges or, where p has none from its location, by p's absence: the ``(process, event)`` pairs
+        of each tuple's absent processes come with it."""
         synced = {(p, ev) for sync in self.s.syncs for p, ev in sync.parts}
-        out = [[e] for p in self.s.processes.values() for e in p.edges if (p.name, e.event) not in synced]
+        out = [([e], []) for p in self.s.processes.values() for e in p.edges if (p.name, e.event) not in synced]
         for sync in self.s.syncs:
-            choices = [[e for e in self.s.processes[p].edges if e.event == ev] for p, ev in sync.parts]
-            out += [list(t) for t in itertools.product(*choices)]
+            choices = []
+            for p, ev in sync.parts:
+                edges: list = [e for e in self.s.processes[p].edges if e.event == ev]
+                choices.append(edges + [(p, ev)] if p in sync.weak else edges)
+            for t in itertools.product(*choices):
+                edges = [e for e in t if isinstance(e, Edge)]
+                if edges:  # a vector of weak constraints alone needs one of them met
+                    out.append((edges, [e for e in t if not isinstance(e, Edge)]))
         return out
 
+    def absent_port(self, process: str, event: str) -> str:
+        """The port of ``process`` meaning "no ``event`` edge leaves my location" (a weak constraint not met)."""
+        return self.absent.setdefault((process, event), f"absent{len(self.absent)}")
+
     def build(self) -> Translation:
+        self.absent: dict[tuple[str, str], str] = {}
+        global_edges = self.global_edges()
+        for _, absent in global_edges:
+            for p, ev in absent:
+                self.absent_port(p, ev)
         types = [self.process_type(p) for p in self.s.processes]
         ports: list[PortDecl] = []
         g_transitions = []
         connectors, arities = [], set()
-        for k, edges in enumerate(self.global_edges()):
+        for k, (edges, absent) in enumerate(global_edges):
             refs = [PortRef(self.atoms[e.process], f"e{e.index}") for e in edges]
+            refs += [PortRef(self.atoms[p], self.absent_port(p, ev)) for p, ev in absent]
             t = self.globals_transition(f"g{k}", edges)
             if t is not None:
                 ports.append(PortDecl(PORT, f"g{k}", exported=True))
