@@ -6,12 +6,14 @@ status, never a traceback, from the one table of runtime/exits.py that
 ``genom2bip`` shares: 1 for bad input, 4 for what a run or an exploration
 found (a model error during the run, an atom invariant that fails, an event
 that an extern port with policy ``error`` cannot take, a violated timing
-constraint; a deadlock or a time-lock that ``explore`` reaches), 5 for an
-exploration a limit stopped, 3 for an internal error.  A run that ends in a
-deadlock, a time-lock or at the step limit exits with 0: running is not
-checking.  (The Verimag engine gives the run's failures 2, 5, 6 and 7; the
-message says which one it is.)  ``explore`` runs the discrete-time
-exploration of a timed model (runtime/timed_cli.py).
+constraint; a deadlock or a time-lock that ``explore`` reaches, a label
+that ``reach`` reaches), 5 for an exploration a limit stopped, 3 for an
+internal error.  A run that ends in a deadlock, a time-lock or at the step
+limit exits with 0: running is not checking.  (The Verimag engine gives the
+run's failures 2, 5, 6 and 7; the message says which one it is.)
+``explore`` runs the discrete-time exploration of a timed model
+(runtime/timed_cli.py); ``reach`` decides reachability of labels in a
+TChecker file (runtime/tchecker/cli.py).
 """
 from __future__ import annotations
 
@@ -52,6 +54,9 @@ def _parser() -> argparse.ArgumentParser:
     explore.add_argument("--tick", default="1ms", help="length of one tick: 1ms, 250us, 2s (default 1ms)")
     explore.add_argument("--max-states", type=int, default=1_000_000, help="stop after this many states")
     explore.add_argument("--externs", metavar="MODULE", help="Python module binding extern functions")
+    from runtime.tchecker.cli import add_parser as add_reach
+
+    add_reach(sub)
     run.add_argument("--no-maximal-progress", action="store_true",
                      help="offer every enabled interaction of a connector, not only the maximal ones")
     run.add_argument("--events", metavar="FILE",
@@ -142,6 +147,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
+        if args.command == "reach":
+            from runtime.tchecker.cli import reach_command
+
+            return reach_command(args, sys.stdout, sys.stderr)
         return explore_command(args, sys.stdout, sys.stderr)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

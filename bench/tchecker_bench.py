@@ -1,0 +1,188 @@
+"""TChecker side by side: each model with ``tck-reach`` (``-a reach`` and ``-a covreach``) and with our zone engine.
+
+    python bench/tchecker_bench.py TCK_REACH MODELS_DIR [--time-limit 300] [--grid 2] [--only fischer]
+
+TCK_REACH is a built ``tck-reach`` (bench/build_tchecker.sh); MODELS_DIR holds TChecker files
+(bench/tchecker_models.sh generates them with TChecker's own scripts, outside the repository).  Each model
+is asked for the labels of its ``#labels=`` line (all at once, as TChecker's tests do) and, when it has
+some, for its first label alone (a reachable query).  Our runs are ``python -m runtime reach`` in a process
+of their own (time, peak memory); verdicts must agree, and where both searches finish the reachable
+configurations without clocks (locations and integers, ``tck-reach -a reach -C graph``) are compared too.
+States: tck-reach's STORED_STATES (the nodes of its final graph, covered ones removed), ours not covered at the
+end (every one stored in brackets); times: the searches' own (ours without Python's start and the step's C
+compilation); memory: each process's peak resident size (ours includes Python and numpy, about 43 MiB).
+Prints a table (markdown) and exits 1 when a verdict or a configuration set differs.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Runs a command in a child of ``sh``: Linux keeps the largest resident size across exec, so a tool started
+#: straight from this (larger) process would report ours as its own peak memory.
+SMALL_PARENT = ["sh", "-c", '"$0" "$@"; exit $?']
+
+
+@dataclass
+class Run:
+    verdict: str  # "reachable", "unreachable", "unknown", "error"
+    states: int | None  # tck-reach: STORED_STATES, the nodes of its final graph; ours: not covered at the end
+    transitions: int | None
+    seconds: float | None
+    rss_mib: float | None
+    note: str = ""
+    stored: int | None = None  # ours: every symbolic state stored, later covered ones included
+
+
+def limited(cmd: list[str], timeout: float | None = None, **kw) -> subprocess.CompletedProcess:
+    """``cmd`` under :data:`SMALL_PARENT` in a session of its own: at ``timeout`` the whole group is killed (the
+    tool is a grandchild, which killing ``sh`` alone would leave running)."""
+    p = subprocess.Popen(SMALL_PARENT + cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True, **kw)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        raise
+    return subprocess.CompletedProcess(cmd, p.returncode, out, err)
+
+
+def tchecker(binary: str, algorithm: str, model: Path, labels: str, timeout: float) -> Run:
+    cmd = [binary, "-a", algorithm] + (["-l", labels] if labels else []) + [str(model)]
+    try:
+        p = limited(cmd, timeout)
+    except subprocess.TimeoutExpired:
+        return Run("unknown", None, None, timeout, None, "time limit")
+    got = dict(line.split(" ", 1) for line in p.stdout.splitlines() if " " in line)
+    if p.returncode != 0 or "REACHABLE" not in got:
+        return Run("error", None, None, None, None, (p.stderr or p.stdout).strip()[:200])
+    return Run("reachable" if got["REACHABLE"].strip() == "true" else "unreachable",
+               int(got.get("STORED_STATES", got.get("VISITED_STATES", "0"))), int(got["VISITED_TRANSITIONS"]),
+               float(got["RUNNING_TIME_SECONDS"]), int(got["MEMORY_MAX_RSS"]) / 1024)
+
+
+def ours(model: Path, labels: str, grid: int, time_limit: int) -> Run:
+    cmd = [sys.executable, "-m", "runtime", "reach", str(model), "--grid", str(grid), "--time-limit",
+           str(time_limit), "--no-trace"] + (["--labels", labels] if labels else [])
+    start = time.perf_counter()
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    p = limited(cmd, time_limit + 600, cwd=ROOT, env=env)  # it stops itself at time_limit; this is a safety net
+    wall = time.perf_counter() - start
+    if p.returncode not in (0, 3, 4):
+        return Run("error", None, None, wall, None, p.stderr.strip().splitlines()[0][:200] if p.stderr else "")
+    out = p.stdout
+    verdict = re.search(r"^verdict: (\w+)", out, re.M).group(1)
+
+    def number(pattern: str) -> float:
+        return float(re.search(pattern, out, re.M).group(1).replace(",", ""))
+
+    run = Run(verdict, int(number(r"^stored states: [\d,]+ \(([\d,]+) not covered")),
+              int(number(r"^visited transitions: ([\d,]+)")), number(r"^time: ([\d.]+) s"),
+              number(r"^memory: ([\d.]+) MiB"), "time limit" if verdict == "unknown" else "")
+    run.stored = int(number(r"^stored states: ([\d,]+)"))
+    return run
+
+
+def configurations_agree(binary: str, model: Path, grid: int, timeout: float) -> str:
+    """'yes', 'NO: ...' or '' (not compared): the configurations without clocks both tools reach."""
+    sys.path.insert(0, str(ROOT))
+    from runtime.tchecker.reach import configurations
+    from runtime.tchecker.syntax import read
+    from runtime.tchecker.system import check
+
+    try:
+        p = limited([binary, "-a", "reach", "-C", "graph", str(model)], timeout)
+    except subprocess.TimeoutExpired:
+        return ""
+    system = check(*read(model))
+    theirs = set()
+    for m in re.finditer(r'intval="([^"]*)".*?vloc="<([^>]*)>"', p.stdout):
+        ints = tuple((k, int(v)) for k, v in (x.split("=") for x in m.group(1).split(",") if x))
+        theirs.add((tuple(m.group(2).split(",")), tuple(sorted(ints))))
+    mine = {(locs, tuple(sorted(ints))) for locs, ints in configurations(model, grid if system.strict else None)}
+    if mine == theirs:
+        return f"yes ({len(mine):,})"
+    return f"NO: {len(theirs - mine)} only in tck-reach, {len(mine - theirs)} only here"
+
+
+def ratio(a: float | None, b: float | None) -> str:
+    if a is None or b is None or b == 0:
+        return "—"
+    return f"{a / b:,.1f}×"
+
+
+def cell(v, fmt: str) -> str:
+    return "—" if v is None else format(v, fmt)
+
+
+def seconds(r: Run) -> str:
+    """tck-reach's time, or the limit it ran past."""
+    return f">{r.seconds:.0f} (limit)" if r.verdict == "unknown" else cell(r.seconds, ".3f")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("tck_reach", help="a built tck-reach (bench/build_tchecker.sh prints its path)")
+    ap.add_argument("models", help="a directory of TChecker files (bench/tchecker_models.sh)")
+    ap.add_argument("--time-limit", type=int, default=300, help="seconds per run of each tool (default 300)")
+    ap.add_argument("--grid", type=int, default=2, help="our time grid for strict constraints (default 2)")
+    ap.add_argument("--only", default="", help="only the models whose file name contains this")
+    ap.add_argument("--compare-up-to", type=int, default=20_000,
+                    help="compare configuration sets when tck-reach -a reach stored at most this many states")
+    args = ap.parse_args(argv)
+    files = sorted(Path(args.models).glob("*.tck"), key=lambda f: (re.sub(r"_\d+$", "", f.stem),
+                                                                     int(re.sub(r"\D", "", f.stem) or 0)))
+    files = [f for f in files if args.only in f.name]
+    if not files:
+        print(f"no .tck file in {args.models}", file=sys.stderr)
+        return 2
+    print("| model | labels | verdict | tck reach states | tck covreach states | ours states (all stored) "
+          "| states ratio "
+          "| tck reach s | tck covreach s | ours s | time ratio | tck covreach MiB | ours MiB | configurations |")
+    print("|" + "---|" * 14)
+    bad = 0
+    for f in files:
+        line = f.read_text(encoding="utf-8").splitlines()
+        found = [x[len("#labels="):] for x in line if x.startswith("#labels=")]
+        every = found[0].replace(":", ",") if found else ""
+        queries = [every] + ([every.split(",")[0]] if "," in every else [])
+        for labels in queries:
+            reach = tchecker(args.tck_reach, "reach", f, labels, args.time_limit)
+            cov = tchecker(args.tck_reach, "covreach", f, labels, args.time_limit)
+            mine = ours(f, labels, args.grid, args.time_limit)
+            verdicts = {r.verdict for r in (reach, cov, mine) if r.verdict in ("reachable", "unreachable")}
+            if len(verdicts) > 1:
+                verdict = "DISAGREE: " + "/".join(r.verdict for r in (reach, cov, mine))
+                bad += 1
+            elif mine.verdict in ("unknown", "error"):
+                verdict = f"{cov.verdict} (ours: {mine.note or mine.verdict})"
+            else:
+                verdict = mine.verdict
+            agree = ""
+            if labels == every and mine.verdict != "unknown" and reach.states and reach.states <= args.compare_up_to:
+                agree = configurations_agree(args.tck_reach, f, args.grid, args.time_limit)
+                bad += agree.startswith("NO")
+            more = "+" if mine.verdict == "unknown" else ""  # stopped: our figures are lower bounds
+            print(f"| {f.stem} | {labels or '(none)'} | {verdict} | {cell(reach.states, ',')} "
+                  f"| {cell(cov.states, ',')} | {cell(mine.states, ',')}{more} ({cell(mine.stored, ',')}) "
+                  f"| {'>' if more else ''}{ratio(mine.states, cov.states)} | {seconds(reach)} "
+                  f"| {seconds(cov)} "
+                  f"| {cell(mine.seconds, '.1f')}{more} | {'>' if more else ''}{ratio(mine.seconds, cov.seconds)} "
+                  f"| {cell(cov.rss_mib, '.1f')} "
+                  f"| {cell(mine.rss_mib, '.1f')} | {agree or '—'} |", flush=True)
+            if mine.verdict == "error":
+                print(f"  ours: {mine.note}", file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

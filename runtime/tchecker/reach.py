@@ -1,0 +1,189 @@
+"""Reachability of a set of location labels in a TChecker file, by the zone engine on its translation.
+
+The search is runtime/zones/search.py's, on the timed BIP model of
+runtime/tchecker/translate.py; it stops at the first symbolic state whose
+locations carry every label asked for.  A trace to it is made concrete and
+replayed on the tick model (runtime/zones/trace.py), so the delays printed
+are those of a run of the model.
+"""
+from __future__ import annotations
+
+import resource
+import time
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+
+from runtime.diagnostics import DiagnosticError
+from runtime.tchecker.syntax import read
+from runtime.tchecker.system import System, check
+from runtime.tchecker.translate import Translation, translate
+
+
+@dataclass
+class Reach:
+    verdict: str  # "reachable", "unreachable", "unknown" (stopped at a limit)
+    states: int  # symbolic states stored
+    discrete: int  # distinct discrete states among them
+    kept: int  # stored states no larger zone came to cover
+    transitions: int  # symbolic transitions computed
+    seconds: float
+    zone_bytes: int  # the zones kept
+    peak_rss: int  # bytes, the whole process
+    grid: int  # strict constraints read on a 1/grid time grid (1: no strict constraint)
+    exact: bool  # the verdict is dense time's (False: unreachable on the grid only)
+    trace: list[tuple[Fraction, str]] = field(default_factory=list)  # (delay before, global edge)
+    trace_note: str = ""
+    stopped: str = ""  # "max-states" or "time-limit" when the verdict is unknown
+    unknown_labels: list[str] = field(default_factory=list)  # carried by no location
+
+
+def load(path: str | Path, grid: int | None = None, keep_integers: bool = False) -> tuple[System, Translation]:
+    """Read, check and translate a TChecker file; strict clock constraints need ``grid`` (a located error else)."""
+    src, decls = read(path)
+    system = check(src, decls)
+    if system.strict is not None and grid is None:
+        raise src.error(system.strict, "strict clock constraint: the zone engine's bounds are integers",
+                        hint="give --grid N to read 'x < c' as 'x <= c - 1/N' (a reachable verdict stays exact; "
+                             "an unreachable one then holds on that time grid)")
+    if grid is not None and grid < 1:
+        raise DiagnosticError([])  # pragma: no cover - the command line checks it first
+    return system, translate(system, grid or 1, keep_integers)
+
+
+class _Goal:
+    """Which places of which atoms carry each label, as the zone explorer's atom indices and place bits."""
+
+    def __init__(self, z, tr: Translation, labels: list[str]) -> None:
+        self.need = []
+        by_name = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
+        for lab in labels:
+            where = []
+            for atom, place in tr.labels.get(lab, ()):
+                fa = by_name[atom]
+                where.append((fa.offset, fa.place_mask([place])))
+            self.need.append(where)
+
+    def holds(self, state: tuple) -> bool:
+        return all(any(state[off] == bit for off, bit in where) for where in self.need)
+
+
+class _OutOfTime(Exception):
+    def __init__(self, transitions: int) -> None:
+        super().__init__("time limit")
+        self.transitions = transitions
+
+
+def _deadline(seconds: float | None, show):
+    """A progress that also stops the search (by raising) once ``seconds`` have passed."""
+    from runtime.explore.progress import Progress, null_progress
+
+    shown = show or null_progress()
+    if seconds is None:
+        return shown
+    end = time.monotonic() + seconds
+
+    class Deadline(Progress):
+        def tick(self, states, transitions, frontier, memory, depth=None):
+            shown.tick(states, transitions, frontier, memory, depth)
+            if time.monotonic() > end:
+                raise _OutOfTime(transitions)
+
+        def done(self):
+            shown.done()
+
+    return Deadline(enabled=False)
+
+
+def reach(path: str | Path, labels: list[str], grid: int | None = None, max_states: int | None = None,
+          progress=None, want_trace: bool = True, time_limit: float | None = None) -> Reach:
+    """Is a configuration whose locations carry every label of ``labels`` reachable?  ``unknown`` when the
+    search stops at ``max_states`` or after ``time_limit`` seconds."""
+    from runtime.zones.search import ZoneExplorer, ZoneResult
+
+    system, tr = load(path, grid)
+    unknown = [lab for lab in labels if lab not in system.labels()]
+    goal_set = bool(labels) and not unknown
+
+    class Explorer(ZoneExplorer):
+        # The goal is tested on each expanded state by the Python search's check; the C search (which writes
+        # its programs without Python) has no goal test yet, so this search is the Python one.
+        def check(self, k, result):  # the engine's hook, called on each state it expands
+            super().check(k, result)
+            if goal_set and -1 not in result.violations and self.goal.holds(self.nodes[k].state):
+                result.violations[-1] = k
+
+    start = time.perf_counter()
+    z = Explorer(tr.package, tr.root, engine="python")
+    z.goal = _Goal(z, tr, labels)
+    try:
+        result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)
+    except _OutOfTime as stop:
+        (progress or _deadline(None, None)).done()
+        result = ZoneResult(len(z.nodes), len({n.state for n in z.nodes}), stop.transitions, 0.0, False,
+                            "time-limit")
+    seconds = time.perf_counter() - start
+    found = result.violations.get(-1)
+    if found is not None:
+        verdict = "reachable"
+    elif result.complete:
+        verdict = "unreachable"
+    else:
+        verdict = "unknown"
+    kept = sum(1 for n in z.nodes if not n.covered)
+    out = Reach(verdict, result.states, result.discrete, kept, result.transitions, seconds, z.memory(),
+                resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, tr.scale,
+                verdict == "reachable" or system.strict is None)
+    out.unknown_labels = unknown
+    out.stopped = result.stopped
+    if found is not None and want_trace:
+        out.trace, out.trace_note = _trace(z, tr, found)
+    return out
+
+
+Configuration = tuple[tuple[str, ...], tuple[tuple[str, int], ...]]
+
+
+def configurations(path: str | Path, grid: int | None = None) -> set[Configuration]:
+    """The reachable configurations of a TChecker file without their clocks: each process's location (in file
+    order) and the integer variables, every one kept (no dead-variable reduction).  What ``tck-reach -C graph``
+    lists, to compare with it."""
+    from runtime.zones.search import ZoneExplorer
+
+    system, tr = load(path, grid, keep_integers=True)
+    z = ZoneExplorer(tr.package, tr.root)
+    z.explore()
+    atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
+    where = {(tr.atoms[p], place): loc for (p, loc), place in tr.places.items()}
+    g = atoms.get("Globals")
+    out = set()
+    for n in z.nodes:
+        locs = []
+        for p in system.processes:
+            fa = atoms[tr.atoms[p]]
+            locs.append(where[(tr.atoms[p], fa.places[int(n.state[fa.offset]).bit_length() - 1])])
+        if g is None:  # no edge reads or writes an integer: each keeps its initial value
+            ints = tuple((v, iv.init) for v, iv in system.ints.items())
+        else:
+            ints = tuple((v, int(n.state[g.slot(tr.variables[v])])) for v in system.ints)
+        out.add((tuple(locs), ints))
+    return out
+
+
+def _trace(z, tr: Translation, node: int) -> tuple[list[tuple[Fraction, str]], str]:
+    from runtime.explore.space import StateSpace
+    from runtime.zones.trace import ConcretizeError, paths_to, replay
+
+    space = StateSpace(tr.package, tr.root, None, None, True, set())
+    problem = "no path"
+    try:
+        for path in paths_to(z, node, []):
+            try:
+                steps, _ = replay(z, path, [], space)
+            except ConcretizeError as exc:
+                problem = str(exc)
+                continue
+            return [(Fraction(s.ticks, tr.scale), s.step.label) for s in steps if s.step.label], ""
+    except ConcretizeError as exc:
+        problem = str(exc)
+    return [], f"no concrete trace: {problem}"
