@@ -10,6 +10,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -168,6 +169,11 @@ def test_ctrl_c_writes_what_is_done_says_what_is_not_and_the_next_run_does_it(tm
             answers += line.split(" ")[0] in ("holds", "violated")
             if answers == 3:
                 break
+        waiting = Path(str(gate) + ".waiting")  # the gated job runs (not only queued) when Ctrl-C comes
+        deadline = time.monotonic() + PATIENCE
+        while not waiting.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert waiting.exists(), "the gated job never started"
         # each worker leads a session of its own, not the command's: a busy machine that shares the CPU between
         # sessions gives each worker a part (bench/campaign_bench.py), and a Ctrl-C at the terminal reaches the
         # command alone
