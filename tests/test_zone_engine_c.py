@@ -175,3 +175,27 @@ def test_a_watcher_that_never_raises_changes_nothing(tmp_path):
     rc = z.explore()
     assert calls and (rc.states, rc.violations, rc.maxima) == (rp.states, rp.violations, rp.maxima)
     assert [_node(n) for n in z.nodes] == [_node(n) for n in zp.nodes]
+
+
+@pytest.mark.parametrize("stop", [True, False], ids=["stop", "go-on"])
+def test_a_goal_is_found_at_the_same_node_by_both_searches(tmp_path, stop):
+    # A goal (places marked at once) is how reachability questions are asked (runtime/tchecker): the C programs say
+    # where it holds as Python's program does, and the first node at the goal is the same.
+    from runtime.zones.node import GOAL
+
+    model = model_of(tmp_path, *CASES[0][1:])
+    found = []
+    for engine in ("python", "c"):
+        z = ZoneExplorer(model.package, model.root, engine=engine)
+        timer = next(fa for fa in z.flat.atoms if fa.name.endswith("slow.timer"))
+        other = next(fa for fa in z.flat.atoms if fa.name.endswith("fast.timer"))
+        z.goal = [[(timer.offset, 1 << k) for k in range(1, len(timer.places))], [(other.offset, 1)]]
+        result = z.explore(stop_at_violation=stop)
+        found.append((result.violations.get(GOAL), result.states, result.complete))
+        if engine == "c":
+            for k, state in enumerate(z.states):
+                written = z.search.program(k)
+                if written is not None:
+                    assert written == z.program(state, z.search.observers)
+    assert found[0] == found[1] and found[0][0] is not None
+    assert found[0][2] is not stop

@@ -64,9 +64,6 @@ class _Goal:
                 where.append((fa.offset, fa.place_mask([place])))
             self.need.append(where)
 
-    def holds(self, state: tuple) -> bool:
-        return all(any(state[off] == bit for off, bit in where) for where in self.need)
-
 
 class _OutOfTime(Exception):
     def __init__(self, transitions: int) -> None:
@@ -99,23 +96,17 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
           progress=None, want_trace: bool = True, time_limit: float | None = None) -> Reach:
     """Is a configuration whose locations carry every label of ``labels`` reachable?  ``unknown`` when the
     search stops at ``max_states`` or after ``time_limit`` seconds."""
+    from runtime.zones.node import GOAL
     from runtime.zones.search import ZoneExplorer, ZoneResult
 
     system, tr = load(path, grid)
     unknown = [lab for lab in labels if lab not in system.labels()]
     goal_set = bool(labels) and not unknown
 
-    class Explorer(ZoneExplorer):
-        # The goal is tested on each expanded state by the Python search's check; the C search (which writes
-        # its programs without Python) has no goal test yet, so this search is the Python one.
-        def check(self, k, result):  # the engine's hook, called on each state it expands
-            super().check(k, result)
-            if goal_set and -1 not in result.violations and self.goal.holds(self.nodes[k].state):
-                result.violations[-1] = k
-
     start = time.perf_counter()
-    z = Explorer(tr.package, tr.root, engine="python")
-    z.goal = _Goal(z, tr, labels)
+    z = ZoneExplorer(tr.package, tr.root)
+    if goal_set:
+        z.goal = _Goal(z, tr, labels).need
     try:
         result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)
     except _OutOfTime as stop:
@@ -123,7 +114,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
         result = ZoneResult(len(z.nodes), len({n.state for n in z.nodes}), stop.transitions, 0.0, False,
                             "time-limit")
     seconds = time.perf_counter() - start
-    found = result.violations.get(-1)
+    found = result.violations.get(GOAL)
     if found is not None:
         verdict = "reachable"
     elif result.complete:

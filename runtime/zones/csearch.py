@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.zones.node import Node, _double
+from runtime.zones.node import GOAL, Node, _double
 
 HERE = Path(__file__).parent
 PROGRAM = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64)  # also the interaction callback
@@ -201,12 +201,14 @@ class CSearch:
         lib.zs_counts(self.ctx, counts)
         result.states, result.discrete, result.transitions, result.merged = counts[0], counts[1], counts[2], counts[3]
         self.z.dropped = counts[4]
-        violation = (ctypes.c_int32 * max(1, len(self.observers)))()
+        violation = (ctypes.c_int32 * (len(self.observers) + 1))()
         top, node = np.zeros(self.d), (ctypes.c_int32 * self.d)()
         lib.zs_results(self.ctx, violation, _dbl(top), node)
         for atom, slot in self.observers.items():
             if violation[slot] >= 0:
                 result.violations[atom] = violation[slot]
+        if violation[len(self.observers)] >= 0:
+            result.violations[GOAL] = violation[len(self.observers)]
         for clock in range(1, self.d):
             if node[clock] >= 0:
                 result.maxima[clock] = (float(top[clock]), node[clock])

@@ -144,6 +144,12 @@ def tables(z, width: int, inexact: set[int]) -> tuple[list[int], dict]:
     out += places
     out += [0] + [atom for atom, _ in model.clocks]
     out += list(model.timed_atoms) + steps + rules + list(z.tick_rules) + observers + measures
+    goal = z.goal
+    out.append(-1 if goal is None else len(goal))
+    for group in goal or []:
+        out.append(len(group))
+        for offset, mask in group:
+            out += [offset, mask]
     return out, step_ids
 
 

@@ -3,6 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+#: The key of ``ZoneResult.violations`` under which the first node at an explorer's goal is kept.
+GOAL = -1
+
 
 class Node:
     """A stored symbolic state: its discrete state, zone, and how it was reached (for traces).

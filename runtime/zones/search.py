@@ -27,7 +27,7 @@ from runtime.explore.progress import Progress, null_progress
 from runtime.explore.space import StateSpace
 from runtime.zones import dbm
 from runtime.zones.model import Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
-from runtime.zones.node import Node
+from runtime.zones.node import GOAL, Node
 
 
 def _flat(bounds) -> list[int]:
@@ -98,6 +98,9 @@ class ZoneExplorer:
         self._ids: dict[tuple, int] = {}
         self._intern = None  # while a C search keeps the states: its numbering
         self.search = None  # the C search that ran (runtime/zones/csearch.py), if one did
+        #: A goal (reachability of places): groups of ``(state offset, place mask)``, the goal holding at a discrete
+        #: state where each group has one alternative marked; its first node goes into violations under GOAL.
+        self.goal: list[list[tuple[int, int]]] | None = None
         #: Told the live ZoneResult as the search goes (after each expanded state in Python; every 1,024 and at
         #: each violation found in C, the nodes so far readable); it may raise to stop the search.
         self.watcher = None
@@ -476,6 +479,8 @@ class ZoneExplorer:
         for atom, (place, clock) in self.model.measures.items():
             if self.place_bit(state, atom) == self.flat.atoms[atom].place_mask([place]):
                 checks += [1, 0, clock, 0]
+        if self.at_goal(state):
+            checks += [2, 0, 0, 0]
         out += [len(checks) // 4, *checks]
         steps: list[int] = []
         count = 0
@@ -546,9 +551,14 @@ class ZoneExplorer:
             step.own, step.zone = step.zone, zone
         return len(step.members)
 
+    def at_goal(self, state: tuple) -> bool:
+        return self.goal is not None and all(any(state[off] == mask for off, mask in group) for group in self.goal)
+
     def check(self, k: int, result: ZoneResult) -> None:
-        """Observers in error and the largest values of watched clocks at node ``k``."""
+        """Observers in error, the goal, and the largest values of watched clocks at node ``k``."""
         node = self.nodes[k]
+        if GOAL not in result.violations and self.at_goal(node.state):
+            result.violations[GOAL] = k
         for atom, (watching, clock, bound) in self.model.observers.items():
             fa = self.flat.atoms[atom]
             if self.place_bit(node.state, atom) != fa.place_mask([watching]):

@@ -26,6 +26,7 @@ typedef struct {
     const int64_t **place;   /* per atom, per place: ticks, discrete, natoms, atoms (clock op expr)..., nactive, ... */
     int64_t *place_base;
     const int64_t *clock_atom, *timed, *tick, *obs, *meas;
+    const int64_t *goal;     /* ngroups (-1: none), per group: n, (offset, mask)... */
     const int64_t **step;    /* natoms, (clock op expr)..., nresets, (clock expr)... */
     const int64_t **rule;    /* kind, [ndiag triples | expr], nedges, edges... */
     int64_t *blob;
@@ -102,6 +103,8 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     t->obs = p;
     p += 5 * t->nobs;
     t->meas = p;
+    p += 3 * t->nmeas;
+    t->goal = p;
     return t;
 }
 
@@ -621,6 +624,20 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
             const int64_t *m = t->meas + 3 * o;  /* atom, place, clock */
             if (s[t->atom_offset[m[0]]] == ((int64_t)1 << m[1])) {
                 lpush(&checks, 1), lpush(&checks, 0), lpush(&checks, m[2]), lpush(&checks, 0);
+            }
+        }
+        if (t->goal[0] >= 0 && !status) {  /* every group has a place marked */
+            const int64_t *q = t->goal + 1;
+            int all = 1;
+            for (int64_t gi = 0; gi < t->goal[0]; gi++) {
+                int any = 0;
+                for (int64_t a = 0; a < q[0]; a++)
+                    any |= s[q[1 + 2 * a]] == q[2 + 2 * a];
+                all &= any;
+                q += 1 + 2 * q[0];
+            }
+            if (all) {
+                lpush(&checks, 2), lpush(&checks, 0), lpush(&checks, 0), lpush(&checks, 0);
             }
         }
         if (!status)

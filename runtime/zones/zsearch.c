@@ -769,7 +769,10 @@ static void check(Ctx *x, int32_t k, const int64_t *pr)
     int64_t slot = x->nodes.a[k].zone;
     for (int64_t i = 0; i < n; i++, c += 4) {
         double top = entry(x, slot, (int64_t)c[2] * d);
-        if (c[0] == 0) {
+        if (c[0] == 2) {
+            if (x->violation[x->nobs] < 0)
+                x->violation[x->nobs] = k;  /* the goal */
+        } else if (c[0] == 0) {
             if (top > (double)c[3] && x->violation[c[1]] < 0)
                 x->violation[c[1]] = k;
         } else if (x->max_node[c[2]] < 0 || top > x->max_value[c[2]]) {
@@ -846,7 +849,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         }
         check(x, k, pr);
         int found = 0;
-        for (int i = 0; i < x->nobs; i++)
+        for (int i = 0; i <= x->nobs; i++)  /* the observers, then the goal */
             found += x->violation[i] >= 0;
         if (stop_at_violation && found) {
             status = 2;
@@ -991,7 +994,7 @@ void zs_zone(void *p, int64_t slot, double *out)
 void zs_results(void *p, int32_t *violation, double *max_value, int32_t *max_node)
 {
     Ctx *x = p;
-    memcpy(violation, x->violation, x->nobs * sizeof(int32_t));
+    memcpy(violation, x->violation, (x->nobs + 1) * sizeof(int32_t));
     memcpy(max_value, x->max_value, x->d * sizeof(double));
     memcpy(max_node, x->max_node, x->d * sizeof(int32_t));
 }
