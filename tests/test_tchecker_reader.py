@@ -256,3 +256,21 @@ def test_any_text_is_read_or_refused_with_a_located_error(tmp_path_factory, head
     except DiagnosticError as e:
         assert all(d.span.file == str(path) for d in e.diagnostics)
         assert e.render().startswith(str(path))
+
+
+@pytest.mark.parametrize("name", ["fischer2.tck", "fischer2_nonstrict.tck", "committed_window.tck", "urgent.tck"])
+def test_local_lu_bounds_change_no_verdict_and_no_configuration(name):
+    # Extra_LU with each place's bounds (ZoneExplorer's local_ceilings) forgets more of a zone; what is reachable
+    # must not change, in the C search as in the Python one.
+    from runtime.tchecker.reach import load
+    from runtime.zones.search import ZoneExplorer
+
+    _, tr = load(FIXTURES / name, 2)
+    seen = set()
+    for engine in ("python", "c"):
+        for local in (False, True):
+            z = ZoneExplorer(tr.package, tr.root, engine=engine, local_ceilings=local)
+            result = z.explore()
+            assert result.complete
+            seen.add(frozenset(n.state for n in z.nodes))
+    assert len(seen) == 1

@@ -19,17 +19,18 @@ def _node(n) -> tuple:
 
 
 def _explore(model, engine: str, **kw):
-    z = ZoneExplorer(model.package, model.root, engine=engine, merge=kw.pop("merge", True))
+    z = ZoneExplorer(model.package, model.root, engine=engine, merge=kw.pop("merge", True),
+                     local_ceilings=kw.pop("local", False))
     return z, z.explore(**kw)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
-@pytest.mark.parametrize("merge", [True, False], ids=["merged", "apart"])
-def test_c_search_stores_what_the_python_search_stores(tmp_path, case, merge):
+@pytest.mark.parametrize("merge,local", [(True, False), (False, False), (True, True)], ids=["merged", "apart", "lu"])
+def test_c_search_stores_what_the_python_search_stores(tmp_path, case, merge, local):
     _, gen, defines, platform, mission = case
     model = model_of(tmp_path, gen, defines, platform, mission)
-    zp, rp = _explore(model, "python", merge=merge)
-    zc, rc = _explore(model, "c", merge=merge)
+    zp, rp = _explore(model, "python", merge=merge, local=local)
+    zc, rc = _explore(model, "c", merge=merge, local=local)
     assert (rc.states, rc.discrete, rc.transitions, rc.merged, rc.complete) == \
         (rp.states, rp.discrete, rp.transitions, rp.merged, rp.complete)
     assert rc.violations == rp.violations

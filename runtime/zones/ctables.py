@@ -109,10 +109,13 @@ def tables(z, width: int, inexact: set[int]) -> tuple[list[int], dict]:
         for k in range(len(fa.places)):
             p = model.places.get((fa.index, 1 << k))
             if p is None:
-                places += [0, -1, 0, 0]
+                places += [0, -1, 0, 0, 0]
                 continue
             discrete = -1 if p.discrete is None else code.value(p.discrete, fa)
-            places += [int(p.ticks), discrete, *_atoms(code, p.atoms, fa), len(p.active), *sorted(p.active)]
+            places += [int(p.ticks), discrete, *_atoms(code, p.atoms, fa), len(p.active), *sorted(p.active),
+                       len(p.ceilings)]
+            for c, (low, up) in sorted(p.ceilings.items()):
+                places += [c, low, up]
     steps, step_ids = [], {}
     for key, st in model.steps.items():
         fa = flat.atoms[key[0]]
@@ -139,7 +142,8 @@ def tables(z, width: int, inexact: set[int]) -> tuple[list[int], dict]:
     for atom, (place, clock) in model.measures.items():
         measures += [atom, flat.atoms[atom].places.index(place), clock]
     out = [width, z.n, len(flat.atoms), len(model.timed_atoms), len(model.rules), len(z.tick_rules),
-           len(model.observers), len(model.measures), len(step_ids), len(code.words), *code.words]
+           len(model.observers), len(model.measures), len(step_ids), int(z.local_ceilings), len(code.words),
+           *code.words]
     out += [fa.offset for fa in flat.atoms] + [len(fa.places) for fa in flat.atoms]
     out += places
     out += [0] + [atom for atom, _ in model.clocks]

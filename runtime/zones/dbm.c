@@ -50,9 +50,9 @@ int z_constrain(double *m, int d, int i, int j, double c)
     return 1;
 }
 
-/* Extra_M on integers: bounds past a clock's ceiling forgotten (dbm.py's extrapolate_np), then closed;
- * 1 when something changed. */
-int z_extrapolate(double *m, int d, const double *ceiling)
+/* Extra_LU on integers: a bound of row i past lower[i] forgotten, one of column j below -upper[j] - 1 raised to it
+ * (dbm.py's extrapolate_np), then closed; 1 when something changed.  Extra_M is lower = upper = the ceilings. */
+int z_extrapolate_lu(double *m, int d, const double *lower, const double *upper)
 {
     int changed = 0;
     for (int i = 0; i < d; i++)
@@ -60,19 +60,24 @@ int z_extrapolate(double *m, int d, const double *ceiling)
             if (i == j)
                 continue;
             double *v = m + (long)i * d + j;
-            if (*v > ceiling[i]) {
+            if (*v > lower[i]) {
                 if (*v != INFINITY) {
                     *v = INFINITY;
                     changed = 1;
                 }
-            } else if (*v < -ceiling[j] - 1) {
-                *v = -ceiling[j] - 1;
+            } else if (*v < -upper[j] - 1) {
+                *v = -upper[j] - 1;
                 changed = 1;
             }
         }
     if (changed)
         z_close(m, d);
     return changed;
+}
+
+int z_extrapolate(double *m, int d, const double *ceiling)
+{
+    return z_extrapolate_lu(m, d, ceiling, ceiling);
 }
 
 /* Every bound of big at least small's. */

@@ -199,8 +199,14 @@ def extrapolate_np(m: np.ndarray, ceiling: np.ndarray) -> np.ndarray:
     ceiling -1 and is then free of bounds above and below.  On integers, every value above ``M`` is alike:
     ``x <= v`` with ``v > M`` becomes no bound, ``x >= v`` with ``v > M + 1`` becomes ``x >= M + 1``.
     """
-    rows = ceiling[:, None]
-    cols = ceiling[None, :] + 1
+    return extrapolate_lu(m, ceiling, ceiling)
+
+
+def extrapolate_lu(m: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Extra_LU (Behrmann, Bouyer, Larsen, Pelanek): as Extra_M, with each clock's largest lower-bound constant
+    deciding the bounds of its row and its largest upper-bound constant those of its column."""
+    rows = lower[:, None]
+    cols = upper[None, :] + 1
     above = (m > rows) & (m != INF)
     low = (m < -cols) & ~(m > rows)
     np.fill_diagonal(above, False)

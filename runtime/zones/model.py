@@ -77,6 +77,8 @@ class Place:
     advancing: set[int] = field(default_factory=set)
     active: set[int] = field(default_factory=set)  # clocks some guard may read before their next reset
     atoms_read: set[int] = field(default_factory=set)  # clocks read there besides guards (observers, queries)
+    ceilings: dict[int, tuple[int, int]] = field(default_factory=dict)  # clock -> (L, U): the largest constants
+    # (+1) a guard may bound it with from below and from above before its next reset, from here (Extra_LU)
 
 
 @dataclass
@@ -276,6 +278,7 @@ def analyse(package: Package, root: str) -> TimedModel:
     measures: dict[int, tuple[str, int]] = {}
     initial: dict[int, int] = {}
     ceilings = [0] * (len(clocks) + 1)
+    consts: dict[tuple, dict[int, int]] = {}  # (atom, place bit, "L" or "U") -> clock -> its guards' largest bound + 1
     dynamic: set[int] = set()
     erased_types = {}
     for fa in flat.atoms:
@@ -297,10 +300,14 @@ def analyse(package: Package, root: str) -> TimedModel:
                 continue
             bit = 1 << fa.places.index(tr.sources[0])
             atoms, rest = _split(tr.guard, mine, where)
+            low, up = (consts.setdefault((fa.index, bit, side), {}) for side in "LU")
             for a in atoms:
                 v = _static(a.rhs, fa)
                 if v is not None:
                     ceilings[a.clock] = max(ceilings[a.clock], int(v) + 1)
+                    for side, ops in ((low, (">", ">=", "==")), (up, ("<", "<=", "=="))):
+                        if a.op in ops:
+                            side[a.clock] = max(side.get(a.clock, 0), int(v) + 1)
                 else:
                     dynamic.add(a.clock)  # compared with data: no ceiling is known, never extrapolated
             if tr.port == TICK and fa.index in timed_atoms:
@@ -309,7 +316,10 @@ def analyse(package: Package, root: str) -> TimedModel:
                             and st.cond.left.name in mine:
                         v = _static(st.cond.right, fa)
                         if v is not None:
-                            ceilings[mine[st.cond.left.name]] = max(ceilings[mine[st.cond.left.name]], int(v))
+                            k = mine[st.cond.left.name]
+                            ceilings[k] = max(ceilings[k], int(v))
+                            for side in (low, up):
+                                side[k] = max(side.get(k, 0), int(v))
                 place = places[(fa.index, bit)]
                 place.ticks = True
                 place.atoms, place.discrete = atoms, rest
@@ -337,7 +347,53 @@ def analyse(package: Package, root: str) -> TimedModel:
     model.erased, model.urgent, model.rules = _erase(package, flat, model, per_atom, tick[0])
     _read_by_priorities(flat, model)
     _activity(flat, places, steps, per_atom)
+    _local_ceilings(flat, model, per_atom, consts, dynamic)
     return model
+
+
+def _local_ceilings(flat, model: TimedModel, per_atom, consts, dynamic: set[int]) -> None:
+    """Per place, each active clock's largest constants a guard may bound it with, from below (L) and from above
+    (U), before its next reset (Behrmann, Bouyer, Larsen, Pelanek: Extra_LU with a static guard analysis): zones
+    then forget what no guard ahead can tell apart.
+
+    Kept global (the model's ceiling): clocks compared with data, clocks a priority compares with another clock
+    (EDF's time left: a diagonal constraint, where a smaller bound would not be sound), and clocks read by
+    observers and response times (their values are the answer)."""
+    keep = set(dynamic)
+    for rule in model.rules:
+        if isinstance(rule.guard, list):
+            keep |= {k for d in rule.guard for k in (d.i, d.j) if k}
+    for place in model.places.values():
+        keep |= place.atoms_read
+    keep |= {clock for _, clock, _ in model.observers.values()} | {clock for _, clock in model.measures.values()}
+    for fa in flat.atoms:
+        mine = set(per_atom[fa.index].values()) - keep
+        if not mine:
+            continue
+        local = {(1 << k, side): {c: v for c, v in consts.get((fa.index, 1 << k, side), {}).items() if c in mine}
+                 for k in range(len(fa.places)) for side in "LU"}
+        edges = []
+        for tr in fa.type.transitions:
+            if len(tr.sources) != 1:
+                continue
+            bit = 1 << fa.places.index(tr.sources[0])
+            step = model.steps.get((fa.index, tr.port or "", bit))
+            reset = {c for c, _ in step.resets} if step is not None else set()
+            edges += [(bit, 1 << fa.places.index(t), reset) for t in tr.targets]
+        changed = True
+        while changed:
+            changed = False
+            for bit, target, reset in edges:
+                for side in "LU":
+                    ahead, here = local[(target, side)], local[(bit, side)]
+                    for c, v in ahead.items():
+                        if c not in reset and here.get(c, 0) < v:
+                            here[c] = v
+                            changed = True
+        for k in range(len(fa.places)):
+            place = model.places[(fa.index, 1 << k)]
+            low, up = local[(1 << k, "L")], local[(1 << k, "U")]
+            place.ceilings = {c: (low.get(c, 0), up.get(c, 0)) for c in (set(low) | set(up)) & place.active}
 
 
 def _read_by_priorities(flat: FlatSystem, model: TimedModel) -> None:

@@ -59,7 +59,7 @@ class ZoneExplorer:
     """
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
-                 merge: bool = True, engine: str = "c") -> None:
+                 merge: bool = True, engine: str = "c", local_ceilings: bool = False) -> None:
         self.model: TimedModel = analyse(package, root)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
         from runtime.native.compiled import compile_space
@@ -92,6 +92,9 @@ class ZoneExplorer:
         self.edges = self.useful_edges(rule_edges([(r.low, r.high) for r in self.model.rules], tops))
         self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
         self.merge = merge
+        # Extra_LU with each place's bounds (model.py's _local_ceilings), off by default: measured, it changes nothing
+        # on DALA and RobNav (their clocks are read by priorities or observers) and stores more on Fischer 6
+        self.local_ceilings = local_ceilings
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
@@ -328,6 +331,28 @@ class ZoneExplorer:
         grown = dbm.constrain_all(dbm.up(start), after)
         return [(grown, True)] + [(z, False) for z in dbm.subtract(zone, grown)]
 
+    def ceilings(self, state: tuple) -> list[tuple[int, int, int]]:
+        """``(clock, L, U)`` of the clocks whose ceilings at ``state`` are their place's rather than the model's
+        (model.py's _local_ceilings), ascending."""
+        if not self.local_ceilings:
+            return []
+        out = []
+        for k, (atom, _) in enumerate(self.model.clocks, 1):
+            got = self.model.places[(atom, self.place_bit(state, atom))].ceilings.get(k)
+            if got is not None:
+                out.append((k, *got))
+        return out
+
+    def extrapolate(self, zone: np.ndarray, state: tuple) -> np.ndarray:
+        """``zone`` forgetting what no guard ahead of ``state`` tells apart (Extra_M, Extra_LU where local)."""
+        over = self.ceilings(state)
+        if not over:
+            return dbm.extrapolate(zone, self.ceiling)
+        lower, upper = self.ceiling.copy(), self.ceiling.copy()
+        for k, low, up in over:
+            lower[k], upper[k] = low, up
+        return dbm.extrapolate_lu(zone, lower, upper)
+
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
         idle = self.idle(state)
@@ -365,7 +390,7 @@ class ZoneExplorer:
         result = ZoneResult(0, 0, 0, 0.0, True)
 
         def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> None:
-            zone = dbm.extrapolate(zone, self.ceiling) if np.isfinite(self.ceiling).any() else zone
+            zone = self.extrapolate(zone, state)
             kept = passed.setdefault(state, [])
             step = Node(state, zone, parent, via, guard, grown)
             if kept:
@@ -461,6 +486,10 @@ class ZoneExplorer:
         out: list[int] = []
         idle = self.idle(state)
         out += [len(idle), *idle]
+        over = self.ceilings(state)
+        out.append(len(over))
+        for k, low, up in over:
+            out += [k, low, up]
         succ = self.successors(state)
         blocks = self.blocking(state, sorted({i for i, _ in succ}))
         fixed = self.passing(state, blocks)

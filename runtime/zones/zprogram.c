@@ -21,7 +21,7 @@ enum { OP_END, OP_CONST, OP_SLOT, OP_NEG, OP_ADD, OP_SUB, OP_MUL, OP_LT, OP_LE, 
 
 typedef struct {
     const int64_t *code;
-    int W, n, natoms, ntimed, nrules, ntick, nobs, nmeas, nsteps;
+    int W, n, natoms, ntimed, nrules, ntick, nobs, nmeas, nsteps, local;
     const int64_t *atom_offset, *atom_nplaces;
     const int64_t **place;   /* per atom, per place: ticks, discrete, natoms, atoms (clock op expr)..., nactive, ... */
     int64_t *place_base;
@@ -59,7 +59,7 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     memcpy(t->blob, words, len * sizeof(int64_t));
     const int64_t *p = t->blob;
     t->W = (int)*p++, t->n = (int)*p++, t->natoms = (int)*p++, t->ntimed = (int)*p++, t->nrules = (int)*p++;
-    t->ntick = (int)*p++, t->nobs = (int)*p++, t->nmeas = (int)*p++, t->nsteps = (int)*p++;
+    t->ntick = (int)*p++, t->nobs = (int)*p++, t->nmeas = (int)*p++, t->nsteps = (int)*p++, t->local = (int)*p++;
     int64_t ncode = *p++;
     t->code = p;
     p += ncode;
@@ -77,6 +77,7 @@ static Tables *tables_read(const int64_t *words, int64_t len)
         p += 2;  /* ticks, discrete */
         p = skip_atoms(p);
         p += 1 + p[0];  /* active clocks */
+        p += 1 + 3 * p[0];  /* (clock, L, U) of the place */
     }
     t->clock_atom = p;
     p += t->n + 1;
@@ -518,6 +519,24 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     }
     lpush(prog, idle.n), lcat(prog, idle.a, idle.n);
     free(idle.a);
+    /* clocks whose ceiling here is their place's */
+    {
+        L over = {0};
+        for (int k = 1; k <= t->n && t->local; k++) {
+            int64_t atom = t->clock_atom[k];
+            int pi = one_place(s[t->atom_offset[atom]]);
+            const int64_t *pl = t->place[t->place_base[atom] + pi];
+            const int64_t *act = skip_atoms(pl + 2);
+            const int64_t *loc = act + 1 + act[0];
+            for (int64_t a = 0; a < loc[0]; a++)
+                if (loc[1 + 3 * a] == k) {
+                    lpush(&over, k), lpush(&over, loc[2 + 3 * a]), lpush(&over, loc[3 + 3 * a]);
+                    break;
+                }
+        }
+        lpush(prog, over.n / 3), lcat(prog, over.a, over.n);
+        free(over.a);
+    }
     /* time passing (search.py's _passing_at) */
     {
         L before = {0}, after = {0}, waits = {0};

@@ -10,6 +10,7 @@
  *
  * Program layout (every bound is a triple i, j, c: xi - xj <= c):
  *   n_idle, idle clocks...
+ *   n_ceilings, (clock, L, U)...: the clocks whose ceilings here are their place's, not the model's
  *   passes (0: time cannot pass here), [n_before, bounds..., n_after, bounds..., n_waits,
  *       per wait: n, bounds..., kind (1: the lower bound k, c follow; 0: none), k, c, rule]
  *   n_checks, per check: kind (0 observer, 1 response clock), slot, clock, bound
@@ -541,7 +542,7 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
 }
 
 /* Where the parts of a program start (the layout above). */
-typedef struct { const int64_t *idle, *pass, *checks, *succ; int64_t nidle; } Parts;
+typedef struct { const int64_t *idle, *ceil, *pass, *checks, *succ; int64_t nidle, nceil; } Parts;
 
 static const int64_t *skip_bounds(const int64_t *p) { return p + 1 + 3 * p[0]; }
 
@@ -550,6 +551,8 @@ static Parts parts(const int64_t *p)
     Parts q;
     q.nidle = p[0], q.idle = p + 1;
     p += 1 + p[0];
+    q.nceil = p[0], q.ceil = p + 1;
+    p += 1 + 3 * p[0];
     q.pass = p;
     if (*p++) {
         p = skip_bounds(p);
@@ -701,10 +704,10 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
 
 /* Store (state, zone) reached from node parent by interaction via; zone is changed (extrapolated). */
 static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via, const int64_t *guard,
-               int64_t nguard, int grown)
+               int64_t nguard, int grown, const double *lower, const double *upper)
 {
     int d = x->d;
-    z_extrapolate(zone, d, x->ceiling);
+    z_extrapolate_lu(zone, d, lower, upper);
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
@@ -798,12 +801,23 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
             idx[k] = (int)q.idle[k];
         z_free(z, src, x->d, idx, (int)q.nidle);
     }
+    const double *lower = x->ceiling, *upper = x->ceiling;
+    double lo[256], up[256];
+    if (q.nceil) {
+        memcpy(lo, x->ceiling, x->d * sizeof(double));
+        memcpy(up, x->ceiling, x->d * sizeof(double));
+        for (int64_t k = 0; k < q.nceil; k++) {
+            lo[q.ceil[3 * k]] = (double)q.ceil[3 * k + 1];
+            up[q.ceil[3 * k]] = (double)q.ceil[3 * k + 2];
+        }
+        lower = lo, upper = up;
+    }
     Doubles out = {0};
     Longs grown = {0};
     int64_t n = elapse(x, pr, z, &out, &grown);
     int status = n < 0 ? (int)n : 0;
     for (int64_t k = 0; k < n && !status; k++)
-        status = add(x, state, out.a + k * x->d * x->d, parent, via, guard, nguard, (int)grown.a[k]);
+        status = add(x, state, out.a + k * x->d * x->d, parent, via, guard, nguard, (int)grown.a[k], lower, upper);
     free(out.a), free(grown.a);
     return status;
 }
