@@ -97,7 +97,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     """Is a configuration whose locations carry every label of ``labels`` reachable?  ``unknown`` when the
     search stops at ``max_states`` or after ``time_limit`` seconds."""
     from runtime.zones.node import GOAL
-    from runtime.zones.search import ZoneExplorer, ZoneResult
+    from runtime.zones.search import ZoneExplorer
 
     system, tr = load(path, grid)
     unknown = [lab for lab in labels if lab not in system.labels()]
@@ -111,8 +111,11 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
         result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)
     except _OutOfTime as stop:
         (progress or _deadline(None, None)).done()
-        result = ZoneResult(len(z.nodes), len({n.state for n in z.nodes}), stop.transitions, 0.0, False,
-                            "time-limit")
+        result = z.result
+        result.complete, result.stopped = False, "time-limit"
+        if z.search is None:  # the Python search counts its discrete states when it ends, which it did not
+            result.states, result.discrete = len(z.nodes), len({n.state for n in z.nodes})
+            result.transitions = stop.transitions
     seconds = time.perf_counter() - start
     found = result.violations.get(GOAL)
     if found is not None:
@@ -121,7 +124,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
         verdict = "unreachable"
     else:
         verdict = "unknown"
-    kept = sum(1 for n in z.nodes if not n.covered)
+    kept = int((~z.graph().covered).sum())
     out = Reach(verdict, result.states, result.discrete, kept, result.transitions, seconds, z.memory(),
                 resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, tr.scale,
                 verdict == "reachable" or system.strict is None)

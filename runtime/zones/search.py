@@ -101,6 +101,7 @@ class ZoneExplorer:
         self._ids: dict[tuple, int] = {}
         self._intern = None  # while a C search keeps the states: its numbering
         self.search = None  # the C search that ran (runtime/zones/csearch.py), if one did
+        self.result: ZoneResult | None = None  # the last search's result, as far as it went (also when it raised)
         #: A goal (reachability of places): groups of ``(state offset, place mask)``, the goal holding at a discrete
         #: state where each group has one alternative marked; its first node goes into violations under GOAL.
         self.goal: list[list[tuple[int, int]]] | None = None
@@ -381,13 +382,14 @@ class ZoneExplorer:
             from runtime.zones.csearch import CSearch
 
             self.search = CSearch(self, lib)
-            result = self.search.run(ZoneResult(0, 0, 0, 0.0, True), max_states, progress, stop_at_violation)
+            self.result = ZoneResult(0, 0, 0, 0.0, True)
+            result = self.search.run(self.result, max_states, progress, stop_at_violation)
             progress.done()
             result.seconds = time.perf_counter() - start
             return result
         passed: dict[tuple, list[int]] = {}
         waiting: deque[int] = deque()
-        result = ZoneResult(0, 0, 0, 0.0, True)
+        result = self.result = ZoneResult(0, 0, 0, 0.0, True)
 
         def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> None:
             zone = self.extrapolate(zone, state)
