@@ -58,3 +58,14 @@ def test_a_step_called_state_by_state_is_built_at_O0_and_the_c_search_at_O2(tmp_
     assert code == 0 and levels(err) == ["gcc -O0) ..."], err
     code, out, err = verify(capsys, PAIR, "--deadlock", "--progress")  # the C search
     assert "explored:" in out and levels(err)[-1] == "gcc -O2) ...", err
+
+
+def test_a_verify_without_progress_says_nothing_of_compiles_after_one_with_it(tmp_path, capsys, monkeypatch):
+    # Who hears of compiles is set per command: a run with --progress in the same process (a test suite, a
+    # campaign's worker) must not leave its listener to the next run, which shows no progress.
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path / "first"))
+    code, _, err = verify(capsys, str(PAIR), "--timed", "--schedulability", "--progress")
+    assert code == 0 and "compiling" in err
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path / "second"))  # nothing cached: it compiles again
+    code, _, err = verify(capsys, str(PAIR), "--timed", "--schedulability")
+    assert code == 0 and err == "", err

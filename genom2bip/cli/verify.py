@@ -161,9 +161,10 @@ def verb_verify(args: argparse.Namespace) -> int:
         error(f"{model.title}: {exc}")
         return EXIT_ERRORS
     options, listener = search_options(args), Printer(args)
-    if (args.progress or sys.stderr.isatty()) and not args.quiet:  # a compile is said where progress is shown
-        from runtime.native.build import tell
-        tell(lambda text: print(f"genom2bip: {text}", file=sys.stderr, flush=True))
+    from runtime.native.build import tell
+
+    shown = (args.progress or sys.stderr.isatty()) and not args.quiet  # a compile is said where progress is shown
+    tell((lambda text: print(f"genom2bip: {text}", file=sys.stderr, flush=True)) if shown else None)
     if args.method == "explore":
         return _explore(model, args, options, listener, EXIT_OK)
     localized = None
