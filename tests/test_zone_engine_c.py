@@ -200,3 +200,39 @@ def test_a_goal_is_found_at_the_same_node_by_both_searches(tmp_path, stop):
                     assert written == z.program(state, z.search.observers)
     assert found[0] == found[1] and found[0][0] is not None
     assert found[0][2] is not stop
+
+
+def test_extra_lu_plus_is_the_same_in_c_and_in_numpy():
+    # The C search extrapolates with z_extrapolate_lu_plus, the Python search with dbm.extrapolate_lu_plus: on
+    # random zones, bounds and marked clocks, both give the same canonical zone, which holds the one given.
+    import ctypes
+    import random
+
+    from runtime.zones import dbm
+
+    lib = library()
+    fn = lib.z_extrapolate_lu_plus
+    dbl = ctypes.POINTER(ctypes.c_double)
+    fn.argtypes = [dbl, ctypes.c_int, dbl, dbl, ctypes.POINTER(ctypes.c_ubyte)]
+    rng = random.Random(7)
+    changed = 0
+    for _ in range(400):
+        n = rng.randint(1, 4)
+        zone = dbm.free_all(n)
+        for _ in range(rng.randint(0, 6)):
+            i, j = rng.sample(range(n + 1), 2)
+            got = dbm.constrain(zone, i, j, rng.randint(-12, 12))
+            zone = got if got is not None else zone
+        zone = dbm.up(zone) if rng.random() < 0.5 else zone
+        lower = np.array([0.0] + [rng.randint(0, 8) for _ in range(n)])
+        upper = np.array([0.0] + [rng.randint(0, 8) for _ in range(n)])
+        plus = np.array([False] + [rng.random() < 0.6 for _ in range(n)])
+        ours = dbm.extrapolate_lu_plus(zone, lower, upper, plus)
+        theirs = np.ascontiguousarray(zone.copy())
+        fn(theirs.ctypes.data_as(dbl), n + 1, np.ascontiguousarray(lower).ctypes.data_as(dbl),
+           np.ascontiguousarray(upper).ctypes.data_as(dbl),
+           np.ascontiguousarray(plus, dtype=np.uint8).ctypes.data_as(ctypes.POINTER(ctypes.c_ubyte)))
+        assert np.array_equal(ours, theirs)
+        assert (ours >= zone).all()  # an abstraction holds at least the zone
+        changed += not np.array_equal(ours, zone)
+    assert changed > 50

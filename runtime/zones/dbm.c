@@ -80,6 +80,41 @@ int z_extrapolate(double *m, int d, const double *ceiling)
     return z_extrapolate_lu(m, d, ceiling, ceiling);
 }
 
+/* Extra_LU+ (Behrmann, Bouyer, Larsen, Pelanek) where plus[k]: a clock above its lower-bound constant has no
+ * bound left in its row, one above its upper-bound constant none in its column (its lower bound raised to it);
+ * only between clocks both marked (no priority compares them), Extra_LU elsewhere (dbm.py's extrapolate_lu_plus). */
+int z_extrapolate_lu_plus(double *m, int d, const double *lower, const double *upper, const unsigned char *plus)
+{
+    double first[256];
+    for (int k = 0; k < d; k++)
+        first[k] = -m[k];  /* row 0: each clock's lower bound, before anything changes */
+    int changed = 0;
+    for (int i = 0; i < d; i++)
+        for (int j = 0; j < d; j++) {
+            if (i == j)
+                continue;
+            double *v = m + (long)i * d + j, to = *v;
+            int li = i && plus[i] && first[i] > lower[i] + 1, uj = j && plus[j] && first[j] > upper[j] + 1;
+            if (li && (j == 0 || plus[j]))
+                to = INFINITY;
+            else if (uj && i && plus[i])
+                to = INFINITY;
+            else if (uj && !i)
+                to = -upper[j] - 1;
+            else if (*v > lower[i])
+                to = INFINITY;
+            else if (*v < -upper[j] - 1)
+                to = -upper[j] - 1;
+            if (to != *v) {
+                *v = to;
+                changed = 1;
+            }
+        }
+    if (changed)
+        z_close(m, d);
+    return changed;
+}
+
 /* Every bound of big at least small's. */
 int z_includes(const double *big, const double *small, int len)
 {

@@ -219,6 +219,33 @@ def extrapolate_lu(m: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.nd
     return close_np(out)
 
 
+def extrapolate_lu_plus(m: np.ndarray, lower: np.ndarray, upper: np.ndarray, plus: np.ndarray) -> np.ndarray:
+    """Extra_LU+ where ``plus`` (one bool per clock): a clock above its lower-bound constant has no bound left in its
+    row, one above its upper-bound constant none in its column (its lower bound raised to it); only between clocks
+    both marked (no priority compares them), Extra_LU elsewhere."""
+    first = -m[0, :]
+    n = m.shape[0]
+    idx = np.arange(n)
+    li = (idx != 0) & plus & (first > lower + 1)
+    uj = (idx != 0) & plus & (first > upper + 1)
+    rows, cols = np.meshgrid(idx, idx, indexing="ij")
+    both_plus = plus[rows] & (plus[cols] | (cols == 0))
+    out = m.copy()
+    drop_l = li[rows] & both_plus
+    drop_u = ~drop_l & uj[cols] & (rows != 0) & plus[rows]
+    raise_u = ~drop_l & ~drop_u & uj[cols] & (rows == 0)
+    rest = ~drop_l & ~drop_u & ~raise_u
+    above = rest & (m > lower[:, None]) & (m != INF)
+    low = rest & ~(m > lower[:, None]) & (m < -(upper[None, :] + 1))
+    diag = rows == cols
+    out[(drop_l | drop_u | above) & ~diag] = INF
+    clamp = (raise_u | low) & ~diag
+    out[clamp] = np.broadcast_to(-(upper[None, :] + 1), out.shape)[clamp]
+    if np.array_equal(out, m):
+        return m
+    return close_np(out)
+
+
 def union_np(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     """The zone ``a`` or ``b`` when their union is one (exact on integer points: the hull minus ``a`` lies in
     ``b``), else None.  Zones that differ only in the order of independent zero-time steps merge so."""

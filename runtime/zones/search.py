@@ -345,14 +345,16 @@ class ZoneExplorer:
         return out
 
     def extrapolate(self, zone: np.ndarray, state: tuple) -> np.ndarray:
-        """``zone`` forgetting what no guard ahead of ``state`` tells apart (Extra_M, Extra_LU where local)."""
+        """``zone`` forgetting what no guard ahead of ``state`` tells apart (Extra_M; Extra_LU+ between the clocks
+        whose ceilings are their place's)."""
         over = self.ceilings(state)
         if not over:
             return dbm.extrapolate(zone, self.ceiling)
         lower, upper = self.ceiling.copy(), self.ceiling.copy()
+        plus = np.zeros(len(lower), dtype=bool)
         for k, low, up in over:
-            lower[k], upper[k] = low, up
-        return dbm.extrapolate_lu(zone, lower, upper)
+            lower[k], upper[k], plus[k] = low, up, True
+        return dbm.extrapolate_lu_plus(zone, lower, upper, plus)
 
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""

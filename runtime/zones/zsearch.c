@@ -704,10 +704,13 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
 
 /* Store (state, zone) reached from node parent by interaction via; zone is changed (extrapolated). */
 static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via, const int64_t *guard,
-               int64_t nguard, int grown, const double *lower, const double *upper)
+               int64_t nguard, int grown, const double *lower, const double *upper, const unsigned char *plus)
 {
     int d = x->d;
-    z_extrapolate_lu(zone, d, lower, upper);
+    if (plus)
+        z_extrapolate_lu_plus(zone, d, lower, upper, plus);
+    else
+        z_extrapolate(zone, d, x->ceiling);
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
@@ -802,22 +805,26 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
         z_free(z, src, x->d, idx, (int)q.nidle);
     }
     const double *lower = x->ceiling, *upper = x->ceiling;
+    const unsigned char *plus = NULL;
     double lo[256], up[256];
+    unsigned char marked[256];
     if (q.nceil) {
         memcpy(lo, x->ceiling, x->d * sizeof(double));
         memcpy(up, x->ceiling, x->d * sizeof(double));
+        memset(marked, 0, x->d);
         for (int64_t k = 0; k < q.nceil; k++) {
             lo[q.ceil[3 * k]] = (double)q.ceil[3 * k + 1];
             up[q.ceil[3 * k]] = (double)q.ceil[3 * k + 2];
+            marked[q.ceil[3 * k]] = 1;
         }
-        lower = lo, upper = up;
+        lower = lo, upper = up, plus = marked;
     }
     Doubles out = {0};
     Longs grown = {0};
     int64_t n = elapse(x, pr, z, &out, &grown);
     int status = n < 0 ? (int)n : 0;
     for (int64_t k = 0; k < n && !status; k++)
-        status = add(x, state, out.a + k * x->d * x->d, parent, via, guard, nguard, (int)grown.a[k], lower, upper);
+        status = add(x, state, out.a + k * x->d * x->d, parent, via, guard, nguard, (int)grown.a[k], lower, upper, plus);
     free(out.a), free(grown.a);
     return status;
 }
