@@ -71,7 +71,7 @@ def reach_command(args, out, err) -> int:
     print(f"stored states: {r.states:,} ({r.kept:,} not covered at the end, {r.discrete:,} discrete)", file=out)
     print(f"visited transitions: {r.transitions:,}", file=out)
     print(f"time: {r.seconds:.3f} s", file=out)
-    print(f"memory: {r.peak_rss / 2**20:.1f} MiB peak (zones kept: {r.zone_bytes / 2**20:.2f} MiB)", file=out)
+    print(f"memory: {r.peak_rss / 2**20:.1f} MiB peak (the search holds {r.zone_bytes / 2**20:.2f} MiB)", file=out)
     if r.verdict == "reachable" and not args.no_trace:
         if r.trace_note:
             print(f"trace: {r.trace_note}", file=out)

@@ -28,7 +28,7 @@ class Reach:
     kept: int  # stored states no larger zone came to cover
     transitions: int  # symbolic transitions computed
     seconds: float
-    zone_bytes: int  # the zones kept
+    zone_bytes: int  # what the search holds (ZoneExplorer.memory)
     peak_rss: int  # bytes, the whole process
     grid: int  # strict constraints read on a 1/grid time grid (1: no strict constraint)
     exact: bool  # the verdict is dense time's (False: unreachable on the grid only)

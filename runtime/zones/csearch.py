@@ -215,6 +215,12 @@ class CSearch:
         if nodes:
             self._nodes(counts)
 
+    def memory(self) -> int:
+        """Bytes the search holds (zsearch.c's zs_memory)."""
+        counts = (ctypes.c_int64 * 16)()
+        self.lib.zs_counts(self.ctx, counts)
+        return counts[11]
+
     def program(self, state_id: int) -> list[int] | None:
         """The program the search used for a state (None if it needed none)."""
         n = self.lib.zs_program(self.ctx, state_id, None, 0)

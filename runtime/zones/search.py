@@ -559,7 +559,10 @@ class ZoneExplorer:
         return np.array([n.state[offset] for n in self.nodes], dtype=np.int64)
 
     def memory(self) -> int:
-        """Bytes the kept zones take (the bulk of a long search; the caches of discrete states come beside)."""
+        """Bytes the search holds: in C, its zones, states, programs and nodes (csearch.py); in Python, the kept
+        zones (the bulk of a long search; the caches of discrete states come beside)."""
+        if self.search is not None:
+            return self.search.memory()
         return (len(self.nodes) - self.dropped) * (self.n + 1) ** 2 * 4
 
     def merge_into(self, step: Node, kept: list[int]) -> int:
