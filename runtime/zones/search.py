@@ -376,7 +376,7 @@ class ZoneExplorer:
         progress = progress or null_progress()
         start = time.perf_counter()
         lib = None
-        if self.engine == "c":
+        if self.engine == "c" and self.n < 256:  # the C operations keep a row or column of a zone on the stack
             from runtime.zones.csearch import library
 
             lib = library()
