@@ -16,7 +16,6 @@ Times are the search alone (the model built and its step compiled beforehand), w
 from __future__ import annotations
 
 import argparse
-import ctypes
 import sys
 import tempfile
 import time
@@ -94,8 +93,7 @@ def main() -> None:
           f"{'zones MB':>9} {'states MB':>9} {'programs MB':>11}")
     for name, model in built:
         z, r, t = search(model, "c", args.max_states)
-        counts = (ctypes.c_int64 * 16)()
-        z.search.lib.zs_counts(z.search.ctx, counts)
+        counts = z.search.counts()
         mb = [counts[k] / 2 ** 20 for k in (12, 13, 14)]
         print(f"{name:24} {r.states:>10,} {r.discrete:>10,} {str(r.complete):>8} {t:>8.1f} {r.states / t:>8,.0f} "
               f"{mb[0]:>9.0f} {mb[1]:>9.0f} {mb[2]:>11.0f}", flush=True)

@@ -197,8 +197,7 @@ class CSearch:
     def _refresh(self, result, nodes: bool) -> None:
         """``result`` as the search stands: counts, violations and maxima; with ``nodes``, the explorer's nodes."""
         lib = self.lib
-        counts = (ctypes.c_int64 * 16)()
-        lib.zs_counts(self.ctx, counts)
+        counts = self.counts()
         result.states, result.discrete, result.transitions, result.merged = counts[0], counts[1], counts[2], counts[3]
         self.z.dropped = counts[4]
         violation = (ctypes.c_int32 * (len(self.observers) + 1))()
@@ -215,11 +214,16 @@ class CSearch:
         if nodes:
             self._nodes(counts)
 
-    def memory(self) -> int:
-        """Bytes the search holds (zsearch.c's zs_memory)."""
+    def counts(self) -> list[int]:
+        """zsearch.c's zs_counts: nodes, discrete states, transitions, merged, dropped, steps, edges, members,
+        guard words, waiting, error argument, bytes held, then bytes of zones, of states and of programs."""
         counts = (ctypes.c_int64 * 16)()
         self.lib.zs_counts(self.ctx, counts)
-        return counts[11]
+        return list(counts)
+
+    def memory(self) -> int:
+        """Bytes the search holds (zsearch.c's zs_memory)."""
+        return self.counts()[11]
 
     def program(self, state_id: int) -> list[int] | None:
         """The program the search used for a state (None if it needed none)."""
@@ -235,8 +239,7 @@ class CSearch:
             error, self.error = self.error, None
             raise error
         if status == -2:
-            counts = (ctypes.c_int64 * 16)()
-            self.lib.zs_counts(self.ctx, counts)
+            counts = self.counts()
             raise unsupported(f"priority {self.z.model.rules[counts[10]].name}: time waits for a clock condition "
                               "that is not one lower bound")
         if status == -9:
