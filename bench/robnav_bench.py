@@ -224,19 +224,10 @@ def main() -> None:
                          "robnav-artefact-edf-suspension.xta (a range 0-50 or a list 0,11,30): one row per value, "
                          "beside the artefact's res.csv")
     args = ap.parse_args()
-    from genom2bip.parser import parse_paths
-
     cores = _numbers(args.cores)
     if args.suspension is not None:
         return suspension_rows(args, cores, _numbers(args.suspension))
-    paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
-    description = parse_paths(paths, [str(args.artefact)])
-    execution, offsets, requests, ready = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(),
-                                                        description)
-    after = 0 if args.requests_at_start else ready
-    out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "client.yaml").write_text(client_text(requests, after, request_inputs(description, requests)))
+    paths, out, execution, offsets, requests, after = prepare(args)
     print(f"{len(execution)} codel intervals, offsets {offsets}, client {' -> '.join(requests)}, "
           f"the first request at {after} ms")
     print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; "
@@ -246,18 +237,40 @@ def main() -> None:
     for nc in cores:
         platform = out / f"edf{nc}.yaml"
         platform.write_text(platform_text(nc, execution, offsets, args.releases))
-        queue = ctx.Queue()
-        proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
-                                             args.exceptions, args.max_states, args.progress, queue))
-        proc.start()
-        got = queue.get()
-        proc.join()
+        got = one_run(ctx, args, paths, platform, out)
         rows.append((nc, got))
         show(nc, got)
     print()
     holds = [nc for nc, g in rows if _track_ok(g)]
     print(f"track keeps its period with {', '.join(map(str, holds)) or 'none'} of the cores tried "
           f"({', '.join(str(nc) for nc, _ in rows)}); published: from {PUBLISHED_SCHEDULABLE_FROM} on")
+
+
+def prepare(args) -> tuple[list[str], Path, dict, dict, list[str], int]:
+    """The artefact read (paths, codel intervals, offsets, requests, when the first is sent) and the client mission
+    written into the output directory."""
+    from genom2bip.parser import parse_paths
+
+    paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
+    description = parse_paths(paths, [str(args.artefact)])
+    execution, offsets, requests, ready = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(),
+                                                        description)
+    after = 0 if args.requests_at_start else ready
+    out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "client.yaml").write_text(client_text(requests, after, request_inputs(description, requests)))
+    return paths, out, execution, offsets, requests, after
+
+
+def one_run(ctx, args, paths: list[str], platform: Path, out: Path) -> dict:
+    """The checks of one platform file, in a process of their own (:func:`run`)."""
+    queue = ctx.Queue()
+    proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
+                                         args.exceptions, args.max_states, args.progress, queue))
+    proc.start()
+    got = queue.get()
+    proc.join()
+    return got
 
 
 def _numbers(text: str) -> list[int]:
@@ -270,19 +283,11 @@ def _numbers(text: str) -> list[int]:
 
 def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
     """One run per suspension delay (and nc), the largest response times beside res.csv's row of that delay."""
-    from genom2bip.parser import parse_paths
-
-    paths = [str(args.artefact / c / f"{c}.gen") for c in COMPONENTS]
-    description = parse_paths(paths, [str(args.artefact)])
-    execution, offsets, requests, ready = read_artefact((args.artefact / "robnav-artefact-edf.xta").read_text(),
-                                                        description)
     task = suspending_task((args.artefact / "robnav-artefact-edf-suspension.xta").read_text())
     if task is None:
         raise SystemExit("robnav-artefact-edf-suspension.xta: no manager with a 'delay' state")
     published = published_by_sd(args.artefact / "res.csv") if (args.artefact / "res.csv").exists() else {}
-    out = args.keep or Path(tempfile.mkdtemp(prefix="robnav-"))
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "client.yaml").write_text(client_text(requests, 0 if args.requests_at_start else ready))
+    paths, out, execution, offsets, _, _ = prepare(args)
     order = ["robloco.odo", "robloco.track", "robmap.fuse", "roblaser.scan", "robmotion.plan"]
     print(f"{task} waits sd ms once granted its core, keeping it (the artefact's 'delay' state); "
           f"nc = {', '.join(map(str, cores))}; files in {out}")
@@ -294,12 +299,7 @@ def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
         for sd in delays:
             platform = out / f"edf{nc}-sd{sd}.yaml"
             platform.write_text(platform_text(nc, execution, offsets, args.releases, {task: sd} if sd else None))
-            queue = ctx.Queue()
-            proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
-                                                 args.exceptions, args.max_states, args.progress, queue))
-            proc.start()
-            got = queue.get()
-            proc.join()
+            got = one_run(ctx, args, paths, platform, out)
             ref = published.get(sd, {}) if nc == 4 else {}
             cells = []
             for t in order:
