@@ -38,23 +38,18 @@ def _until(lines: queue.Queue, seen: dict[str, list[str]], done) -> None:
         seen[name].append(line)
 
 
-def test_one_ctrl_c_prints_what_was_found_and_stops_the_whole_command(tmp_path):
-    # mid's codel may take 1 s on a 20 ms task: every task overruns at once, the response times search for minutes
-    platform = platform_file(tmp_path, "cores: 1\nexecution:\n  Anomaly.mid.mid_step: [0 ms, 1 s]\n")
-    props = tmp_path / "p.mcl"
-    props.write_text("ok: deadlock free;\n")
+def _interrupted(argv: list[str], cwd, ready) -> tuple[int, str, str]:
+    """``genom2bip verify`` with ``argv``, one SIGINT once ``ready(seen)`` holds of the lines printed so far; its exit
+    status, stdout and stderr once it has ended."""
     env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "verify", str(ANOMALY), "--timed", "--platform",
-                             str(platform), "--response-times", "--deadlock", "--property", str(props),
-                             "--progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            cwd=tmp_path)
+    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "verify", *argv], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=cwd)
     lines: queue.Queue = queue.Queue()
     for stream, name in ((proc.stdout, "out"), (proc.stderr, "err")):
         threading.Thread(target=_lines, args=(stream, lines, name), daemon=True).start()
     seen: dict[str, list[str]] = {"out": [], "err": []}
     try:
-        _until(lines, seen, lambda s: sum("overrun reachable" in x for x in s["out"]) == 3
-               and any(x.startswith("states ") for x in s["err"]))
+        _until(lines, seen, ready)
         assert proc.poll() is None, "".join(seen["out"] + seen["err"])
         proc.send_signal(signal.SIGINT)
         code = proc.wait(timeout=PATIENCE)
@@ -63,7 +58,19 @@ def test_one_ctrl_c_prints_what_was_found_and_stops_the_whole_command(tmp_path):
             proc.kill()
     _until(lines, seen, lambda s: False)
     _until(lines, seen, lambda s: False)
-    out, err = "".join(seen["out"]), "".join(seen["err"])
+    return code, "".join(seen["out"]), "".join(seen["err"])
+
+
+def test_one_ctrl_c_prints_what_was_found_and_stops_the_whole_command(tmp_path):
+    # mid's codel may take 1 s on a 20 ms task: every task overruns at once, the response times search for minutes
+    platform = platform_file(tmp_path, "cores: 1\nexecution:\n  Anomaly.mid.mid_step: [0 ms, 1 s]\n")
+    props = tmp_path / "p.mcl"
+    props.write_text("ok: deadlock free;\n")
+    code, out, err = _interrupted(
+        [str(ANOMALY), "--timed", "--platform", str(platform), "--response-times", "--deadlock", "--property",
+         str(props), "--progress"], tmp_path,
+        lambda s: sum("overrun reachable" in x for x in s["out"]) == 3 and any(x.startswith("states ")
+                                                                              for x in s["err"]))
     assert code == 4, out + err  # three overruns were found: the answer, whatever is left undecided
     assert "genom2bip: stopping: what was found so far follows (Ctrl-C again stops at once)" in err
     assert "search stopped (interrupted by Ctrl-C) after " in out, out
@@ -81,25 +88,8 @@ def test_one_ctrl_c_during_an_untimed_search_stops_the_properties_after_it(tmp_p
     dala = ROOT / "descriptions/dala"
     props = tmp_path / "p.mcl"
     props.write_text("a: deadlock free;\nb: deadlock free;\n")
-    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, "-m", "genom2bip", "verify", str(dala), "--deadlock", "--property",
-                             str(props), "--progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=env, cwd=tmp_path)
-    lines: queue.Queue = queue.Queue()
-    for stream, name in ((proc.stdout, "out"), (proc.stderr, "err")):
-        threading.Thread(target=_lines, args=(stream, lines, name), daemon=True).start()
-    seen: dict[str, list[str]] = {"out": [], "err": []}
-    try:
-        _until(lines, seen, lambda s: any(x.startswith("states ") for x in s["err"]))
-        assert proc.poll() is None, "".join(seen["out"] + seen["err"])
-        proc.send_signal(signal.SIGINT)
-        code = proc.wait(timeout=PATIENCE)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    _until(lines, seen, lambda s: False)
-    _until(lines, seen, lambda s: False)
-    out, err = "".join(seen["out"]), "".join(seen["err"])
+    code, out, err = _interrupted([str(dala), "--deadlock", "--property", str(props), "--progress"], tmp_path,
+                                  lambda s: any(x.startswith("states ") for x in s["err"]))
     assert code == 5, out + err
     assert "explored: " in out and "interrupted" in out
     assert "interrupted: not run: property a, property b" in out, out
