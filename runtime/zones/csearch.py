@@ -38,7 +38,7 @@ def library():
     lib = ctypes.CDLL(str(build(source, cc, what="zone search")), mode=ctypes.RTLD_LOCAL)
     p, i32, i64, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64, ctypes.POINTER(ctypes.c_double)
     for name, res, args in (
-            ("zs_new", p, [i32, dbl, i32, i32, i32]), ("zs_free", None, [p]),
+            ("zs_new", p, [i32, dbl, i32, i32]), ("zs_free", None, [p]),
             ("zs_set_program", i32, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_initial", i32, [p, i64, dbl, PROGRAM]),
             ("zs_run", i32, [p, i64, i32, PROGRAM, PROGRESS, i64, i32]),
@@ -73,7 +73,7 @@ class CSearch:
         self.d = z.n + 1
         self.observers = {atom: slot for slot, atom in enumerate(z.model.observers)}
         ceiling = np.ascontiguousarray(z.ceiling, dtype=np.float64)
-        self.ctx = lib.zs_new(self.d, _dbl(ceiling), len(self.observers), z.n, int(z.merge))
+        self.ctx = lib.zs_new(self.d, _dbl(ceiling), len(self.observers), int(z.merge))
         if not self.ctx:
             raise MemoryError("zone search: no memory for its context")
         self.error: BaseException | None = None

@@ -54,9 +54,8 @@ def find(z, watch: np.ndarray, limit: int = 200):
     """Lassos through nodes where ``watch`` (one bool per node) holds: see runtime/zones/search.py's lassos."""
     g = z.graph()
     n = len(g.parent)
-    rep = np.arange(n)
     covered, by = g.covered.tolist(), g.by.tolist()
-    rl = rep.tolist()
+    rl = list(range(n))
     for k in range(n - 1, -1, -1):  # a node is covered by one stored after it
         if covered[k] and by[k] >= 0:
             rl[k] = rl[by[k]]

@@ -30,9 +30,6 @@ typedef struct {
     const int64_t **step;    /* natoms, (clock op expr)..., nresets, (clock expr)... */
     const int64_t **rule;    /* kind, [ndiag triples | expr], nedges, edges... */
     int64_t *blob;
-    /* interaction numbers: index, nports, per port: atom, nplaces, step per place...; nlow, lows, nhigh, highs */
-    int64_t **inter;
-    int64_t ninter;
     succ_fn succ;
     int64_t budget;
     inter_fn ask_inter;
@@ -43,9 +40,7 @@ static void tables_free(Tables *t)
 {
     if (!t)
         return;
-    for (int64_t i = 0; i < t->ninter; i++)
-        free(t->inter[i]);
-    free(t->inter), free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob), free(t);
+    free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob), free(t);
 }
 
 static const int64_t *skip_atoms(const int64_t *p) { return p + 1 + 3 * p[0]; }
@@ -223,10 +218,9 @@ typedef struct {
     int64_t **row;
     int64_t nen;
     /* memo of regions: rule, acc, result (each result: a list of [n, triples...]) */
-    L memo_key, memo_val;  /* key: r, nacc, acc...; val: offset into regions pool per key */
-    L memo_off;
-    L pool;                /* results: count, then per region: n, triples... */
-    int depth;
+    L memo_key;            /* per memo entry: r, nacc, acc... */
+    L memo_off;            /* per memo entry: where its result starts in pool */
+    L pool;                /* results: count (-1: everywhere), then per region: n, triples... */
 } Prog;
 
 static int feasible(Prog *g, const int64_t *b, int64_t n)
@@ -469,7 +463,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
         cap *= 16;
     }
     int status = 0;
-    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, {0}, 0};
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}};
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
     if (n < 0) {
@@ -712,6 +706,6 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     }
 out:
     free(buf), free(via), free(sidx), free(srow), free(g.index), free(g.row);
-    free(g.memo_key.a), free(g.memo_val.a), free(g.memo_off.a), free(g.pool.a);
+    free(g.memo_key.a), free(g.memo_off.a), free(g.pool.a);
     return status;
 }

@@ -41,7 +41,7 @@ typedef struct { int32_t *a; int32_t n, cap; uint8_t seen; } Kept;
 typedef struct { char *a; int64_t n, size; VEC(int64_t) free; } Pool;  /* zone slots of one width */
 
 typedef struct {
-    int d, nobs, nclocks, merge;
+    int d, nobs, merge;
     double *ceiling;
     Pool shorts, floats;    /* zone slots (see slot_new) */
     VEC(Node) nodes;
@@ -69,19 +69,18 @@ typedef struct {
     int64_t *hash;          /* open addressing: state + 1, 0 empty */
     int64_t hcap;
     int64_t *inter_key, **inter_val, icap, icount;
-    program_fn ask;
     int64_t prog_words;     /* words held by programs */
     int told;               /* violations found when zs_run last looked */
 } Ctx;
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
 
-void *zs_new(int d, const double *ceiling, int nobs, int nclocks, int merge)
+void *zs_new(int d, const double *ceiling, int nobs, int merge)
 {
     Ctx *x = calloc(1, sizeof(Ctx));
     if (!x)
         return NULL;
-    x->d = d, x->nobs = nobs, x->nclocks = nclocks, x->merge = merge;
+    x->d = d, x->nobs = nobs, x->merge = merge;
     x->ceiling = malloc(d * sizeof(double));
     memcpy(x->ceiling, ceiling, d * sizeof(double));
     x->violation = malloc((nobs + 1) * sizeof(int32_t));
@@ -111,10 +110,7 @@ void zs_free(void *p)
     free(x->floats.free.a), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
-    if (x->tables) {
-        x->tables->ninter = 0;
-        tables_free(x->tables);
-    }
+    tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
     free(x->inter_key), free(x->inter_val), free(x->bytes.a), free(x->ends.a), free(x->enc), free(x->hash), free(x);
