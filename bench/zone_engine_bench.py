@@ -1,6 +1,6 @@
 """The zone engine's speed: the C search beside the Python reference on the same models, in the same run.
 
-Run ``python bench/zone_engine_bench.py [--states N] [--full] [--robnav ARTEFACT_DIR]``.
+Run ``python bench/zone_engine_bench.py [--states N] [--full] [--reduce] [--robnav ARTEFACT_DIR]``.
 
 Both searches store the same nodes in the same order (tests/test_zone_engine_c.py), so the first N symbolic
 states of one are those of the other: each model is searched by both up to ``--states`` (default 20,000)
@@ -59,8 +59,8 @@ def robnav_model(artefact: Path):
     return build_model(paths, include_dirs=[str(artefact)], no_rules=True, time=settings)
 
 
-def search(model, engine: str, states: int | None) -> tuple[object, object, float]:
-    z = ZoneExplorer(model.package, model.root, SearchOptions().externs, engine=engine)
+def search(model, engine: str, states: int | None, reduce: bool = False) -> tuple[object, object, float]:
+    z = ZoneExplorer(model.package, model.root, SearchOptions().externs, engine=engine, reduce=reduce)
     z.successors(z.space.state(z.space.initial_ids[0]))  # the compiled step built before the clock starts
     start = time.perf_counter()
     result = z.explore(max_states=states)
@@ -73,6 +73,8 @@ def main() -> None:
     ap.add_argument("--full", action="store_true", help="then search each model to the end with the C engine")
     ap.add_argument("--max-states", type=int, default=6_000_000, help="bound of the --full searches")
     ap.add_argument("--robnav", type=Path, metavar="ARTEFACT_DIR")
+    ap.add_argument("--reduce", action="store_true",
+                    help="also search each model with the partial-order reduction (to --states): what it left out")
     args = ap.parse_args()
     models = list(dala_models())
     if args.robnav:
@@ -87,6 +89,15 @@ def main() -> None:
         assert (rp.states, rp.transitions) == (rc.states, rc.transitions), name
         print(f"{name:24} {rc.states:>9,} {tp:>9.2f} {rp.states / tp:>12,.0f} {tc:>8.2f} {rc.states / tc:>10,.0f} "
               f"{tp / tc:>6.1f}x", flush=True)
+    if args.reduce:
+        print(f"\n{'model (C, reduction)':24} {'states':>9} {'off: discrete':>13} {'on: discrete':>12} "
+              f"{'sets asked':>10} {'smaller':>8} {'steps left out':>14} {'off s':>6} {'on s':>6}")
+        for name, model in built:
+            _, off, t0 = search(model, "c", args.states)
+            z, on, t1 = search(model, "c", args.states, reduce=True)
+            asked, smaller, left, _ = z.por.stats
+            print(f"{name:24} {on.states:>9,} {off.discrete:>13,} {on.discrete:>12,} {asked:>10,} {smaller:>8,} "
+                  f"{left:>14,} {t0:>6.1f} {t1:>6.1f}", flush=True)
     if not args.full:
         return
     print(f"\n{'model (C, to the end)':24} {'states':>10} {'discrete':>10} {'complete':>8} {'s':>8} {'st/s':>8} "

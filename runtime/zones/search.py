@@ -59,7 +59,7 @@ class ZoneExplorer:
     """
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
-                 merge: bool = True, engine: str = "c", local_ceilings: bool = False) -> None:
+                 merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False) -> None:
         self.model: TimedModel = analyse(package, root)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
         from runtime.native.compiled import compile_space
@@ -108,6 +108,9 @@ class ZoneExplorer:
         #: Told the live ZoneResult as the search goes (after each expanded state in Python; every 1,024 and at
         #: each violation found in C, the nodes so far readable); it may raise to stop the search.
         self.watcher = None
+        #: Partial-order reduction where time cannot pass (runtime/zones/reduction.py), built when a search starts.
+        self.reduce = reduce
+        self.por = None
 
     # -- the discrete side ------------------------------------------------------------------------
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
@@ -375,6 +378,10 @@ class ZoneExplorer:
         """Breadth-first over symbolic states; observers checked and watched clocks maximised on the way."""
         progress = progress or null_progress()
         start = time.perf_counter()
+        if self.reduce and self.por is None:
+            from runtime.zones.reduction import PartialOrder
+
+            self.por = PartialOrder(self)
         lib = None
         if self.engine == "c" and self.n < 256:  # the C operations keep a row or column of a zone on the stack
             from runtime.zones.csearch import library
@@ -393,7 +400,8 @@ class ZoneExplorer:
         waiting: deque[int] = deque()
         result = self.result = ZoneResult(0, 0, 0, 0.0, True)
 
-        def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> None:
+        def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> bool:
+            """Store the node; False when a stored zone covers it."""
             zone = self.extrapolate(zone, state)
             kept = passed.setdefault(state, [])
             step = Node(state, zone, parent, via, guard, grown)
@@ -404,7 +412,7 @@ class ZoneExplorer:
                     if parent >= 0:  # the step is kept for cycles (lassos), its zone not: the covering node's stands
                         step.zone, step.by = None, kept[bigger[0]]
                         self.out[parent].append((kept[bigger[0]], step))
-                    return
+                    return False
                 for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):
                     old = self.nodes[kept[i]]
                     old.covered, old.by = True, len(self.nodes)  # a larger zone came: no need to expand this one
@@ -420,6 +428,7 @@ class ZoneExplorer:
                 self.out[parent].append((len(self.nodes) - 1, step))
             kept.append(len(self.nodes) - 1)
             waiting.append(len(self.nodes) - 1)
+            return True
 
         for sid in self.space.initial_ids:
             state = self.space.state(sid)
@@ -442,19 +451,29 @@ class ZoneExplorer:
             enabled = sorted({i for i, _ in succ})
             blocks = self.blocking(node.state, enabled)
             here = node.zone
-            for index, nxt in succ:
-                need, resets = self.guard(index, node.state)
-                met = dbm.constrain_all(here, need)
-                if met is None:
-                    continue
-                for piece, cut in self.allowed(met, index, blocks):
-                    zone = piece
-                    for c, v in resets:
-                        zone = dbm.reset(zone, c, v)
-                    zone = self.forget(zone, nxt)
-                    result.transitions += 1
-                    for z, grown in self.elapse(zone, nxt):
-                        add(nxt, z, k, index, need + cut, grown)
+            keep = None  # the reduction's set, fired first; the others when one of its steps reaches a stored zone
+            if self.por is not None and self.passing(node.state, blocks) is None:
+                keep = self.por.ample(node.state, succ)
+            old, fired = False, result.transitions  # the rest too when none of the set fires in this zone
+            for first in ((True, False) if keep is not None else (True,)):
+                if not first and not old and result.transitions > fired:
+                    self.por.stats[3] += 1
+                    break
+                for index, nxt in succ:
+                    if keep is not None and (index in keep) != first:
+                        continue
+                    need, resets = self.guard(index, node.state)
+                    met = dbm.constrain_all(here, need)
+                    if met is None:
+                        continue
+                    for piece, cut in self.allowed(met, index, blocks):
+                        zone = piece
+                        for c, v in resets:
+                            zone = dbm.reset(zone, c, v)
+                        zone = self.forget(zone, nxt)
+                        result.transitions += 1
+                        for z, grown in self.elapse(zone, nxt):
+                            old |= not add(nxt, z, k, index, need + cut, grown)
             if max_states is not None and len(self.nodes) >= max_states:
                 result.complete, result.stopped = False, "max-states"
                 break

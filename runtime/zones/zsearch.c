@@ -38,12 +38,13 @@ typedef struct {
 typedef struct { int32_t from, target, ref; } Edge;  /* ref >= 0: a node; ref < 0: step -ref-1 */
 typedef struct { int32_t member, next; } Member;
 typedef struct { int32_t *a; int32_t n, cap; uint8_t seen; } Kept;
-typedef struct { char *a; int64_t n, size; VEC(int64_t) free; } Pool;  /* zone slots of one width */
+typedef struct { char *a; int32_t *refs; int64_t n, size; VEC(int64_t) free; } Pool;  /* zone slots of one width */
 
 typedef struct {
     int d, nobs, merge;
     double *ceiling;
     Pool shorts, floats;    /* zone slots (see slot_new) */
+    int64_t *zkey, zcap, zused;  /* the zones stored once each: open addressing on slot + 1, 0 empty, -1 gone */
     VEC(Node) nodes;
     VEC(Node) steps;        /* steps into a zone another node covers */
     VEC(Edge) edges;
@@ -71,7 +72,15 @@ typedef struct {
     int64_t *inter_key, **inter_val, icap, icount;
     int64_t prog_words;     /* words held by programs */
     int told;               /* violations found when zs_run last looked */
+    /* partial-order reduction where time cannot pass (runtime/zones/reduction.py computes the sets) */
+    program_fn ask_ample;   /* NULL: off */
+    VEC(int64_t *) amp;     /* per state: [n, interactions...] to fire first, AMP_ALL for all; NULL: not asked */
+    int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
+    int64_t reduced;        /* expansions that left steps out */
 } Ctx;
+
+static int64_t amp_all[1] = {-1};
+#define AMP_ALL amp_all
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
 
@@ -106,8 +115,12 @@ void zs_free(void *p)
         free(x->prog.a[i]);
     for (int64_t i = 0; i < x->kept.n; i++)
         free(x->kept.a[i].a);
+    for (int64_t i = 0; i < x->amp.n; i++)
+        if (x->amp.a[i] != AMP_ALL)
+            free(x->amp.a[i]);
+    free(x->amp.a);
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
-    free(x->floats.free.a), free(x->nodes.a), free(x->steps.a);
+    free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
     tables_free(x->tables);
@@ -187,6 +200,14 @@ static int grow_states(Ctx *x, int64_t n)
             x->prog.a = a, x->kept.a = k, x->kept.cap = x->prog.cap;
         }
         Kept none = {0};
+        if (x->amp.n == x->amp.cap) {
+            x->amp.cap = x->prog.cap;
+            int64_t **b = realloc(x->amp.a, x->amp.cap * sizeof(int64_t *));
+            if (!b)
+                return -9;
+            x->amp.a = b;
+        }
+        x->amp.a[x->amp.n++] = NULL;
         x->prog.a[x->prog.n++] = NULL;
         x->kept.a[x->kept.n++] = none;
     }
@@ -329,9 +350,10 @@ static int64_t pool_take(Pool *p)
         return p->free.a[--p->free.n];
     if (p->n % 1024 == 0) {
         char *a = realloc(p->a, (p->n + 1024) * p->size);
-        if (!a)
+        int32_t *r = a ? realloc(p->refs, (p->n + 1024) * sizeof(int32_t)) : NULL;
+        if (!a || !r)
             return -1;
-        p->a = a;
+        p->a = a, p->refs = r;
     }
     return p->n++;
 }
@@ -344,25 +366,86 @@ static int fits_short(const double *z, int64_t len)
     return 1;
 }
 
+/* -- zones stored once each ------------------------------------------------------------------------
+ * Most symbolic states share their zone with others (whole DALA on two cores: 76,423 stored zones, 1,847
+ * different), so a zone slot is shared and counted: slot_new finds an equal zone through a hash table and
+ * slot_drop lets a slot go with its last user.  Slots are never changed once written. */
+static const char *slot_bytes(const Ctx *x, int64_t s)
+{
+    return s & 1 ? x->floats.a + (s >> 1) * x->floats.size : x->shorts.a + (s >> 1) * x->shorts.size;
+}
+
+static int32_t *slot_refs(Ctx *x, int64_t s)
+{
+    return s & 1 ? &x->floats.refs[s >> 1] : &x->shorts.refs[s >> 1];
+}
+
+static uint64_t slot_hash(const Ctx *x, int64_t s)
+{
+    return hash_bytes((const uint8_t *)slot_bytes(x, s), s & 1 ? x->floats.size : x->shorts.size) ^ (uint64_t)(s & 1);
+}
+
+static int zkey_grow(Ctx *x)
+{
+    int64_t cap = x->zcap ? 2 * x->zcap : 4096, *old = x->zkey, ocap = x->zcap;
+    int64_t *key = calloc(cap, sizeof(int64_t));
+    if (!key)
+        return -1;
+    x->zkey = key, x->zcap = cap, x->zused = 0;
+    for (int64_t i = 0; i < ocap; i++)
+        if (old[i] > 0) {
+            int64_t h = (int64_t)(slot_hash(x, old[i] - 1) & (uint64_t)(cap - 1));
+            while (key[h])
+                h = (h + 1) & (cap - 1);
+            key[h] = old[i], x->zused++;
+        }
+    free(old);
+    return 0;
+}
+
+/* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory. */
 static int64_t slot_new(Ctx *x, const double *z)
 {
     int64_t len = (int64_t)x->d * x->d;
+    int64_t s;
     if (fits_short(z, len)) {
-        int64_t s = pool_take(&x->shorts);
-        if (s < 0)
+        if ((s = pool_take(&x->shorts)) < 0)
             return -1;
         int16_t *dst = (int16_t *)x->shorts.a + s * len;
         for (int64_t k = 0; k < len; k++)
             dst[k] = z[k] == INFINITY ? SHORT_INF : (int16_t)z[k];
-        return 2 * s;
+        s = 2 * s;
+    } else {
+        if ((s = pool_take(&x->floats)) < 0)
+            return -1;
+        float *dst = (float *)x->floats.a + s * len;
+        for (int64_t k = 0; k < len; k++)
+            dst[k] = (float)z[k];
+        s = 2 * s + 1;
     }
-    int64_t s = pool_take(&x->floats);
-    if (s < 0)
+    if (2 * (x->zused + 1) > x->zcap && zkey_grow(x))
         return -1;
-    float *dst = (float *)x->floats.a + s * len;
-    for (int64_t k = 0; k < len; k++)
-        dst[k] = (float)z[k];
-    return 2 * s + 1;
+    int64_t size = s & 1 ? x->floats.size : x->shorts.size, mask = x->zcap - 1;
+    int64_t h = (int64_t)(slot_hash(x, s) & (uint64_t)mask), hole = -1;
+    for (; x->zkey[h]; h = (h + 1) & mask) {
+        int64_t t = x->zkey[h] - 1;
+        if (t < 0) {
+            if (hole < 0)
+                hole = h;
+            continue;
+        }
+        if ((t & 1) == (s & 1) && !memcmp(slot_bytes(x, t), slot_bytes(x, s), size)) {
+            Pool *p = s & 1 ? &x->floats : &x->shorts;  /* the copy just written goes back */
+            PUSH(p->free, s >> 1);
+            (*slot_refs(x, t))++;
+            return t;
+        }
+    }
+    if (hole < 0)
+        hole = h, x->zused++;
+    x->zkey[hole] = s + 1;
+    *slot_refs(x, s) = 1;
+    return s;
 }
 
 static double entry(const Ctx *x, int64_t s, int64_t k)
@@ -422,6 +505,12 @@ static int slot_leq(Ctx *x, int64_t s, const double *z)  /* z includes the store
 
 static int slot_drop(Ctx *x, int64_t s)
 {
+    if (--*slot_refs(x, s) > 0)
+        return 0;
+    int64_t mask = x->zcap - 1, h = (int64_t)(slot_hash(x, s) & (uint64_t)mask);
+    while (x->zkey[h] != s + 1)
+        h = (h + 1) & mask;
+    x->zkey[h] = -1;
     if (s & 1)
         PUSH(x->floats.free, s >> 1);
     else
@@ -432,7 +521,8 @@ static int slot_drop(Ctx *x, int64_t s)
 static int64_t zone_bytes(const Ctx *x)
 {
     int64_t len = (int64_t)x->d * x->d;
-    return (x->shorts.n - x->shorts.free.n) * len * 2 + (x->floats.n - x->floats.free.n) * len * 4;
+    return (x->shorts.n - x->shorts.free.n) * len * 2 + (x->floats.n - x->floats.free.n) * len * 4
+           + x->zcap * 8 + (x->shorts.n + x->floats.n) * 4;
 }
 
 /* -- zone operations that dbm.c does not have --------------------------------------------------------- */
@@ -534,6 +624,40 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
     memcpy(copy, words, n * sizeof(int64_t));
     x->prog.a[state] = copy;
     x->prog_words += n;
+    return 0;
+}
+
+/* The partial-order reduction on (``ask``: called with a state where time cannot pass, it answers with
+ * zs_set_ample) or off (NULL). */
+void zs_set_por(void *p, program_fn ask)
+{
+    ((Ctx *)p)->ask_ample = ask;
+}
+
+/* The interactions to fire first at ``state``; n < 0: all of them. */
+int zs_set_ample(void *p, int64_t state, const int64_t *vias, int64_t n)
+{
+    Ctx *x = p;
+    if (state >= x->amp.n)
+        return -1;
+    if (n < 0) {
+        x->amp.a[state] = AMP_ALL;
+        return 0;
+    }
+    int64_t *copy = malloc((n + 1) * sizeof(int64_t));
+    if (!copy)
+        return -9;
+    copy[0] = n;
+    memcpy(copy + 1, vias, n * sizeof(int64_t));
+    x->amp.a[state] = copy;
+    return 0;
+}
+
+static int in_list(const int64_t *list, int64_t v)
+{
+    for (int64_t i = 1; i <= list[0]; i++)
+        if (list[i] == v)
+            return 1;
     return 0;
 }
 
@@ -716,6 +840,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     if (kept->n) {
         for (int32_t i = 0; i < kept->n; i++)
             if (slot_geq(x, x->nodes.a[kept->a[i]].zone, zone)) {
+                x->old_hit = 1;
                 if (parent >= 0) {
                     step.by = kept->a[i];
                     Edge e = {parent, kept->a[i], (int32_t)(-x->steps.n - 1)};
@@ -876,69 +1001,88 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         x->told = found;
         double *here = T(x, 0), *met = T(x, 1), *block = T(x, 2);
         slot_load(x, x->nodes.a[k].zone, here);
-        const int64_t *s = parts(pr).succ;
-        int64_t nsucc = *s++;
-        for (int64_t t = 0; t < nsucc && !status; t++) {
-            int64_t nxt = s[0], via = s[1];
-            const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
-            int64_t nblocks = *bl++;
-            const int64_t *blocks = bl;
-            for (int64_t b = 0; b < nblocks; b++)
-                bl = skip_bounds(bl);
-            s = bl;
-            memcpy(met, here, len * sizeof(double));
-            if (!constrain_all(met, d, nb + 1, nb[0]))
-                continue;
-            /* allowed: the pieces of met outside every block, each with its cut bounds */
-            pieces.n = cuts.n = ncut.n = 0;
-            for (int64_t i = 0; i < len; i++)
-                PUSH(pieces, met[i]);
-            PUSH(ncut, 0);
-            const int64_t *b = blocks;
-            for (int64_t bi = 0; bi < nblocks && pieces.n; bi++) {
-                memcpy(block, met, len * sizeof(double));
-                int live = constrain_all(block, d, b + 1, b[0]);
-                b = skip_bounds(b);
-                if (!live)
+        const int64_t *keep = NULL;  /* the reduction's set first; the rest if it reached a stored zone */
+        if (x->ask_ample && !*parts(pr).pass) {
+            int64_t st = x->nodes.a[k].state;
+            if (!x->amp.a[st] && x->ask_ample(st) != 0) {
+                status = -1;
+                break;
+            }
+            keep = x->amp.a[st] == AMP_ALL ? NULL : x->amp.a[st];
+        }
+        x->old_hit = 0;
+        int64_t fired = x->transitions;  /* none of the set fires in this zone: the others must */
+        for (int round = 0; round < (keep ? 2 : 1) && !status; round++) {
+            if (round == 1 && !x->old_hit && x->transitions > fired) {
+                x->reduced++;
+                break;
+            }
+            const int64_t *s = parts(pr).succ;
+            int64_t nsucc = *s++;
+            for (int64_t t = 0; t < nsucc && !status; t++) {
+                int64_t nxt = s[0], via = s[1];
+                const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
+                int64_t nblocks = *bl++;
+                const int64_t *blocks = bl;
+                for (int64_t b = 0; b < nblocks; b++)
+                    bl = skip_bounds(bl);
+                s = bl;
+                if (keep && in_list(keep, via) != (round == 0))
                     continue;
-                Doubles next = {0};
-                Longs ncuts = {0}, nn = {0};
-                int64_t off = 0;
-                for (int64_t pi = 0; pi * len < pieces.n; pi++) {
-                    Longs pc = {0}, pn = {0};
-                    subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn);
-                    int64_t o2 = 0;
-                    for (int64_t q = 0; q < pn.n; q++) {
-                        for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
-                            PUSH(ncuts, cuts.a[off + w]);
-                        for (int64_t w = 0; w < 3 * pn.a[q]; w++)
-                            PUSH(ncuts, pc.a[o2 + w]);
-                        o2 += 3 * pn.a[q];
-                        PUSH(nn, ncut.a[pi] + pn.a[q]);
+                memcpy(met, here, len * sizeof(double));
+                if (!constrain_all(met, d, nb + 1, nb[0]))
+                    continue;
+                /* allowed: the pieces of met outside every block, each with its cut bounds */
+                pieces.n = cuts.n = ncut.n = 0;
+                for (int64_t i = 0; i < len; i++)
+                    PUSH(pieces, met[i]);
+                PUSH(ncut, 0);
+                const int64_t *b = blocks;
+                for (int64_t bi = 0; bi < nblocks && pieces.n; bi++) {
+                    memcpy(block, met, len * sizeof(double));
+                    int live = constrain_all(block, d, b + 1, b[0]);
+                    b = skip_bounds(b);
+                    if (!live)
+                        continue;
+                    Doubles next = {0};
+                    Longs ncuts = {0}, nn = {0};
+                    int64_t off = 0;
+                    for (int64_t pi = 0; pi * len < pieces.n; pi++) {
+                        Longs pc = {0}, pn = {0};
+                        subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn);
+                        int64_t o2 = 0;
+                        for (int64_t q = 0; q < pn.n; q++) {
+                            for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
+                                PUSH(ncuts, cuts.a[off + w]);
+                            for (int64_t w = 0; w < 3 * pn.a[q]; w++)
+                                PUSH(ncuts, pc.a[o2 + w]);
+                            o2 += 3 * pn.a[q];
+                            PUSH(nn, ncut.a[pi] + pn.a[q]);
+                        }
+                        off += 3 * ncut.a[pi];
+                        free(pc.a), free(pn.a);
                     }
-                    off += 3 * ncut.a[pi];
-                    free(pc.a), free(pn.a);
+                    free(pieces.a), free(cuts.a), free(ncut.a);
+                    pieces = next, cuts = ncuts, ncut = nn;
                 }
-                free(pieces.a), free(cuts.a), free(ncut.a);
-                pieces = next, cuts = ncuts, ncut = nn;
+                int64_t off = 0;
+                for (int64_t pi = 0; pi * len < pieces.n && !status; pi++) {
+                    double *z = T(x, 1);
+                    memcpy(z, pieces.a + pi * len, len * sizeof(double));
+                    for (int64_t r = 0; r < rs[0]; r++)
+                        z_reset(z, d, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
+                    need.n = 0;
+                    for (int64_t w = 0; w < 3 * nb[0]; w++)
+                        PUSH(need, nb[1 + w]);
+                    for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
+                        PUSH(need, cuts.a[off + w]);
+                    off += 3 * ncut.a[pi];
+                    x->transitions++;
+                    status = arrive(x, nxt, z, k, (int32_t)via, need.a, need.n / 3, ask);
+                    /* arrive may move the program array: re-read nothing from it after this point */
+                }
+                /* T(x, 0) (here) is never used by arrive, so the next successor starts from the same zone */
             }
-            int64_t off = 0;
-            for (int64_t pi = 0; pi * len < pieces.n && !status; pi++) {
-                double *z = T(x, 1);
-                memcpy(z, pieces.a + pi * len, len * sizeof(double));
-                for (int64_t r = 0; r < rs[0]; r++)
-                    z_reset(z, d, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
-                need.n = 0;
-                for (int64_t w = 0; w < 3 * nb[0]; w++)
-                    PUSH(need, nb[1 + w]);
-                for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
-                    PUSH(need, cuts.a[off + w]);
-                off += 3 * ncut.a[pi];
-                x->transitions++;
-                status = arrive(x, nxt, z, k, (int32_t)via, need.a, need.n / 3, ask);
-                /* arrive may move the program array: re-read nothing from it after this point */
-            }
-            /* T(x, 0) (here) is never used by arrive, so the next successor starts from the same zone */
         }
         if (status)
             break;
@@ -968,6 +1112,7 @@ void zs_counts(void *p, int64_t *out)
     out[4] = x->dropped, out[5] = x->steps.n, out[6] = x->edges.n, out[7] = x->members.n, out[8] = x->guards.n;
     out[9] = x->waiting.n - x->head, out[10] = x->err_arg, out[11] = zs_memory(x);
     out[12] = zone_bytes(x), out[13] = x->bytes.n + x->ends.n * 16, out[14] = x->prog_words * 8;
+    out[15] = x->reduced;
 }
 
 /* Node (steps: which=1) fields as int64 rows of 10: state parent via by zone own members guard guard_len
