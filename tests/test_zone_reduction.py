@@ -47,12 +47,19 @@ def test_steps_writing_a_shared_integer_keep_every_order_between_them(engine):
     assert _timed_states(z1) == _timed_states(z0)
 
 
-def test_the_c_and_python_searches_reduce_alike():
+@pytest.mark.parametrize("case", [None] + CASES[:3], ids=["shared.tck"] + [c[0] for c in CASES[:3]])
+def test_the_c_and_python_searches_reduce_alike(tmp_path, case):
     if library() is None:
         pytest.skip("the C zone search needs a C compiler (apt-get install gcc)")
-    _, tr = load(TCK / "shared.tck")
-    zp, _ = _search(tr.package, tr.root, "python", True)
-    zc, _ = _search(tr.package, tr.root, "c", True)
+    if case is None:
+        _, tr = load(TCK / "shared.tck")
+        package, root = tr.package, tr.root
+    else:
+        model = model_of(tmp_path, *case[1:])
+        package, root = model.package, model.root
+    zp, rp = _search(package, root, "python", True)
+    zc, rc = _search(package, root, "c", True)
+    assert (rc.states, rc.transitions, rc.maxima) == (rp.states, rp.transitions, rp.maxima)
     assert [(n.state, n.parent, n.via) for n in zc.nodes] == [(n.state, n.parent, n.via) for n in zp.nodes]
 
 

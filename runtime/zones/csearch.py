@@ -17,6 +17,7 @@ from runtime.zones.node import GOAL, Node, _double
 
 HERE = Path(__file__).parent
 PROGRAM = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64)  # also the interaction callback
+AMPLE = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64, ctypes.c_int64)  # a node's state and zone slot
 PROGRESS = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int64, ctypes.c_int64, ctypes.c_int64, ctypes.c_int64,
                             ctypes.c_int64)
 #: zs_run's statuses.
@@ -51,7 +52,7 @@ def library():
             ("zs_intern", i64, [p, ctypes.POINTER(i64)]), ("zs_state_words", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
-            ("zs_set_por", None, [p, PROGRAM]), ("zs_set_ample", i32, [p, i64, ctypes.POINTER(i64), i64]),
+            ("zs_set_por", None, [p, AMPLE]), ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
             ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
@@ -94,7 +95,7 @@ class CSearch:
             if status:
                 raise MemoryError("zone search: no memory for the model's tables")
             z._intern = self._intern
-        self._ample = PROGRAM(self._ask_ample)
+        self._ample = AMPLE(self._ask_ample)
         if z.por is not None:
             lib.zs_set_por(self.ctx, self._ample)
 
@@ -136,18 +137,16 @@ class CSearch:
             self.error = e
             return 1
 
-    def _ask_ample(self, state_id: int) -> int:
-        """The reduction's callback (a state where time cannot pass): the interactions to fire first."""
+    def _ask_ample(self, state_id: int, slot: int) -> int:
+        """The reduction's callback (a node whose state lets no time pass): the interactions to fire first."""
         try:
-            state = self.state(state_id)
             z = self.z
-            keep = z.por.ample(state, z.successors(state))
-            z._succ.pop(state, None)
-            z._blocks.pop(state, None)
+            state = self.state(state_id)
+            keep = z.ample(state, self.zone(slot).astype(np.float64), forget=True)
             if keep is None:
-                return self.lib.zs_set_ample(self.ctx, state_id, None, -1)
+                return self.lib.zs_set_ample(self.ctx, None, -1)
             words = np.asarray(sorted(keep), dtype=np.int64)
-            return self.lib.zs_set_ample(self.ctx, state_id, _longs(words), len(words))
+            return self.lib.zs_set_ample(self.ctx, _longs(words), len(words))
         except BaseException as e:  # noqa: BLE001 - re-raised by run()
             self.error = e
             return 1

@@ -58,6 +58,7 @@ class PartialOrder:
             infos.append(SourceInfo(frozenset(a for a, _ in ports), ports,
                                     src.kind in ("port", "rendezvous") and not src.alternatives, False))
         self.info = infos
+        self.high_of: list[int] = []  # per rule: its high side's sources and those above them (bitset)
         # which sources each original connector id reaches (ZoneExplorer.__init__'s tops, without the tick)
         tops: dict[int, set[int]] = {}
         for c, srcs in top_connectors(engine.sources).items():
@@ -73,6 +74,7 @@ class PartialOrder:
         clock_owner = {k + 1: atom for k, (atom, _) in enumerate(z.model.clocks)}
         natoms = len(flat.atoms)
         reads: list[set[int]] = []
+        self.above = [0] * self.n  # the sources a priority puts above s, through chains (bitset)
         for s in range(self.n):
             above, todo, seen_rules = set(), [s], set()
             read = set(infos[s].atoms)
@@ -90,6 +92,13 @@ class PartialOrder:
                         todo.append(h)
                         read |= infos[h].atoms
             reads.append(read)
+            for h in above:
+                self.above[s] |= 1 << h
+        for r in range(len(rules)):
+            mask = 0
+            for h in high_of[r]:
+                mask |= 1 << h | self.above[h]
+            self.high_of.append(mask)
         # the checks' atoms: each check is one more pseudo-atom, moved by every source moving one of its atoms
         checks: list[set[int]] = []
         for atom, (_, clock, _) in z.model.observers.items():
@@ -119,6 +128,10 @@ class PartialOrder:
         for t in range(self.n):
             for a in reads[t]:
                 readers[a] |= 1 << t
+        self.own = [0] * self.n  # the sources moving one of its atoms (what can make its clock guard hold in zero time)
+        for s in range(self.n):
+            for a in infos[s].atoms:
+                self.own[s] |= writers[a]
         self.enablers = [0] * self.n  # a disabled source whose leaves' atoms all offer their ports: all it reads
         self.dependents = [0] * self.n
         for s in range(self.n):
@@ -134,6 +147,17 @@ class PartialOrder:
         for fa in flat.atoms:
             for bit, place in enumerate(fa.places):
                 self.offers[(fa.index, 1 << bit)] = {t.port for t in fa.type.transitions if place in t.sources}
+        # the sources that take an atom out of a place: those with one of its ports offered there
+        self.leaving: dict[tuple[int, int], int] = {}
+        for (atom, bit), ports in self.offers.items():
+            if None in ports or "" in ports:  # an internal transition leaves the place: any step of the atom
+                self.leaving[(atom, bit)] = writers[atom]
+                continue
+            mask = 0
+            for s, info in enumerate(infos):
+                if any(a == atom and p in ports for a, p in info.ports):
+                    mask |= 1 << s
+            self.leaving[(atom, bit)] = mask
         tick = next(fc.id for fc in z.model.flat.connectors if fc.label == "tick")
         self.tick_rules = [r for r, rule in enumerate(rules) if any(c == tick for c, _ in rule.low)]
         self.stats = [0, 0, 0, 0]  # states asked, states reduced, steps left out, expansions left reduced (Python)
@@ -147,13 +171,27 @@ class PartialOrder:
             bit <<= 1
         return got
 
-    def _enablers(self, s: int, state: tuple) -> int:
+    def _leaving(self, atom: int, marking: int) -> int:
+        got, bit = 0, 1
+        while bit <= marking:
+            if marking & bit:
+                got |= self.leaving.get((atom, bit), 0)
+            bit <<= 1
+        return got
+
+    def _enablers(self, s: int, state: tuple, stub: int) -> int:
+        """Sources one of which must fire before disabled source ``s`` can: those taking an atom of it that lacks
+        its port out of its place (the atom adding least to ``stub``), else all that move what it reads."""
         info = self.info[s]
+        best = None
         if info.rendezvous:
             for atom, port in info.ports:
-                if port not in self._offers(atom, self.z.place_bit(state, atom)):
-                    return self.writers[atom]
-        return self.enablers[s]
+                marking = self.z.place_bit(state, atom)
+                if port not in self._offers(atom, marking):
+                    w = self._leaving(atom, marking)
+                    if best is None or bin(w & ~stub).count("1") < bin(best & ~stub).count("1"):
+                        best = w
+        return self.enablers[s] if best is None else best
 
     def _witnesses(self, state: tuple, enabled: dict[int, list[int]]) -> list[int]:
         """Starting sets, as bitsets of sources: each keeps time stopped for as long as none of it fires."""
@@ -176,8 +214,15 @@ class PartialOrder:
                     out.append(start)
         return out
 
-    def ample(self, state: tuple, succ: list[tuple[int, tuple]]) -> set[int] | None:
-        """The interactions to fire at ``state`` (where time cannot pass), or None for all of them."""
+    def ample(self, state: tuple, succ: list[tuple[int, tuple]], fires=None) -> set[int] | None:
+        """The interactions to fire at ``state`` (where time cannot pass), or None for all of them.
+
+        ``fires``, if given, says of an interaction whether it fires from the node's zone, and why not:
+        ``"fires"``, ``"guard"`` (its clock guard fails there) or the set of rules each of which alone blocks it
+        everywhere there (possibly empty).  A source whose clock guard fails can only be enabled, before time
+        passes, by a step of its own atoms; one that a single rule blocks waits for that rule's high side to be
+        disabled, so that side's enabled sources are enough as its enablers (the closure brings what disables
+        them)."""
         self.stats[0] += 1
         enabled: dict[int, list[int]] = {}
         for i, _ in succ:
@@ -187,9 +232,20 @@ class PartialOrder:
         on = 0
         for s in enabled:
             on |= 1 << s
+        blocked: dict[int, list[int]] = {}  # source -> its possible sets of enablers, for those not firing here
+        if fires is not None:
+            for s, ids in enabled.items():
+                why = [fires(i) for i in ids]
+                if any(w == "fires" for w in why):
+                    continue
+                if all(w == "guard" for w in why):
+                    blocked[s] = [self.own[s]]  # only its own atoms' steps can reset its clocks or change its guard
+                else:
+                    rules = set.intersection(*why) if all(w != "guard" for w in why) else set()  # one rule for all
+                    blocked[s] = [self.high_of[r] & on for r in sorted(rules)] or [self.enablers[s]]
         best = on
         for start in self._witnesses(state, enabled):
-            got = self._close(start, on, best, state)
+            got = self._close(start, on, best, state, blocked)
             if got is not None and bin(got).count("1") < bin(best).count("1"):
                 best = got
         if best == on:
@@ -199,7 +255,7 @@ class PartialOrder:
         self.stats[2] += sum(len(ids) for s, ids in enabled.items() if not best >> s & 1)
         return keep
 
-    def _close(self, start: int, on: int, best: int, state: tuple) -> int | None:
+    def _close(self, start: int, on: int, best: int, state: tuple, blocked: dict[int, int]) -> int | None:
         """The stubborn set from ``start``, as its enabled sources; None once it is no better than ``best``."""
         limit = bin(best).count("1")
         stub, todo, done = start, start, 0
@@ -208,7 +264,11 @@ class PartialOrder:
             s = low.bit_length() - 1
             todo &= ~low
             done |= low
-            stub |= self.dependents[s] if on & low else self._enablers(s, state)
+            if s in blocked:
+                options = blocked[s]
+                stub |= min(options, key=lambda m: bin(m & ~stub).count("1"))
+            else:
+                stub |= self.dependents[s] if on & low else self._enablers(s, state, stub)
             if bin(stub & on).count("1") >= limit:
                 return None
             todo = stub & ~done

@@ -453,7 +453,7 @@ class ZoneExplorer:
             here = node.zone
             keep = None  # the reduction's set, fired first; the others when one of its steps reaches a stored zone
             if self.por is not None and self.passing(node.state, blocks) is None:
-                keep = self.por.ample(node.state, succ)
+                keep = self.ample(node.state, here)
             old, fired = False, result.transitions  # the rest too when none of the set fires in this zone
             for first in ((True, False) if keep is not None else (True,)):
                 if not first and not old and result.transitions > fired:
@@ -483,6 +483,39 @@ class ZoneExplorer:
         result.discrete = len(passed)
         result.seconds = time.perf_counter() - start
         return result
+
+    def ample(self, state: tuple, zone: np.ndarray, forget: bool = False) -> set[int] | None:
+        """The reduction's set at a node where time cannot pass (runtime/zones/reduction.py), None for every
+        step; ``forget`` lets the state's caches go (the C search keeps what it needs)."""
+        succ = self.successors(state)
+        blocks = self.blocking(state, sorted({i for i, _ in succ}))
+        keep = self.por.ample(state, succ, lambda i: self._fires(zone, i, state, blocks))
+        if forget:
+            self._succ.pop(state, None)
+            self._blocks.pop(state, None)
+            for index, _ in succ:
+                self._guards.pop((index, state), None)
+        return keep
+
+    def _fires(self, zone: np.ndarray, index: int, state: tuple, blocks: "Blocking"):
+        """Whether an enabled interaction fires from ``zone``: ``fires``; ``guard`` when its clock guard fails
+        there; else the compound priorities each of which alone blocks it everywhere in the zone."""
+        met = dbm.constrain_all(zone, self.guard(index, state)[0])
+        if met is None:
+            return "guard"
+        if self.allowed(met, index, blocks):
+            return "fires"
+        alone = set()
+        for r in self.rules_of(index)[0]:
+            pieces = [met]
+            for b in blocks.region(r):
+                block = dbm.constrain_all(met, b) if b else met
+                if block is None:
+                    continue
+                pieces = [q for p in pieces for q in dbm.subtract(p, block)]
+            if not pieces:
+                alone.add(r)
+        return alone
 
     def initial_zone(self) -> np.ndarray:
         """Every clock at its first value."""

@@ -21,6 +21,7 @@
 #include <stdio.h>
 
 typedef int (*program_fn)(int64_t state);
+typedef int (*ample_fn)(int64_t state, int64_t zone);  /* a node's discrete state and zone slot */
 typedef int (*progress_fn)(int64_t nodes, int64_t transitions, int64_t waiting, int64_t memory, int64_t depth);
 
 /* A growable array of a plain type. */
@@ -73,14 +74,14 @@ typedef struct {
     int64_t prog_words;     /* words held by programs */
     int told;               /* violations found when zs_run last looked */
     /* partial-order reduction where time cannot pass (runtime/zones/reduction.py computes the sets) */
-    program_fn ask_ample;   /* NULL: off */
-    VEC(int64_t *) amp;     /* per state: [n, interactions...] to fire first, AMP_ALL for all; NULL: not asked */
+    ample_fn ask_ample;     /* NULL: off */
+    L amp;                  /* the set the last call answered: interactions to fire first; amp_all: all */
+    int amp_all;
     int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
     int64_t reduced;        /* expansions that left steps out */
 } Ctx;
 
-static int64_t amp_all[1] = {-1};
-#define AMP_ALL amp_all
+
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
 
@@ -115,9 +116,6 @@ void zs_free(void *p)
         free(x->prog.a[i]);
     for (int64_t i = 0; i < x->kept.n; i++)
         free(x->kept.a[i].a);
-    for (int64_t i = 0; i < x->amp.n; i++)
-        if (x->amp.a[i] != AMP_ALL)
-            free(x->amp.a[i]);
     free(x->amp.a);
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
@@ -200,14 +198,6 @@ static int grow_states(Ctx *x, int64_t n)
             x->prog.a = a, x->kept.a = k, x->kept.cap = x->prog.cap;
         }
         Kept none = {0};
-        if (x->amp.n == x->amp.cap) {
-            x->amp.cap = x->prog.cap;
-            int64_t **b = realloc(x->amp.a, x->amp.cap * sizeof(int64_t *));
-            if (!b)
-                return -9;
-            x->amp.a = b;
-        }
-        x->amp.a[x->amp.n++] = NULL;
         x->prog.a[x->prog.n++] = NULL;
         x->kept.a[x->kept.n++] = none;
     }
@@ -627,29 +617,21 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
     return 0;
 }
 
-/* The partial-order reduction on (``ask``: called with a state where time cannot pass, it answers with
+/* The partial-order reduction on (``ask``: called with a node whose state lets no time pass, it answers with
  * zs_set_ample) or off (NULL). */
-void zs_set_por(void *p, program_fn ask)
+void zs_set_por(void *p, ample_fn ask)
 {
     ((Ctx *)p)->ask_ample = ask;
 }
 
-/* The interactions to fire first at ``state``; n < 0: all of them. */
-int zs_set_ample(void *p, int64_t state, const int64_t *vias, int64_t n)
+/* The interactions to fire first at the node asked about; n < 0: all of them. */
+int zs_set_ample(void *p, const int64_t *vias, int64_t n)
 {
     Ctx *x = p;
-    if (state >= x->amp.n)
-        return -1;
-    if (n < 0) {
-        x->amp.a[state] = AMP_ALL;
-        return 0;
-    }
-    int64_t *copy = malloc((n + 1) * sizeof(int64_t));
-    if (!copy)
+    x->amp.n = 0;
+    x->amp_all = n < 0;
+    if (lpush(&x->amp, n < 0 ? 0 : n) || (n > 0 && lcat(&x->amp, vias, n)))
         return -9;
-    copy[0] = n;
-    memcpy(copy + 1, vias, n * sizeof(int64_t));
-    x->amp.a[state] = copy;
     return 0;
 }
 
@@ -1003,12 +985,11 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         slot_load(x, x->nodes.a[k].zone, here);
         const int64_t *keep = NULL;  /* the reduction's set first; the rest if it reached a stored zone */
         if (x->ask_ample && !*parts(pr).pass) {
-            int64_t st = x->nodes.a[k].state;
-            if (!x->amp.a[st] && x->ask_ample(st) != 0) {
+            if (x->ask_ample(x->nodes.a[k].state, x->nodes.a[k].zone) != 0) {
                 status = -1;
                 break;
             }
-            keep = x->amp.a[st] == AMP_ALL ? NULL : x->amp.a[st];
+            keep = x->amp_all ? NULL : x->amp.a;
         }
         x->old_hit = 0;
         int64_t fired = x->transitions;  /* none of the set fires in this zone: the others must */
