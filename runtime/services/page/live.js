@@ -782,9 +782,9 @@ function alert(e) {
 
 function overrun(e) {
   // One line per task (or codel) that overran, with its count and the last message: they can come every period.
-  // A task's count is the controller's own (the event carries it, GET /tasks too), the one the task table shows:
-  // the page opened late, or a stream that fell behind, does not make it smaller.  A codel's count is what the page
-  // saw, and says so.
+  // A task's count is the controller's own (the event carries it, GET /tasks too) and the task table shows the same
+  // number, the larger of the two: the page opened late, or a stream that fell behind, does not make it smaller, and
+  // the table does not wait for its next reading.  A codel's count is what the page saw, and says so.
   const key = `${e.event}:${e.task || e.codel || ""}`;
   const li = overrunLine(key, e.event);
   if (e.event === "overrun" && typeof e.overruns === "number") li.count = Math.max(li.count, e.overruns);
@@ -810,20 +810,23 @@ function overrunLine(key, kind) {
 
 function showOverrun(li) {
   li.dataset.count = li.count;
-  const task = li.dataset.kind === "overrun";
-  setText(li.querySelector("b"), task ? `${li.dataset.key.slice("overrun:".length)} overran` : "codel overrun");
-  setText(li.querySelector(".count"), task ? `${li.count} times` : `${li.count} seen since the page opened`);
+  const task = li.dataset.kind === "overrun" ? li.dataset.key.slice("overrun:".length) : null;
+  setText(li.querySelector("b"), task ? `${task} overran` : "codel overrun");
+  setText(li.querySelector(".count"), task ? `${li.count} times;` : `${li.count} since the page opened;`);
   setText(li.querySelector(".last"), li.last);
   if ($("overruns").firstElementChild !== li) $("overruns").prepend(li);
+  if (task) {
+    const row = $("tasks").querySelector(`tbody tr[data-task="${CSS.escape(task)}"]`);
+    if (row) setText(row.cells[OVERRUNS], String(li.count));
+  }
 }
 
 function tasksOverran(tasks) {
   // The table and the lines say the same count: a task that overran before the page opened gets its line too.
   for (const task of tasks) {
-    if (!task.overruns) continue;
+    if (!task.overruns && !live.overruns.has(`overrun:${task.task}`)) continue;
     const li = overrunLine(`overrun:${task.task}`, "overrun");
-    if (task.overruns <= li.count) continue;
-    li.count = task.overruns;
+    li.count = Math.max(li.count, task.overruns);
     if (!li.last) li.last = "(before the page opened)";
     showOverrun(li);
   }
@@ -866,6 +869,7 @@ async function readTasks() {
 }
 
 const FONT = "12px sans-serif";  // the plots' words: the page's smallest text is 11 px
+const OVERRUNS = 4;  // the task table's column of overruns
 const COLOURS = ["#2a62b8", "#d9480f", "#2f9e44", "#7048e8", "#c2255c", "#0b7285", "#e67700", "#5c940d"];
 
 function plotTasks() {
