@@ -812,7 +812,8 @@ function showOverrun(li) {
   li.dataset.count = li.count;
   const task = li.dataset.kind === "overrun" ? li.dataset.key.slice("overrun:".length) : null;
   setText(li.querySelector("b"), task ? `${task} overran` : "codel overrun");
-  setText(li.querySelector(".count"), task ? `${li.count} times;` : `${li.count} since the page opened;`);
+  const times = li.count === 1 ? "once" : `${li.count} times`;
+  setText(li.querySelector(".count"), task ? `${times};` : `${li.count} since the page opened;`);
   setText(li.querySelector(".last"), li.last);
   if ($("overruns").firstElementChild !== li) $("overruns").prepend(li);
   if (task) {
