@@ -155,6 +155,18 @@ def test_module_picture_draws_constraints_rules_and_interruptions_distinctly():
     assert not any((t, h) == ("NDD.Stop.control", "NDD.GoTo.control") for t, h, _ in drawn)  # cancel goes with abort
 
 
+def test_module_picture_titles_tasks_not_services_and_leaves_controller_to_activity_unlabelled():
+    """A service's frame is untitled (its controller and activity say its name), a task's is titled; the edge from a
+    service's controller to its activity carries no label (always start, finish, fail, interrupted)."""
+    dot = module(dala()[3], "NDD")
+    titles = re.findall(r'^\s*graph \[label="([^"]*)", style="rounded,filled"', dot, re.M)
+    assert sorted(titles) == ["", "", "", "", "", "control", "motion"]
+    drawn = edges(dot)
+    goto = [a for t, h, a in drawn if (t, h) == ("NDD.GoTo.control", "NDD.GoTo.activity")]
+    assert goto and all("label=" not in a for a in goto)
+    assert any((t, h) == ("NDD.motion.scheduler", "NDD.GoTo.activity") and "exec_start" in a for t, h, a in drawn)
+
+
 def test_a_module_of_a_small_description_of_our_own():
     description = parse_paths([str(COUNTER)])
     package, root, _ = model_of(description, "counter")

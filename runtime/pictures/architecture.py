@@ -109,7 +109,7 @@ def module(s: Structure, name: str) -> str:
                 for a in atoms:
                     dot.node(a, label=_atom_label(s, a), **style.NODES[s.roles.get(a, "atom")])
                 continue
-            service = any(s.roles.get(a) in ("control", "activity") for a in atoms)  # its atoms say its name
+            service = any(s.roles.get(a) == "control" for a in atoms)  # a service's atoms say its name
             # (an empty label, not none: a cluster without one takes its parent's, the module's name)
             with dot.cluster(label="" if service else group.split(".", 1)[1], style="rounded,filled",
                              fillcolor="#fafafa", color="#b8c2d6", fontname=style.FONT, fontsize=style.NODE_SIZE):
