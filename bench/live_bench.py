@@ -1,6 +1,7 @@
 """The live page's cost to the controller: DALA's corridor mission in real time, with the page closed, then open.
 
-    python bench/live_bench.py [--runs N] [--screenshot FILE]     (needs gen/dala, Debian's chromium, Playwright)
+    python bench/live_bench.py [--runs N] [--screenshot FILE [--width PX] [--module NAME] [--open-only]]
+    (needs gen/dala, Debian's chromium, Playwright)
 
 Each run is ``genom2bip mission descriptions/dala/missions/corridor.yaml --view`` in a process of its own (real
 time: tasks of 25 to 100 ms).  With the page open, headless Chromium (another process, as an operator's browser
@@ -83,7 +84,7 @@ def read_tasks(url: str, pid: int, last: dict, stop: threading.Event) -> None:
         stop.wait(1.0)
 
 
-def one_run(page_open: bool, screenshot: Path | None) -> dict:
+def one_run(page_open: bool, screenshot: Path | None, width: int = 1500, module: str | None = None) -> dict:
     """One corridor mission; the tasks at its end and, page open, the page's updates per second."""
     with tempfile.TemporaryDirectory() as out:
         proc, url = start_mission(Path(out))
@@ -102,7 +103,7 @@ def one_run(page_open: bool, screenshot: Path | None) -> dict:
 
             with sync_playwright() as playwright:
                 browser = launch(playwright)
-                page = browser.new_page(viewport={"width": 1500, "height": 1100})
+                page = browser.new_page(viewport={"width": width, "height": 1100})
                 page.goto(url + "/live/")
                 page.wait_for_selector('#stream[data-status="open"]', timeout=60_000)
                 shot_at = time.perf_counter() + 25
@@ -119,11 +120,14 @@ def one_run(page_open: bool, screenshot: Path | None) -> dict:
                     mission = {proc.pid, *descendants(proc.pid)}
                     browser_cpu = cpu_seconds([p for p in descendants(os.getpid()) if p not in mission])
                     if screenshot is not None and time.perf_counter() > shot_at:
+                        if module:  # its view open, as an operator who clicked it sees it
+                            page.click(f'#level g.node.module:has(title:text-is("{module}"))')
+                            page.wait_for_selector(f'#module g.node:has(title:text-is("{module}.requests"))')
                         # the whole page in the viewport: what is off the screen is not drawn (docs/live.md)
-                        page.set_viewport_size({"width": 1500, "height": page.evaluate("document.body.scrollHeight")})
+                        page.set_viewport_size({"width": width, "height": page.evaluate("document.body.scrollHeight")})
                         page.wait_for_timeout(1500)
                         page.screenshot(path=str(screenshot))
-                        page.set_viewport_size({"width": 1500, "height": 1100})
+                        page.set_viewport_size({"width": width, "height": 1100})
                         screenshot = None
                     page.wait_for_timeout(1000)
                 browser.close()
@@ -156,15 +160,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=1, help="runs of each (default 1)")
     parser.add_argument("--screenshot", type=Path, help="a full-page screenshot of the first open run")
+    parser.add_argument("--width", type=int, default=1500, help="the browser's width in px (default 1500)")
+    parser.add_argument("--module", metavar="NAME", help="open this module's view before the screenshot")
+    parser.add_argument("--open-only", action="store_true", help="only runs with the page open")
     args = parser.parse_args()
     from browserkit import chromium_path
 
     if chromium_path() is None:
         raise SystemExit("no Chromium: apt-get install chromium (or GENOM2BIP_CHROMIUM=/path/to/chromium)")
     for i in range(args.runs):  # the order alternates, so that a change of the machine's load favours neither
-        for page_open in ((False, True) if i % 2 == 0 else (True, False)):
+        for page_open in ((True,) if args.open_only else (False, True) if i % 2 == 0 else (True, False)):
             if page_open:
-                show("open", one_run(True, args.screenshot if i == 0 else None))
+                show("open", one_run(True, args.screenshot if i == 0 else None, args.width, args.module))
             else:
                 show("closed", one_run(False, None))
 

@@ -55,21 +55,36 @@ def dala():
 # --------------------------------------------------------------------------- functional level
 
 
+def _attr(attrs: str, name: str) -> str | None:
+    m = re.search(rf'\b{name}="([^"]*)"', attrs)
+    return m.group(1) if m else None
+
+
 def test_functional_level_draws_every_module_poster_and_reader_of_the_descriptions():
     description, _, _, s = dala()
     dot = functional_level(s)
     drawn = edges(dot)
+    table = re.compile(r'^\s*"([^"]+)" \[label=<(.*)>, shape="plain"\];$', re.M)
+    tables = {m.group(1): m.group(2) for m in table.finditer(dot)}
+    assert set(tables) == {c.name for c in description.components}
+    for c in description.components:  # one row per service and per poster written, each a port edges can leave
+        for sv in c.services:
+            assert f'port="s_{sv.name}"' in tables[c.name] and f">{sv.name}<" in tables[c.name]
+        for p in c.ports:
+            if p.direction == "out":
+                assert f'port="p_{p.name}"' in tables[c.name] and f"poster {p.name}" in tables[c.name]
     writes = {(c.name, p.name) for c in description.components for p in c.ports if p.direction == "out"}
-    assert {(c, f"{c}.{p}") for c, p in writes} <= {(t, h) for t, h, _ in drawn}
     reads = {(w, p.name, c.name) for c in description.components for p in c.ports if p.direction == "in"
              for (w, name) in writes if name == p.name and w != c.name}
-    assert reads and {(f"{w}.{p}", r) for w, p, r in reads} <= {(t, h) for t, h, _ in drawn}
-    nddplan = next(a for t, h, a in drawn if (t, h) == ("Aspect.Obs", "NDD"))
+    assert reads
+    for w, p, r in reads:  # from the poster's row to the module whose codels read it
+        assert any((t, h) == (w, r) and _attr(a, "tailport") == f"p_{p}:e" and 'style="dashed"' in a
+                   for t, h, a in drawn)
+    nddplan = next(a for t, h, a in drawn if (t, h) == ("Aspect", "NDD") and _attr(a, "tailport") == "p_Obs:e")
     assert "nddPlan" in nddplan
-    assert {c.name for c in description.components} <= nodes(dot)
 
 
-def test_functional_level_labels_every_cross_module_rule_with_its_id():
+def test_functional_level_labels_every_cross_module_rule_with_its_id_from_row_to_row():
     _, rules, _, s = dala()
     drawn = edges(functional_level(s))
     crossing = [r for r in rules if r.kind in GUARD_KINDS for o in r.others if o[0] != r.service[0]]
@@ -77,11 +92,38 @@ def test_functional_level_labels_every_cross_module_rule_with_its_id():
     for r in crossing:
         for o in r.others:
             if o[0] != r.service[0]:
-                assert any(t == o[0] and h == r.service[0] and r.id in a and "#c0392b" in a for t, h, a in drawn), r.id
-    interrupts = {(r.service[0], o[0]) for r in rules if r.kind == "interrupts" for o in r.others
-                  if o[0] != r.service[0]}
-    assert interrupts and all(any((t, h) == pair and "arrowhead=\"tee\"" in a for t, h, a in drawn)
-                              for pair in interrupts)
+                assert any(t == o[0] and h == r.service[0] and r.id in a and "#c0392b" in a
+                           and _attr(a, "tailport") == f"s_{o[1]}" and _attr(a, "headport") == f"s_{r.service[1]}"
+                           for t, h, a in drawn), r.id
+    interrupts = {(r.service, o) for r in rules if r.kind == "interrupts" for o in r.others if o[0] != r.service[0]}
+    assert interrupts
+    for a, v in interrupts:
+        assert any((t, h) == (a[0], v[0]) and "arrowhead=\"tee\"" in attrs and _attr(attrs, "tailport") == f"s_{a[1]}"
+                   and _attr(attrs, "headport") == f"s_{v[1]}" for t, h, attrs in drawn), (a, v)
+
+
+def test_functional_level_legend_is_a_few_lines_of_text_naming_only_what_is_drawn():
+    dot = functional_level(dala()[3])
+    assert "cluster" not in dot and "legend:" not in dot  # no cluster of sample edges laid out with the graph
+    assert "red dashed</b></font>: rule of the rule file" in dot and "orange, bar head" in dot
+    assert "green dashed" not in dot  # no constraint of a description crosses modules in DALA
+
+
+def test_functional_level_of_dala_is_compact_and_its_text_readable(tmp_path):
+    """Compact: at most about 1 600 x 800 px (it was 3 237 x 901, a third of it legend); no font under 10 pt."""
+    dot = functional_level(dala()[3])
+    sizes = [float(x) for x in re.findall(r'(?:fontsize="|point-size=")([0-9.]+)', dot)]
+    assert sizes and min(sizes) >= 10
+    width, height, _ = _png_pixels(render(dot, tmp_path / "level.png").read_bytes())
+    assert 800 < width <= 1600 and 300 < height <= 800, (width, height)
+
+
+def test_wrapped_labels_keep_every_name_and_stay_short():
+    from runtime.pictures.architecture import _wrap
+
+    assert _wrap(["pomWaitOdometry", "pomFix", "pomUpdate"]) == "pomWaitOdometry, pomFix,\npomUpdate"
+    assert _wrap(["one"]) == "one" and _wrap([]) == ""
+    assert _wrap(["a-very-long-codel-name-indeed", "b"]) == "a-very-long-codel-name-indeed,\nb"
 
 
 # --------------------------------------------------------------------------- one module
@@ -111,6 +153,18 @@ def test_module_picture_draws_constraints_rules_and_interruptions_distinctly():
     stop = [a for t, h, a in drawn if (t, h) == ("NDD.Stop.control", "NDD.GoTo.activity")]
     assert len(stop) == 1 and "interrupts" in stop[0] and "tee" in stop[0]
     assert not any((t, h) == ("NDD.Stop.control", "NDD.GoTo.control") for t, h, _ in drawn)  # cancel goes with abort
+
+
+def test_module_picture_titles_tasks_not_services_and_leaves_controller_to_activity_unlabelled():
+    """A service's frame is untitled (its controller and activity say its name), a task's is titled; the edge from a
+    service's controller to its activity carries no label (always start, finish, fail, interrupted)."""
+    dot = module(dala()[3], "NDD")
+    titles = re.findall(r'^\s*graph \[label="([^"]*)", style="rounded,filled"', dot, re.M)
+    assert sorted(titles) == ["", "", "", "", "", "control", "motion"]
+    drawn = edges(dot)
+    goto = [a for t, h, a in drawn if (t, h) == ("NDD.GoTo.control", "NDD.GoTo.activity")]
+    assert goto and all("label=" not in a for a in goto)
+    assert any((t, h) == ("NDD.motion.scheduler", "NDD.GoTo.activity") and "exec_start" in a for t, h, a in drawn)
 
 
 def test_a_module_of_a_small_description_of_our_own():

@@ -4,7 +4,7 @@ from __future__ import annotations
 from collections import defaultdict
 
 from runtime.pictures import style
-from runtime.pictures.dot import Dot
+from runtime.pictures.dot import Dot, Html, escape, quote
 from runtime.pictures.structure import Link, Structure
 
 
@@ -13,44 +13,68 @@ def _short(label: str) -> str:
     return label.rsplit(":", 1)[-1]
 
 
+def _wrap(names: list[str], width: int = 24) -> str:
+    """``names`` joined by commas, a new line before a name that would make a line longer than ``width``."""
+    lines: list[str] = []
+    for name in names:
+        if lines and len(lines[-1]) + len(name) + 2 <= width:
+            lines[-1] += f", {name}"
+        else:
+            lines[-1:] = [lines[-1] + ","] if lines else []
+            lines.append(name)
+    return "\n".join(lines)
+
+
+def _module_table(module: str, rows: list[tuple[str, str, str]]) -> Html:
+    """A module as one table: its name, then one row per (port id, text, role): tasks, services, posters."""
+    shade = {"task": "#f3e8fc", "service": "#e8eefc", "poster": "#e6f1fb"}
+    cells = "".join(f'<tr><td port="{port}" bgcolor="{shade[role]}" align="left">'
+                    + (f"<i>{escape(text)}</i>" if role != "service" else escape(text)) + "</td></tr>"
+                    for port, text, role in rows)
+    return Html(f'<table border="0" cellborder="1" cellspacing="0" cellpadding="4" color="#7a8ca8">'
+                f'<tr><td bgcolor="#d5deee"><b>{escape(module)}</b></td></tr>{cells}</table>')
+
+
 def functional_level(s: Structure) -> str:
-    """Modules with their services and posters, the data flow between them, and the links that cross modules."""
-    dot = Dot(s.system, rankdir="LR", fontname=style.FONT, label=f"functional level {s.system}", labelloc="t",
-              nodesep="0.4", ranksep="1.1")
+    """Modules with their tasks, services and posters, the data flow between them, and the links that cross modules.
+
+    Each module is one table (a row per task, service and poster): edges leave and reach the rows they are about,
+    so that a rule needs only its id as label and the picture stays a few modules wide.
+    """
+    dot = Dot(s.system, rankdir="LR", fontname=style.FONT, labelloc="t", nodesep="0.3", ranksep="0.4")
     style.start(dot)
     kinds: list[str] = []
-    services: dict[str, list[str]] = defaultdict(list)
+    rows: dict[str, list[tuple[str, str, str]]] = defaultdict(list)
+    ports: dict[str, str] = {}  # "Module.Service" (or task, poster) -> its row's port
     for owner in dict.fromkeys(s.owners.values()):
         module, name = owner.split(".", 1)
         period = s.periods.get(owner)
-        services[module].append(f"{name} ({period})" if period else name)
-    posters = {(a.split(".", 1)[0], a.rsplit(".", 1)[-1]) for a, r in s.roles.items() if r == "poster"}
+        ports[owner] = f"s_{name}"
+        rows[module].append((f"s_{name}", f"{name}: {period}" if period else name, "task" if period else "service"))
+    for a, role in s.roles.items():
+        if role == "poster":
+            module, name = a.split(".", 1)[0], a.rsplit(".", 1)[-1]
+            ports[f"{module}.{name}"] = f"p_{name}"
+            rows[module].append((f"p_{name}", f"poster {name}", "poster"))
     for module in s.modules:
-        with dot.cluster(label=module, style="rounded", color="#7a8ca8", fontname=style.FONT, fontsize=13):
-            names = services.get(module, [])
-            dot.node(module, label="\n".join(names) or module, **style.NODES["control"])
-            for m, p in sorted(posters):
-                if m == module:
-                    dot.node(f"{m}.{p}", label=p, **style.NODES["poster"])
-                    dot.edge(module, f"{m}.{p}", **style.EDGES["write"][0])
-                    kinds.append("write")
+        dot.node(module, label=_module_table(module, rows.get(module, [])), shape="plain")
     for f in s.flows:
-        dot.edge(f"{f.module}.{f.poster}", f.reader, label=", ".join(f.codels), **style.EDGES["read"][0])
+        dot.edge(f.module, f.reader, tailport=f"{ports[f'{f.module}.{f.poster}']}:e", label=_wrap(f.codels),
+                 **style.EDGES["read"][0])
         kinds.append("read")
     crossing: dict[tuple[str, str, str], list[str]] = defaultdict(list)
     for link in s.links:
         a, b = s.module_of(link.tail), s.module_of(link.head)
         if a == b or link.kind not in ("constraint", "rule", "interrupts"):
             continue
-        what = (f"{s.owner_of(link.tail)} interrupts {s.owner_of(link.head)}" if link.kind == "interrupts"
-                else f"{', '.join(link.rules) or link.label}:\n{s.owner_of(link.head)} guarded by "
-                     f"{s.owner_of(link.tail)}")
-        if what not in crossing[(a, b, link.kind)]:
-            crossing[(a, b, link.kind)].append(what)
-    for (a, b, kind), texts in crossing.items():
-        dot.edge(a, b, label="\n".join(texts), constraint="false", **style.EDGES[kind][0])
+        what = "" if link.kind == "interrupts" else ", ".join(link.rules) or link.label
+        if what not in crossing[(s.owner_of(link.tail), s.owner_of(link.head), link.kind)]:
+            crossing[(s.owner_of(link.tail), s.owner_of(link.head), link.kind)].append(what)
+    for (tail, head, kind), texts in crossing.items():
+        dot.edge(s.module_of(tail), s.module_of(head), label="\n".join(t for t in texts if t) or None,
+                 tailport=ports.get(tail), headport=ports.get(head), constraint="false", **style.EDGES[kind][0])
         kinds.append(kind)
-    style.legend(dot, kinds)
+    dot.defaults("graph", label=style.title(f"functional level {s.system}", kinds))
     return str(dot)
 
 
@@ -73,20 +97,22 @@ def module(s: Structure, name: str) -> str:
         raise KeyError(name)
     links = [k for k in s.links if s.module_of(k.tail) == name or s.module_of(k.head) == name]
     outside = sorted({a for k in links for a in (k.tail, k.head) if s.module_of(a) != name})
-    dot = Dot(name, rankdir="TB", compound="true", fontname=style.FONT, label=f"module {name}", labelloc="t",
-              nodesep="0.35", ranksep="0.7", newrank="true")
+    dot = Dot(name, rankdir="LR", compound="true", fontname=style.FONT, labelloc="t", nodesep="0.25",
+              ranksep="0.5", newrank="true")
     style.start(dot)
     groups: dict[str, list[str]] = defaultdict(list)
     for a in mine:
         groups[s.owners.get(a) or (a.rsplit(".", 1)[0] if a.count(".") > 1 else "")].append(a)
-    with dot.cluster(label=name, style="rounded", color="#7a8ca8", fontsize=13, fontname=style.FONT):
+    with dot.cluster(label=name, labeljust="l", style="rounded", color="#7a8ca8", fontsize=13, fontname=style.FONT):
         for group, atoms in groups.items():
             if not group:
                 for a in atoms:
                     dot.node(a, label=_atom_label(s, a), **style.NODES[s.roles.get(a, "atom")])
                 continue
-            with dot.cluster(label=group.split(".", 1)[1], style="rounded,filled", fillcolor="#fafafa",
-                             color="#b8c2d6", fontname=style.FONT, fontsize=11):
+            service = any(s.roles.get(a) == "control" for a in atoms)  # a service's atoms say its name
+            # (an empty label, not none: a cluster without one takes its parent's, the module's name)
+            with dot.cluster(label="" if service else group.split(".", 1)[1], style="rounded,filled",
+                             fillcolor="#fafafa", color="#b8c2d6", fontname=style.FONT, fontsize=style.NODE_SIZE):
                 for a in atoms:
                     dot.node(a, label=_atom_label(s, a), **style.NODES[s.roles.get(a, "atom")])
     by_module: dict[str, list[str]] = defaultdict(list)
@@ -96,13 +122,25 @@ def module(s: Structure, name: str) -> str:
         with dot.cluster(label=f"{other} (other module)", style="dashed", color="#aaaaaa", fontname=style.FONT):
             for a in atoms:
                 dot.node(a, label=_atom_label(s, a), **style.NODES["outside"])
-    kinds = _edges(dot, links)
-    style.legend(dot, kinds)
+    # Atoms of other modules that only guard or interrupt this one come first, those it only guards come last: no
+    # edge then joins two atoms of one rank, where Graphviz would lay their labels over one another.
+    heads = {k.head for k in links}
+    tails = {k.tail for k in links}
+    for rank, atoms in (("min", [a for a in outside if a not in heads]),
+                        ("max", [a for a in outside if a not in tails])):
+        if atoms:
+            dot.line(f"{{rank={rank}; {' '.join(quote(a) for a in atoms)}}}")
+    kinds = _edges(dot, links, s)
+    dot.defaults("graph", label=style.title(f"module {name}", kinds))
     return str(dot)
 
 
-def _edges(dot: Dot, links: list[Link]) -> list[str]:
-    """One edge per (tail, head, kind), labelled with what its connectors do; returns the kinds drawn."""
+def _edges(dot: Dot, links: list[Link], s: Structure) -> list[str]:
+    """One edge per (tail, head, kind), labelled with what its connectors do; returns the kinds drawn.
+
+    An edge between the controller and the activity of one service is left unlabelled: it is always start, finish,
+    fail and interrupted, and five copies of those words crowded the picture.
+    """
     merged: dict[tuple[str, str, str], list[str]] = defaultdict(list)
     aborted = {(k.tail, k.head.rsplit(".", 1)[0]) for k in links if k.kind == "interrupts" and "abort" in k.ports}
     for k in links:
@@ -114,7 +152,9 @@ def _edges(dot: Dot, links: list[Link]) -> list[str]:
         if text not in merged[(k.tail, k.head, k.kind)]:
             merged[(k.tail, k.head, k.kind)].append(text)
     for (tail, head, kind), texts in merged.items():
-        label = texts[0] if len(texts) == 1 else f"{texts[0]} … (+{len(texts) - 1})" if len(texts) > 4 else \
-            "\n".join(texts)
+        label = _wrap(texts) if len(texts) <= 4 else f"{texts[0]} ... (+{len(texts) - 1})"
+        if kind == "sync" and s.owners.get(tail) and s.owners.get(tail) == s.owners.get(head) \
+                and {s.roles.get(tail), s.roles.get(head)} == {"control", "activity"}:
+            label = None
         dot.edge(tail, head, label=label, **style.EDGES[kind][0])
     return [kind for _, _, kind in merged]

@@ -11,9 +11,18 @@ def quote(text: object) -> str:
     return f'"{s}"'
 
 
+class Html(str):
+    """An HTML-like label (a table): written between ``<`` and ``>``, not quoted; build it with :func:`escape`."""
+
+
+def escape(text: object) -> str:
+    """``text`` as it may appear inside an HTML-like label."""
+    return str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+
+
 def attributes(attrs: dict[str, object]) -> str:
     """``[a="1", b="x"]`` for the attributes that are not None (empty string when there are none)."""
-    items = [f"{k}={quote(v)}" for k, v in attrs.items() if v is not None]
+    items = [f"{k}=<{v}>" if isinstance(v, Html) else f"{k}={quote(v)}" for k, v in attrs.items() if v is not None]
     return f" [{', '.join(items)}]" if items else ""
 
 

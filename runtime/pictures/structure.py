@@ -150,12 +150,12 @@ def structure(flat: FlatSystem, interface: dict[str, Any] | None = None) -> Stru
 
 
 def _periods(interface: dict[str, Any] | None) -> dict[str, str]:
-    """``Module.task`` -> ``task, every 100 ms`` for the periodic tasks the interface lists."""
+    """``Module.task`` -> ``every 100 ms`` for the periodic tasks the interface lists."""
     out = {}
     for cname, comp in (interface or {}).get("components", {}).items():
         for tname, task in comp.get("tasks", {}).items():
             if task.get("period_us"):
-                out[f"{cname}.{tname}"] = f"task, every {task['period_us'] / 1000:g} ms"
+                out[f"{cname}.{tname}"] = f"every {task['period_us'] / 1000:g} ms"
     return out
 
 

@@ -345,12 +345,16 @@ async function drawLevel() {
     for (const text of g.querySelectorAll("text")) {
       const label = names.get(text.textContent.trim());
       if (!label) continue;
-      const box = text.getBBox();
+      // The service's row of its module's table (its cell's frame is drawn just before its text), else its text.
+      const cell = text.previousElementSibling;
+      const framed = cell && cell.tagName === "polygon";
+      const box = framed ? cell.getBBox() : text.getBBox();
+      const pad = framed ? -1 : 3;
       const rect = document.createElementNS("http://www.w3.org/2000/svg", "rect");
       rect.setAttribute("class", "svc-bg");
-      rect.setAttribute("x", box.x - 3); rect.setAttribute("y", box.y - 1);
-      rect.setAttribute("width", box.width + 6); rect.setAttribute("height", box.height + 2);
-      rect.setAttribute("rx", 3);
+      rect.setAttribute("x", box.x - pad); rect.setAttribute("y", box.y - pad / 3);
+      rect.setAttribute("width", box.width + 2 * pad); rect.setAttribute("height", box.height + 2 * pad / 3);
+      rect.setAttribute("rx", framed ? 0 : 3);
       rect.dataset.service = label;
       text.before(rect);
       text.dataset.service = label;
@@ -777,21 +781,56 @@ function alert(e) {
 }
 
 function overrun(e) {
-  // One line per task (or codel) that overran, with the count and the last message: they can come every period.
+  // One line per task (or codel) that overran, with its count and the last message: they can come every period.
+  // A task's count is the controller's own (the event carries it, GET /tasks too) and the task table shows the same
+  // number, the larger of the two: the page opened late, or a stream that fell behind, does not make it smaller, and
+  // the table does not wait for its next reading.  A codel's count is what the page saw, and says so.
   const key = `${e.event}:${e.task || e.codel || ""}`;
+  const li = overrunLine(key, e.event);
+  if (e.event === "overrun" && typeof e.overruns === "number") li.count = Math.max(li.count, e.overruns);
+  else li.count += 1;
+  li.last = `last: ${e.message || JSON.stringify(e)}`;
+  showOverrun(li);
+}
+
+function overrunLine(key, kind) {
   let li = live.overruns.get(key);
   if (!li) {
     li = document.createElement("li");
-    li.className = e.event;
-    li.dataset.kind = e.event;
-    li.innerHTML = "<b></b> <span></span>";
+    li.className = kind;
+    li.dataset.kind = kind;
+    li.dataset.key = key;
+    li.innerHTML = '<b></b> <span class="count"></span> <span class="last"></span>';
     live.overruns.set(key, li);
     li.count = 0;
+    li.last = "";
   }
-  li.count += 1;
-  li.querySelector("b").textContent = `${e.event.replace("_", " ")} ×${li.count}`;
-  li.querySelector("span").textContent = `last: ${e.message || JSON.stringify(e)}`;
-  $("overruns").prepend(li);
+  return li;
+}
+
+function showOverrun(li) {
+  li.dataset.count = li.count;
+  const task = li.dataset.kind === "overrun" ? li.dataset.key.slice("overrun:".length) : null;
+  setText(li.querySelector("b"), task ? `${task} overran` : "codel overrun");
+  const times = li.count === 1 ? "once" : `${li.count} times`;
+  setText(li.querySelector(".count"), task ? `${times};` : `${li.count} since the page opened;`);
+  setText(li.querySelector(".last"), li.last);
+  if ($("overruns").firstElementChild !== li) $("overruns").prepend(li);
+  if (task) {
+    const row = $("tasks").querySelector(`tbody tr[data-task="${CSS.escape(task)}"]`);
+    if (row) setText(row.cells[OVERRUNS], String(li.count));
+  }
+}
+
+function tasksOverran(tasks) {
+  // The table and the lines say the same count: a task that overran before the page opened gets its line too.
+  for (const task of tasks) {
+    if (!task.overruns && !live.overruns.has(`overrun:${task.task}`)) continue;
+    const li = overrunLine(`overrun:${task.task}`, "overrun");
+    li.count = Math.max(li.count, task.overruns);
+    if (!li.last) li.last = "(before the page opened)";
+    showOverrun(li);
+  }
 }
 
 async function readTasks() {
@@ -821,6 +860,7 @@ async function readTasks() {
     }
     body.append(tr);
   }
+  tasksOverran(tasks);
   plotTasks();
   try {
     const summary = await json("/");
@@ -829,18 +869,35 @@ async function readTasks() {
   } catch (err) { /* the table says enough */ }
 }
 
+const FONT = "12px sans-serif";  // the plots' words: the page's smallest text is 11 px
+const OVERRUNS = 4;  // the task table's column of overruns
 const COLOURS = ["#2a62b8", "#d9480f", "#2f9e44", "#7048e8", "#c2255c", "#0b7285", "#e67700", "#5c940d"];
 
 function plotTasks() {
   // Each task's lateness p99 (a line) and the periods it missed since the reading before (a bar), per reading.
   const canvas = $("tasks-plot");
   if (!visible(canvas)) return;
+  const wide = Math.max(240, Math.round(canvas.clientWidth));  // drawn at the size shown: text never scaled down
   const ctx = canvas.getContext("2d");
   const h = live.taskHistory;
-  ctx.clearRect(0, 0, canvas.width, canvas.height);
-  if (h.length < 2) return;
+  if (h.length < 2) { ctx.clearRect(0, 0, canvas.width, canvas.height); return; }
   const names = h[h.length - 1][1].map((x) => x.task);
   const find = (tasks, name) => tasks.find((k) => k.task === name) || {};
+  ctx.font = FONT;
+  const keys = [];  // each task's name and missed periods, as many to a line as the width takes
+  let x = 0, row = 0;
+  for (const name of names) {
+    const label = `${name} (${find(h[h.length - 1][1], name).missed || 0} missed)`;
+    const w = ctx.measureText(label).width;
+    if (x && x + w > wide) { x = 0; row += 1; }
+    keys.push([label, x, row]);
+    x += w + 14;
+  }
+  const head = 16 * (row + 1) + 6;
+  const tall = head + 170;
+  if (canvas.width !== wide || canvas.height !== tall) { canvas.width = wide; canvas.height = tall; }
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  ctx.font = FONT;  // a canvas resized forgets its font
   let top = 1, most = 1;
   h.forEach(([, tasks], j) => {
     for (const x of tasks) {
@@ -848,22 +905,19 @@ function plotTasks() {
       if (j) most = Math.max(most, x.missed - (find(h[j - 1][1], x.task).missed || 0));
     }
   });
-  const left = 44, bottom = canvas.height - 16, height = canvas.height - 40;
+  const left = 64, bottom = canvas.height - 20, height = canvas.height - head - 34;
   const t0 = h[0][0], t1 = h[h.length - 1][0];
   const X = (t) => left + ((t - t0) / Math.max(t1 - t0, 1e-6)) * (canvas.width - left - 8);
   const Y = (v) => bottom - (v / top) * height;
-  ctx.font = "10px sans-serif";
   ctx.fillStyle = "#556";
   ctx.fillText(`p99 ${top.toFixed(1)} ms`, 0, Y(top) + 4);
-  ctx.fillText("0", left - 10, bottom);
-  ctx.fillText(`bars: missed (most ${most} per reading)`, left, canvas.height - 3);
-  let x = left;
+  ctx.fillText("0", left - 12, bottom);
+  ctx.fillText(`bars: missed (most ${most} per reading)`, left, canvas.height - 4);
   names.forEach((name, i) => {
     const colour = COLOURS[i % COLOURS.length];
     ctx.strokeStyle = ctx.fillStyle = colour;
-    const label = `${name} (${find(h[h.length - 1][1], name).missed || 0} missed)`;
-    ctx.fillText(label, x, 10);
-    x += ctx.measureText(label).width + 12;
+    const [label, kx, krow] = keys[i];
+    ctx.fillText(label, kx, 13 + 16 * krow);
     const width = Math.max(1, (canvas.width - left) / h.length / names.length);
     h.forEach(([t, tasks], j) => {
       if (!j) return;
@@ -882,6 +936,7 @@ function plotTasks() {
     });
     ctx.stroke();
   });
+  canvas.dataset.font = ctx.font;  // what the tests read: the size the plot's words are drawn at
 }
 
 // ---- the mission's world ------------------------------------------------------------------------------------------
