@@ -226,6 +226,7 @@ def _report(args: argparse.Namespace):
         raise Failure(EXIT_USAGE)
     name = Path(args.paths[0]).stem if args.paths[0].endswith(".bip") else \
         (args.name or "-".join(system_name([p]) for p in args.paths))
+    name += "-timed" if getattr(args, "timed", False) else ""  # the main job verifies NDD untimed, then timed
     directory = traces_directory(option, name)
     if directory is not None:
         why = check_directory(directory, _inputs(args))

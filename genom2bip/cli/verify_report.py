@@ -95,9 +95,7 @@ class Report:
     def check(self, kind: str, subject: str, verdict: str, result=None, how: str = "", message: str = "",
               **extra) -> Check:
         """Record one check's answer; a trace printed just before it with the same subject is attached."""
-        data = result.to_json() if result is not None else None
-        if data is not None:
-            data.pop("trace", None)
+        data = _without_traces(result.to_json()) if result is not None else None
         figures = data["figures"] if data is not None else extra.pop("figures", {})
         item = Check(kind, subject, verdict, figures, how, message or (data or {}).get("message", ""),
                      result=data, **extra)
@@ -207,6 +205,15 @@ class Report:
                 "exit_status": status, "meaning": _meaning(status)}
 
 
+def _without_traces(data):
+    """A result's JSON without its traces (each is a file of its own, or inline in its check's ``traces``)."""
+    if isinstance(data, dict):
+        return {k: _without_traces(v) for k, v in data.items() if k != "trace"}
+    if isinstance(data, list):
+        return [_without_traces(v) for v in data]
+    return data
+
+
 class _Tee(io.TextIOBase):
     """A stream that writes to two: what a trace prints goes on to the terminal (or the log) and into its file."""
 
@@ -271,6 +278,14 @@ def check_directory(directory: Path, inputs: list[Path]) -> str | None:
     """
     from genom2bip.output import OutputError, check_inputs, kept_entries
 
+    for parent in [directory, *directory.parents]:
+        if os.path.lexists(parent):
+            if not parent.is_dir():
+                return f"cannot write {directory}: {parent} is not a directory" if parent != directory else \
+                    f"cannot write {directory}: it exists and is not a directory"
+            if not os.access(parent, os.W_OK | os.X_OK):
+                return f"cannot write {directory}: {parent} is not writable"
+            break
     try:
         check_inputs(directory, inputs)
         if directory.is_dir() and not directory.is_symlink() and not any(directory.iterdir()):
@@ -281,13 +296,6 @@ def check_directory(directory: Path, inputs: list[Path]) -> str | None:
         return str(exc).replace("choose another -o DIR", "choose another --traces DIR")
     except OSError as exc:
         return f"cannot read {directory}: {exc.strerror or exc}"
-    for parent in [directory, *directory.parents]:
-        if os.path.lexists(parent):
-            if not parent.is_dir():
-                return f"cannot write {directory}: {parent} is not a directory"
-            if not os.access(parent, os.W_OK | os.X_OK):
-                return f"cannot write {directory}: {parent} is not writable"
-            break
     return None
 
 
