@@ -3,8 +3,10 @@
 ``--traces`` refused before anything runs (docs/output.md)."""
 from __future__ import annotations
 
+import io
 import json
 import os
+import shutil
 from pathlib import Path
 
 import jsonschema
@@ -270,3 +272,32 @@ def test_the_environment_sets_the_default(capsys, monkeypatch, tmp_path):
     code, out, _ = run(capsys, DINING, "--root", "Table2()")
     assert code == 4 and f"details in {tmp_path / 'env'}/verify.txt" in out
     assert os.path.isfile(tmp_path / "env" / "deadlock-1.txt")
+
+
+# --------------------------------------------------------------------------- progress on long waits
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_the_progress_line_fits_one_row_of_the_terminal(monkeypatch):
+    """A line wider than the terminal wraps, and ``\\r`` then redraws only its last row: the line is cut to fit."""
+    from runtime.explore.progress import Progress
+
+    monkeypatch.setenv("COLUMNS", "50")
+    stream = _Terminal()
+    progress = Progress(stream, delay=0)
+    progress.tick(3_855_360, 12_345_678, 1_234_567, lambda: 7 * 2**30, depth=1234)
+    drawn = stream.getvalue().split("\r")[-1]
+    assert drawn.startswith("states 3,855,360  transitions 12,345,678") and len(drawn) <= 49
+
+
+@pytest.mark.skipif(shutil.which("spin") is None, reason="SPIN is not installed (apt-get install spin)")
+def test_spin_says_what_it_does_before_its_search(capsys, tmp_path):
+    code, out, err = run(capsys, DINING, "--root", "Table2()", "--engine", "spin", "--progress",
+                         "--traces", tmp_path / "t")
+    assert code == 4 and "violated  deadlock freedom (SPIN, " in out
+    assert "genom2bip: SPIN: translating the model to Promela, generating pan.c and compiling it ..." in err
+    assert "genom2bip: SPIN: pan ready in " in err
