@@ -49,6 +49,8 @@ def run(items, model, args: argparse.Namespace, options, listener, deadlock_verd
     worst = EXIT_OK
     for item in items:
         print(f"property {describe(item)}")
+        if hasattr(listener, "aside") and item.property.pattern != "deadlock free":
+            listener.aside(f"property {item.name}: localization ...")
         if item.property.pattern == "deadlock free":
             word = {EXIT_OK: "holds", EXIT_VIOLATED: "violated"}.get(deadlock_verdict, "inconclusive")
             print(f"  {word} (compositional invariants, above)")
