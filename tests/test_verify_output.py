@@ -71,7 +71,7 @@ def test_by_default_the_summary_comes_first_and_the_traces_go_to_out_traces(caps
     where = Path("out/traces/Dining")
     assert lines[3] == f"details in {where}/verify.txt, 1 trace as NAME.txt and NAME.json (--traces terminal " \
                        "prints them here)"
-    assert lines[4].startswith("exit status 4: found: a deadlock")
+    assert lines[4].startswith("exit status 4: found: a deadlock")  # said when not 0
     assert len(lines) == 5  # no trace on the terminal
     directory = default_traces / where
     assert sorted(p.name for p in directory.iterdir()) == [".genom2bip", "deadlock-1.json", "deadlock-1.txt",
@@ -236,6 +236,7 @@ def test_json_and_summary_of_services_that_run_until_stopped(capsys, tmp_path):
     code, out, _ = run(capsys, *argv, "--traces", tmp_path / "t2")
     poll = next(line for line in out.splitlines() if "Polling.Poll" in line)
     assert poll.split()[:2] == ["until", "stopped"] and "no bound" not in out and running in poll
+    assert out.splitlines()[-1].startswith(f"details in {tmp_path / 't2'}/verify.txt")  # exit status 0: no line
 
 
 def test_json_of_a_timed_check_that_holds(capsys, tmp_path):

@@ -158,7 +158,12 @@ class Report:
 
     def summary_lines(self, status: int) -> list[str]:
         """The header, one line per check, what was not run, and where the details and traces are."""
-        lines = list(self.header)
+        lines: list[str] = []
+        for text in self.header:  # "platform: ..." and "time: ..." of a timed model make one line
+            if text.startswith("time: ") and lines and lines[-1].startswith("platform: "):
+                lines[-1] += f"; {text}"
+            else:
+                lines.append(text)
         if self.checks:
             lines.append(f"summary ({_counted(self.checks)}):")
         width = min(max((len(c.word) for c in self.checks), default=0), 16)
@@ -175,7 +180,8 @@ class Report:
             n = len(self.traces)
             traces = f", {n} trace{'s' if n != 1 else ''} as NAME.txt and NAME.json" if n else ""
             lines.append(f"details in {self.directory}/{DETAILS}{traces} (--traces terminal prints them here)")
-        lines.append(f"exit status {status}: {_meaning(status)}")
+        if status:  # 0 says itself: every line above holds
+            lines.append(f"exit status {status}: {_meaning(status)}")
         return lines
 
     def document(self, status: int, interrupted: bool) -> dict[str, Any]:
