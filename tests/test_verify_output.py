@@ -302,3 +302,27 @@ def test_spin_says_what_it_does_before_its_search(capsys, tmp_path):
     assert code == 4 and "violated  deadlock freedom (SPIN, " in out
     assert "genom2bip: SPIN: translating the model to Promela, generating pan.c and compiling it ..." in err
     assert "genom2bip: SPIN: pan ready in " in err
+
+
+def test_a_ctrl_c_the_search_does_not_take_still_gives_the_summary_and_writes_what_is_known(capsys, tmp_path,
+                                                                                             monkeypatch):
+    """The second property's check is cut by a KeyboardInterrupt (a Ctrl-C outside a search's own handler)."""
+    import genom2bip.verify as api
+
+    checked = []
+    original = api.check_property
+
+    def check_then_interrupt(*a, **kw):
+        if checked:
+            raise KeyboardInterrupt
+        checked.append(1)
+        return original(*a, **kw)
+
+    monkeypatch.setattr(api, "check_property", check_then_interrupt)
+    code, out, err = run(capsys, SERVER, "--property", props(tmp_path), "--engine", "python",
+                         "--traces", tmp_path / "t")
+    assert code == 130 and "genom2bip: interrupted" in err
+    lines = out.splitlines()
+    assert lines[1] == "summary (1 check: 1 holds):" and lines[2].startswith("  holds  property ok (")
+    assert lines[-1] == "exit status 130: interrupted by Ctrl-C (or SIGTERM), after saying what was known"
+    assert "property ok" in (tmp_path / "t" / "verify.txt").read_text()

@@ -15,8 +15,9 @@ from pathlib import Path
 from genom2bip.cli.printers import Printer, print_lines, print_trace, step_sources
 from genom2bip.cli.verify_report import active, running
 from genom2bip.cli.verbs import (
-    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, add_preprocessor_arguments,
-    add_rules_arguments, description_files, error, load_externs, parse_defines, print_diagnostics, verb,
+    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure,
+    add_preprocessor_arguments, add_rules_arguments, description_files, error, load_externs, parse_defines,
+    print_diagnostics, verb,
 )
 
 
@@ -166,6 +167,11 @@ def verb_verify(args: argparse.Namespace) -> int:
     try:
         with running(report):
             status = _verify(args, report)
+    except KeyboardInterrupt:  # a Ctrl-C the search did not take: what is known is said (and written) first
+        if report.captured:
+            args._interrupted = True
+            _finish(report, EXIT_INTERRUPTED, args)
+        raise
     except BaseException:
         _spill(report)
         raise
