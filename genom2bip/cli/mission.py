@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, error, verb
@@ -103,6 +104,9 @@ def verb_mission(args: argparse.Namespace) -> int:
     if why:  # said before the run: a run lost after the fact cannot be had again
         error(f"--out {args.out}: the mission's trace and picture cannot be written there: {why}")
         return EXIT_ERRORS
+    if sys.stderr.isatty() and not (args.quiet or args.json):  # importing the simulator alone takes seconds
+        print(f"genom2bip: starting the controller{' and the world' if world is not None else ''} ...",
+              file=sys.stderr, flush=True)
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
                       log=None if args.quiet or args.json else print, times=bool(args.codel_times),
                       view=args.port if args.view else None, token=token)

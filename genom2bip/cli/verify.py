@@ -2,7 +2,9 @@
 
 MODEL is description files or directories (the functional level is built as
 ``genom2bip generate`` builds it, rules included) or one ``.bip`` file
-(``--root`` names the root, default the last compound type).  Exit status:
+(``--root`` names the root, default the last compound type).  It prints a
+summary line per check and writes the details and traces to a directory
+(genom2bip/cli/verify_report.py, docs/output.md).  Exit status:
 0 every check passed, 4 a deadlock, a violated property or a model error was
 found, 5 a limit stopped the search before an answer, 1 bad input, 2 usage.
 """
