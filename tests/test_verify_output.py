@@ -326,3 +326,21 @@ def test_a_ctrl_c_the_search_does_not_take_still_gives_the_summary_and_writes_wh
     assert lines[1] == "summary (1 check: 1 holds):" and lines[2].startswith("  holds  property ok (")
     assert lines[-1] == "exit status 130: interrupted by Ctrl-C (or SIGTERM), after saying what was known"
     assert "property ok" in (tmp_path / "t" / "verify.txt").read_text()
+
+
+def test_a_violation_found_while_the_search_goes_on_is_said_at_once_and_its_trace_written(capsys, tmp_path):
+    platform = tmp_path / "fp1.yaml"
+    platform.write_text(FP1)
+    code, out, err = run(capsys, PLATFORM / "Starved.gen", "--timed", "--platform", platform,
+                         "--traces", tmp_path / "t")
+    assert code == 4
+    assert "genom2bip: found: period of Starved.idle (10 ms): overrun reachable (found after " in err
+    line = next(line for line in out.splitlines() if "Starved.idle" in line)
+    assert line.split()[0] == "violated" and line.endswith("→ overrun-period-of-Starved.idle-10-ms.txt")
+    text = (tmp_path / "t" / "overrun-period-of-Starved.idle-10-ms.txt").read_text()
+    assert text.startswith("period of Starved.idle (10 ms): counterexample\n") and "Starved.idle:late" in text
+
+
+def test_an_empty_traces_option_is_a_usage_error(capsys):
+    code, out, err = run(capsys, DINING, "--root", "Table2()", "--traces", "")
+    assert code == 2 and out == "" and "--traces: give a directory, or 'terminal'" in err
