@@ -5,6 +5,10 @@
   suite builds at :data:`TEST_LEVEL` unless the run sets the variable itself
   (``GENOM2BIP_OPT=2 python -m pytest`` tests the level users get throughout).  Set in ``os.environ``, it
   reaches the commands the tests start.  :func:`shipped_c_level` gives a test the level users get.
+* ``verify``'s traces, ``GENOM2BIP_TRACES`` (genom2bip/cli/verify_report.py): by default ``verify`` prints a
+  summary and writes its details and traces under ``out/traces/``.  The suite's verify tests read the details
+  and traces as they are printed, so the suite runs with ``terminal`` (and writes nothing into the working
+  directory); tests/test_verify_output.py tests the default, the directory and the JSON document.
 * The compiled-C cache (``$XDG_CACHE_HOME/genom2bip/native``) is shared by the workers of ``-n``: a
   library is written under a name of its own and renamed into place, so two workers building the same
   model at once both load a whole library (tests/test_native.py checks it).
@@ -18,6 +22,7 @@ import pytest
 #: gcc's level for the suite's builds.
 TEST_LEVEL = "0"
 os.environ.setdefault("GENOM2BIP_OPT", TEST_LEVEL)
+os.environ.setdefault("GENOM2BIP_TRACES", "terminal")
 
 
 @pytest.fixture

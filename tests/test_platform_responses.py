@@ -189,6 +189,9 @@ FP1 = "cores: 1\npolicy: fixed-priority\nbest: wcet\n"
 #: ends (its codels never reach ether nor throw from its start).
 NO_BOUND = "no bound: a request can wait for ever"
 UNTIL_STOPPED = "runs until stopped: once started, no final report without an interruption"
+#: ... and one whose lasso runs the service itself, period after period, though its codels could end it.
+KEEPS_RUNNING = "runs until stopped: works every period once started, may go on for ever (not a fault)"
+WAITING = FIXTURES / "Waiting.gen"
 
 
 def lasso_of(out: str, owner: str, value: str = NO_BOUND) -> tuple[list[tuple[float, str]], list[str], int]:
@@ -236,16 +239,17 @@ def test_the_model_names_the_services_that_only_an_interruption_ends(exceptions,
         assert timed.arguments.get("until_stopped", "") == expected, gen
 
 
-@pytest.mark.parametrize("options, track", [((), NO_BOUND), (("--no-exceptions",), UNTIL_STOPPED)],
+@pytest.mark.parametrize("options, track", [((), KEEPS_RUNNING), (("--no-exceptions",), UNTIL_STOPPED)],
                          ids=["exceptions", "no-exceptions"])
-def test_a_service_that_can_end_by_itself_has_no_bound_and_one_that_cannot_runs_until_stopped(
+def test_a_service_that_works_every_period_runs_until_stopped_whether_or_not_its_codels_can_end_it(
         tmp_path, capsys, options, track):
-    """Poll may yield ether; Track only pauses, and ends by itself only when its codel may throw e_lost."""
+    """Poll may yield ether; Track only pauses, and ends by itself only when its codel may throw e_lost.  Both
+    lassos run the service's own codels every period: no request waits, so neither is worded as a fault."""
     code, out, _ = verify(capsys, POLLING, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times",
                           *options)
     table = response_table(out)
-    assert (table["Polling.Poll"], table["Polling.Track"]) == (NO_BOUND, track), out
-    for owner, value in (("Polling.Poll", NO_BOUND), ("Polling.Track", track)):
+    assert (table["Polling.Poll"], table["Polling.Track"]) == (KEEPS_RUNNING, track), out
+    for owner, value in (("Polling.Poll", KEEPS_RUNNING), ("Polling.Track", track)):
         steps, lines, loop = lasso_of(out, owner, value)  # each wording keeps its lasso
         labels = [label for _, label in steps]
         assert f"{owner}:trigger" in labels and f"{owner}:start" in labels
@@ -266,11 +270,30 @@ def test_a_service_that_runs_until_stopped_in_json(tmp_path):
     assert (values["Endless.Watch"], values["Endless.Once"]) == ("until stopped", 14.0)
 
 
-def test_a_service_that_can_end_by_itself_is_unbounded_in_json(tmp_path):
+def test_a_service_that_can_end_by_itself_but_keeps_running_is_until_stopped_in_json(tmp_path):
     polling = check_response_times(model_of(tmp_path, POLLING, {}, FP1, None))
-    assert {r.owner: r.to_json()["details"]["until_stopped"] for r in polling.responses} == \
+    details = {r.owner: r.to_json()["details"] for r in polling.responses}
+    assert {o: d["until_stopped"] for o, d in details.items()} == \
         {"Polling.main": False, "Polling.Poll": False, "Polling.Track": False}
-    assert polling.values()["Polling.Poll"] == polling.values()["Polling.Track"] == "unbounded"
+    assert {o: d["keeps_running"] for o, d in details.items()} == \
+        {"Polling.main": False, "Polling.Poll": True, "Polling.Track": True}
+    assert details["Polling.Poll"]["unbounded"] is True
+    assert polling.values()["Polling.Poll"] == polling.values()["Polling.Track"] == "until stopped"
+    assert polling.message == "run until stopped: Polling.Poll, Polling.Track"
+
+
+def test_a_request_that_never_gets_its_core_has_no_bound_worded_as_a_wait(tmp_path, capsys):
+    """Ping would end in one codel, but idle never gets the core: its lasso never runs Ping, a real wait."""
+    code, out, _ = verify(capsys, WAITING, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times")
+    table = response_table(out)
+    assert table["Waiting.Ping"] == NO_BOUND, out
+    steps, lines, loop = lasso_of(out, "Waiting.Ping")
+    assert not any(label.startswith("Waiting.Ping:exec") for _, label in steps)
+    times = check_response_times(model_of(tmp_path, WAITING, {}, FP1, None))
+    ping = next(r for r in times.responses if r.owner == "Waiting.Ping")
+    assert ping.unbounded and not ping.keeps_running and not ping.until_stopped
+    assert times.values()["Waiting.Ping"] == "unbounded" and "no bound: " in times.message
+    assert "Waiting.Ping" in times.message.split(";")[0]
 
 
 def test_a_starved_task_has_no_bound_on_one_core_and_a_small_one_on_two(tmp_path, capsys):

@@ -30,7 +30,8 @@ BY_HELP = {
 }
 #: Lines whose answer is "found" (exit 4): the example model's deadlock, the timed example's end.
 FOUND = ("examples/model.bip --root 'System()' --trace-picture", "examples/model.bip --root 'System()' --method both",
-         "python -m runtime explore examples/timed.bip")
+         "python -m runtime explore examples/timed.bip", "examples/model.bip --root 'System()' --traces traces",
+         "examples/model.bip --root 'System()' --json")
 
 
 def using_it() -> list[str]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, error, verb
@@ -46,6 +47,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="the token every request to the controller must send, in the first line of FILE "
                              "(default: the environment variable GENOM2BIP_TOKEN), as for `python -m PACKAGE run`")
     parser.add_argument("--quiet", action="store_true", help="print only the report")
+    parser.add_argument("--json", action="store_true",
+                        help="print the report as one JSON document, nothing else (schema: "
+                             "genom2bip/cli/mission_schema.json; docs/output.md)")
     parser.add_argument("--codel-times", metavar="FILE",
                         help="record how long each codel runs (calls; longest, p99 and mean CPU and wall time), "
                              "write it to FILE (JSON) and print it after the report")
@@ -100,8 +104,11 @@ def verb_mission(args: argparse.Namespace) -> int:
     if why:  # said before the run: a run lost after the fact cannot be had again
         error(f"--out {args.out}: the mission's trace and picture cannot be written there: {why}")
         return EXIT_ERRORS
+    if sys.stderr.isatty() and not (args.quiet or args.json):  # importing the simulator alone takes seconds
+        print(f"genom2bip: starting the controller{' and the world' if world is not None else ''} ...",
+              file=sys.stderr, flush=True)
     run = run_mission(mission, package, args.codels, world, realtime=args.realtime, live=args.live,
-                      log=None if args.quiet else print, times=bool(args.codel_times),
+                      log=None if args.quiet or args.json else print, times=bool(args.codel_times),
                       view=args.port if args.view else None, token=token)
     written = []
     try:
@@ -109,25 +116,46 @@ def verb_mission(args: argparse.Namespace) -> int:
         write_trace(run, trace)  # first: the run's record, before anything that reads it could fail
         written.append(str(trace))
     except OSError as exc:
-        print(report.text(run))
+        _print_report(args, run, written, EXIT_ERRORS)
         error(f"cannot write the trace {trace}: {exc.strerror or exc}")
         return EXIT_ERRORS
-    print(report.text(run))
+    if not args.json:
+        print(report.text(run))
+    status = EXIT_OK if run.ok else EXIT_VIOLATED
     if run.world is not None:
         try:
             picture.draw(run, png)
             written.insert(0, str(png))
         except OSError as exc:
-            print("  wrote " + ", ".join(written))
+            _wrote(args, run, written, EXIT_ERRORS)
             error(f"cannot write the picture {png}: {exc.strerror or exc}")
             return EXIT_ERRORS
     if run.codel_times is not None:
         try:
             write_json(args.codel_times, run.codel_times)
         except OSError as exc:
-            print("  wrote " + ", ".join(written))
+            _wrote(args, run, written, EXIT_ERRORS)
             error(f"--codel-times {args.codel_times}: cannot write it: {exc.strerror or exc}")
             return EXIT_ERRORS
         written.append(args.codel_times)
-    print("  wrote " + ", ".join(written))
-    return EXIT_OK if run.ok else EXIT_VIOLATED
+    _wrote(args, run, written, status)
+    return status
+
+
+def _print_report(args: argparse.Namespace, run, written: list[str], status: int) -> None:
+    """The report, as text or (``--json``) as one document."""
+    from genom2bip.mission import report
+
+    if args.json:
+        import json
+        print(json.dumps(report.document(run, written, status), indent=1))
+    else:
+        print(report.text(run))
+
+
+def _wrote(args: argparse.Namespace, run, written: list[str], status: int) -> None:
+    """The files written, after the report (in the document with ``--json``)."""
+    if args.json:
+        _print_report(args, run, written, status)
+    else:
+        print("  wrote " + ", ".join(written))

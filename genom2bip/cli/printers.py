@@ -69,12 +69,24 @@ class Printer(Listener):
 
     def unbounded(self, max_bytes: int) -> None:
         """On a terminal, a search given no bound says which one it has and how to stop it."""
-        if (self.args.progress or sys.stderr.isatty()) and not self.args.quiet:
+        if self._shown():
             print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
                   "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
 
+    def _shown(self) -> bool:
+        """Progress is shown: on a terminal, or asked for with --progress, and not --quiet."""
+        return bool((self.args.progress or sys.stderr.isatty()) and not self.args.quiet)
+
+    def aside(self, line: str) -> None:
+        """With the details going to a file, a step of a long check is still said as it ends, on stderr."""
+        from genom2bip.cli.verify_report import active
+
+        if active().captured and self._shown():
+            print(f"genom2bip: {line.strip()}", file=sys.stderr, flush=True)
+
     def phase(self, line: str) -> None:
         print(f"  {line}", flush=True)
+        self.aside(line)
 
     def round(self, number: int, r) -> None:
         """One line per localization round: kept atoms, states, time, outcome, replay."""
@@ -82,4 +94,6 @@ class Printer(Listener):
             f"{r.kept} of {r.atoms} atoms kept, {r.chaos} free"
         replayed = "replayed on the model" if r.outcome in ("violated", "run found") else "not replayed"
         tail = f", {replayed} ({r.concrete_states:,} states searched)" if r.concrete_states else ""
-        print(f"  round {number}: {what}: {r.states:,} states, {r.seconds:.2f} s: {r.outcome}{tail}", flush=True)
+        line = f"round {number}: {what}: {r.states:,} states, {r.seconds:.2f} s: {r.outcome}{tail}"
+        print(f"  {line}", flush=True)
+        self.aside(line)

@@ -2,7 +2,9 @@
 
 MODEL is description files or directories (the functional level is built as
 ``genom2bip generate`` builds it, rules included) or one ``.bip`` file
-(``--root`` names the root, default the last compound type).  Exit status:
+(``--root`` names the root, default the last compound type).  It prints a
+summary line per check and writes the details and traces to a directory
+(genom2bip/cli/verify_report.py, docs/output.md).  Exit status:
 0 every check passed, 4 a deadlock, a violated property or a model error was
 found, 5 a limit stopped the search before an answer, 1 bad input, 2 usage.
 """
@@ -13,9 +15,11 @@ import sys
 from pathlib import Path
 
 from genom2bip.cli.printers import Printer, print_lines, print_trace, step_sources
+from genom2bip.cli.verify_report import active, running
 from genom2bip.cli.verbs import (
-    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure, add_preprocessor_arguments,
-    add_rules_arguments, description_files, error, load_externs, parse_defines, print_diagnostics, verb,
+    EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, EXIT_VIOLATED, Failure,
+    add_preprocessor_arguments, add_rules_arguments, description_files, error, load_externs, parse_defines,
+    print_diagnostics, verb,
 )
 
 
@@ -57,6 +61,14 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     add_native_arguments(search)
     search.add_argument("--progress", action="store_true", help="show progress even when stderr is not a terminal")
     search.add_argument("--quiet", action="store_true", help="no progress line")
+    answer = parser.add_argument_group("the answer (docs/output.md)")
+    answer.add_argument("--traces", metavar="DIR",
+                        help="write the details (DIR/verify.txt) and each trace (DIR/NAME.txt, DIR/NAME.json) to DIR "
+                             "and print a summary line per check; 'terminal' prints everything here as it comes "
+                             "(default: out/traces/MODEL, or $GENOM2BIP_TRACES)")
+    answer.add_argument("--json", action="store_true",
+                        help="print one JSON document: model, platform, checks with verdicts, figures and trace "
+                             "files (schema: genom2bip/cli/verify_schema.json)")
     out = parser.add_argument_group("exports")
     out.add_argument("--aut", metavar="FILE", help="write the explored LTS in Aldebaran format (CADP, mCRL2)")
     out.add_argument("--dot", metavar="FILE", help="write the explored LTS as a Graphviz graph")
@@ -147,14 +159,35 @@ def _check_options(args) -> None:
 @verb("verify", help="explore the BIP model: deadlocks, properties (MCL-style), LTS and Promela exports, SPIN",
       arguments=_arguments)
 def verb_verify(args: argparse.Namespace) -> int:
-    """Build or read the model, then run the checks asked for and print a verdict for each."""
+    """Build or read the model, run the checks asked for; a summary line per check, the details and traces in files
+    (or as they come with ``--traces terminal``, or one JSON document with ``--json``)."""
     from genom2bip.cli.verify_compositional import check_arguments as check_compositional
-    from genom2bip.cli.verify_native import search_options
-    from runtime.engine import EngineError
 
     _check_options(args)
     check_compositional(args)
+    report = _report(args)
+    try:
+        with running(report):
+            status = _verify(args, report)
+    except KeyboardInterrupt:  # a Ctrl-C the search did not take: what is known is said (and written) first
+        if report.captured:
+            args._interrupted = True
+            _finish(report, EXIT_INTERRUPTED, args)
+        raise
+    except BaseException:
+        _spill(report)
+        raise
+    return _finish(report, status, args)
+
+
+def _verify(args: argparse.Namespace, report) -> int:
+    """Load the model and run every check asked for, printing as they come; the worst exit status."""
+    from genom2bip.cli.verify_compositional import run as run_compositional
+    from genom2bip.cli.verify_native import search_options
+    from runtime.engine import EngineError
+
     model = load_model(args)
+    _describe(report, model, args)
     try:
         model.flat
     except EngineError as exc:
@@ -171,8 +204,7 @@ def verb_verify(args: argparse.Namespace) -> int:
     if args.method == "compositional" and args.property:  # every property classified before anything runs
         from genom2bip.cli.verify_localized import read_localizable
         localized = read_localizable(args, model)
-    from genom2bip.cli.verify_compositional import run as run_compositional
-    print(f"model {model.title}")
+    report.line(f"model {model.title}")
     load_externs(args.externs)
     compositional = run_compositional(model, args, options, listener)
     if args.method == "both":
@@ -186,6 +218,82 @@ def verb_verify(args: argparse.Namespace) -> int:
         from genom2bip.cli.verify_localized import run as run_localized
         return max(compositional, run_localized(localized, model, args, options, listener, compositional))
     return compositional
+
+
+def _report(args: argparse.Namespace):
+    """Where the answer goes (--traces, --json, $GENOM2BIP_TRACES); a directory that cannot take the traces is
+    refused before anything runs."""
+    import os
+
+    from genom2bip.cli.verify_report import TERMINAL, Report, check_directory, traces_directory
+    from genom2bip.generate import system_name
+
+    option = args.traces or os.environ.get("GENOM2BIP_TRACES") or None
+    if args.traces == "":
+        error("--traces: give a directory, or 'terminal'")
+        raise Failure(EXIT_USAGE)
+    name = Path(args.paths[0]).stem if args.paths[0].endswith(".bip") else \
+        (args.name or "-".join(system_name([p]) for p in args.paths))
+    name += "-timed" if getattr(args, "timed", False) else ""  # the main job verifies NDD untimed, then timed
+    directory = traces_directory(option, name)
+    if directory is not None:
+        why = check_directory(directory, _inputs(args))
+        if why is not None:
+            error(f"--traces {directory}: {why}" if args.traces else
+                  f"{why} (the traces' default directory; --traces DIR or --traces terminal chooses another place)")
+            raise Failure(EXIT_ERRORS)
+    return Report(TERMINAL if directory is None else "files", directory, args.json)
+
+
+def _inputs(args: argparse.Namespace) -> list[Path]:
+    return [Path(p) for p in (*args.paths, *args.property, args.rules) if p]
+
+
+def _describe(report, model, args: argparse.Namespace) -> None:
+    """What the JSON document says of the model: title, root, files, time."""
+    from genom2bip.verify import tick_us
+
+    tick = tick_us(model.package)
+    report.model = {"title": model.title, "root": model.root, "paths": list(args.paths), "timed": tick is not None,
+                    "tick_ms": tick / 1000 if tick else None, "rules": not getattr(args, "no_rules", False)}
+    report.platform = _platform_of(model) or (_dedicated() if tick else None)
+    report.tick_ms = tick / 1000 if tick else None
+
+
+def _dedicated() -> str:
+    from genom2bip.platform import DEDICATED
+    return DEDICATED
+
+
+def _spill(report) -> None:
+    """A run that stops on an error or a second Ctrl-C: the details printed so far are not lost."""
+    if report.captured:
+        (sys.stderr if report.as_json else sys.stdout).write(report.log.getvalue())
+
+
+def _finish(report, status: int, args: argparse.Namespace) -> int:
+    """The summary (or the JSON document) after the run, and the details and traces written; the exit status."""
+    import json
+
+    from genom2bip.cli.verify_report import write_directory
+    from genom2bip.output import OutputError
+
+    if not report.captured:
+        return status
+    if report.directory is not None:
+        try:
+            write_directory(report, _inputs(args))
+        except (OutputError, OSError) as exc:
+            error(f"--traces {report.directory}: the details and traces were not written: "
+                  f"{getattr(exc, 'strerror', None) or exc}")
+            report.directory = None
+            status = status or EXIT_ERRORS
+    if report.as_json:
+        print(json.dumps(report.document(status, bool(getattr(args, "_interrupted", False))), indent=1))
+    else:
+        for line in report.summary_lines(status):
+            print(line)
+    return status
 
 
 def _response_observers(model) -> list:
@@ -224,14 +332,16 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
     if zones:
         from genom2bip.cli.verify_timed import check_timing_zones
         if args.method == "explore":
-            print(f"model {model.title}")
+            active().line(f"model {model.title}")
         from genom2bip.cli.verify_timed import platform_line
         platform_line(model)
         worst, stopped = check_timing_zones(model, observers, responses, options, listener)
         left = (["deadlock"] if deadlock else []) + [f"property {p.name}" for p in properties]
         left += [f"--{k} export" for k in ("aut", "dot", "promela") if getattr(args, k)]
+        args._interrupted = stopped == "interrupted"
         if stopped == "interrupted" and left:  # one Ctrl-C stops the whole command, after what was found
             print(f"interrupted: not run: {', '.join(left)}")
+            active().not_run += left
         if stopped == "interrupted" or not left:
             return max(compositional, worst)
         observers, responses = set(), False
@@ -246,13 +356,14 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         if code != EXIT_OK:
             return code
     if args.method == "explore":
-        print(f"model {model.title}")
+        active().line(f"model {model.title}")
     if args.engine == "spin":
         from genom2bip.cli.verify_spin import run_spin
         return run_spin(space, args, options, listener, deadlock, properties)
     worst = max(compositional, _run_explorer(space, args, options, listener, deadlock, properties))
     if observers and getattr(args, "_interrupted", False):
         print("interrupted: not run: the timing observers")
+        active().not_run.append("the timing observers")
     elif observers:
         from genom2bip.cli.verify_timed import check_observers
         worst = max(worst, check_observers(model, observers, space, options, listener))
@@ -309,6 +420,7 @@ def _write_promela(space, properties, path: str) -> int:
         error(f"cannot write {path}: {exc.strerror or exc}")
         return EXIT_ERRORS
     print(f"wrote {path} ({len(monitors)} observer(s))")
+    active().wrote(path, f"Promela, {len(monitors)} observer(s)")
     return EXIT_OK
 
 
@@ -326,8 +438,11 @@ def _run_explorer(space, args, options, listener, deadlock: bool, properties) ->
         if error_ is not None:
             worst = EXIT_VIOLATED
             print(f"model error in state {error_.state}: {error_.message}")
-            print("  trace to the state where it happens:")
-            print_trace(error_.trace.steps, sources=sources)
+            active().check("model-error", "model error", "error", message=error_.message,
+                           how=_figures_in_words(exploration))
+            with active().trace("model error", "model-error", error_.trace, "trace"):
+                print("  trace to the state where it happens:")
+                print_trace(error_.trace.steps, sources=sources)
             _trace_picture(args, space.engine, error_.trace.steps, [f"model error: {error_.message}"])
         if deadlock:
             worst = max(worst, _report_deadlocks(space, check_deadlock(space, options, listener, lts, exploration),
@@ -344,6 +459,7 @@ def _run_explorer(space, args, options, listener, deadlock: bool, properties) ->
     for k, item in enumerate(properties):
         if getattr(args, "_interrupted", False):  # one Ctrl-C stops the whole command, after what was found
             print(f"interrupted: not run: {', '.join(f'property {p.name}' for p in properties[k:])}")
+            active().not_run += [f"property {p.name}" for p in properties[k:]]
             break
         found = check_property(space, item, options, listener)
         args._interrupted = found.limit == "interrupted"
@@ -351,13 +467,16 @@ def _run_explorer(space, args, options, listener, deadlock: bool, properties) ->
         stats = (f"{found.method}, {found.figures.states:,} states, {found.figures.seconds:.2f} s"
                  if found.method else "")
         print(f"  {found.word}" + (f" ({stats})" if stats else "") + (f": {found.message}" if found.message else ""))
+        subject = f"property {found.name or found.subject}"
+        active().check("property", subject, found.verdict.value, found, how=stats)
         if found.evidence:
             what = "counterexample" if found.evidence == "counterexample" else "witness"
             n = len(found.trace)
-            print(f"  {what} ({n} step{'s' if n != 1 else ''}):")
-            print_trace(found.trace.steps, sources=sources)
-            if found.trace.loop is not None:
-                print(f"    ... and back to the state after step {found.trace.loop}, forever")
+            with active().trace(subject, f"{subject} {what}", found.trace, what):
+                print(f"  {what} ({n} step{'s' if n != 1 else ''}):")
+                print_trace(found.trace.steps, sources=sources)
+                if found.trace.loop is not None:
+                    print(f"    ... and back to the state after step {found.trace.loop}, forever")
             if found.verdict is Verdict.VIOLATED:
                 _trace_picture(args, space.engine, found.trace.steps, [f"violates {found.subject}"]
                                + ([f"then back to step {found.trace.loop}, forever"]
@@ -371,21 +490,37 @@ def _run_explorer(space, args, options, listener, deadlock: bool, properties) ->
 
 def _report_deadlocks(space, found, args, sources) -> int:
     """Each deadlock with its trace and state (the first one drawn with --trace-picture)."""
+    how = _figures_in_words(found)
     if not found.deadlocks:
         print("deadlocks: none reachable" + ("" if found.complete else " in the explored part"))
+        active().check("deadlock", "deadlock freedom", found.verdict.value, found, how=how,
+                       message="" if found.complete else "none reachable in the explored part")
         return EXIT_OK
     n = len(found.deadlocks)
     shortest = ", each with a shortest trace" if found.shortest else ""
     print(f"deadlocks: {n} reachable state{'s' if n != 1 else ''} without enabled interaction{shortest}")
+    active().check("deadlock", "deadlock freedom", found.verdict.value, found, how=how,
+                   message=f"{n} reachable deadlock{'s' if n != 1 else ''}")
     for k, d in enumerate(found.deadlocks, 1):
-        print(f"deadlock {k} of {n} (state {d.state}, {len(d.trace)} steps):")
-        print_trace(d.trace.steps, sources=sources)
-        print("  state:")
-        print_lines(d.text)
+        with active().trace("deadlock freedom", f"deadlock-{k}", d.trace, "deadlock", d.text):
+            print(f"deadlock {k} of {n} (state {d.state}, {len(d.trace)} steps):")
+            print_trace(d.trace.steps, sources=sources)
+            print("  state:")
+            print_lines(d.text)
         if k == 1:
             _trace_picture(args, space.engine, d.trace.steps, [f"deadlock {k} of {n}: no interaction enabled"]
                            + d.moved)
     return EXIT_VIOLATED
+
+
+def _figures_in_words(result) -> str:
+    """A search's figures as the summary shows them: states, transitions, time."""
+    f = getattr(result, "figures", None)
+    if f is None:
+        return ""
+    moves = f", {f.transitions:,} transitions" if f.transitions is not None else ""
+    method = getattr(result, "method", "")
+    return f"{method + ', ' if method else ''}{f.states:,} states{moves}, {f.seconds:.2f} s"
 
 
 def _trace_picture(args, engine, steps, ending: list[str]) -> None:
@@ -403,6 +538,7 @@ def _trace_picture(args, engine, steps, ending: list[str]) -> None:
         error(str(exc))
         return
     print(f"wrote {path} (sequence diagram of this trace)")
+    active().wrote(path, f"sequence diagram of the first counterexample, {len(steps)} steps")
 
 
 def _export_lts(space, args) -> int:
@@ -418,4 +554,5 @@ def _export_lts(space, args) -> int:
             error(f"cannot write {path}: {exc.strerror or exc}")
             return EXIT_ERRORS
         print(f"wrote {path} ({what}: {states:,} states, {transitions:,} transitions)")
+        active().wrote(path, f"{what}: {states:,} states, {transitions:,} transitions")
     return EXIT_OK

@@ -74,9 +74,14 @@ def run(model, args: argparse.Namespace, options, listener) -> int:
     found = check_deadlock_compositional(model, options, listener)
     if args.graph and _write_graph(found.analysis, args.graph) != EXIT_OK:
         return EXIT_ERRORS
+    from genom2bip.cli.verify_report import active
+
     sources = step_sources(model.flat)
-    _report(found, lambda trace: print_trace(trace, sources=sources))
     total = found.figures.seconds
+    how = f"compositional: invariants and SAT, {found.potentials} potential, {len(found.candidates)} candidate(s), " \
+          f"{total:.2f} s"
+    active().check("deadlock", "deadlock freedom", found.verdict.value, found, how=how)
+    _report(found, lambda trace: print_trace(trace, sources=sources))
     if found.verdict is Verdict.HOLDS:
         print(f"deadlock-free (compositional, {total:.2f} s)")
         return EXIT_OK
@@ -110,8 +115,10 @@ def _report(found, print_trace) -> None:
         for cycle in p.waits[:5]:
             print(f"  waits: {' -> '.join(cycle + cycle[:1])}")
         if p.trace is not None:
-            print(f"  trace ({len(p.trace)} steps):")
-            print_trace(p.trace.steps)
+            from genom2bip.cli.verify_report import active
+            with active().trace("deadlock freedom", f"candidate-{n}", p.trace, "trace", "\n".join(p.state)):
+                print(f"  trace ({len(p.trace)} steps):")
+                print_trace(p.trace.steps)
     if not found.listing_complete:
         print(f"the listing stopped after {len(found.candidates)} candidates; "
               + ("the exhaustive exploration decided the others too" if found.explored else "more may exist"))
@@ -144,7 +151,10 @@ def _write_graph(analysis, path: str) -> int:
     except OSError as exc:
         error(f"cannot write {path}: {exc.strerror or exc}")
         return EXIT_ERRORS
-    print(f"wrote {path} (dependency graph: {g.number_of_nodes()} atoms, {g.number_of_edges()} edges, "
-          f"{sum(len(p.waits) for p in analysis.candidates)} wait-for cycles)")
+    what = (f"dependency graph: {g.number_of_nodes()} atoms, {g.number_of_edges()} edges, "
+            f"{sum(len(p.waits) for p in analysis.candidates)} wait-for cycles")
+    print(f"wrote {path} ({what})")
+    from genom2bip.cli.verify_report import active
+    active().wrote(path, what)
     return EXIT_OK
 

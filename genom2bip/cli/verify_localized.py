@@ -42,14 +42,19 @@ def run(items, model, args: argparse.Namespace, options, listener, deadlock_verd
     from runtime.localize.refine import NotLocalizable
     from runtime.props import describe
 
+    from genom2bip.cli.verify_report import active
+
     print("properties by localization (the atoms a property involves kept exact, the others a free environment; "
           "counterexample-guided refinement; deadlock freedom is not preserved by it and stays with the invariants)")
     worst = EXIT_OK
     for item in items:
         print(f"property {describe(item)}")
+        if hasattr(listener, "aside") and item.property.pattern != "deadlock free":
+            listener.aside(f"property {item.name}: localization ...")
         if item.property.pattern == "deadlock free":
             word = {EXIT_OK: "holds", EXIT_VIOLATED: "violated"}.get(deadlock_verdict, "inconclusive")
             print(f"  {word} (compositional invariants, above)")
+            active().check("property", f"property {item.name}", word, how="compositional invariants, above")
             worst = max(worst, deadlock_verdict)
             continue
         try:
@@ -58,13 +63,16 @@ def run(items, model, args: argparse.Namespace, options, listener, deadlock_verd
             error(f"{item.property.span}: property {item.name}: {exc}")
             worst = max(worst, EXIT_ERRORS)
             continue
-        print(f"  {found.word} ({found.method}, {found.figures.states:,} states, {found.figures.seconds:.2f} s)"
-              + (f": {found.message}" if found.message else ""))
+        how = f"{found.method}, {found.figures.states:,} states, {found.figures.seconds:.2f} s"
+        print(f"  {found.word} ({how})" + (f": {found.message}" if found.message else ""))
+        subject = f"property {item.name}"
+        active().check("property", subject, found.verdict.value, found, how=how)
         if found.trace is not None and len(found.trace):
             what = "counterexample" if found.verdict is Verdict.VIOLATED else "witness"
             n = len(found.trace)
-            print(f"  {what} on the model ({n} step{'s' if n != 1 else ''}):")
-            print_trace(found.trace.steps, sources=step_sources(model.flat))
+            with active().trace(subject, f"{subject} {what}", found.trace, what):
+                print(f"  {what} on the model ({n} step{'s' if n != 1 else ''}):")
+                print_trace(found.trace.steps, sources=step_sources(model.flat))
         if found.verdict in (Verdict.VIOLATED, Verdict.ERROR):
             worst = max(worst, EXIT_VIOLATED)
         elif found.verdict is Verdict.INCONCLUSIVE:

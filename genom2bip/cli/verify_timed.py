@@ -12,6 +12,7 @@ import argparse
 import sys
 
 from genom2bip.cli.verbs import EXIT_USAGE, Failure, error
+from genom2bip.cli.verify_report import active
 
 EXIT_OK, EXIT_VIOLATED, EXIT_INCONCLUSIVE = 0, 4, 5
 
@@ -147,7 +148,7 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
         return EXIT_OK
     if tick:
         platform_line(model)
-        print(f"time: one tick is {tick / 1000:g} ms")
+        active().line(f"time: one tick is {tick / 1000:g} ms")
     worst = EXIT_OK
     for atom in atoms:
         if localized:
@@ -157,16 +158,20 @@ def check_observers(model, kinds, space, options, listener, localized: bool = Fa
             found = check_observer(model, atom, space, options, listener)
         what = "overrun" if atom.kind == "overrun" else "violation"
         how = f"{found.method}, " if localized and found.method else ""
+        figures = f"{how}{found.figures.states:,} states, {found.figures.seconds:.2f} s"
         if found.verdict is Verdict.HOLDS:
-            print(f"{found.subject}: no {what} reachable ({how}{found.figures.states:,} states, "
-                  f"{found.figures.seconds:.2f} s)")
+            print(f"{found.subject}: no {what} reachable ({figures})")
+            active().check("observer", found.subject, "holds", found, how=figures, message=f"no {what} reachable")
         elif found.verdict is Verdict.VIOLATED:
             trace = found.trace if found.trace is not None else timed([], tick)
-            print(f"{found.subject}: {what} reachable ({how}{len(trace)} steps):")
-            timed_trace(trace)
+            active().check("observer", found.subject, "violated", found, how=figures, message=f"{what} reachable")
+            with active().trace(found.subject, f"{what} {found.subject}", trace, "counterexample"):
+                print(f"{found.subject}: {what} reachable ({how}{len(trace)} steps):")
+                timed_trace(trace)
             worst = EXIT_VIOLATED
         else:
             print(f"{found.subject}: inconclusive ({found.message})")
+            active().check("observer", found.subject, found.verdict.value, found, how=figures)
             worst = max(worst, EXIT_VIOLATED if found.verdict is Verdict.ERROR else EXIT_INCONCLUSIVE)
     return worst
 
@@ -177,20 +182,28 @@ def print_zone_verdict(found, early: bool = False) -> int:
     from genom2bip.verify import Verdict
 
     what = "overrun" if found.kind == "overrun" else "violation"
+    figures = f"{found.method}, {found.figures.states:,} symbolic states, {found.figures.seconds:.2f} s"
     if found.verdict is Verdict.HOLDS:
-        print(f"{found.subject}: no {what} reachable ({found.method}, {found.figures.states:,} symbolic "
-              f"states, {found.figures.seconds:.2f} s)")
+        print(f"{found.subject}: no {what} reachable ({figures})")
+        active().check("observer", found.subject, "holds", found, message=f"no {what} reachable")
         return EXIT_OK
     if found.verdict is Verdict.VIOLATED:
         when = (f"found after {found.figures.states:,} symbolic states, {found.figures.seconds:.1f} s; "
                 if early else "")
-        print(f"{found.subject}: {what} reachable" + (f" ({when}{len(found.trace)} steps):" if found.trace else
-                                                      f" ({when}{found.message})"))
-        if found.trace is not None:
-            timed_trace(found.trace)
+        if early and active().captured:  # the details come at the end: the terminal hears of it now
+            print(f"genom2bip: found: {found.subject}: {what} reachable ({when.rstrip('; ')})", file=sys.stderr)
+        if not early:
+            active().check("observer", found.subject, "violated", found, message=f"{what} reachable")
+        with active().trace(found.subject, f"{what} {found.subject}", found.trace, "counterexample"):
+            print(f"{found.subject}: {what} reachable" + (f" ({when}{len(found.trace)} steps):" if found.trace else
+                                                          f" ({when}{found.message})"))
+            if found.trace is not None:
+                timed_trace(found.trace)
         sys.stdout.flush()
         return EXIT_VIOLATED
-    print(f"{found.subject}: inconclusive ({_stopped_by(found.limit or found.message)})")
+    why = _stopped_by(found.limit or found.message)
+    print(f"{found.subject}: inconclusive ({why})")
+    active().check("observer", found.subject, "inconclusive", found, message=why)
     return EXIT_INCONCLUSIVE
 
 
@@ -213,8 +226,12 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> tupl
 
     tick = tick_us(model.package)
     if tick:
-        print(f"time: one tick is {tick / 1000:g} ms; explored with clock zones", flush=True)
+        active().line(f"time: one tick is {tick / 1000:g} ms; explored with clock zones")
     results = check_timing(model, kinds, responses, options, listener)
+    if results and active().captured:
+        f = results[0]
+        active().header.append(f"one search by clock zones for every check below ({f.method}, {f.figures.states:,} "
+                               f"symbolic states, {f.figures.seconds:.2f} s)")
     told = getattr(listener, "told", set())
     limit = next((r.limit for r in results if r.verdict is Verdict.INCONCLUSIVE and r.limit), "")
     if limit:
@@ -226,7 +243,9 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> tupl
         if isinstance(found, ResponseResult):
             continue
         if found.observer in told and found.verdict is Verdict.VIOLATED:
-            print(f"{found.subject}: {'overrun' if found.kind == 'overrun' else 'violation'} reachable (trace above)")
+            what = f"{'overrun' if found.kind == 'overrun' else 'violation'} reachable"
+            print(f"{found.subject}: {what} (trace above)")
+            active().check("observer", found.subject, "violated", found, message=what)
             worst = _worse(worst, EXIT_VIOLATED)
             continue
         worst = _worse(worst, print_zone_verdict(found))
@@ -242,18 +261,43 @@ def check_timing_zones(model, kinds, responses: bool, options, listener) -> tupl
             owner = r.owner
             period = f"  (period {r.ms(r.period_ticks):g} ms)" if r.period_ticks else ""
             print(f"  {owner:<{width}}  {_response_value(r)}{period}")
+        figures = f"{times[0].method}, {times[0].figures.states:,} symbolic states, {times[0].figures.seconds:.2f} s"
+        for r in times:
+            _record_response(r, figures)
         for r in times:
             owner = r.owner
             if r.trace is not None:
-                print(f"{owner}: {_response_value(r)} ({len(r.trace)} steps):")
-                timed_trace(r.trace)
-                if r.trace.loop is not None:
-                    print(f"    ... and back to the state after step {r.trace.loop}, forever")
+                what = "lasso" if r.trace.loop is not None else "trace"
+                with active().trace(f"response time of {owner}", f"response {owner}", r.trace, what):
+                    print(f"{owner}: {_response_value(r)} ({len(r.trace)} steps):")
+                    timed_trace(r.trace)
+                    if r.trace.loop is not None:
+                        print(f"    ... and back to the state after step {r.trace.loop}, forever")
             elif r.message and r.verdict is not Verdict.INCONCLUSIVE and r.message != _response_value(r):
                 print(f"{owner}: {r.message}")
         if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
             worst = _worse(worst, EXIT_INCONCLUSIVE)
     return worst, limit
+
+
+def _record_response(r, figures: str) -> None:  # noqa: ARG001 - the figures are the search's, said once
+    """A response time's summary line: its value in words, the period beside a task's."""
+    from genom2bip.verify.zones import response_value
+
+    value = response_value(r)
+    word = f"{value:g} ms" if isinstance(value, float | int) else _SHORT.get(value, value)
+    period = f"period {r.ms(r.period_ticks):g} ms" if r.period_ticks else ""
+    full = _response_value(r)
+    message = "" if full == word or full.startswith(f"{word} ") and r.verdict.value == "holds" else full
+    if word == "until stopped":
+        message = message.removeprefix("runs until stopped: ")
+    active().check("response", f"response time of {r.owner}", r.verdict.value, r, how=period, message=message,
+                   value=word, value_ms=r.value_ms if isinstance(value, float | int) else None)
+
+
+#: A response time without a number, in the summary's first column.
+_SHORT = {"unbounded": "no bound", "until stopped": "until stopped", "inconclusive": "inconclusive",
+          "bounded, not measured": "bounded", "never requested": "never requested"}
 
 
 def _worse(a: int, b: int) -> int:
@@ -275,7 +319,7 @@ def _response_value(r) -> str:
         return f"more than {r.ms(r.cap_ticks):g} ms so far ({_stopped_by(r.limit)})"
     return {"inconclusive": f"inconclusive ({_stopped_by(r.limit)})",
             "unbounded": "no bound: a request can wait for ever",
-            "until stopped": UNTIL_STOPPED,
+            "until stopped": r.message if r.keeps_running else UNTIL_STOPPED,
             "bounded, not measured": "every request ends (not measured: its codels can cycle)"}.get(value, value)
 
 
@@ -285,4 +329,4 @@ def platform_line(model) -> None:
     if ann is None:
         return
     from genom2bip.platform import DEDICATED
-    print(f"platform: {ann.arguments.get('platform') or DEDICATED}")
+    active().line(f"platform: {ann.arguments.get('platform') or DEDICATED}")

@@ -182,3 +182,43 @@ def text(run: Run) -> str:
                      "wall: wall time):")
         lines += ["    " + line for line in table(run.codel_times)]
     return "\n".join(lines)
+
+
+def document(run: Run, written: list[str], status: int) -> dict[str, Any]:
+    """The report as one JSON document (``genom2bip mission --json``; docs/output.md,
+    genom2bip/cli/mission_schema.json): the same figures as :func:`text`, for a script."""
+    codels: dict[str, int] = {}
+    for e in run.events:
+        if e.get("event") == "codel_overrun":
+            owner = e.get("task") or e.get("service") or "?"
+            codels[owner] = codels.get(owner, 0) + 1
+    requests = []
+    for o in run.outcomes:
+        if o.step.kind == "wait":
+            continue
+        r = (final_report(run, o.request) or o.report) if o.step.kind == "send" else o.report
+        requests.append({"request": o.request, "step": o.step.kind, "target": o.step.target,
+                         "status": r.get("status"), "rule": r.get("rule"),
+                         "exception": None if r.get("exception") is None else str(r.get("exception")),
+                         "expected": o.ok, "problem": o.problem})
+    return {
+        "tool": "genom2bip mission", "schema": 1, "mission": run.mission.name,
+        "world": str(run.world_path) if run.world_path else None,
+        "ok": run.ok, "expectations_met": run.expectations_met, "real_time_held": run.real_time_held,
+        "goals": [{"goal": _shown(g["goal"]), "point": list(g["point"]) if g["point"] is not None else None,
+                   "status": g["status"], "reached": g["reached"], "why": g["why"],
+                   "distance_left": g["distance_left"], "tolerance": g["tolerance"], "request": g["request"]}
+                  for g in goals(run)],
+        "driven_m": distance_driven(run) if run.world is not None else None,
+        "collisions": run.world.collisions if run.world is not None else None,
+        "robot_time_s": run.sim_time, "wall_time_s": run.wall_time, "clock": run.clock,
+        "requests": requests,
+        "rejected_by_rules": [{"request": o.request, "rule": o.report.get("rule"),
+                               "service": f"{o.report.get('component')}.{o.report.get('service')}"}
+                              for o in run.outcomes
+                              if o.report.get("status") == "rejected" and o.report.get("reason") == "rule"],
+        "timing": [{"task": t["task"], "period_ms": t["period_ms"], "periods": t["periods"] + t["missed"],
+                    "missed": t["missed"], "overran": t["overruns"], "codels_late": codels.get(t["task"], 0)}
+                   for t in run.timing],
+        "controller_error": run.error, "files": list(written), "exit_status": status,
+    }

@@ -31,6 +31,9 @@ RESPONSE_KINDS = ("response", "pending")
 ABOVE_CAP = "above the cap so far"
 #: Why a service has no bound when only an interruption ends it (a tracking service that pauses for ever).
 UNTIL_STOPPED = "runs until stopped: once started, no final report without an interruption"
+#: Why a service has no bound when its lasso keeps running the service itself (a tracking or polling service that
+#: may end by itself, but need not): not a fault, unlike a request that waits.
+KEEPS_RUNNING = "runs until stopped: works every period once started, may go on for ever (not a fault)"
 
 
 @dataclass
@@ -45,6 +48,7 @@ class ResponseResult(CheckResult):
     value_ticks: int | None = None  # None: more than the cap, or no bound at all (``unbounded``)
     unbounded: bool = False  # a lasso: a request (or a cycle of the task) can wait for ever
     until_stopped: bool = False  # unbounded, and a service that once started ends only when interrupted
+    keeps_running: bool = False  # unbounded, and the lasso's loop runs the service's own codels: it works, not waits
     cap_ticks: int = 0
     tick_us: int | None = None
     period_ticks: int | None = None  # a task's period
@@ -59,6 +63,7 @@ class ResponseResult(CheckResult):
     def details(self) -> dict[str, Any]:
         return {"observer": self.observer, "owner": self.owner, "kind": self.kind, "value_ticks": self.value_ticks,
                 "unbounded": self.unbounded, "until_stopped": self.until_stopped,
+                "keeps_running": self.keeps_running,
                 "value_ms": self.value_ms, "cap_ticks": self.cap_ticks, "cap_ms": self.ms(self.cap_ticks),
                 "period_ms": self.ms(self.period_ticks)}
 
@@ -349,9 +354,19 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
     trace, message = _trace(z, ways, [], space, tick)
     # the builder read the service's codels: none reached from its start yields ether or throws
     stopped = owner in _timed(model, "until_stopped")
+    running = not stopped and common["kind"] == "service" and _runs_in_loop(trace, owner)
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
-                          until_stopped=stopped,
-                          message=message or (UNTIL_STOPPED if stopped else "a request can wait for ever"), **common)
+                          until_stopped=stopped, keeps_running=running,
+                          message=message or (UNTIL_STOPPED if stopped else KEEPS_RUNNING if running else
+                                              "a request can wait for ever"), **common)
+
+
+def _runs_in_loop(trace: Trace | None, owner: str) -> bool:
+    """The lasso's loop executes ``owner``'s codels: the request was started and keeps working, period after period
+    (a request that waits for a start or a core it never gets does not)."""
+    if trace is None or trace.loop is None:
+        return False
+    return any(getattr(step, "label", "").startswith(f"{owner}:exec") for step in trace.steps[trace.loop:])
 
 
 @dataclass
@@ -376,7 +391,7 @@ def response_value(r: ResponseResult) -> float | str:
     """A response time as a number of ms, or a word saying why there is none."""
     if r.verdict is Verdict.INCONCLUSIVE:
         return "inconclusive"
-    if r.until_stopped:
+    if r.until_stopped or r.keeps_running:
         return "until stopped"
     if r.unbounded:
         return "unbounded"
@@ -402,10 +417,14 @@ def check_response_times(model: Model, options: SearchOptions | None = None, lis
     first = found[0]
     unbounded = [r for r in found if r.unbounded]
     stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE]
+    waiting = [r.owner for r in unbounded if not (r.until_stopped or r.keeps_running)]
+    running = [r.owner for r in unbounded if r.until_stopped or r.keeps_running]
     if stopped:
         verdict, message = Verdict.INCONCLUSIVE, f"stopped by {first.limit or 'a limit'}: the values are not maxima"
     elif unbounded:
-        verdict, message = Verdict.VIOLATED, "no bound: " + ", ".join(r.owner for r in unbounded)
+        verdict, message = Verdict.VIOLATED, "; ".join(
+            ([f"no bound: {', '.join(waiting)}"] if waiting else [])
+            + ([f"run until stopped: {', '.join(running)}"] if running else []))
     else:
         verdict, message = Verdict.HOLDS, "every response time has a bound"
     return ResponseTimes(f"response times of {model.title}", verdict, first.figures,

@@ -6,6 +6,7 @@ one line per report, ended by a newline, about once a second.
 """
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from typing import Callable, TextIO
@@ -56,6 +57,7 @@ class Progress:
             self.stream.write(line + "\n")
             self.stream.flush()
             return
+        line = line[:max(20, shutil.get_terminal_size().columns - 1)]  # one row: a wrapped line cannot be redrawn
         pad = " " * max(0, self.width - len(line))
         self.stream.write("\r" + line + pad)
         self.stream.flush()

@@ -130,6 +130,11 @@ class SpinRun:
             raise SpinError(f"cannot run {argv[0]}: {err}") from None
 
     def build(self, monitors: list[Monitor] | None = None, extra: tuple[str, ...] = ()) -> Path:
+        from runtime.native import build as native  # its notice: the command line says what a long wait is
+
+        start = time.perf_counter()
+        if native.notice is not None:
+            native.notice("SPIN: translating the model to Promela, generating pan.c and compiling it ...")
         text = write_promela(self.space, monitors, hidden=self.cores <= 1)
         (self.dir / "model.pml").write_text(text, encoding="utf-8")
         gen = self._run(["spin", "-o2", "-a", "model.pml"])  # -o2: keep write-only variables (we reduce ourselves)
@@ -145,6 +150,8 @@ class SpinRun:
         comp = self._run([cc, *flags, "-o", "pan", "pan.c"])
         if comp.returncode != 0:
             raise SpinError(f"compiling pan failed:\n{comp.stderr[-2000:]}")
+        if native.notice is not None:
+            native.notice(f"SPIN: pan ready in {time.perf_counter() - start:.1f} s; searching ...")
         return self.dir / "pan"
 
     def pan(self, args: list[str], timeout: float | None = None, progress=None) -> PanReport:
