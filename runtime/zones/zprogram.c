@@ -32,6 +32,8 @@ typedef struct {
     int64_t *blob;
     succ_fn succ;
     int64_t budget;
+    int64_t *sbuf, *svia;    /* the step's successors of the last state asked, kept from one call to the next */
+    int scap;
     inter_fn ask_inter;
 } Tables;
 
@@ -40,7 +42,8 @@ static void tables_free(Tables *t)
 {
     if (!t)
         return;
-    free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob), free(t);
+    free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob), free(t->sbuf), free(t->svia);
+    free(t);
 }
 
 static const int64_t *skip_atoms(const int64_t *p) { return p + 1 + 3 * p[0]; }
@@ -480,31 +483,41 @@ static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
     return status;
 }
 
-/* Write the program of state s (words) into prog; BACK: let Python write it. Successor states are interned
- * through ``intern`` (their numbers go into the program). */
-typedef int64_t (*intern_fn)(void *ctx, const int64_t *words);
+/* The step's successors of state s into t->sbuf (words) and t->svia, the buffers grown as needed: their
+ * number, or < 0 (-9 memory; else the step's error, which Python's successors handle). */
+static int step_successors(Tables *t, const int64_t *s)
+{
+    int ecode;
+    int64_t earg;
+    if (!t->scap) {
+        t->scap = 64;
+        t->sbuf = malloc((size_t)t->scap * t->W * sizeof(int64_t));
+        t->svia = malloc((size_t)t->scap * sizeof(int64_t));
+    }
+    for (;;) {
+        if (!t->sbuf || !t->svia)
+            return -9;
+        int n = t->succ(s, t->sbuf, t->svia, t->scap, t->budget, &ecode, &earg);
+        if (n >= 0 || t->scap >= 65536 || ecode != 10)
+            return n < 0 && n == -9 ? -10 : n;
+        t->scap *= 4;
+        free(t->sbuf), free(t->svia);
+        t->sbuf = malloc((size_t)t->scap * t->W * sizeof(int64_t));
+        t->svia = malloc((size_t)t->scap * sizeof(int64_t));
+    }
+}
+
+/* Write the program of state s (words) into prog; BACK: let Python write it.  A successor goes into the program
+ * as -(its index among the step's successors) - 1, interned only when a step first takes it (zsearch.c). */
 
 static int64_t *inter_row(void *ctx, Tables *t, int64_t number);
 
-static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *scratch, intern_fn intern, L *prog)
+static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *scratch, L *prog)
 {
-    int cap = 256, n;
-    int64_t *buf, *via;
-    int ecode;
-    int64_t earg;
-    for (;;) {
-        buf = malloc((size_t)cap * t->W * sizeof(int64_t));
-        via = malloc((size_t)cap * sizeof(int64_t));
-        if (!buf || !via) {
-            free(buf), free(via);
-            return -9;
-        }
-        n = t->succ(s, buf, via, cap, t->budget, &ecode, &earg);
-        if (n >= 0 || cap >= 65536 || ecode != 10)
-            break;
-        free(buf), free(via);
-        cap *= 16;
-    }
+    int n = step_successors(t, s);
+    int64_t *buf = t->sbuf, *via = t->svia;
+    if (n == -9)
+        return -9;
     int status = 0;
     Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}};
     int64_t *sidx = NULL;
@@ -731,10 +744,10 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
                 if (need_of(&g, srow[i], &need, &resets)) {
                     status = BACK;
                 } else {
-                    int64_t id = intern(ctx, buf + (size_t)i * t->W);
-                    if (id < 0)
-                        status = (int)id;
-                    else {
+                    /* the successor is interned when a step first takes it (zsearch.c's resolve): most are
+                     * timers' and overruns' steps whose clock guard no zone of this state meets */
+                    int64_t id = -(int64_t)i - 1;
+                    {
                         lpush(prog, id), lpush(prog, sidx[i]);
                         lpush(prog, need.n / 3), lcat(prog, need.a, need.n);
                         lpush(prog, resets.n / 2), lcat(prog, resets.a, resets.n);
@@ -748,7 +761,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
         prog->a[count_at] = count;
     }
 out:
-    free(buf), free(via), free(sidx), free(srow), free(g.index), free(g.row);
+    free(sidx), free(srow), free(g.index), free(g.row);
     free(g.memo_key.a), free(g.memo_off.a), free(g.pool.a);
     return status;
 }

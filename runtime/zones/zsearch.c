@@ -587,7 +587,7 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
             return NULL;
         state_words(x, state, s);
         L prog = {0};
-        int status = write_program(x, x->tables, s, x->d, T(x, 8), intern, &prog);
+        int status = write_program(x, x->tables, s, x->d, T(x, 8), &prog);
         free(s);
         if (!status) {
             x->prog_words += prog.n;
@@ -940,6 +940,29 @@ int zs_initial(void *p, int64_t state, const double *zone, program_fn ask)
     return arrive(x, state, z, -1, -1, NULL, 0, ask);
 }
 
+/* The number of successor entry ``*id`` of state ``state``'s program, interned now if it was not yet (a program
+ * written in C names its successors by their index among the step's successors until a step takes them); the
+ * entry is then rewritten with it.  < 0: no memory (-9), or the step no longer gives that successor. */
+static int64_t resolve(Ctx *x, int64_t state, int64_t *id)
+{
+    if (*id >= 0)
+        return *id;
+    Tables *t = x->tables;
+    int64_t *w = malloc(t->W * sizeof(int64_t));
+    if (!w)
+        return -9;
+    state_words(x, state, w);
+    int n = step_successors(t, w);
+    free(w);
+    int64_t k = -*id - 1;
+    if (n <= k)
+        return n == -9 ? -9 : -1;
+    int64_t got = intern(x, t->sbuf + k * t->W);
+    if (got >= 0)
+        *id = got;
+    return got;
+}
+
 /* Bytes the search holds: zones, states' words, programs' words are counted as they are kept. */
 int64_t zs_memory(Ctx *x)
 {
@@ -1001,6 +1024,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             const int64_t *s = parts(pr).succ;
             int64_t nsucc = *s++;
             for (int64_t t = 0; t < nsucc && !status; t++) {
+                const int64_t *entry = s;
                 int64_t nxt = s[0], via = s[1];
                 const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
                 int64_t nblocks = *bl++;
@@ -1059,6 +1083,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                         PUSH(need, cuts.a[off + w]);
                     off += 3 * ncut.a[pi];
                     x->transitions++;
+                    if (nxt < 0 && (nxt = resolve(x, x->nodes.a[k].state, (int64_t *)entry)) < 0) {
+                        status = nxt == -9 ? -9 : -1;
+                        break;
+                    }
                     status = arrive(x, nxt, z, k, (int32_t)via, need.a, need.n / 3, ask);
                     /* arrive may move the program array: re-read nothing from it after this point */
                 }
@@ -1153,6 +1181,8 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
     const int64_t *s = q.succ;
     int64_t n = *s++;
     for (int64_t t = 0; t < n; t++) {
+        if (s[0] < 0 && resolve(x, state, (int64_t *)s) < 0)
+            return -2;
         const int64_t *rs = skip_bounds(s + 2), *bl = rs + 1 + 2 * rs[0];
         int64_t nb = *bl++;
         for (int64_t b = 0; b < nb; b++)
