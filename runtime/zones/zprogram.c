@@ -19,6 +19,9 @@ enum { OP_END, OP_CONST, OP_SLOT, OP_NEG, OP_ADD, OP_SUB, OP_MUL, OP_LT, OP_LE, 
        OP_AND, OP_OR, OP_NOT };
 #define BACK 1  /* "send this state back to Python" */
 
+/* The step's successors of one state: words, interactions, room for cap; ``state``: whose, -1 none. */
+typedef struct { int64_t *words, *via; int cap, n; int64_t state; } SuccBuf;
+
 typedef struct {
     const int64_t *code;
     int W, n, natoms, ntimed, nrules, ntick, nobs, nmeas, nsteps, local;
@@ -32,8 +35,10 @@ typedef struct {
     int64_t *blob;
     succ_fn succ;
     int64_t budget;
-    int64_t *sbuf, *svia;    /* the step's successors of the last state asked, kept from one call to the next */
-    int scap;
+    SuccBuf wbuf;            /* the step's successors of the state whose program is being written */
+    SuccBuf rbuf;            /* those of the state whose successor was last interned (zsearch.c's resolve) */
+    int64_t *top_gen, *top_idx, gen;  /* per rule: its region at the state being written (memo entry), if top_gen
+                                       * is that program's generation: the memo's common case found at once */
     inter_fn ask_inter;
 } Tables;
 
@@ -42,7 +47,8 @@ static void tables_free(Tables *t)
 {
     if (!t)
         return;
-    free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob), free(t->sbuf), free(t->svia);
+    free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob);
+    free(t->wbuf.words), free(t->wbuf.via), free(t->rbuf.words), free(t->rbuf.via), free(t->top_gen), free(t->top_idx);
     free(t);
 }
 
@@ -88,6 +94,8 @@ static Tables *tables_read(const int64_t *words, int64_t len)
         p += 1 + 2 * p[0];
     }
     t->rule = malloc((t->nrules + 1) * sizeof(int64_t *));
+    t->top_gen = calloc(t->nrules + 1, sizeof(int64_t));
+    t->top_idx = calloc(t->nrules + 1, sizeof(int64_t));
     for (int r = 0; r < t->nrules; r++) {
         t->rule[r] = p;
         int64_t kind = *p++;
@@ -224,6 +232,7 @@ typedef struct {
     L memo_key;            /* per memo entry: r, nacc, acc... */
     L memo_off;            /* per memo entry: where its result starts in pool */
     L pool;                /* results: count (-1: everywhere), then per region: n, triples... */
+    int64_t gen;           /* this program's number (Tables' top_gen) */
 } Prog;
 
 /* Some clock values meet every bound (i, j, c: x_i - x_j <= c, clock 0 the zero): no negative cycle among the
@@ -335,6 +344,10 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
 
 static int memo_find(Prog *g, int64_t r, const int64_t *acc, int64_t nacc)
 {
+    if (!nacc) {
+        const Tables *t = g->t;
+        return t->top_gen[r] == g->gen ? (int)t->top_idx[r] : -1;
+    }
     for (int64_t k = 0, at = 0; k < g->memo_off.n; k++) {
         const int64_t *key = g->memo_key.a + at;
         if (key[0] == r && key[1] == nacc && !memcmp(key + 2, acc, 3 * nacc * sizeof(int64_t)))
@@ -460,6 +473,8 @@ store:
                     lcat(&kept, mine.a + at, 1 + 3 * mine.a[at]);
                     count++;
                 }
+        if (!nacc0)
+            t->top_gen[r] = g->gen, t->top_idx[r] = g->memo_off.n;
         lpush(&g->memo_key, r), lpush(&g->memo_key, nacc0), lcat(&g->memo_key, acc0, 3 * nacc0);
         lpush(&g->memo_off, g->pool.n);
         lpush(&g->pool, all ? -1 : count);
@@ -483,27 +498,28 @@ static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
     return status;
 }
 
-/* The step's successors of state s into t->sbuf (words) and t->svia, the buffers grown as needed: their
- * number, or < 0 (-9 memory; else the step's error, which Python's successors handle). */
-static int step_successors(Tables *t, const int64_t *s)
+/* The step's successors of state s into b, grown as needed: their number, or < 0 (-9 memory; else the step's
+ * error, which Python's successors handle). */
+static int step_successors(Tables *t, const int64_t *s, SuccBuf *b)
 {
     int ecode;
     int64_t earg;
-    if (!t->scap) {
-        t->scap = 64;
-        t->sbuf = malloc((size_t)t->scap * t->W * sizeof(int64_t));
-        t->svia = malloc((size_t)t->scap * sizeof(int64_t));
+    b->state = -1;
+    if (!b->cap) {
+        b->cap = 64;
+        b->words = malloc((size_t)b->cap * t->W * sizeof(int64_t));
+        b->via = malloc((size_t)b->cap * sizeof(int64_t));
     }
     for (;;) {
-        if (!t->sbuf || !t->svia)
+        if (!b->words || !b->via)
             return -9;
-        int n = t->succ(s, t->sbuf, t->svia, t->scap, t->budget, &ecode, &earg);
-        if (n >= 0 || t->scap >= 65536 || ecode != 10)
-            return n < 0 && n == -9 ? -10 : n;
-        t->scap *= 4;
-        free(t->sbuf), free(t->svia);
-        t->sbuf = malloc((size_t)t->scap * t->W * sizeof(int64_t));
-        t->svia = malloc((size_t)t->scap * sizeof(int64_t));
+        int n = t->succ(s, b->words, b->via, b->cap, t->budget, &ecode, &earg);
+        if (n >= 0 || b->cap >= 65536 || ecode != 10)
+            return b->n = n == -9 ? -10 : n;
+        b->cap *= 4;
+        free(b->words), free(b->via);
+        b->words = malloc((size_t)b->cap * t->W * sizeof(int64_t));
+        b->via = malloc((size_t)b->cap * sizeof(int64_t));
     }
 }
 
@@ -514,12 +530,12 @@ static int64_t *inter_row(void *ctx, Tables *t, int64_t number);
 
 static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *scratch, L *prog)
 {
-    int n = step_successors(t, s);
-    int64_t *buf = t->sbuf, *via = t->svia;
+    int n = step_successors(t, s, &t->wbuf);
+    int64_t *buf = t->wbuf.words, *via = t->wbuf.via;
     if (n == -9)
         return -9;
     int status = 0;
-    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}};
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, ++t->gen};
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
     if (n < 0) {

@@ -948,16 +948,22 @@ static int64_t resolve(Ctx *x, int64_t state, int64_t *id)
     if (*id >= 0)
         return *id;
     Tables *t = x->tables;
-    int64_t *w = malloc(t->W * sizeof(int64_t));
-    if (!w)
-        return -9;
-    state_words(x, state, w);
-    int n = step_successors(t, w);
-    free(w);
+    SuccBuf *b = &t->rbuf;
+    if (b->state != state || !b->cap) {  /* one expansion takes several successors of the same state */
+        int64_t *w = malloc(t->W * sizeof(int64_t));
+        if (!w)
+            return -9;
+        state_words(x, state, w);
+        step_successors(t, w, b);
+        free(w);
+        b->state = state;
+    }
     int64_t k = -*id - 1;
-    if (n <= k)
-        return n == -9 ? -9 : -1;
-    int64_t got = intern(x, t->sbuf + k * t->W);
+    if (b->n <= k) {
+        b->state = -1;
+        return b->n == -9 ? -9 : -1;
+    }
+    int64_t got = intern(x, b->words + k * t->W);
     if (got >= 0)
         *id = got;
     return got;
