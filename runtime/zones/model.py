@@ -351,6 +351,12 @@ def analyse(package: Package, root: str) -> TimedModel:
     return model
 
 
+#: The L or U of a clock no guard ahead bounds from that side: below every bound a clock can have (Extra_LU's
+#: minus infinity; the constants are kept as the largest bound + 1, so -2 is already below 0 - 1).  A clock above
+#: it has no bound left on that side, which is what TChecker's ExtraLU+ does with an absent constant.
+NO_BOUND = -2
+
+
 def _local_ceilings(flat, model: TimedModel, per_atom, consts, dynamic: set[int]) -> None:
     """Per place, each active clock's largest constants a guard may bound it with, from below (L) and from above
     (U), before its next reset (Behrmann, Bouyer, Larsen, Pelanek: Extra_LU with a static guard analysis): zones
@@ -393,7 +399,8 @@ def _local_ceilings(flat, model: TimedModel, per_atom, consts, dynamic: set[int]
         for k in range(len(fa.places)):
             place = model.places[(fa.index, 1 << k)]
             low, up = local[(1 << k, "L")], local[(1 << k, "U")]
-            place.ceilings = {c: (low.get(c, 0), up.get(c, 0)) for c in (set(low) | set(up)) & place.active}
+            place.ceilings = {c: (low.get(c, NO_BOUND), up.get(c, NO_BOUND))
+                              for c in (set(low) | set(up)) & place.active}
 
 
 def _read_by_priorities(flat: FlatSystem, model: TimedModel) -> None:
