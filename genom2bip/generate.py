@@ -200,7 +200,7 @@ def generate(description: ir.Description, system: str, out: Path, sources: str, 
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
     files.update(python_files(package, root, docs, name, title, sources, version,
-                              interface_data(description, system, sources)))
+                              interface_data(description, system, sources, out / name)))
 
     try:
         written = write_tree(files, out, name, [Path(p) for p in (inputs if inputs is not None else description.files)])
