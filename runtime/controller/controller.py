@@ -129,7 +129,7 @@ class Controller(Running):
                 state = f"has stopped on an error ({self.error})" if self.error else \
                     "is stopping" if self.status in ("ready", "running") else "has stopped"
                 raise RequestError(503, f"the controller {state}; request to {svc.label} not accepted")
-            if not svc.reentrant:
+            if not svc.reentrant and not svc.renews:
                 busy = svc.busy_with()
                 if busy is not None:
                     others = self.meanings.interrupters.get(svc.label, [])
@@ -187,8 +187,12 @@ class Controller(Running):
         svc = self.services.get(name)
         if svc is not None and svc.queue:
             with self._lock:
-                svc.current = svc.queue.popleft()
-            self._taken = (svc, svc.current)  # a step fired again after a detached codel takes it again
+                taken = svc.queue.popleft()
+                if svc.current is not None and svc.current.final is None:  # it interrupts the running one
+                    svc.incoming = taken
+                else:
+                    svc.current = taken
+            self._taken = (svc, taken)  # a step fired again after a detached codel takes it again
 
     def _poster_written(self, component: str, port: str, value: PosterValue) -> None:
         if self.reports.listeners:
