@@ -29,7 +29,7 @@ class CMappingError(Exception):
 
 def cname(scoped: str) -> str:
     """The C global name of an IDL scoped name: ``::a::b`` → ``a_b``."""
-    return scoped.removeprefix("::").replace("::", "_").replace(" ", "_").replace("+", "x")
+    return re.sub(r"::| ", "_", scoped.removeprefix("::")).translate({ord("+"): "x"})
 
 
 def cdecl(declarator: str, name: str) -> str:
@@ -211,9 +211,9 @@ class CMapping:
         elif isinstance(v, str):
             final = self.resolve(c.type)
             if isinstance(final, ir.BaseType) and final.name == "char":
-                text = "'" + v.replace("\\", "\\\\").replace("'", "\\'") + "'"
+                text = "'" + v.translate({ord("\\"): "\\\\", ord("'"): "\\'"}) + "'"
             else:
-                text = '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+                text = '"' + v.translate({ord("\\"): "\\\\", ord('"'): '\\"'}) + '"'
                 d = "char *const"  # a constant pointer: no unused-variable warning where it is not used
         else:
             text = repr(v)

@@ -17,7 +17,7 @@ from runtime.codels import codel_specs
 from runtime.controller.binding import Binder
 from runtime.controller.choice import Choice
 from runtime.controller.codel_times import CodelTimes
-from runtime.controller.codels import load_codels
+from runtime.controller.codels import load_codels, with_c_codels
 from runtime.controller.data import Data, PosterValue
 from runtime.controller.intake import checked_inputs, request_locals
 from runtime.controller.meaning import Meanings, StepInfo
@@ -51,7 +51,7 @@ class Controller(Running):
         self.types: dict[str, dict[str, Any]] = interface.get("types", {})
         comps = interface["components"]
         self.data = Data(interface)
-        self.codels = load_codels(codels, list(comps))
+        self.codels = with_c_codels(load_codels(codels, list(comps)), interface)
         self.binder = Binder(interface, self.data, self.codels, codel_specs(package), on_poster=self._poster_written)
         self.binder.times = CodelTimes(interface) if times else None
         externs: dict[str, Callable] = dict(self.binder.externs())

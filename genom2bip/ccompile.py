@@ -1,0 +1,92 @@
+"""Compiling a component's C and C++ codels into one shared library, against its generated ``<comp>_c_types.h``.
+
+The sources are the component's ``codels/<Component>/`` folder beside its ``.gen``, else the files of
+``codels/`` named ``<Component>*`` (GenoM3's skeleton names them ``<comp>_codels.c``, ``<comp>_<task>_codels.c``),
+else every source of ``codels/`` when the component is alone in its folder.  ``.c`` files go to gcc (gnu99),
+``.cc``/``.cpp``/``.cxx`` to g++; the library links with g++ when any file is C++.  Compiler messages keep
+the sources' own file:line:column.
+"""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from genom2bip import ir
+from runtime.ccodels import INCLUDE
+from runtime.errors import Genom2bipError
+
+C_SUFFIXES = (".c",)
+CXX_SUFFIXES = (".cc", ".cpp", ".cxx", ".C")
+
+
+class CodelBuildError(Genom2bipError):
+    """The codels did not compile or link: the compiler's located messages, or the compiler is missing."""
+
+
+@dataclass
+class Built:
+    """A component's compiled codels: the library's bytes and the sources it was made from."""
+
+    library: bytes
+    sources: list[Path]
+
+
+def codel_sources(description: ir.Description, component: ir.Component) -> list[Path]:
+    """The C/C++ sources of ``component`` (none: its codels are Python, or it has none)."""
+    if not component.file:
+        return []
+    folder = Path(component.file).parent / "codels"
+    if not folder.is_dir():
+        return []
+
+    def sources(d: Path) -> list[Path]:
+        return sorted(p for p in d.iterdir() if p.is_file() and p.suffix in C_SUFFIXES + CXX_SUFFIXES)
+
+    own = folder / component.name
+    if own.is_dir():
+        return sources(own)
+    named = [p for p in sources(folder) if p.name.startswith(component.name)]
+    if named:
+        return named
+    alone = [c for c in description.components if c.file and Path(c.file).parent == Path(component.file).parent]
+    return sources(folder) if len(alone) == 1 else []
+
+
+def compile_codels(component: ir.Component, sources: list[Path], header: str, timeout: float = 300.0) -> Built:
+    """Compile ``sources`` with ``header`` as ``<comp>_c_types.h`` into a shared library (its bytes)."""
+    cxx = any(p.suffix in CXX_SUFFIXES for p in sources)
+    needed = ["gcc"] + (["g++"] if cxx else [])
+    for tool in needed:
+        if shutil.which(tool) is None:
+            raise CodelBuildError(f"the codels of {component.name} ({', '.join(str(p) for p in sources)}) need "
+                                  f"{tool}, which is not installed (Debian: apt-get install {tool})")
+    with tempfile.TemporaryDirectory(prefix=f"genom2bip-{component.name}-") as tmp:
+        work = Path(tmp)
+        (work / f"{component.name}_c_types.h").write_text(header, encoding="utf-8")
+        objects = []
+        for k, src in enumerate(sources):
+            obj = work / f"{k}_{src.stem}.o"
+            tool = "g++" if src.suffix in CXX_SUFFIXES else "gcc"
+            std = [] if tool == "g++" else ["-std=gnu99"]
+            cmd = [tool, *std, "-fPIC", "-O2", "-Wall", f"-I{work}", f"-I{INCLUDE}", f"-I{src.parent}",
+                   "-c", str(src), "-o", str(obj)]
+            _run(cmd, component, timeout)
+            objects.append(str(obj))
+        library = work / f"lib{component.name}_codels.so"
+        _run(["g++" if cxx else "gcc", "-shared", "-o", str(library), *objects], component, timeout)
+        return Built(library.read_bytes(), list(sources))
+
+
+def _run(cmd: list[str], component: ir.Component, timeout: float) -> None:
+    try:
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise CodelBuildError(f"compiling the codels of {component.name} took more than {timeout:.0f} s: "
+                              f"{' '.join(cmd)}") from None
+    if done.returncode != 0:
+        lines = [x for x in done.stderr.splitlines() if x.strip()][:40]
+        raise CodelBuildError(f"the codels of {component.name} do not compile ({cmd[0]} exit status "
+                              f"{done.returncode}):\n" + "\n".join(lines))
