@@ -369,8 +369,23 @@ def signature(mapping: CMapping, c: ir.Component, codel: ir.Codel, service: ir.S
     return f"genom_event\n{codel.name}({', '.join(args)})"
 
 
+def find_port(description: ir.Description, c: ir.Component, name: str) -> ir.Port | None:
+    """The component's port ``name``: its own, else one of an interface it provides (as declared) or uses
+    (the direction turned round: the interface's ``port out`` is the user's ``port in``)."""
+    own = c.port(name)
+    if own is not None:
+        return own
+    for iface, turn in [(x, False) for x in c.provides] + [(x, True) for x in c.uses]:
+        found = next((p for p in getattr(description.interfaces.get(iface), "ports", []) if p.name == name), None)
+        if found is not None:
+            flipped = {ir.Direction.IN: ir.Direction.OUT, ir.Direction.OUT: ir.Direction.IN}
+            direction = flipped.get(found.direction, found.direction) if turn else found.direction
+            return ir.Port(found.name, direction, found.type, found.multiple, found.doc, span=found.span)
+    return None
+
+
 def _port_type(mapping: CMapping, c: ir.Component, name: str) -> ir.Type:
-    port = c.port(name)
+    port = find_port(mapping.d, c, name)
     if port is None:
         raise CMappingError(f"{c.span}: no port {name} in component {c.name}")
     mapping.port(c.name, port)
@@ -378,8 +393,9 @@ def _port_type(mapping: CMapping, c: ir.Component, name: str) -> ir.Type:
 
 
 def _events(c: ir.Component) -> list[str]:
-    """The component's events: ``ether``, every state its codels name, and ``pause::s`` for the paused ones."""
-    names: list[str] = ["ether"]
+    """The component's events: GenoM3's standard ``ether``, ``start``, ``stop``, every state its codels name, and
+    ``pause::s`` for the states they yield to with ``pause::``."""
+    names: list[str] = ["ether", "start", "stop"]
     codels = [x for t in c.tasks for x in t.codels] + [x for s in c.services for x in s.fsm_codels()]
     for codel in codels:
         for state in codel.triggers:
@@ -404,8 +420,14 @@ def c_types_header(description: ir.Description, component: ir.Component, source:
     for name in description.exceptions:
         if not name.startswith(others) or not others:
             m.exception(name)
+    for iface in dict.fromkeys(component.provides + component.uses):  # an interface's ports have its own name
+        for p in getattr(description.interfaces.get(iface), "ports", []):
+            m.port(iface, p)
     for p in component.ports:
         m.port(component.name, p)
+    for iface in dict.fromkeys(component.provides + component.uses):  # and as the component's own
+        for p in getattr(description.interfaces.get(iface), "ports", []):
+            m.port(component.name, find_port(description, component, p.name))
     signatures: list[str] = []
     seen: set[str] = set()
     owners: list[tuple[ir.Codel, ir.Service | None]] = [(x, None) for t in component.tasks for x in t.codels]
@@ -507,7 +529,7 @@ def _arg_type(mapping: CMapping, c: ir.Component, codel: ir.Codel, p: ir.CodelPa
                 local.append(ir.Member(q.name, qtype))
         local += service.locals
     if p.source == ir.Origin.PORT:
-        return c.port(p.path).type
+        return find_port(mapping.d, c, p.path).type
     if p.source == ir.Origin.LOCAL or (p.source is None and _path_type(mapping, local, p.path) is not None):
         t = _path_type(mapping, local, p.path)
     else:
@@ -532,7 +554,7 @@ def c_layouts(description: ir.Description, component: ir.Component) -> dict:
         for p in codel.params:
             t = _arg_type(m, component, codel, p, service)
             if p.source == ir.Origin.PORT:
-                port = component.port(p.path)
+                port = find_port(description, component, p.path)
                 args.append(["port", str(port.direction), port.multiple, layout(m, t, named)])
             elif p.source == ir.Origin.REMOTE:
                 args.append(["remote"])

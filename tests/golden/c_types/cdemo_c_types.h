@@ -64,6 +64,12 @@ const char genom_extern_weak cdemo_ether[] = "::cdemo::ether";
 const char genom_extern_weak cdemo_start[] = "::cdemo::start";
 #endif /* _cdemo_start_c_type */
 
+#ifndef _cdemo_stop_c_type
+# define _cdemo_stop_c_type
+#include "genom3/c/exception.h"
+const char genom_extern_weak cdemo_stop[] = "::cdemo::stop";
+#endif /* _cdemo_stop_c_type */
+
 #ifndef _cdemo_step_c_type
 # define _cdemo_step_c_type
 #include "genom3/c/exception.h"
@@ -75,12 +81,6 @@ const char genom_extern_weak cdemo_step[] = "::cdemo::step";
 #include "genom3/c/exception.h"
 const char genom_extern_weak cdemo_pause_step[] = "::cdemo::pause::step";
 #endif /* _cdemo_pause_step_c_type */
-
-#ifndef _cdemo_stop_c_type
-# define _cdemo_stop_c_type
-#include "genom3/c/exception.h"
-const char genom_extern_weak cdemo_stop[] = "::cdemo::stop";
-#endif /* _cdemo_stop_c_type */
 
 #ifndef _cdemo_e_range_c_type
 # define _cdemo_e_range_c_type

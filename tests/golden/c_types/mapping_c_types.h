@@ -210,6 +210,12 @@ const char genom_extern_weak mapping_ether[] = "::mapping::ether";
 const char genom_extern_weak mapping_start[] = "::mapping::start";
 #endif /* _mapping_start_c_type */
 
+#ifndef _mapping_stop_c_type
+# define _mapping_stop_c_type
+#include "genom3/c/exception.h"
+const char genom_extern_weak mapping_stop[] = "::mapping::stop";
+#endif /* _mapping_stop_c_type */
+
 #ifndef _mapping_pause_watch_c_type
 # define _mapping_pause_watch_c_type
 #include "genom3/c/exception.h"
