@@ -1,8 +1,8 @@
 """Compiling a component's C and C++ codels into one shared library, against its generated ``<comp>_c_types.h``.
 
-The sources are the component's ``codels/<Component>/`` folder beside its ``.gen``, else the files of
-``codels/`` named ``<Component>*`` (GenoM3's skeleton names them ``<comp>_codels.c``, ``<comp>_<task>_codels.c``),
-else every source of ``codels/`` when the component is alone in its folder.  ``.c`` files go to gcc (gnu99),
+The sources are the component's ``codels/<Component>/`` folder beside its ``.gen``, else every source of
+``codels/`` when the component is alone in its folder, else the files of ``codels/`` named ``<Component>*``
+(GenoM3's skeleton names them ``<comp>_codels.c``, ``<comp>_<task>_codels.c``).  ``.c`` files go to gcc (gnu99),
 ``.cc``/``.cpp``/``.cxx`` to g++; the library links with g++ when any file is C++.  Compiler messages keep
 the sources' own file:line:column.
 """
@@ -48,11 +48,10 @@ def codel_sources(description: ir.Description, component: ir.Component) -> list[
     own = folder / component.name
     if own.is_dir():
         return sources(own)
-    named = [p for p in sources(folder) if p.name.startswith(component.name)]
-    if named:
-        return named
-    alone = [c for c in description.components if c.file and Path(c.file).parent == Path(component.file).parent]
-    return sources(folder) if len(alone) == 1 else []
+    beside = [c for c in description.components if c.file and Path(c.file).parent == Path(component.file).parent]
+    if len(beside) == 1:
+        return sources(folder)
+    return [p for p in sources(folder) if p.name.startswith(component.name)]
 
 
 def compile_codels(component: ir.Component, sources: list[Path], header: str, timeout: float = 300.0) -> Built:
@@ -66,6 +65,7 @@ def compile_codels(component: ir.Component, sources: list[Path], header: str, ti
     with tempfile.TemporaryDirectory(prefix=f"genom2bip-{component.name}-") as tmp:
         work = Path(tmp)
         (work / f"{component.name}_c_types.h").write_text(header, encoding="utf-8")
+        (work / f"ac{component.name}.h").write_text(autoconf_header(component), encoding="utf-8")
         objects = []
         for k, src in enumerate(sources):
             obj = work / f"{k}_{src.stem}.o"
@@ -78,6 +78,17 @@ def compile_codels(component: ir.Component, sources: list[Path], header: str, ti
         library = work / f"lib{component.name}_codels.so"
         _run(["g++" if cxx else "gcc", "-shared", "-o", str(library), *objects], component, timeout)
         return Built(library.read_bytes(), list(sources))
+
+
+def autoconf_header(component: ir.Component) -> str:
+    """``ac<comp>.h``: what the configure script of genom3's skeleton defines, which its codels include first."""
+    version = str(component.properties.get("version", "0.0")).replace('"', "")
+    name = component.name
+    return (f"/* ac{name}.h: written by genom2bip in place of the configure script's header. */\n"
+            f"#ifndef GENOM2BIP_AC_{name}_H\n#define GENOM2BIP_AC_{name}_H\n"
+            f'#define PACKAGE "{name}-genom3"\n#define PACKAGE_NAME "{name}-genom3"\n'
+            f'#define PACKAGE_VERSION "{version}"\n#define VERSION "{version}"\n'
+            f'#define PACKAGE_STRING "{name}-genom3 {version}"\n#endif\n')
 
 
 def _run(cmd: list[str], component: ir.Component, timeout: float) -> None:

@@ -143,3 +143,36 @@ int main(void) {
 def test_golden_files_are_listed():
     assert sorted(p.name for p in GOLDEN.glob("*.h")) == sorted(f"{c}_c_types.h" for _, c in CASES)
     assert Path(GOLDEN / "regenerate.py").is_file()
+
+
+def test_a_used_interfaces_ports_are_the_components_turned_round(tmp_path):
+    description = parse_text("module t { struct chunk { long n; }; };\n"
+                             "interface source {\n  port out t::chunk Audio;\n};\n"
+                             "component sink {\n  uses source;\n  task r { period 10 ms; };\n"
+                             "  function Get() { codel sinkGet(port in Audio); };\n};\n", "sink.gen")
+    sink = description.component("sink")
+    assert [(p.name, str(p.direction)) for p in sink.ports] == [("Audio", "in")]
+    text = c_types_header(description, sink)
+    assert "typedef struct source_Audio {\n  t_chunk * (*data)(genom_context self);\n  genom_event (*write)" in text
+    assert "typedef struct sink_Audio {\n  t_chunk * (*data)(genom_context self);\n  genom_event (*read)" in text
+    assert "sinkGet(const sink_Audio *Audio, const genom_context self);" in text
+
+
+def test_codel_sources_are_the_components_folder_or_all_when_alone_else_by_name(tmp_path):
+    from genom2bip.ccompile import codel_sources
+
+    (tmp_path / "one" / "codels").mkdir(parents=True)
+    (tmp_path / "one" / "a.gen").write_text("component a { task t { period 10 ms; }; };\n")
+    for name in ("a_codels.c", "Date.cc", "notes.txt"):
+        (tmp_path / "one" / "codels" / name).write_text("")
+    description = parse_paths([str(tmp_path / "one")])
+    assert [p.name for p in codel_sources(description, description.component("a"))] == ["Date.cc", "a_codels.c"]
+    (tmp_path / "two" / "codels" / "b").mkdir(parents=True)
+    (tmp_path / "two" / "a.gen").write_text("component a { task t { period 10 ms; }; };\n")
+    (tmp_path / "two" / "b.gen").write_text("component b { task t { period 10 ms; }; };\n")
+    (tmp_path / "two" / "codels" / "a_main.c").write_text("")
+    (tmp_path / "two" / "codels" / "helper.c").write_text("")
+    (tmp_path / "two" / "codels" / "b" / "b.cpp").write_text("")
+    description = parse_paths([str(tmp_path / "two")])
+    assert [p.name for p in codel_sources(description, description.component("a"))] == ["a_main.c"]
+    assert [p.name for p in codel_sources(description, description.component("b"))] == ["b.cpp"]
