@@ -44,7 +44,8 @@ def serving(cdemo):
     from runtime.services.server import ServiceServer
 
     _, pkg = cdemo
-    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, None, times=True)
+    codels = str(FIXTURE / "codels")  # the Python codels of pywatch (the C ones are in the package's libraries)
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, codels, times=True)
     controller.start()
     server = ServiceServer(controller).start()
     try:
@@ -81,6 +82,8 @@ def test_every_service_runs_its_c_codels_through_http(serving):
     assert poster["written"] and poster["value"] == {"x": 1.0, "y": 1.0}
     seen = client.call("cwatch", "Look")  # C++ codels of another component read the port
     assert seen["status"] == "ok" and seen["outputs"] == {"seen": {"x": 1.0, "y": 1.0}, "reads": 1}
+    python = client.call("pywatch", "Look")  # and a Python codel in the same level
+    assert python["status"] == "ok" and python["outputs"] == {"seen": {"x": 1.0, "y": 1.0}}
     failed = client.call("cdemo", "Fail", {"name": "bob"})
     assert failed["status"] == "failed" and failed["detail"] == {"limit": -1.0, "what": "bob"}
     far = client.call("cdemo", "MoveTo", {"x": 9.0, "y": 9.0})
@@ -110,6 +113,17 @@ def test_the_package_runs_from_another_directory_with_its_libraries(cdemo, tmp_p
     assert done.returncode == 0, done.stderr
     codels = done.stdout.split("codels: ", 1)[1].split(";")[0]
     assert str(out / "cdemo" / "libcdemo_codels.so") in codels and str(out / "cdemo" / "libcwatch_codels.so") in codels
+
+
+def test_a_library_that_cannot_be_loaded_is_reported_for_each_of_its_codels(cdemo, tmp_path):
+    from runtime.controller import Controller
+
+    out, pkg = cdemo
+    interface = dict(pkg.INTERFACE, where=str(tmp_path))  # a folder without the libraries
+    controller = Controller(pkg.package(), pkg.ROOT, interface, None)
+    assert "cdemo.cdStep" in controller.binder.missing and "cwatch.cwLook" in controller.binder.missing
+    why = controller.codels.why_missing("cdemo", "cdStep")
+    assert f"{tmp_path / 'libcdemo_codels.so'}: cannot load the C codels of cdemo" in why
 
 
 def test_a_codel_that_does_not_compile_is_reported_at_its_line_and_nothing_is_written(tmp_path, capsys):
