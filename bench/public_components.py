@@ -104,13 +104,21 @@ def binding_cost(calls: int) -> None:
         x.value = 1.0
         return "ether"
 
-    for label, f in (("C through ctypes", fn), ("Python", python)):
+    from runtime.ccodels.isolated import IsolatedLibrary
+
+    c_spec = pkg.INTERFACE["components"]["probe"]["c"]
+    started = time.perf_counter()
+    isolated = IsolatedLibrary("probe", str(Path(pkg.INTERFACE["where"]) / c_spec["library"]), c_spec)
+    print(f"binding: a codels process starts in {(time.perf_counter() - started) * 1e3:.0f} ms")
+    for label, f in (("C through ctypes", fn), ("C in a process of its own", isolated.get("probeSet")),
+                     ("Python", python)):
         ref = Ref(0.0)
         start = time.perf_counter()
         for _ in range(calls):
             f(x=ref)
         per = (time.perf_counter() - start) / calls * 1e6
         print(f"binding: {label}: {per:.2f} us per call ({calls} calls)")
+    isolated.close()
 
 
 def main() -> int:

@@ -149,3 +149,27 @@ def test_a_missing_compiler_is_one_clear_line(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "need gcc, which is not installed (Debian: apt-get install gcc)" in err[0]
     assert not (tmp_path / "out" / "cdemo").exists()
+
+
+def test_a_codel_that_crashes_in_its_own_process_fails_its_request_and_the_level_goes_on(cdemo, monkeypatch):
+    from runtime.controller import Controller
+    from runtime.services.client import Client
+    from runtime.services.server import ServiceServer
+
+    monkeypatch.setenv("GENOM2BIP_CODELS_PROCESS", "1")
+    _, pkg = cdemo
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, None)
+    controller.start()
+    server = ServiceServer(controller).start()
+    client = Client(server.url, timeout=30)
+    try:
+        crashed = client.call("cdemo", "Crash", timeout=60)
+        assert crashed["status"] == "failed" and crashed["codel"] == "cdCrash"
+        assert "codel cdCrash of cdemo crashed: its process ended on signal SIGSEGV" in crashed["message"]
+        moved = client.call("cdemo", "MoveTo", {"x": 0.5, "y": 0.0}, timeout=60)  # a new process serves it
+        assert moved["status"] == "ok" and moved["outputs"] == {"steps": 2}
+        assert client.call("cwatch", "Look", timeout=60)["outputs"]["seen"] == {"x": 0.5, "y": 0.0}
+    finally:
+        server.stop()
+        controller.stop(timeout=30)
+    assert controller.error is None

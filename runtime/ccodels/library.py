@@ -238,9 +238,18 @@ class CodelLibrary:
         raise Throw(name, detail=members)
 
 
-def c_codels(interface: dict[str, Any]) -> tuple[dict[str, dict[str, Callable]], dict[str, str], list[str]]:
+#: Set to 1: each component's C codels run in a process of their own (runtime.ccodels.isolated).
+PROCESS_ENV = "GENOM2BIP_CODELS_PROCESS"
+
+
+def c_codels(interface: dict[str, Any], isolate: bool | None = None
+             ) -> tuple[dict[str, dict[str, Callable]], dict[str, str], list[str]]:
     """The C codels of every component the interface gives a library: (functions by component, problems by
-    component, the libraries loaded).  Libraries are found relative to the package (``interface["where"]``)."""
+    component, the libraries loaded).  Libraries are found relative to the package (``interface["where"]``);
+    ``isolate`` (default: the environment variable ``GENOM2BIP_CODELS_PROCESS=1``) runs each library in a
+    process of its own, so that a codel that crashes fails its request and the controller goes on."""
+    if isolate is None:
+        isolate = os.environ.get(PROCESS_ENV, "") == "1"
     base = Path(interface.get("where") or ".")
     found: dict[str, dict[str, Callable]] = {}
     problems: dict[str, str] = {}
@@ -250,7 +259,12 @@ def c_codels(interface: dict[str, Any]) -> tuple[dict[str, dict[str, Callable]],
         if not c:
             continue
         try:
-            library = CodelLibrary(component, base / c["library"], c)
+            if isolate:
+                from runtime.ccodels.isolated import IsolatedLibrary
+
+                library: Any = IsolatedLibrary(component, str(base / c["library"]), c)
+            else:
+                library = CodelLibrary(component, base / c["library"], c)
         except CodelLibraryError as err:
             problems[component] = str(err)
             continue

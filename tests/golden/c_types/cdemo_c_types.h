@@ -183,6 +183,15 @@ cdStop(cdemo_types_mood *mood, const genom_context self);
 extern "C" {
 #endif
 genom_event
+cdCrash(const genom_context self);
+#ifdef __cplusplus
+}
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+genom_event
 cdFail(const char name[16], char stored[16], const genom_context self);
 #ifdef __cplusplus
 }
