@@ -18,6 +18,9 @@ from genom2bip import ir
 from runtime.ccodels import INCLUDE
 from runtime.errors import Genom2bipError
 
+#: What the codels call for the wall clock: linked to the controller's clock (runtime/ccodels/clock/wallclock.c).
+WRAPPED = ("gettimeofday", "clock_gettime", "time")
+WALLCLOCK = INCLUDE.parent / "clock" / "wallclock.c"
 C_SUFFIXES = (".c",)
 CXX_SUFFIXES = (".cc", ".cpp", ".cxx", ".C")
 
@@ -75,8 +78,12 @@ def compile_codels(component: ir.Component, sources: list[Path], header: str, ti
                    "-c", str(src), "-o", str(obj)]
             _run(cmd, component, timeout)
             objects.append(str(obj))
+        clock = work / "genom2bip_wallclock.o"  # the codels' wall clock can follow the controller's
+        _run(["gcc", "-std=gnu99", "-fPIC", "-O2", "-c", str(WALLCLOCK), "-o", str(clock)], component, timeout)
         library = work / f"lib{component.name}_codels.so"
-        _run(["g++" if cxx else "gcc", "-shared", "-o", str(library), *objects], component, timeout)
+        wrap = [f"-Wl,--wrap={f}" for f in WRAPPED]
+        _run(["g++" if cxx else "gcc", "-shared", *wrap, "-o", str(library), *objects, str(clock)], component,
+             timeout)
         return Built(library.read_bytes(), list(sources))
 
 

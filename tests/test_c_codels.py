@@ -173,3 +173,27 @@ def test_a_codel_that_crashes_in_its_own_process_fails_its_request_and_the_level
         server.stop()
         controller.stop(timeout=30)
     assert controller.error is None
+
+
+def test_codels_reading_the_wall_clock_see_the_controllers_virtual_clock(cdemo):
+    import time
+
+    from runtime.controller import Controller, VirtualClock
+
+    _, pkg = cdemo
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, None, clock=VirtualClock())
+    controller.start()
+    try:
+        first = controller.wait(controller.submit("cdemo", "Stamp").id, timeout=60).final
+        assert controller.wait(controller.submit("cdemo", "SetLimit", {"limit": 100.0}).id, timeout=60).final[
+            "status"] == "ok"
+        wall = time.monotonic()
+        moved = controller.wait(controller.submit("cdemo", "MoveTo", {"x": 20.0, "y": 0.0}).id, timeout=60).final
+        wall = time.monotonic() - wall
+        second = controller.wait(controller.submit("cdemo", "Stamp").id, timeout=60).final
+    finally:
+        controller.stop(timeout=30)
+    assert moved["outputs"] == {"steps": 80}  # 80 periods of 10 ms: 0.8 s on the controller's clock
+    read = second["outputs"]["stamp"] - first["outputs"]["stamp"]
+    assert abs(read - (second["time"] - first["time"])) < 0.02  # what gettimeofday said is the controller's time
+    assert read > 0.8, f"the codel read {read:.3f} s on the wall clock over a 0.8 s move ({wall:.3f} s of real time)"

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -21,6 +22,7 @@ from runtime.genom import Ref, Throw
 EVENT = ctypes.c_void_p  # a genom_event (const char *), NULL for genom_ok
 RAISE = ctypes.CFUNCTYPE(EVENT, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
 RAISED = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p)
+NOW = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_int)  # genom2bip_now(realtime): runtime/ccodels/clock
 
 
 class Context(ctypes.Structure):
@@ -149,6 +151,17 @@ class CodelLibrary:
         self.prefix = f"::{component}::"
         self._made: dict[str, Callable] = {}
 
+    def follow(self, clock: Any) -> bool:
+        """Make the codels' wall clock (gettimeofday, clock_gettime, time) the controller's ``clock``."""
+        try:
+            hook = ctypes.c_void_p.in_dll(self.lib, "genom2bip_now")
+        except ValueError:
+            return False
+        epoch = time.time() - clock.now()
+        self._now = NOW(lambda realtime: clock.now() + (epoch if realtime else 0.0))  # kept alive here
+        hook.value = ctypes.cast(self._now, ctypes.c_void_p).value
+        return True
+
     def get(self, name: str) -> Callable | None:
         """The function calling codel ``name``, None when the component declares no such C codel."""
         if name in self._made:
@@ -242,12 +255,13 @@ class CodelLibrary:
 PROCESS_ENV = "GENOM2BIP_CODELS_PROCESS"
 
 
-def c_codels(interface: dict[str, Any], isolate: bool | None = None
+def c_codels(interface: dict[str, Any], isolate: bool | None = None, clock: Any = None
              ) -> tuple[dict[str, dict[str, Callable]], dict[str, str], list[str]]:
     """The C codels of every component the interface gives a library: (functions by component, problems by
     component, the libraries loaded).  Libraries are found relative to the package (``interface["where"]``);
     ``isolate`` (default: the environment variable ``GENOM2BIP_CODELS_PROCESS=1``) runs each library in a
-    process of its own, so that a codel that crashes fails its request and the controller goes on."""
+    process of its own, so that a codel that crashes fails its request and the controller goes on.  On a
+    virtual ``clock`` the codels' wall clock follows it (in the controller's process)."""
     if isolate is None:
         isolate = os.environ.get(PROCESS_ENV, "") == "1"
     base = Path(interface.get("where") or ".")
@@ -265,6 +279,8 @@ def c_codels(interface: dict[str, Any], isolate: bool | None = None
                 library: Any = IsolatedLibrary(component, str(base / c["library"]), c)
             else:
                 library = CodelLibrary(component, base / c["library"], c)
+                if clock is not None and getattr(clock, "virtual", False):
+                    library.follow(clock)
         except CodelLibraryError as err:
             problems[component] = str(err)
             continue

@@ -51,14 +51,14 @@ class Controller(Running):
         self.types: dict[str, dict[str, Any]] = interface.get("types", {})
         comps = interface["components"]
         self.data = Data(interface)
-        self.codels = with_c_codels(load_codels(codels, list(comps)), interface)
+        self.clock = clock or MonotonicClock()
+        self.codels = with_c_codels(load_codels(codels, list(comps)), interface, self.clock)
         self.binder = Binder(interface, self.data, self.codels, codel_specs(package), on_poster=self._poster_written)
         self.binder.times = CodelTimes(interface) if times else None
         externs: dict[str, Callable] = dict(self.binder.externs())
         externs["request_pending"] = self._pending
         externs["take_request"] = self._take
         self.engine = Engine(package, root, externs)
-        self.clock = clock or MonotonicClock()
         self.timers = Timers.of(self.engine.flat, {c["instance"]: c.get("clock_rate_us") for c in comps.values()})
         self.monitor = Monitor.of(self.engine.flat, package)  # the model's observers on this clock (None: none)
         self.services: dict[str, Service] = {

@@ -49,6 +49,7 @@ struct cdemo_ids {
   sequence_double trail;
   char name[16];
   cdemo_types_mood mood;
+  double stamp;
 };
 #endif /* _cdemo_ids_definition_c_type */
 
@@ -175,6 +176,15 @@ extern "C" {
 #endif
 genom_event
 cdStop(cdemo_types_mood *mood, const genom_context self);
+#ifdef __cplusplus
+}
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+genom_event
+cdStamp(double *stamp, const genom_context self);
 #ifdef __cplusplus
 }
 #endif
