@@ -153,13 +153,15 @@ class Layouts:
     def _set_field(self, lay: list, target: Any, name: str, value: Any, keep: list) -> None:
         if self.is_scalar(lay):
             setattr(target, name, self.scalar(lay, value, keep))
+        elif lay[0] == "str":  # a char array member reads as a bytes copy: it is assigned whole
+            setattr(target, name, (value or "").encode()[: lay[1] - 1])
         else:
             self.fill(lay, value, getattr(target, name), keep)
 
     def _set_item(self, lay: list, target: Any, k: int, value: Any, keep: list) -> None:
         if self.is_scalar(lay):
             target[k] = self.scalar(lay, value, keep)
-        else:
+        else:  # an element of an array is a view of its memory (a char array too): filled in place
             self.fill(lay, value, target[k], keep)
 
     def new(self, lay: list, value: Any, keep: list) -> Any:
