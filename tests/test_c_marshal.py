@@ -63,3 +63,18 @@ def test_the_bindings_structures_have_the_headers_sizes_and_offsets(mapping, tmp
     named: dict = {}
     ids = layout(CMapping(description), NamedType("mapping::ids"), named)  # the whole IDS: every kind of member
     assert printed[1] == ctypes.sizeof(Layouts(named).ctype(ids))
+
+
+def test_a_multiple_out_port_handle_writes_opens_and_closes_its_elements():
+    from runtime.ccodels.library import Port
+
+    port = Port(Layouts({}), ["b", "double"], "out", True, {"left": 1.0, "gone": 3.0})
+    handle = port.handle
+    assert ctypes.c_double.from_address(handle.data(b"left", None)).value == 1.0  # the element's current value
+    ctypes.c_double.from_address(handle.data(b"right", None)).value = 2.5
+    assert handle.rw(b"right", None) is None  # genom_ok
+    assert handle.close(b"gone", None) is None
+    assert port.published() == (True, {"left": 1.0, "right": 2.5})
+    untouched = Port(Layouts({}), ["b", "double"], "in", False, 4.0)
+    assert ctypes.c_double.from_address(untouched.handle.data(None)).value == 4.0
+    assert untouched.handle.rw(None) is None and untouched.published() == (False, None)  # read() publishes nothing
