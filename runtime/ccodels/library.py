@@ -60,6 +60,25 @@ class Raised:
         return ctypes.addressof(self._buffer)
 
 
+_HANDLES: dict[tuple[bool, bool], Any] = {}
+
+
+def _handle_type(multiple: bool, out: bool) -> Any:
+    """The ctypes structure of a port handle (made once per kind): data, read or write, open and close."""
+    key = (multiple, out)
+    if key not in _HANDLES:
+        voidp, chars = ctypes.c_void_p, ctypes.c_char_p
+        if multiple:
+            fields = [("data", ctypes.CFUNCTYPE(voidp, chars, voidp)), ("rw", ctypes.CFUNCTYPE(EVENT, chars, voidp))]
+            if out:
+                fields += [("open", ctypes.CFUNCTYPE(EVENT, chars, voidp)),
+                           ("close", ctypes.CFUNCTYPE(EVENT, chars, voidp))]
+        else:
+            fields = [("data", ctypes.CFUNCTYPE(voidp, voidp)), ("rw", ctypes.CFUNCTYPE(EVENT, voidp))]
+        _HANDLES[key] = type("port_handle", (ctypes.Structure,), {"_fields_": fields})
+    return _HANDLES[key]
+
+
 class Port:
     """A port handle for one call: ``data()`` points at a C copy of the poster's value, ``write()`` marks it."""
 
@@ -71,16 +90,8 @@ class Port:
         self.written: set[str | None] = set()
         self.closed: set[str] = set()
         self.initial = value
-        voidp, chars = ctypes.c_void_p, ctypes.c_char_p
-        if multiple:
-            fields = [("data", ctypes.CFUNCTYPE(voidp, chars, voidp)), ("rw", ctypes.CFUNCTYPE(EVENT, chars, voidp))]
-            if self.out:
-                fields += [("open", ctypes.CFUNCTYPE(EVENT, chars, voidp)),
-                           ("close", ctypes.CFUNCTYPE(EVENT, chars, voidp))]
-        else:
-            fields = [("data", ctypes.CFUNCTYPE(voidp, voidp)), ("rw", ctypes.CFUNCTYPE(EVENT, voidp))]
-        handle = type("port", (ctypes.Structure,), {"_fields_": fields})
-        types = dict(fields)
+        handle = _handle_type(multiple, self.out)
+        types = dict(handle._fields_)
         if multiple:
             calls = [types["data"](lambda i, s: self.data(i.decode())), types["rw"](lambda i, s: self.mark(i.decode()))]
             if self.out:
