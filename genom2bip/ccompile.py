@@ -37,16 +37,23 @@ class Built:
     sources: list[Path]
 
 
-def codel_sources(description: ir.Description, component: ir.Component) -> list[Path]:
-    """The C/C++ sources of ``component`` (none: its codels are Python, or it has none)."""
+def codel_sources(description: ir.Description, component: ir.Component, given: Path | None = None) -> list[Path]:
+    """The C/C++ sources of ``component`` (none: its codels are Python, or it has none).
+
+    ``given`` (``--c-codels DIR``): ``DIR/<Component>/``, else the files of DIR named ``<Component>*``.
+    """
+    def sources(d: Path) -> list[Path]:
+        return sorted(p for p in d.iterdir() if p.is_file() and p.suffix in C_SUFFIXES + CXX_SUFFIXES)
+
+    if given is not None:
+        if (given / component.name).is_dir():
+            return sources(given / component.name)
+        return [p for p in sources(given) if p.name.startswith(component.name)]
     if not component.file:
         return []
     folder = Path(component.file).parent / "codels"
     if not folder.is_dir():
         return []
-
-    def sources(d: Path) -> list[Path]:
-        return sorted(p for p in d.iterdir() if p.is_file() and p.suffix in C_SUFFIXES + CXX_SUFFIXES)
 
     own = folder / component.name
     if own.is_dir():

@@ -189,7 +189,8 @@ def write_bip_file(package: Package, directory: Path | str) -> Path:
     return target
 
 
-def c_codel_files(description: ir.Description, interface: dict, version: str) -> dict[str, str | bytes]:
+def c_codel_files(description: ir.Description, interface: dict, version: str,
+                  folder: Path | None = None) -> dict[str, str | bytes]:
     """``<comp>_c_types.h`` and ``lib<comp>_codels.so`` of every component whose codels are C or C++
     (genom2bip.ccompile); the interface learns how to call them (its component's ``c`` entry)."""
     from genom2bip.back.c_types import CMappingError, c_layouts, c_types_header
@@ -197,7 +198,7 @@ def c_codel_files(description: ir.Description, interface: dict, version: str) ->
 
     files: dict[str, str | bytes] = {}
     for c in description.components:
-        sources = codel_sources(description, c)
+        sources = codel_sources(description, c, folder)
         if not sources:
             continue
         try:
@@ -213,8 +214,12 @@ def c_codel_files(description: ir.Description, interface: dict, version: str) ->
 
 
 def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,
-             rules: list[Rule] | None = None, inputs: list[str] | None = None, time=None) -> Generated:
+             rules: list[Rule] | None = None, inputs: list[str] | None = None, time=None,
+             c_codels: Path | None = None) -> Generated:
     """Write ``<out>/<system>/`` atomically (genom2bip.output); returns what was written.
+
+    ``c_codels``: a folder of C/C++ codels, ``<Component>/`` per component, in place of the ``codels/`` folders
+    beside the descriptions (genom2bip.ccompile).
 
     ``inputs`` are the paths read (default: the description's files): the output may not be or contain one.
     ``time`` (genom2bip.build.timed.TimeOptions) adds ticks, clocks and observers.
@@ -224,7 +229,7 @@ def generate(description: ir.Description, system: str, out: Path, sources: str, 
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
     interface = interface_data(description, system, sources, out / name)
-    files.update(c_codel_files(description, interface, version))
+    files.update(c_codel_files(description, interface, version, c_codels))
     files.update(python_files(package, root, docs, name, title, sources, version, interface))
 
     try:

@@ -61,6 +61,9 @@ class Raised:
 
 
 _HANDLES: dict[tuple[bool, bool], Any] = {}
+#: What ``read()`` returns while the poster a port reads was never written: an event no codel declares.
+NO_DATA = ctypes.create_string_buffer(b"::genom2bip::no_data")
+NO_DATA_EVENT = ctypes.addressof(NO_DATA)
 
 
 def _handle_type(multiple: bool, out: bool) -> Any:
@@ -117,11 +120,13 @@ class Port:
             self.buffers[key] = holder
         return ctypes.addressof(self.buffers[key])
 
-    def mark(self, key: str | None) -> None:
+    def mark(self, key: str | None) -> int | None:
+        """``write()`` publishes the element after the call; ``read()`` fails while the poster holds nothing."""
         if self.out:
             self.data(key)
             self.written.add(key)
-        return None
+            return None
+        return NO_DATA_EVENT if self._value_of(key) is None else None
 
     def open(self, key: str) -> None:
         self.closed.discard(key)
