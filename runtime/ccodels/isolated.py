@@ -4,8 +4,9 @@ The child process loads the library and calls the codels exactly as :mod:`runtim
 the controller's process; a call goes over a pipe as plain data (the arguments, which of them are ``out``
 holders) and comes back as the yield or the exception, with the holders' new values.  When the child dies
 during a call (SIGSEGV, abort), the call raises :class:`CodelCrashed` naming the codel and the signal, and a
-new child is started for the next call: what the codels kept in their own static variables is lost, the
-IDS is not (it lives in the controller).  Each call pays the round trip (docs/codels.md gives the figure).
+new child is started in the background for the next call (which waits for it): what the codels kept in
+their own static variables is lost, the IDS is not (it lives in the controller).  Each call pays the round
+trip (docs/codels.md gives the figure).
 """
 from __future__ import annotations
 
@@ -59,9 +60,22 @@ class IsolatedLibrary:
         self.lock = threading.Lock()
         self.codels = spec["codels"]
         self.restarts = 0
+        self.ready = threading.Event()  # a child serves calls (cleared while a new one starts after a crash)
+        self.broken: str | None = None  # why the new child could not serve
         why = self._start()
         if why is not None:
             raise CodelLibraryError(why)
+        self.ready.set()
+
+    def _restart(self) -> None:
+        """Start a new child in the background: the crashed call reports at once, the next one waits for it."""
+        self.ready.clear()
+
+        def start() -> None:
+            self.broken = self._start()
+            self.ready.set()
+
+        threading.Thread(target=start, name=f"codels-{self.component}-restart", daemon=True).start()
 
     def _start(self) -> str | None:
         """A new child; why it cannot serve (its library does not load), None when it is ready."""
@@ -95,6 +109,9 @@ class IsolatedLibrary:
         refs = [k for k, v in kwargs.items() if isinstance(v, Ref)]
         plain = {k: (v.value if isinstance(v, Ref) else v) for k, v in kwargs.items()}
         with self.lock:
+            self.ready.wait()
+            if self.broken is not None:
+                raise CodelCrashed(f"codel {name} of {self.component} cannot run: {self.broken}")
             try:
                 self.conn.send((name, plain, refs))
                 how, value, detail, written = self.conn.recv()
@@ -104,7 +121,7 @@ class IsolatedLibrary:
                 ended = (f"signal {signal.Signals(-code).name}" if code is not None and code < 0
                          else f"exit status {code}")
                 self.restarts += 1
-                self._start()
+                self._restart()
                 raise CodelCrashed(f"codel {name} of {self.component} crashed: its process ended on {ended} "
                                    f"(a new one serves the next calls)") from None
         for k in refs:
