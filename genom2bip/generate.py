@@ -138,6 +138,7 @@ def python_files(package: Package, root: str, docs: dict[str, str], module: str,
         "counts": f"{len(package.atom_types)} atom types, {len(package.connector_types)} connector types, "
                   f"{len(package.compound_types)} compound types",
         "has_interface": interface is not None,
+        "has_c": interface is not None and any(c.get("c") for c in interface["components"].values()),
         "interface": literal(interface) if interface is not None else "",
     }
     files = {
@@ -188,9 +189,37 @@ def write_bip_file(package: Package, directory: Path | str) -> Path:
     return target
 
 
+def c_codel_files(description: ir.Description, interface: dict, version: str,
+                  folder: Path | None = None) -> dict[str, str | bytes]:
+    """``<comp>_c_types.h`` and ``lib<comp>_codels.so`` of every component whose codels are C or C++
+    (genom2bip.ccompile); the interface learns how to call them (its component's ``c`` entry)."""
+    from genom2bip.back.c_types import CMappingError, c_layouts, c_types_header
+    from genom2bip.ccompile import CodelBuildError, codel_sources, compile_codels
+
+    files: dict[str, str | bytes] = {}
+    for c in description.components:
+        sources = codel_sources(description, c, folder)
+        if not sources:
+            continue
+        try:
+            header = c_types_header(description, c, c.file, version)
+            built = compile_codels(c, sources, header)
+            layouts = c_layouts(description, c)
+        except (CMappingError, CodelBuildError) as exc:
+            raise GenerateError(str(exc)) from None
+        files[f"{c.name}_c_types.h"] = header
+        files[f"lib{c.name}_codels.so"] = built.library
+        interface["components"][c.name]["c"] = {"library": f"lib{c.name}_codels.so", **layouts}
+    return files
+
+
 def generate(description: ir.Description, system: str, out: Path, sources: str, version: str,
-             rules: list[Rule] | None = None, inputs: list[str] | None = None, time=None) -> Generated:
+             rules: list[Rule] | None = None, inputs: list[str] | None = None, time=None,
+             c_codels: Path | None = None) -> Generated:
     """Write ``<out>/<system>/`` atomically (genom2bip.output); returns what was written.
+
+    ``c_codels``: a folder of C/C++ codels, ``<Component>/`` per component, in place of the ``codels/`` folders
+    beside the descriptions (genom2bip.ccompile).
 
     ``inputs`` are the paths read (default: the description's files): the output may not be or contain one.
     ``time`` (genom2bip.build.timed.TimeOptions) adds ticks, clocks and observers.
@@ -199,8 +228,9 @@ def generate(description: ir.Description, system: str, out: Path, sources: str, 
     name = package_name(system)
     files = {f"{package.name}.bip": write_package(package)}
     title = f"{system} functional level ({', '.join(c.name for c in description.components)})"
-    files.update(python_files(package, root, docs, name, title, sources, version,
-                              interface_data(description, system, sources)))
+    interface = interface_data(description, system, sources, out / name)
+    files.update(c_codel_files(description, interface, version, c_codels))
+    files.update(python_files(package, root, docs, name, title, sources, version, interface))
 
     try:
         written = write_tree(files, out, name, [Path(p) for p in (inputs if inputs is not None else description.files)])

@@ -347,6 +347,11 @@ class Service(Node):
     def __post_init__(self) -> None:
         self.kind = ServiceKind(self.kind)
 
+    @property
+    def interrupts_itself(self) -> bool:
+        """An activity whose ``interrupts`` names itself (or ``all``): a new request interrupts the running one."""
+        return self.kind == ServiceKind.ACTIVITY and (self.name in self.interrupts or "all" in self.interrupts)
+
     def fsm_codels(self) -> list[Codel]:
         """The codels as an automaton: a plain ``codel f()`` (a function's) runs as ``<start> f() yield ether``."""
         return [c if c.triggers else replace(c, triggers=["start"], yields=[Yield("ether", span=c.span)])

@@ -216,10 +216,10 @@ class Written:
     leftovers: list[Path]
 
 
-def write_tree(files: dict[str, str], out: Path, name: str, inputs: list[Path]) -> Written:
+def write_tree(files: dict[str, str | bytes], out: Path, name: str, inputs: list[Path]) -> Written:
     """Write ``files`` as ``<out>/<name>/`` atomically, with the marker; refuses (OutputError) what is unsafe."""
     target = out / name
-    data = {file_name: encode(text) for file_name, text in files.items()}
+    data = {file_name: text if isinstance(text, bytes) else encode(text) for file_name, text in files.items()}
     if os.path.lexists(out) and not out.is_dir():
         raise OutputError(f"cannot write {out}: it exists and is not a directory")
     check_inputs(target, inputs)

@@ -59,13 +59,13 @@ def test_same_search_on_verify_fixtures(name, root):
     same_search((verifykit.package(name), root))
 
 
-def test_ndd_has_55680_states_and_no_deadlock(shipped_c_level):
+def test_ndd_has_125440_states_and_no_deadlock(shipped_c_level):
     # the level users get, on the whole search of the main model (the other tests build at -O0)
     pkg, root = verifykit.ndd_model()
     cs = compiled(StateSpace(pkg, root))
     result = cs.explore()
-    assert (result.states, result.complete, result.deadlocks) == (55_680, True, [])
-    assert result.transitions == 401_104
+    assert (result.states, result.complete, result.deadlocks) == (125_440, True, [])
+    assert result.transitions == 992_672
 
 
 def test_ndd_agrees_state_by_state_with_a_request_budget():

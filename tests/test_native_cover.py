@@ -56,7 +56,7 @@ def test_timed_ndd_agrees_on_its_first_states_and_counts_as_python():
     space = StateSpace(package, root)
     assert agree(space, compiled(space), limit=1500) == 1500
     result = compiled(StateSpace(package, root)).explore()
-    assert (result.states, result.transitions, result.depth, result.complete) == (142_720, 973_296, 34, True)
+    assert (result.states, result.transitions, result.depth, result.complete) == (279_040, 2_072_832, 38, True)
 
 
 # -- floats and strings ------------------------------------------------------------------------------

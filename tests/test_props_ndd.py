@@ -29,7 +29,7 @@ def test_ndd_has_no_reachable_deadlock():
     pkg, root = ndd_model()
     result = explore(StateSpace(pkg, root))
     assert result.complete and result.deadlocks == [] and result.error is None
-    assert result.states == 55_680
+    assert result.states == 125_440
 
 
 def test_goto_is_triggered_only_after_setspeed_finished(ndd):

@@ -152,7 +152,7 @@ def test_codel_arguments_are_named_after_their_variables_and_clashes_are_prefixe
 
 def test_generated_interface_describes_dala():
     interface = dala().INTERFACE
-    assert interface["codels"] == "descriptions/dala/codels"
+    assert interface["codels"] == "../../descriptions/dala/codels"  # relative to the package
     ndd = interface["components"]["NDD"]
     assert ndd["ports"]["Speed"] == {"direction": "out", "schema": {"$ref": "dala::twist"}, "multiple": False}
     assert ndd["tasks"]["motion"]["period_us"] == 100_000 and ndd["tasks"]["motion"]["instance"] == "NDD.motion"

@@ -175,20 +175,16 @@ def test_bad_requests_get_a_4xx_that_names_the_problem(ctl, method, path, body, 
     assert controller.status == "running"
 
 
-def test_a_second_request_to_a_busy_activity_is_refused_and_the_first_still_reports(ctl):
-    _, _, client = ctl
+def test_a_second_goto_interrupts_the_first_and_reaches_its_own_goal(ctl):
+    _, _, client = ctl  # GoTo interrupts itself: re-sending it changes the goal, as GenoM users do
     navigation_ready(client)
     ndd_settings(client)
     first = client.send("NDD", "GoTo", goal={"x": 1000.0, "y": 0.0, "theta": 0.0})
-    with pytest.raises(ServiceError) as err:
-        client.send("NDD", "GoTo", goal={"x": 1.0, "y": 0.0, "theta": 0.0})
-    assert err.value.status == 409
-    assert f"NDD.GoTo is busy with request {first}" in err.value.message
-    assert "or interrupt it (" in err.value.message and "NDD.Stop" in err.value.message
     until(lambda: client.request(first)["status"] == "running")
-    client.call("NDD", "Stop", timeout=5)
-    assert client.wait(first, timeout=5)["status"] == "interrupted"
-    assert client.call("NDD", "GoTo", goal={"x": 0.05, "y": 0.0, "theta": 0.0}, timeout=5)["status"] == "ok"
+    second = client.send("NDD", "GoTo", goal={"x": 0.05, "y": 0.0, "theta": 0.0})
+    ended = client.wait(first, timeout=5)
+    assert ended["status"] == "interrupted" and ended["by"] == "NDD.GoTo" and ended["by_request"] == second
+    assert client.wait(second, timeout=5)["status"] == "ok"
 
 
 def test_components_services_and_openapi_describe_the_interface(ctl):

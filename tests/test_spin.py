@@ -49,7 +49,7 @@ def test_same_states_and_deadlock_verdict(name, root, reduce):
 def test_same_on_the_ndd_module():
     pkg, root = ndd_model()
     ours, theirs = both(pkg, root)
-    assert ours.states == theirs.report.states == 55_680
+    assert ours.states == theirs.report.states == 125_440
     assert theirs.report.errors == 0 and ours.deadlocks == []
 
 
@@ -222,6 +222,6 @@ def test_pan_progress_lines_are_streamed():
         report = run.pan(["-E", "-n"], progress=Progress(stream, force=True, delay=0))
     finally:
         run.cleanup()
-    assert report.states == 55_680
+    assert report.states == 125_440
     shown = stream.getvalue()
     assert "states 10,000" in shown and "depth " in shown and "states/s" in shown

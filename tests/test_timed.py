@@ -92,9 +92,9 @@ component Odo {
 """
 
 
-def test_a_codel_no_state_reaches_still_gets_its_wcet(tmp_path, capsys):
-    # Track interrupts only itself, which the model serialises: its stop state is never reached, so the
-    # activity has no transition on exec_stop; the task's exec connector for it still takes the codel's 10 ms.
+def test_a_codel_only_a_self_interruption_reaches_gets_its_wcet(tmp_path, capsys):
+    # Track interrupts only itself: a new request preempts the running one, which runs its stop codel (GenoM3);
+    # the task's exec connector for it takes the codel's 10 ms.
     gen = tmp_path / "Odo.gen"
     gen.write_text(ODO)
     code, out, err = verify(capsys, str(gen), "--timed", "--schedulability")
@@ -103,7 +103,7 @@ def test_a_codel_no_state_reaches_still_gets_its_wcet(tmp_path, capsys):
     assert main([str(gen), "--timed", "-o", str(tmp_path / "out")]) == 0
     capsys.readouterr()
     bip = (tmp_path / "out" / "odo" / "odo.bip").read_text()
-    assert "on exec_stop" not in bip
+    assert "on exec_stop from STOP to STOP_YIELD" in bip
     assert "connector Exec2_PP Track_exec_stop(odo.scheduler_exec, Track.activity_exec_stop)" in bip  # 10 ms / 5 ms
 
 

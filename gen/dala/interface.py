@@ -9,7 +9,7 @@ Python codels and serves requests from this; docs/runtime.md has the shape.
 
 INTERFACE = {
     'system': 'dala',
-    'codels': 'descriptions/dala/codels',
+    'codels': '../../descriptions/dala/codels',
     'types': {
         'NDD::ids::params': {
             'type': 'object',

@@ -366,8 +366,9 @@ def Aspect_Run_Control() -> AtomType:
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -480,6 +481,148 @@ def Aspect_Run_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['RENEW'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['HANDOVER'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['RENEW'],
+                ['RENEW'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '41', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['HANDOVER'],
+                ['HANDOVER'],
                 annotations=[
                     Annotation(
                         'source',
@@ -1704,8 +1847,9 @@ def LaserRF_Start_Control() -> AtomType:
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -1829,6 +1973,159 @@ def LaserRF_Start_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['RENEW'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['HANDOVER'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'refuse',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['RENEW'],
+                ['RENEW'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['HANDOVER'],
+                ['HANDOVER'],
                 annotations=[
                     Annotation(
                         'source',
@@ -3195,8 +3492,9 @@ def NDD_GoTo_Control() -> AtomType:
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -3336,6 +3634,172 @@ def NDD_GoTo_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Call('NDD_nddCheckGoal'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'reject',
+                ['RENEW'],
+                ['ACTIVE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['RENEW'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['HANDOVER'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'refuse',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['RENEW'],
+                ['RENEW'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '80', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['HANDOVER'],
+                ['HANDOVER'],
                 annotations=[
                     Annotation(
                         'source',
@@ -5349,8 +5813,9 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Status', 'status', data=['done', 'ok', 'running'], exported=True),
             PortDecl('Port', 'cancel', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -5474,6 +5939,159 @@ def RFLEX_TrackSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['RENEW'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['HANDOVER'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'refuse',
+                ['ACTIVE'],
+                ['ACTIVE'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['RENEW'],
+                ['RENEW'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '51', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'status',
+                ['HANDOVER'],
+                ['HANDOVER'],
                 annotations=[
                     Annotation(
                         'source',
@@ -6513,6 +7131,17 @@ def Aspect_Run_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '16'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
@@ -6578,6 +7207,7 @@ def Aspect_Run_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_fuse', targets=[PortRef('activity', 'exec_fuse')]),
             ExportPort('Port', 'activity_exec_wait', targets=[PortRef('activity', 'exec_wait')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
@@ -6954,6 +7584,17 @@ def LaserRF_Start_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '16'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
@@ -7021,6 +7662,7 @@ def LaserRF_Start_Service() -> CompoundType:
                 targets=[PortRef('activity', 'exec_acquire')],
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
@@ -7191,6 +7833,17 @@ def NDD_GoTo_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '84', 'column': '16'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
                 'BroadcastX_2',
                 'LaserRF_Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
@@ -7294,6 +7947,7 @@ def NDD_GoTo_Service() -> CompoundType:
                 targets=[PortRef('activity', 'exec_arrived')],
             ),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'LaserRF_Stop_start', targets=[PortRef('LaserRF_Stop_start', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'RFLEX_Stop_start', targets=[PortRef('RFLEX_Stop_start', 'ep')]),
@@ -8130,6 +8784,17 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '55', 'column': '16'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
@@ -8193,6 +8858,7 @@ def RFLEX_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_track', targets=[PortRef('activity', 'exec_track')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Status', 'control_status', targets=[PortRef('control', 'status')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
@@ -8372,6 +9038,19 @@ def Aspect_Module() -> CompoundType:
                 comment='codel aspStop of state stop',
             ),
             ConnectorInstance(
+                'Rendezvous_P',
+                'Run_preempt',
+                ports=[PortRef('Run', 'preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'Aspect.Run:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/Aspect.gen', 'line': '44', 'column': '16'},
+                    ),
+                ],
+                comment='a new request to Run interrupts the running one',
+            ),
+            ConnectorInstance(
                 'Triggered_1_1',
                 'Stop_start',
                 ports=[PortRef('Stop', 'start'), PortRef('Run', 'Stop_start')],
@@ -8447,6 +9126,24 @@ def Aspect_Module() -> CompoundType:
             ),
         ],
         priorities=[
+            Priority(
+                'Run_exec_start_before_preempt',
+                InteractionPattern('Run_exec_start'),
+                InteractionPattern('Run_preempt'),
+                comment='a new request to Run takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'Run_exec_fuse_before_preempt',
+                InteractionPattern('Run_exec_fuse'),
+                InteractionPattern('Run_preempt'),
+                comment='a new request to Run takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'Run_exec_wait_before_preempt',
+                InteractionPattern('Run_exec_wait'),
+                InteractionPattern('Run_preempt'),
+                comment='a new request to Run takes effect before the running one runs another codel',
+            ),
             Priority(
                 'Run_exec_start_before_Stop_start',
                 InteractionPattern('Run_exec_start'),
@@ -8688,6 +9385,7 @@ def LaserRF_Module() -> CompoundType:
             ExportPort('Port', 'Start_exec_start', targets=[PortRef('Start_exec_start', 'ep')]),
             ExportPort('Port', 'Start_exec_acquire', targets=[PortRef('Start_exec_acquire', 'ep')]),
             ExportPort('Port', 'Start_exec_stop', targets=[PortRef('Start_exec_stop', 'ep')]),
+            ExportPort('Port', 'Start_preempt', targets=[PortRef('Start', 'preempt')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'acquisition_sleep', targets=[PortRef('acquisition', 'sleep')]),
             ExportPort(
@@ -8995,6 +9693,7 @@ def NDD_Module() -> CompoundType:
             ExportPort('Port', 'GoTo_exec_plan', targets=[PortRef('GoTo_exec_plan', 'ep')]),
             ExportPort('Port', 'GoTo_exec_arrived', targets=[PortRef('GoTo_exec_arrived', 'ep')]),
             ExportPort('Port', 'GoTo_exec_stop', targets=[PortRef('GoTo_exec_stop', 'ep')]),
+            ExportPort('Port', 'GoTo_preempt', targets=[PortRef('GoTo', 'preempt')]),
             ExportPort(
                 'Port',
                 'GoTo_LaserRF_Stop_start',
@@ -9466,6 +10165,7 @@ def RFLEX_Module() -> CompoundType:
                 'TrackSpeed_exec_stop',
                 targets=[PortRef('TrackSpeed_exec_stop', 'ep')],
             ),
+            ExportPort('Port', 'TrackSpeed_preempt', targets=[PortRef('TrackSpeed', 'preempt')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'servo_sleep', targets=[PortRef('servo', 'sleep')]),
             ExportPort(
@@ -9569,6 +10269,19 @@ def DALA() -> CompoundType:
             ),
             ConnectorInstance(
                 'Rendezvous_P',
+                'LaserRF_Start_preempt',
+                ports=[PortRef('LaserRF', 'Start_preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'LaserRF.Start:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/LaserRF.gen', 'line': '55', 'column': '16'},
+                    ),
+                ],
+                comment='a new request to Start interrupts the running one',
+            ),
+            ConnectorInstance(
+                'Rendezvous_P',
                 'NDD_motion_exec_start',
                 ports=[PortRef('NDD', 'motion_exec_start')],
                 annotations=[
@@ -9647,6 +10360,19 @@ def DALA() -> CompoundType:
             ),
             ConnectorInstance(
                 'Rendezvous_P',
+                'NDD_GoTo_preempt',
+                ports=[PortRef('NDD', 'GoTo_preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'NDD.GoTo:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/NDD.gen', 'line': '84', 'column': '16'},
+                    ),
+                ],
+                comment='a new request to GoTo interrupts the running one',
+            ),
+            ConnectorInstance(
+                'Rendezvous_P',
                 'RFLEX_servo_exec_start',
                 ports=[PortRef('RFLEX', 'servo_exec_start')],
                 annotations=[
@@ -9722,6 +10448,19 @@ def DALA() -> CompoundType:
                     ),
                 ],
                 comment='codel rflexBrake of state stop',
+            ),
+            ConnectorInstance(
+                'Rendezvous_P',
+                'RFLEX_TrackSpeed_preempt',
+                ports=[PortRef('RFLEX', 'TrackSpeed_preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'RFLEX.TrackSpeed:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '55', 'column': '16'},
+                    ),
+                ],
+                comment='a new request to TrackSpeed interrupts the running one',
             ),
             ConnectorInstance(
                 'Triggered_1_1',
@@ -9869,6 +10608,48 @@ def DALA() -> CompoundType:
             ),
         ],
         priorities=[
+            Priority(
+                'LaserRF_Start_exec_start_before_preempt',
+                InteractionPattern('LaserRF_Start_exec_start'),
+                InteractionPattern('LaserRF_Start_preempt'),
+                comment='a new request to Start takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'LaserRF_Start_exec_acquire_before_preempt',
+                InteractionPattern('LaserRF_Start_exec_acquire'),
+                InteractionPattern('LaserRF_Start_preempt'),
+                comment='a new request to Start takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_start_before_preempt',
+                InteractionPattern('NDD_GoTo_exec_start'),
+                InteractionPattern('NDD_GoTo_preempt'),
+                comment='a new request to GoTo takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_plan_before_preempt',
+                InteractionPattern('NDD_GoTo_exec_plan'),
+                InteractionPattern('NDD_GoTo_preempt'),
+                comment='a new request to GoTo takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'NDD_GoTo_exec_arrived_before_preempt',
+                InteractionPattern('NDD_GoTo_exec_arrived'),
+                InteractionPattern('NDD_GoTo_preempt'),
+                comment='a new request to GoTo takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'RFLEX_TrackSpeed_exec_start_before_preempt',
+                InteractionPattern('RFLEX_TrackSpeed_exec_start'),
+                InteractionPattern('RFLEX_TrackSpeed_preempt'),
+                comment='a new request to TrackSpeed takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'RFLEX_TrackSpeed_exec_track_before_preempt',
+                InteractionPattern('RFLEX_TrackSpeed_exec_track'),
+                InteractionPattern('RFLEX_TrackSpeed_preempt'),
+                comment='a new request to TrackSpeed takes effect before the running one runs another codel',
+            ),
             Priority(
                 'LaserRF_Start_exec_start_before_Stop_start',
                 InteractionPattern('LaserRF_Start_exec_start'),

@@ -10,8 +10,9 @@ the shape.
 from __future__ import annotations
 
 import keyword
+import os
 import re
-from pathlib import PurePosixPath
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 from genom2bip import ir
@@ -262,14 +263,22 @@ def component_interface(schemas: Schemas, c: ir.Component) -> dict[str, Any]:
     }
 
 
-def interface_data(description: ir.Description, system: str, sources: str) -> dict[str, Any]:
-    """Everything the runtime needs about ``description``'s components, as plain data."""
+def interface_data(description: ir.Description, system: str, sources: str,
+                   package_dir: Path | None = None) -> dict[str, Any]:
+    """Everything the runtime needs about ``description``'s components, as plain data.
+
+    ``codels`` is the descriptions' ``codels`` folder: relative to ``package_dir`` (where the package is
+    written) when it is given, so that the package finds it from any working directory.
+    """
     schemas = Schemas(description)
     first = PurePosixPath(sources.split()[0]) if sources.split() else PurePosixPath(".")
     folder = first.parent if first.suffix else first
+    codels = str(folder / "codels")
+    if package_dir is not None:
+        codels = PurePosixPath(os.path.relpath(os.path.abspath(codels), os.path.abspath(package_dir))).as_posix()
     components = {c.name: component_interface(schemas, c) for c in description.components}
     types = dict(sorted(schemas.named.items()))
-    return {"system": system, "codels": str(folder / "codels"), "types": types, "components": components}
+    return {"system": system, "codels": codels, "types": types, "components": components}
 
 
 def literal(value: Any, indent: int = 0, column: int = 0, width: int = 110) -> str:

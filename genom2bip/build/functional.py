@@ -253,7 +253,7 @@ class FunctionalLevel:
         )
         states = f"states {', '.join(fsm.states)}" if fsm.states else "no codel"
         activity = self.asm.atom(path + ("activity",), self._atom_type(
-            activity_type(m, name, fsm, origin=s.span, abortable=interruptible),
+            activity_type(m, name, fsm, origin=s.span, abortable=interruptible or s.interrupts_itself),
             f"Activity of {s.kind} {c.name}.{s.name}: {states}."))
         self._codel_externs(m, fsm)
         if s.validate is not None:
@@ -273,8 +273,19 @@ class FunctionalLevel:
             ends = [End(control, port), End(activity, port)]
             self.asm.wire(Wire(self._rendezvous(ends), ends, port, path, f"{label}:{port}",
                                annotations=source_annotation(s.span)))
-        for state in fsm.states:
-            self._exec(m, label, task, activity, state, fsm.codel_of[state], owner=path)
+        execs = [self._exec(m, label, task, activity, state, fsm.codel_of[state], owner=path) for state in fsm.states]
+        if s.interrupts_itself:
+            ends = [End(control, "preempt"), End(activity, "abort")]
+            preempt = self.asm.wire(Wire(self._rendezvous(ends), ends, "preempt", path, f"{label}:preempt",
+                                         comment=f"a new request to {s.name} interrupts the running one",
+                                         annotations=source_annotation(s.ref_spans.get(f"interrupts:{s.name}",
+                                                                                       s.span))))
+            for w in execs:
+                if w.name == exec_port("stop"):  # the stop codel runs after an abort: no abort to wait for
+                    continue
+                self.asm.rank(Rank(f"{ident(s.name)}_{w.name}_before_preempt", w, preempt, owner=path[:1],
+                                   comment=f"a new request to {s.name} takes effect before the running one runs "
+                                           "another codel"))
         if fsm.paused:
             self.wakes[task].append(End(activity, "wake"))
 

@@ -270,6 +270,9 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
     if constrained:
         ports.insert(1, PortDecl(PORT, "refuse", exported=True))
         transitions.insert(1, Transition("refuse", ["IDLE"], ["IDLE"]))
+    if service.interrupts_itself:
+        places += ["RENEW", "HANDOVER"]
+        _renewal(ports, transitions, validate, bool(service.validate), interruptible, constrained, observed)
     return AtomType(
         name=joined(module, service.name, "Control"),
         data=data,
@@ -281,6 +284,36 @@ def controller_type(module: str, service: ir.Service, constrained: bool, interru
         transitions=located(transitions, service.span),
         annotations=source_annotation(service.span),
     )
+
+
+def _renewal(ports: list[PortDecl], transitions: list[Transition], validate: list, has_validate: bool,
+             interruptible: bool, constrained: bool, observed: bool) -> None:
+    """A service that interrupts itself takes a new request while it runs one (GenoM3's rule, docs/runtime.md).
+
+    ``trigger`` in ACTIVE validates the new request (RENEW); refused, the running one goes on; accepted,
+    ``preempt`` aborts the running activity (HANDOVER); its end (finish, fail or interrupted, reported as
+    the old request's) leads to CHECK, from where the new request starts as any other.
+    """
+    kept = [Assign(Var("done"), Const(True)), Assign(Var("ok"), Const(True))]
+    transitions += [
+        Transition("trigger", ["ACTIVE"], ["RENEW"], action=validate),
+        Transition("preempt", ["RENEW"], ["HANDOVER"], guard=Binary("==", Var("verdict"), Const(0))),
+    ]
+    for source in ("RENEW", "HANDOVER"):  # the old request ends (by itself, or as told): the new one is next
+        transitions += [Transition("finish", [source], ["CHECK"], action=kept),
+                        Transition("fail", [source], ["CHECK"], action=[Assign(Var("ok"), Const(False))]),
+                        Transition("interrupted", [source], ["CHECK"], action=[Assign(Var("ok"), Const(False))])]
+    ports.append(PortDecl(PORT, "preempt", exported=True))
+    if has_validate:
+        transitions.append(Transition("reject", ["RENEW"], ["ACTIVE"], guard=Binary("!=", Var("verdict"), Const(0)),
+                                      action=[Assign(Var("verdict"), Const(0))]))
+    if interruptible:  # another service interrupts both: the running request is aborted, the new one cancelled
+        transitions += [Transition("cancel", [p], ["ACTIVE"], action=[Assign(Var("verdict"), Const(0))])
+                        for p in ("RENEW", "HANDOVER")]
+    if constrained:
+        transitions.append(Transition("refuse", ["ACTIVE"], ["ACTIVE"]))
+    if observed:
+        transitions += [Transition("status", [p], [p]) for p in ("RENEW", "HANDOVER")]
 
 
 def acceptor_type(module: str, requests: list[tuple[str, str]], origin: Span = NOWHERE,

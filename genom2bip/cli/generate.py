@@ -19,6 +19,9 @@ def _generate_arguments(parser: argparse.ArgumentParser) -> None:
                         help="directory to write <system>/ into (default: gen)")
     parser.add_argument("--name", metavar="SYSTEM",
                         help="name of the system (default: the first PATH's name, e.g. dala)")
+    parser.add_argument("--c-codels", metavar="DIR",
+                        help="C/C++ codels to compile, DIR/<Component>/ per component (default: each component's "
+                             "codels/ folder beside its .gen; docs/codels.md)")
     add_rules_arguments(parser)
     from genom2bip.cli.verify_timed import add_time_arguments
     add_time_arguments(parser)
@@ -37,13 +40,18 @@ def verb_generate(args: argparse.Namespace) -> int:
     rules = load_rules(args, description)
     system = args.name or system_name(args.paths)
     sources = " ".join(args.paths) + (f" --rules {args.rules}" if args.rules else "")
+    sources += f" --c-codels {args.c_codels}" if args.c_codels else ""
     from genom2bip.cli.verify_timed import time_settings, warn_untimed
     from genom2bip.loading import Diagnostics, time_options
     time = time_options(description, args.paths, time_settings(args), Diagnostics(print_diagnostics))
     sources += (" --timed" if time.ticks else " --monitor") if time is not None else ""
+    if args.c_codels and not Path(args.c_codels).is_dir():
+        error(f"--c-codels {args.c_codels}: no such directory")
+        return EXIT_ERRORS
     try:
         inputs = [*args.paths, *args.include_dirs, *([str(rules_file(args))] if rules_file(args) else [])]
-        result = generate(description, system, Path(args.output), sources, version(), rules, inputs, time)
+        result = generate(description, system, Path(args.output), sources, version(), rules, inputs, time,
+                          c_codels=Path(args.c_codels) if args.c_codels else None)
     except DiagnosticError as exc:
         print(exc.render(), file=sys.stderr)
         return EXIT_ERRORS

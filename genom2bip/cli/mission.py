@@ -1,7 +1,8 @@
 """``genom2bip mission MISSION [--world WORLD]``: run a mission against the generated controller in a simulated world.
 
-Starts the generated package's controller (``--package``, default
-``gen/<system>``) with its codels and services interface, loads the world
+Starts the generated package's controller (``--package``, default the
+package that holds the mission's components: genom2bip.mission.package)
+with its codels and services interface, loads the world
 (ir-sim YAML), sends the mission's requests through the client, then prints
 the report and writes the trajectory picture and the trace (``--out``);
 ``--codel-times FILE`` records how long each codel ran, writes it to FILE and
@@ -30,8 +31,9 @@ def _port(text: str) -> int:
 def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("mission", metavar="MISSION", help="the mission file (YAML; docs/missions.md)")
     parser.add_argument("--world", metavar="WORLD", help="the world file (ir-sim YAML); default: the mission's")
-    parser.add_argument("--package", metavar="DIR", default="gen/dala",
-                        help="the generated package to run (default: gen/dala)")
+    parser.add_argument("--package", metavar="DIR",
+                        help="the generated package to run (default: the one in a gen/ folder, of the working "
+                             "directory or above the mission, that holds the components the mission names)")
     parser.add_argument("--codels", metavar="DIR|MODULE", help="the codels (default: the package's, docs/runtime.md)")
     parser.add_argument("--out", metavar="DIR", default="out",
                         help="where MISSION.png and MISSION.jsonl are written (default: out)")
@@ -63,6 +65,7 @@ def verb_mission(args: argparse.Namespace) -> int:
     from genom2bip.mission import picture, report
     from genom2bip.mission.inputs import check_inputs
     from genom2bip.mission.outputs import output_problem
+    from genom2bip.mission.package import NoPackage, find_package
     from genom2bip.mission.session import load_package, run_mission, write_trace
     from genom2bip.mission.spec import read_mission
     from genom2bip.mission.world import check_world
@@ -91,8 +94,8 @@ def verb_mission(args: argparse.Namespace) -> int:
         error(str(exc))
         return EXIT_USAGE
     try:
-        package = load_package(args.package)
-    except (FileNotFoundError, ImportError) as exc:
+        package = load_package(args.package or find_package(mission))
+    except (FileNotFoundError, ImportError, NoPackage) as exc:
         error(str(exc))
         return EXIT_ERRORS
     reporter = Reporter()

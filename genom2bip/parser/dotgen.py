@@ -134,6 +134,7 @@ class _Builder(TypeReader, ComponentReader, ServiceReader):
         for comp in self.components:
             self.apply_pragmas(comp)
             self.merge_provided(comp)
+            self.merge_used(comp)
             if comp.ids and f"{comp.name}::ids" not in self.desc.types:  # ids only from provided interfaces
                 self.desc.types[f"{comp.name}::ids"] = StructType(f"{comp.name}::ids", comp.ids, span=comp.span)
         if self.src.file and self.src.file not in self.desc.files:

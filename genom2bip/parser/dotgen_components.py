@@ -8,6 +8,7 @@ from lark import Token, Tree
 
 from genom2bip.ir import (
     Component,
+    Direction,
     Interface,
     Member,
     NamedType,
@@ -259,6 +260,21 @@ class ComponentReader(DotgenReader):
                            hint="declare or #include the interface before the component")
                 continue
             self.merge_checked(comp, iface, f"component '{comp.name}'", where)
+
+    def merge_used(self, comp: Component) -> None:
+        """A used interface's ports become the component's, turned round: its ``port out`` is read (GenoM3)."""
+        for name in comp.uses:
+            iface = self.desc.interfaces.get(name)
+            if iface is None:
+                continue
+            mine = {p.name for p in comp.ports}
+            turned = []
+            for p in iface.ports:
+                if p.name not in mine:
+                    port = copy.deepcopy(p)
+                    port.direction = Direction.IN if p.direction == Direction.OUT else Direction.OUT
+                    turned.append(port)
+            comp.ports[:0] = turned
 
     def merge_checked(self, target: Component | Interface, iface: Interface, what: str, where: Span) -> None:
         """Merge ``iface`` into ``target``, refusing what genom3's prop_merge and comp_addids refuse.

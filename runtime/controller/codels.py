@@ -111,3 +111,19 @@ def _from_package(package: types.ModuleType, components: list[str], where: str) 
         except Exception as err:  # noqa: BLE001
             problems[c] = f"importing {package.__name__}.{c} failed: {type(err).__name__}: {err}"
     return CodelSource(where, modules, package, problems)
+
+
+def with_c_codels(source: CodelSource, interface: dict[str, Any], clock: Any = None) -> CodelSource:
+    """``source`` with the C codel libraries the interface names (runtime.ccodels): a component's C codels
+    serve it in place of Python ones; a library that cannot be loaded is reported per codel.  On a virtual
+    ``clock`` the C codels' wall clock is the controller's."""
+    if not any(spec.get("c") for spec in interface["components"].values()):
+        return source
+    from runtime.ccodels import c_codels
+
+    found, problems, loaded = c_codels(interface, clock=clock)
+    source.modules.update(found)
+    source.problems.update(problems)
+    if loaded:
+        source.where = ", ".join(x for x in [source.where, *loaded] if x)
+    return source

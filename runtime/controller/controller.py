@@ -17,7 +17,7 @@ from runtime.codels import codel_specs
 from runtime.controller.binding import Binder
 from runtime.controller.choice import Choice
 from runtime.controller.codel_times import CodelTimes
-from runtime.controller.codels import load_codels
+from runtime.controller.codels import load_codels, with_c_codels
 from runtime.controller.data import Data, PosterValue
 from runtime.controller.intake import checked_inputs, request_locals
 from runtime.controller.meaning import Meanings, StepInfo
@@ -51,14 +51,14 @@ class Controller(Running):
         self.types: dict[str, dict[str, Any]] = interface.get("types", {})
         comps = interface["components"]
         self.data = Data(interface)
-        self.codels = load_codels(codels, list(comps))
+        self.clock = clock or MonotonicClock()
+        self.codels = with_c_codels(load_codels(codels, list(comps)), interface, self.clock)
         self.binder = Binder(interface, self.data, self.codels, codel_specs(package), on_poster=self._poster_written)
         self.binder.times = CodelTimes(interface) if times else None
         externs: dict[str, Callable] = dict(self.binder.externs())
         externs["request_pending"] = self._pending
         externs["take_request"] = self._take
         self.engine = Engine(package, root, externs)
-        self.clock = clock or MonotonicClock()
         self.timers = Timers.of(self.engine.flat, {c["instance"]: c.get("clock_rate_us") for c in comps.values()})
         self.monitor = Monitor.of(self.engine.flat, package)  # the model's observers on this clock (None: none)
         self.services: dict[str, Service] = {
@@ -129,7 +129,7 @@ class Controller(Running):
                 state = f"has stopped on an error ({self.error})" if self.error else \
                     "is stopping" if self.status in ("ready", "running") else "has stopped"
                 raise RequestError(503, f"the controller {state}; request to {svc.label} not accepted")
-            if not svc.reentrant:
+            if not svc.reentrant and not svc.renews:
                 busy = svc.busy_with()
                 if busy is not None:
                     others = self.meanings.interrupters.get(svc.label, [])
@@ -187,8 +187,12 @@ class Controller(Running):
         svc = self.services.get(name)
         if svc is not None and svc.queue:
             with self._lock:
-                svc.current = svc.queue.popleft()
-            self._taken = (svc, svc.current)  # a step fired again after a detached codel takes it again
+                taken = svc.queue.popleft()
+                if svc.current is not None and svc.current.final is None:  # it interrupts the running one
+                    svc.incoming = taken
+                else:
+                    svc.current = taken
+            self._taken = (svc, taken)  # a step fired again after a detached codel takes it again
 
     def _poster_written(self, component: str, port: str, value: PosterValue) -> None:
         if self.reports.listeners:

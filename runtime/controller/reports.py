@@ -86,8 +86,10 @@ class Reports:
             if status in FINAL:
                 req.status, req.final = status, report
                 svc = self.services[req.label]
-                if svc.current is req:
-                    svc.current = None
+                if svc.incoming is req:
+                    svc.incoming = None
+                if svc.current is req:  # a request that interrupted it is next
+                    svc.current, svc.incoming = svc.incoming, None
                 self.ended.append(req.id)
                 while len(self.ended) > self.keep:
                     self.requests.pop(self.ended.popleft(), None)
@@ -125,7 +127,7 @@ class Reports:
         """Every request still queued or running gets its final report when the controller stops."""
         for svc in self.services.values():
             with self.lock:
-                pending = ([svc.current] if svc.current is not None else []) + list(svc.queue)
+                pending = [r for r in (svc.current, svc.incoming) if r is not None] + list(svc.queue)
                 svc.queue.clear()
             for req in pending:
                 if req.final is None:
@@ -180,6 +182,9 @@ class Reports:
             rule = (info.rule or {}).get("name", "a rule")
             self.report(req, "rejected", reason="rule", rule=rule, status_of=status_of(info.reads, state),
                         message=f"{req.label} refused by rule {rule}")
+        elif kind == "preempt":  # the new request, accepted, interrupts the running one of the same service
+            if svc.current is not None and svc.current is not req:
+                svc.current.interrupted_by = (svc.label, req.id)
         elif kind == "reject":
             f = req.failure or {}
             self.report(req, "rejected", reason="validate", **failure_fields(f),
@@ -193,8 +198,9 @@ class Reports:
                 if victim.current is not None:
                     victim.current.interrupted_by = (svc.label, req.id)
             for victim in info.cancelled:  # accepted, not started: it ends here
-                if victim.current is not None:
-                    self.report(victim.current, "interrupted", by=svc.label, by_request=req.id,
+                waiting = victim.incoming or victim.current
+                if waiting is not None:
+                    self.report(waiting, "interrupted", by=svc.label, by_request=req.id,
                                 message=f"{victim.label} interrupted by {svc.label} before it started")
         elif kind == "finish":
             self.report(req, "ok", outputs=outputs(svc, req, data.ids[svc.scope.component]))

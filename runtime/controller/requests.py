@@ -62,6 +62,8 @@ class Service:
     spec: dict[str, Any]
     queue: deque = field(default_factory=deque)
     current: Request | None = None
+    # a request accepted while ``current`` runs, by a service that interrupts itself: it starts once current ends
+    incoming: Request | None = None
     # slots of (done, ok, running) of its controller atom, to say why a rule refused something
     status_slots: tuple[int, int, int] | None = None
 
@@ -73,6 +75,12 @@ class Service:
     def reentrant(self) -> bool:
         """Attributes and functions queue their requests; an activity takes one at a time."""
         return self.spec["kind"] != "activity"
+
+    @property
+    def renews(self) -> bool:
+        """An activity that interrupts itself: a new request interrupts the running one (GenoM3), never busy."""
+        interrupts = self.spec.get("interrupts", [])
+        return self.spec["kind"] == "activity" and (self.scope.name in interrupts or "all" in interrupts)
 
     def busy_with(self) -> Request | None:
         return self.current or (self.queue[0] if self.queue else None)

@@ -209,7 +209,12 @@ class Running(Takeover):
         req = None
         if svc is not None:
             b.scope = svc.scope
-            req = (svc.queue[0] if svc.queue else None) if info.kind in ("trigger", "refuse") else svc.current
+            if info.kind in ("trigger", "refuse"):
+                req = svc.queue[0] if svc.queue else None
+            elif info.kind in ("reject", "preempt"):  # the new request of a service that interrupts itself
+                req = svc.incoming or svc.current
+            else:
+                req = svc.current
             b.locals = req.locals if req is not None else None
         else:
             b.scope, b.locals = info.scope, None

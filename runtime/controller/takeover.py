@@ -120,6 +120,8 @@ class Takeover:
             svc, req = d.taken
             if svc.current is req:
                 svc.current = None
+            if svc.incoming is req:
+                svc.incoming = None
             svc.queue.appendleft(req)
         b.replay[d.call.extern] = d.call
         b.scope, b.locals = d.call.scope, d.call.locals

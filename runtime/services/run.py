@@ -93,18 +93,28 @@ def token_of(args) -> str | None:
 
 
 def find_codels(interface: dict[str, Any], given: str | None, origin: str | None) -> str | None:
-    """``--codels``, else the interface's ``codels`` path from the working directory, else from above the package."""
+    """``--codels``, else the interface's ``codels`` folder: relative to the package (``origin``: its directory or a
+    file in it), absolute, or (packages from before) relative to the working directory or a folder above the package.
+    """
     if given:
         return given
-    relative = interface.get("codels")
-    if not relative:
+    recorded = interface.get("codels")
+    if not recorded:
         return None
-    if Path(relative).is_dir():
-        return relative
+    if origin:
+        package = Path(origin).resolve()
+        package = package if package.is_dir() else package.parent
+        beside = (package / recorded).resolve()
+        if beside.is_dir():
+            return str(beside)
+        if Path(recorded).is_absolute():
+            return None
+    if Path(recorded).is_dir():
+        return recorded
     if origin:
         for folder in Path(origin).resolve().parents:
-            if (folder / relative).is_dir():
-                return str(folder / relative)
+            if (folder / recorded).is_dir():
+                return str(folder / recorded)
     return None
 
 

@@ -9,7 +9,7 @@ Python codels and serves requests from this; docs/runtime.md has the shape.
 
 INTERFACE = {
     'system': 'counter',
-    'codels': 'tests/fixtures/genom3/codels',
+    'codels': '../../fixtures/genom3/codels',
     'types': {},
     'components': {
         'counter': {

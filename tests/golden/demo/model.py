@@ -811,8 +811,9 @@ def demo_GoTo_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Port', 'cancel', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -908,6 +909,139 @@ def demo_GoTo_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Call('demo_check_position'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'reject',
+                ['RENEW'],
+                ['ACTIVE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['RENEW'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '65', 'column': '12'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['HANDOVER'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
@@ -1785,6 +1919,17 @@ def demo_GoTo_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '73', 'column': '15'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
                 'BroadcastX_2',
                 'Stop_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
@@ -1861,6 +2006,7 @@ def demo_GoTo_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
             ExportPort('Port', 'activity_exec_drive', targets=[PortRef('activity', 'exec_drive')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
             ExportPort('Port', 'activity_wake', targets=[PortRef('activity', 'wake')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
@@ -2309,6 +2455,19 @@ def demo_Module() -> CompoundType:
                 comment='codel goto_stop of state stop',
             ),
             ConnectorInstance(
+                'Rendezvous_P',
+                'GoTo_preempt',
+                ports=[PortRef('GoTo', 'preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'demo.GoTo:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom3/demo.gen', 'line': '73', 'column': '15'},
+                    ),
+                ],
+                comment='a new request to GoTo interrupts the running one',
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'MoveDistance_exec_start',
                 ports=[
@@ -2468,6 +2627,18 @@ def demo_Module() -> CompoundType:
             ),
         ],
         priorities=[
+            Priority(
+                'GoTo_exec_start_before_preempt',
+                InteractionPattern('GoTo_exec_start'),
+                InteractionPattern('GoTo_preempt'),
+                comment='a new request to GoTo takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'GoTo_exec_drive_before_preempt',
+                InteractionPattern('GoTo_exec_drive'),
+                InteractionPattern('GoTo_preempt'),
+                comment='a new request to GoTo takes effect before the running one runs another codel',
+            ),
             Priority(
                 'GoTo_exec_start_before_Stop_start',
                 InteractionPattern('GoTo_exec_start'),

@@ -9,7 +9,7 @@ Python codels and serves requests from this; docs/runtime.md has the shape.
 
 INTERFACE = {
     'system': 'rflex',
-    'codels': 'tests/fixtures/genom2/codels',
+    'codels': '../../fixtures/genom2/codels',
     'types': {
         'POM_POS': {
             'type': 'object',

@@ -393,8 +393,9 @@ def rflex_Init_Control() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -485,6 +486,115 @@ def rflex_Init_Control() -> AtomType:
                     ),
                 ],
             ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Call('rflex_rflexInitCheck'))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'reject',
+                ['RENEW'],
+                ['ACTIVE'],
+                guard=Binary('!=', Var('verdict'), Const(0)),
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
         ],
         annotations=[
             Annotation(
@@ -506,6 +616,7 @@ def rflex_Init_Activity() -> AtomType:
             PortDecl('Port', 'finish', exported=True),
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
+            PortDecl('Port', 'abort', exported=True),
         ],
         places=['ETHER', 'START', 'START_YIELD', 'FINISHED', 'FAILED', 'INTERRUPTED'],
         initial=InitialTransition(
@@ -605,6 +716,18 @@ def rflex_Init_Activity() -> AtomType:
                 'interrupted',
                 ['INTERRUPTED'],
                 ['ETHER'],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'abort',
+                ['START'],
+                ['INTERRUPTED'],
+                action=[Assign(Var('aborted'), Const(True))],
                 annotations=[
                     Annotation(
                         'source',
@@ -960,8 +1083,9 @@ def rflex_TrackSpeed_Control() -> AtomType:
             PortDecl('Port', 'fail', exported=True),
             PortDecl('Port', 'interrupted', exported=True),
             PortDecl('Port', 'cancel', exported=True),
+            PortDecl('Port', 'preempt', exported=True),
         ],
-        places=['IDLE', 'CHECK', 'ACTIVE'],
+        places=['IDLE', 'CHECK', 'ACTIVE', 'RENEW', 'HANDOVER'],
         initial=InitialTransition(
             ['IDLE'],
             action=[
@@ -1041,6 +1165,126 @@ def rflex_TrackSpeed_Control() -> AtomType:
                 ['CHECK'],
                 ['IDLE'],
                 action=[Assign(Var('running'), Const(False)), Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'trigger',
+                ['ACTIVE'],
+                ['RENEW'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'preempt',
+                ['RENEW'],
+                ['HANDOVER'],
+                guard=Binary('==', Var('verdict'), Const(0)),
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['RENEW'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'finish',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('done'), Const(True)), Assign(Var('ok'), Const(True))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'fail',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'interrupted',
+                ['HANDOVER'],
+                ['CHECK'],
+                action=[Assign(Var('ok'), Const(False))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['RENEW'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '51', 'column': '9'},
+                    ),
+                ],
+            ),
+            Transition(
+                'cancel',
+                ['HANDOVER'],
+                ['ACTIVE'],
+                action=[Assign(Var('verdict'), Const(0))],
                 annotations=[
                     Annotation(
                         'source',
@@ -2209,6 +2453,17 @@ def rflex_Init_Service() -> CompoundType:
         connectors=[
             ConnectorInstance(
                 'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
+                'RendezvousX_PP',
                 'start',
                 ports=[PortRef('control', 'start'), PortRef('activity', 'start')],
                 annotations=[
@@ -2270,6 +2525,7 @@ def rflex_Init_Service() -> CompoundType:
         ],
         ports=[
             ExportPort('Port', 'activity_exec_start', targets=[PortRef('activity', 'exec_start')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'control_trigger', targets=[PortRef('control', 'trigger')]),
         ],
@@ -2581,6 +2837,17 @@ def rflex_TrackSpeed_Service() -> CompoundType:
         ],
         connectors=[
             ConnectorInstance(
+                'RendezvousX_PP',
+                'preempt',
+                ports=[PortRef('control', 'preempt'), PortRef('activity', 'abort')],
+                annotations=[
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '60', 'column': '23'},
+                    ),
+                ],
+            ),
+            ConnectorInstance(
                 'BroadcastX_2',
                 'Init_start',
                 ports=[PortRef('activity', 'abort'), PortRef('control', 'cancel')],
@@ -2655,6 +2922,7 @@ def rflex_TrackSpeed_Service() -> CompoundType:
             ExportPort('Port', 'activity_exec_exec', targets=[PortRef('activity', 'exec_exec')]),
             ExportPort('Port', 'activity_exec_end', targets=[PortRef('activity', 'exec_end')]),
             ExportPort('Port', 'activity_exec_stop', targets=[PortRef('activity', 'exec_stop')]),
+            ExportPort('Port', 'preempt', targets=[PortRef('preempt', 'ep')]),
             ExportPort('Port', 'Init_start', targets=[PortRef('Init_start', 'ep')]),
             ExportPort('Port', 'start', targets=[PortRef('start', 'ep')]),
             ExportPort('Port', 'Stop_start', targets=[PortRef('Stop_start', 'ep')]),
@@ -2756,6 +3024,19 @@ def rflex_Module() -> CompoundType:
                 comment='codel rflexInitStart of state start',
             ),
             ConnectorInstance(
+                'Rendezvous_P',
+                'Init_preempt',
+                ports=[PortRef('Init', 'preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.Init:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '27', 'column': '9'},
+                    ),
+                ],
+                comment='a new request to Init interrupts the running one',
+            ),
+            ConnectorInstance(
                 'Rendezvous_PP',
                 'TrackSpeed_exec_start',
                 ports=[
@@ -2818,6 +3099,19 @@ def rflex_Module() -> CompoundType:
                     ),
                 ],
                 comment='codel rflexTrackInter of state stop',
+            ),
+            ConnectorInstance(
+                'Rendezvous_P',
+                'TrackSpeed_preempt',
+                ports=[PortRef('TrackSpeed', 'preempt')],
+                annotations=[
+                    Annotation('label', arguments={'name': 'rflex.TrackSpeed:preempt'}),
+                    Annotation(
+                        'source',
+                        arguments={'file': 'tests/fixtures/genom2/rflex.gen', 'line': '60', 'column': '23'},
+                    ),
+                ],
+                comment='a new request to TrackSpeed interrupts the running one',
             ),
             ConnectorInstance(
                 'Rendezvous_PP',
@@ -2992,6 +3286,30 @@ def rflex_Module() -> CompoundType:
             ),
         ],
         priorities=[
+            Priority(
+                'Init_exec_start_before_preempt',
+                InteractionPattern('Init_exec_start'),
+                InteractionPattern('Init_preempt'),
+                comment='a new request to Init takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_start_before_preempt',
+                InteractionPattern('TrackSpeed_exec_start'),
+                InteractionPattern('TrackSpeed_preempt'),
+                comment='a new request to TrackSpeed takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_exec_before_preempt',
+                InteractionPattern('TrackSpeed_exec_exec'),
+                InteractionPattern('TrackSpeed_preempt'),
+                comment='a new request to TrackSpeed takes effect before the running one runs another codel',
+            ),
+            Priority(
+                'TrackSpeed_exec_end_before_preempt',
+                InteractionPattern('TrackSpeed_exec_end'),
+                InteractionPattern('TrackSpeed_preempt'),
+                comment='a new request to TrackSpeed takes effect before the running one runs another codel',
+            ),
             Priority(
                 'TrackSpeed_exec_start_before_Init_start',
                 InteractionPattern('TrackSpeed_exec_start'),

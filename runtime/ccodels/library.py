@@ -1,0 +1,305 @@
+"""A component's C codels as the controller's codel functions: one shared library per component, bound by ctypes.
+
+The library is loaded with RTLD_LOCAL (codel names collide between components).  Each codel becomes a
+Python function with the keyword arguments a Python codel gets (runtime/controller/binding.py), so the
+controller calls C and Python codels the same way: ``in`` values are copied into C data, ``out``/``inout``
+holders too and read back after the call, ports are handles whose ``data()`` points at a copy of the
+poster (``write()`` publishes it), and the context's ``raise()`` records an exception and its detail,
+decoded by the exception's IDL type and thrown as :class:`~runtime.genom.Throw`.  The returned event
+(``::comp::pause::main``) is the yield name (``pause::main``).
+"""
+from __future__ import annotations
+
+import ctypes
+import os
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+from runtime.ccodels.marshal import Layouts
+from runtime.genom import Ref, Throw
+
+EVENT = ctypes.c_void_p  # a genom_event (const char *), NULL for genom_ok
+RAISE = ctypes.CFUNCTYPE(EVENT, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
+RAISED = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p)
+NOW = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_int)  # genom2bip_now(realtime): runtime/ccodels/clock
+
+
+class Context(ctypes.Structure):
+    """``struct genom_context_iface``: raise, raised, data."""
+
+    _fields_ = [("raise_", RAISE), ("raised", RAISED), ("data", ctypes.c_void_p)]
+
+
+class CodelLibraryError(Exception):
+    """The library cannot be loaded or lacks a codel: said with the library's path."""
+
+
+class Raised:
+    """What a codel raised through its context: the exception id and a copy of its detail."""
+
+    def __init__(self) -> None:
+        self.event: int | None = None
+        self.detail = b""
+        self.raise_ = RAISE(self._raise)
+        self.raised = RAISED(self._raised)
+        self.context = Context(self.raise_, self.raised, None)
+        self._buffer: Any = None
+
+    def _raise(self, ex: int | None, detail: int | None, size: int, _self: int | None) -> int | None:
+        self.event = ex
+        self.detail = ctypes.string_at(detail, size) if detail and size else b""
+        return ex
+
+    def _raised(self, ex: Any, _self: int | None) -> int | None:
+        if ex:
+            ex[0] = self.event
+        if not self.detail:
+            return None
+        self._buffer = ctypes.create_string_buffer(self.detail, len(self.detail))
+        return ctypes.addressof(self._buffer)
+
+
+_HANDLES: dict[tuple[bool, bool], Any] = {}
+#: What ``read()`` returns while the poster a port reads was never written: an event no codel declares.
+NO_DATA = ctypes.create_string_buffer(b"::genom2bip::no_data")
+NO_DATA_EVENT = ctypes.addressof(NO_DATA)
+
+
+def _handle_type(multiple: bool, out: bool) -> Any:
+    """The ctypes structure of a port handle (made once per kind): data, read or write, open and close."""
+    key = (multiple, out)
+    if key not in _HANDLES:
+        voidp, chars = ctypes.c_void_p, ctypes.c_char_p
+        if multiple:
+            fields = [("data", ctypes.CFUNCTYPE(voidp, chars, voidp)), ("rw", ctypes.CFUNCTYPE(EVENT, chars, voidp))]
+            if out:
+                fields += [("open", ctypes.CFUNCTYPE(EVENT, chars, voidp)),
+                           ("close", ctypes.CFUNCTYPE(EVENT, chars, voidp))]
+        else:
+            fields = [("data", ctypes.CFUNCTYPE(voidp, voidp)), ("rw", ctypes.CFUNCTYPE(EVENT, voidp))]
+        _HANDLES[key] = type("port_handle", (ctypes.Structure,), {"_fields_": fields})
+    return _HANDLES[key]
+
+
+class Port:
+    """A port handle for one call: ``data()`` points at a C copy of the poster's value, ``write()`` marks it."""
+
+    def __init__(self, layouts: Layouts, lay: list, direction: str, multiple: bool, value: Any) -> None:
+        self.layouts, self.lay, self.multiple = layouts, lay, multiple
+        self.out = direction != "in"
+        self.keep: list = []
+        self.buffers: dict[str | None, Any] = {}
+        self.written: set[str | None] = set()
+        self.closed: set[str] = set()
+        self.initial = value
+        handle = _handle_type(multiple, self.out)
+        types = dict(handle._fields_)
+        if multiple:
+            calls = [types["data"](lambda i, s: self.data(i.decode())), types["rw"](lambda i, s: self.mark(i.decode()))]
+            if self.out:
+                calls += [types["open"](lambda i, s: self.open(i.decode())),
+                          types["close"](lambda i, s: self.close(i.decode()))]
+        else:
+            calls = [types["data"](lambda s: self.data(None)), types["rw"](lambda s: self.mark(None))]
+        self.calls = calls
+        self.handle = handle(*calls)
+
+    def _value_of(self, key: str | None) -> Any:
+        if key is None:
+            return self.initial
+        return self.initial.get(key) if isinstance(self.initial, dict) else None
+
+    def data(self, key: str | None) -> int:
+        if key not in self.buffers:
+            lay = self.lay
+            if lay[0] == "str" and lay[1] is None:  # an unbounded string: data() gives the char * itself
+                holder = ctypes.c_char_p(str(self._value_of(key) or "").encode())
+            else:
+                holder = self.layouts.new(lay, self._value_of(key), self.keep)
+            self.buffers[key] = holder
+        return ctypes.addressof(self.buffers[key])
+
+    def mark(self, key: str | None) -> int | None:
+        """``write()`` publishes the element after the call; ``read()`` fails while the poster holds nothing."""
+        if self.out:
+            self.data(key)
+            self.written.add(key)
+            return None
+        return NO_DATA_EVENT if self._value_of(key) is None else None
+
+    def open(self, key: str) -> None:
+        self.closed.discard(key)
+        self.data(key)
+        return None
+
+    def close(self, key: str) -> None:
+        self.closed.add(key)
+        return None
+
+    def published(self) -> tuple[bool, Any]:
+        """(written, the value to publish) after the call."""
+        if not self.written and not self.closed:
+            return False, None
+        if not self.multiple:
+            return True, self.layouts.value(self.lay, self.buffers[None])
+        now = dict(self.initial) if isinstance(self.initial, dict) else {}
+        for key in self.written:
+            now[key] = self.layouts.value(self.lay, self.buffers[key])
+        for key in self.closed:
+            now.pop(key, None)
+        return True, now
+
+
+class CodelLibrary:
+    """The C codels of one component: ``find(name)`` gives the Python function that calls one."""
+
+    def __init__(self, component: str, path: str | Path, spec: dict[str, Any]) -> None:
+        self.component = component
+        self.path = str(path)
+        try:
+            self.lib = ctypes.CDLL(self.path, mode=os.RTLD_LOCAL | os.RTLD_NOW)
+        except OSError as err:
+            raise CodelLibraryError(f"{self.path}: cannot load the C codels of {component}: {err}") from None
+        self.layouts = Layouts(spec["types"])
+        self.codels: dict[str, list] = spec["codels"]
+        self.exceptions: dict[str, list] = spec["exceptions"]
+        self.prefix = f"::{component}::"
+        self._made: dict[str, Callable] = {}
+
+    def follow(self, clock: Any) -> bool:
+        """Make the codels' wall clock (gettimeofday, clock_gettime, time) the controller's ``clock``."""
+        try:
+            hook = ctypes.c_void_p.in_dll(self.lib, "genom2bip_now")
+        except ValueError:
+            return False
+        epoch = time.time() - clock.now()
+        self._now = NOW(lambda realtime: clock.now() + (epoch if realtime else 0.0))  # kept alive here
+        hook.value = ctypes.cast(self._now, ctypes.c_void_p).value
+        return True
+
+    def get(self, name: str) -> Callable | None:
+        """The function calling codel ``name``, None when the component declares no such C codel."""
+        if name in self._made:
+            return self._made[name]
+        if name not in self.codels:
+            return None
+        try:
+            symbol = getattr(self.lib, name)
+        except AttributeError:
+            return None
+        symbol.restype = EVENT
+        fn = self._caller(name, symbol, self.codels[name])
+        self._made[name] = fn
+        return fn
+
+    def _caller(self, name: str, symbol: Any, args: list[list]) -> Callable:
+        layouts = self.layouts
+
+        def codel(**kwargs: Any) -> str | None:
+            keep: list = []
+            raised = Raised()
+            passed: list = []
+            back: list[tuple[Ref, list, Any]] = []
+            ports: list[tuple[Ref | None, Port]] = []
+            for value, arg in zip(kwargs.values(), args):
+                kind = arg[0]
+                if kind == "port":
+                    lay = arg[3]
+                    holder = value if isinstance(value, Ref) else None
+                    port = Port(layouts, lay, arg[1], arg[2], holder.value if holder is not None else value)
+                    ports.append((holder, port))
+                    passed.append(ctypes.byref(port.handle))
+                elif kind == "remote":
+                    passed.append(None)
+                elif kind == "value":
+                    lay = arg[1]
+                    if layouts.is_scalar(lay):
+                        obj = layouts.new(lay, value, keep)
+                        passed.append(obj)
+                    else:
+                        obj = layouts.new(lay, value, keep)
+                        keep.append(obj)
+                        passed.append(ctypes.byref(obj))
+                else:  # reference: out / inout
+                    lay = arg[1]
+                    current = value.value if isinstance(value, Ref) else value
+                    obj = layouts.new(lay, current, keep)
+                    keep.append(obj)
+                    passed.append(ctypes.byref(obj))
+                    if isinstance(value, Ref):
+                        back.append((value, lay, obj))
+            passed.append(ctypes.byref(raised.context))
+            event = symbol(*passed)
+            for ref, lay, obj in back:
+                ref.value = layouts.value(lay, obj)
+                layouts.release(lay, obj, keep)
+            for holder, port in ports:
+                written, now = port.published()
+                if written and holder is not None:
+                    holder.value = now
+            if event is None:
+                return None
+            text = ctypes.string_at(event).decode(errors="replace")
+            if raised.event is not None and raised.event == event or text in self.exceptions:
+                self._throw(text, raised.detail)
+            if text.startswith(self.prefix):
+                return text[len(self.prefix):]
+            return text
+
+        codel.__name__ = name
+        codel.__qualname__ = f"{self.component}.{name}"
+        return codel
+
+    def _throw(self, text: str, detail: bytes) -> None:
+        known = self.exceptions.get(text)
+        if known is None:
+            raise Throw(text.removeprefix("::"))
+        name, lay = known
+        members: dict[str, Any] = {}
+        if lay is not None and detail:
+            types = dict(self.layouts.types)
+            types[f"{name}::detail"] = lay
+            reader = Layouts(types)
+            ctype = reader.ctype(["ref", f"{name}::detail"])
+            obj = ctype.from_buffer_copy(detail.ljust(ctypes.sizeof(ctype), b"\0")[: ctypes.sizeof(ctype)])
+            members = reader.value(["ref", f"{name}::detail"], obj)
+        raise Throw(name, detail=members)
+
+
+#: Set to 1: each component's C codels run in a process of their own (runtime.ccodels.isolated).
+PROCESS_ENV = "GENOM2BIP_CODELS_PROCESS"
+
+
+def c_codels(interface: dict[str, Any], isolate: bool | None = None, clock: Any = None
+             ) -> tuple[dict[str, dict[str, Callable]], dict[str, str], list[str]]:
+    """The C codels of every component the interface gives a library: (functions by component, problems by
+    component, the libraries loaded).  Libraries are found relative to the package (``interface["where"]``);
+    ``isolate`` (default: the environment variable ``GENOM2BIP_CODELS_PROCESS=1``) runs each library in a
+    process of its own, so that a codel that crashes fails its request and the controller goes on.  On a
+    virtual ``clock`` the codels' wall clock follows it (in the controller's process)."""
+    if isolate is None:
+        isolate = os.environ.get(PROCESS_ENV, "") == "1"
+    base = Path(interface.get("where") or ".")
+    found: dict[str, dict[str, Callable]] = {}
+    problems: dict[str, str] = {}
+    loaded: list[str] = []
+    for component, spec in interface["components"].items():
+        c = spec.get("c")
+        if not c:
+            continue
+        try:
+            if isolate:
+                from runtime.ccodels.isolated import IsolatedLibrary
+
+                library: Any = IsolatedLibrary(component, str(base / c["library"]), c)
+            else:
+                library = CodelLibrary(component, base / c["library"], c)
+                if clock is not None and getattr(clock, "virtual", False):
+                    library.follow(clock)
+        except CodelLibraryError as err:
+            problems[component] = str(err)
+            continue
+        loaded.append(library.path)
+        found[component] = {name: fn for name in library.codels if (fn := library.get(name)) is not None}
+    return found, problems, loaded
