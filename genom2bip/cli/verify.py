@@ -74,6 +74,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     add_compositional_arguments(parser)
     from genom2bip.cli.verify_timed import add_time_arguments
     add_time_arguments(parser, verify=True)
+    from genom2bip.cli.verify_smc import add_arguments as add_smc_arguments
+    add_smc_arguments(parser)
 
 
 # --------------------------------------------------------------------------- loading
@@ -154,6 +156,8 @@ def verb_verify(args: argparse.Namespace) -> int:
 
     _check_options(args)
     check_compositional(args)
+    from genom2bip.cli import verify_smc
+    smc = verify_smc.settings(args) if verify_smc.wanted(args) else None
     model = load_model(args)
     try:
         model.flat
@@ -165,6 +169,9 @@ def verb_verify(args: argparse.Namespace) -> int:
 
     shown = (args.progress or sys.stderr.isatty()) and not args.quiet  # a compile is said where progress is shown
     tell((lambda text: print(f"genom2bip: {text}", file=sys.stderr, flush=True)) if shown else None)
+    if smc is not None:
+        load_externs(args.externs)
+        return verify_smc.run(model, args, smc)
     if args.method == "explore":
         return _explore(model, args, options, listener, EXIT_OK)
     localized = None

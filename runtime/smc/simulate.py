@@ -86,6 +86,8 @@ class RunOutcome:
     steps: int
     end: str  # "horizon", "goals", "deadlock", "zeno"
     choices: list[tuple[int, int]] | None = None  # (interaction index, rank among its successors) per step
+    reached_steps: list[int | None] = field(default_factory=list)  # the step count when each goal was reached
+    start: int = 0  # the initial state it started from (a number of the state space)
 
 
 @dataclass
@@ -175,10 +177,12 @@ class Simulator:
         rng = run_seed(seed, index)
         step = self.step
         initial = self.space.initial_ids
-        step.start(self.space.state(initial[rng.randrange(len(initial))] if len(initial) > 1 else initial[0]))
+        start = initial[rng.randrange(len(initial))] if len(initial) > 1 else initial[0]
+        step.start(self.space.state(start))
         horizon, tick_us = cfg.horizon, cfg.tick_us
         goals = self.goal_slots
         reached: list[int | None] = [None] * len(goals)
+        at_step: list[int | None] = [None] * len(goals)
         left = len(goals)
         responses: list[list[int]] = [[] for _ in cfg.watches]
         since: list[int | None] = [None] * len(cfg.watches)
@@ -255,7 +259,7 @@ class Simulator:
             if left:
                 for g, (slot, bit) in enumerate(goals):
                     if reached[g] is None and step.value(slot) & bit:
-                        reached[g] = now
+                        reached[g], at_step[g] = now, steps
                         left -= 1
                 if not left and not cfg.keep_going:
                     end = "goals"
@@ -263,7 +267,7 @@ class Simulator:
             if steps >= limit:
                 end = "zeno"
                 break
-        return RunOutcome(index, reached, responses, now, steps, end, choices)
+        return RunOutcome(index, reached, responses, now, steps, end, choices, at_step, start)
 
 
 class _CStep:
