@@ -269,3 +269,56 @@ def test_a_triangular_distribution_moves_the_probability_as_computed_by_hand():
         report = estimate(model, SmcSettings(horizon_us=14_000, epsilon=0.05, delta=0.01))
     [overrun] = report.results
     assert overrun.estimate.contains(0.64) and not overrun.estimate.contains(0.4)
+
+
+# --------------------------------------------------------------------------- campaigns
+
+
+def campaign_file(tmp_path: Path, smc: str, vary: str = "{cores: [1, 2], policy: [edf, fixed-priority]}") -> Path:
+    path = tmp_path / "c.yaml"
+    path.write_text(f"""campaign: smc
+models:
+  slack:
+    paths: [{SLACK}]
+    timed: {{platform: {SMC / 'slack.yaml'}}}
+checks:
+  - check: smc
+    model: slack
+    smc: {smc}
+    vary: {vary}
+""")
+    return path
+
+
+def test_a_campaign_asks_for_smc_over_cores_and_policies(tmp_path):
+    from genom2bip.campaign import expand, read_campaign, run_job
+
+    path = campaign_file(tmp_path, "{time-bound: 15 ms, epsilon: 0.05, delta: 0.05, seed: 2}")
+    jobs = expand(read_campaign(path)).jobs
+    assert [dict(j.point) for j in jobs] == [{"cores": c, "policy": p} for c in (1, 2)
+                                             for p in ("edf", "fixed-priority")]
+    assert {j.target for j in jobs} == {"Pr[<= 15 ms]"} and len({j.id for j in jobs}) == 4
+    record = run_job(jobs[0])
+    assert record["status"] == "done" and record["verdict"] == "violated", record
+    [overrun] = record["result"]["details"]["results"]
+    details = overrun["details"]
+    assert details["runs"] == 738 and details["seed"] == 2 and details["low"] <= 0.4 <= details["high"]
+    other = expand(read_campaign(campaign_file(tmp_path, "{time-bound: 15 ms, epsilon: 0.05, seed: 3}"))).jobs
+    assert {j.id for j in other}.isdisjoint(j.id for j in jobs)  # the seed is part of what a job is
+
+
+@pytest.mark.parametrize("smc, column, message", [
+    ("{epsilon: 2}", 20, "smc: epsilon is 2; expected a number between 0 and 1"),
+    ("{time-bound: soon}", 23, "time-bound: 'soon' is not a duration"),
+    ("{runs: many}", 17, "runs: 'many' is not a whole number"),
+    ("{epsilon: 0.1, samples: 5}", 25, "unknown key 'samples'"),
+])
+def test_a_bad_smc_setting_of_a_campaign_is_located(tmp_path, smc, column, message):
+    from genom2bip.campaign import read_campaign
+    from runtime.diagnostics import DiagnosticError
+
+    path = campaign_file(tmp_path, smc)
+    with pytest.raises(DiagnosticError) as info:
+        read_campaign(path)
+    text = info.value.render()
+    assert f"{path}:9:{column}: error: check 1 (smc): smc: " in text and message in text, text

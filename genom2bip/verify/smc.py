@@ -423,3 +423,29 @@ def replay(model: Model, trace: dict[str, Any], atom: str | None = None) -> tupl
         if not state[fa.offset] & (1 << fa.places.index("ERROR")):
             raise ValueError(f"the trace replays but {atom} is not in ERROR at its end")
     return state
+
+
+@dataclass
+class SmcSummary(CheckResult):
+    """A whole SMC report as one check's result (a campaign's job): violated when a run reached an observer's
+    ERROR, inconclusive when Wald's test stayed undecided, else holds; ``details`` has every estimate."""
+
+    check: ClassVar[str] = "smc"
+
+    report: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def estimates(self) -> list[dict[str, Any]]:
+        return self.report.get("results", [])
+
+    def details(self) -> dict[str, Any]:
+        return self.report
+
+
+def summary(report: SmcReport, subject: str) -> SmcSummary:
+    """``report`` as one :class:`~genom2bip.verify.CheckResult`."""
+    verdicts = {r.verdict for r in report.results}
+    verdict = (Verdict.VIOLATED if Verdict.VIOLATED in verdicts else
+               Verdict.INCONCLUSIVE if Verdict.INCONCLUSIVE in verdicts else Verdict.HOLDS)
+    return SmcSummary(subject, verdict, Figures(states=0, transitions=report.steps, seconds=report.seconds),
+                      method="smc", exhaustive=False, notes=list(report.notes), report=report.to_json())
