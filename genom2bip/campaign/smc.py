@@ -48,19 +48,6 @@ def smc_batch(params: ModelParams, key: str, config, seed: int, first: int, coun
     return run_batch(sim, seed, first, count)
 
 
-def model_params(args) -> ModelParams:
-    """The command line's model as parameters a worker rebuilds it from."""
-    from genom2bip.cli.verbs import parse_defines
-    from genom2bip.cli.verify_timed import time_settings
-
-    time = time_settings(args)
-    return ModelParams(paths=tuple(str(p) for p in args.paths), rules=args.rules, no_rules=args.no_rules,
-                       defines=tuple(sorted(parse_defines(args.defines).items())),
-                       include_dirs=tuple(args.include_dirs), root=args.root, timed=True, tick_us=time.tick_us,
-                       default_wcet_us=time.default_wcet_us, observers=time.observers, platform=time.platform,
-                       client=time.client, responses=time.responses, no_exceptions=not time.exceptions)
-
-
 class DaskRunner:
     """Batches on a Dask cluster, read back in index order."""
 

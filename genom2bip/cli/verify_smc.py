@@ -215,8 +215,22 @@ def _runner(model, args, config, sim):
     if args.smc_workers is None and not args.scheduler:
         return None, lambda: None
     from genom2bip.campaign.cluster import ClusterSpec
-    from genom2bip.campaign.smc import DaskRunner, model_params
+    from genom2bip.campaign.smc import DaskRunner
 
     params = model_params(args)
     runner = DaskRunner(ClusterSpec(scheduler=args.scheduler, workers=args.smc_workers), params, config)
     return runner, runner.close
+
+
+def model_params(args: argparse.Namespace):
+    """The command line's model as parameters a worker rebuilds it from."""
+    from genom2bip.campaign.params import ModelParams
+    from genom2bip.cli.verbs import parse_defines
+    from genom2bip.cli.verify_timed import time_settings
+
+    time = time_settings(args)
+    return ModelParams(paths=tuple(str(p) for p in args.paths), rules=args.rules, no_rules=args.no_rules,
+                       defines=tuple(sorted(parse_defines(args.defines).items())),
+                       include_dirs=tuple(args.include_dirs), root=args.root, timed=True, tick_us=time.tick_us,
+                       default_wcet_us=time.default_wcet_us, observers=time.observers, platform=time.platform,
+                       client=time.client, responses=time.responses, no_exceptions=not time.exceptions)
