@@ -109,7 +109,7 @@ def run(model, args: argparse.Namespace, smc) -> int:
     from runtime.diagnostics import DiagnosticError
 
     try:
-        config = sim_config(model, smc)
+        config = sim_config(model, smc, lambda text: print(text, file=sys.stderr))
     except DiagnosticError as exc:
         print(exc.render(), file=sys.stderr)
         return EXIT_ERRORS

@@ -16,7 +16,7 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Iterable, Iterator
+from typing import Any, Callable, ClassVar, Iterable, Iterator
 
 from genom2bip.loading import InputError, UsageError
 from genom2bip.verify.model import Model, tick_us
@@ -78,9 +78,10 @@ class SmcSettings:
 # --------------------------------------------------------------------------- the simulator's configuration
 
 
-def sim_config(model: Model, settings: SmcSettings) -> SimConfig:
+def sim_config(model: Model, settings: SmcSettings, warn: Callable[[str], None] | None = None) -> SimConfig:
     """Goals, schedulers, durations, weights and response watches of ``model`` (InputError / DiagnosticError for
-    a bad ``.proba`` file; UsageError for a model SMC does not take)."""
+    a bad ``.proba`` file; UsageError for a model SMC does not take); ``warn`` hears the ``.proba`` file's
+    warnings, rendered."""
     tick = tick_us(model.package)
     if tick is None:
         raise UsageError(["--smc needs --timed: a model with ticks"])
@@ -106,6 +107,9 @@ def sim_config(model: Model, settings: SmcSettings) -> SimConfig:
         proba = load_proba(Path(settings.proba), model.description, reporter)
         reporter.raise_if_errors()
         assert proba is not None
+        for d in reporter.diagnostics:
+            if warn is not None:
+                warn(d.render(reporter.sources))
         weights = {(f"{c}.{o}", s, n): w for (c, o, s, n), w in proba.weights.items()}
     watches = []
     if settings.responses:
