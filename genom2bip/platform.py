@@ -15,6 +15,8 @@ A platform file (``verify --timed --platform FILE``)::
         priority: 10             # fixed-priority: 0 is the highest (overrides 'priority')
       robmotion.plan:
         suspend: 11 ms           # after each release the task waits this long before it asks for a core
+    distributions:               # statistical model checking only (docs/smc.md): how a duration is drawn
+      robloco.TrackSpeedStart.tssExec: {triangular: 8 ms}   # default uniform; or {normal: [mean, sd]}
 
 Codels are named ``Component.Owner.codel`` where the owner is the service or
 task whose automaton runs the codel.  Every problem is reported with the file,
