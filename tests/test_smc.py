@@ -322,3 +322,19 @@ def test_a_bad_smc_setting_of_a_campaign_is_located(tmp_path, smc, column, messa
         read_campaign(path)
     text = info.value.render()
     assert f"{path}:9:{column}: error: check 1 (smc): smc: " in text and message in text, text
+
+
+def test_smc_refuses_what_belongs_to_exhaustive_verification(capsys, tmp_path):
+    code, out, err = verify(capsys, SLACK, "--timed", "--platform", SMC / "slack.yaml", "--smc", "--deadlock")
+    assert code == 2 and "--deadlock belongs to exhaustive verification" in err and out == ""
+    assert main(["generate", str(SLACK), "--timed", "--platform", str(SMC / "slack.yaml"), "-o", str(tmp_path)]) == 0
+    capsys.readouterr()
+    code, out, err = verify(capsys, tmp_path / "slack" / "slack.bip", "--timed", "--smc")
+    assert code == 2 and "--smc takes description files (a .bip file has no platform" in err and "Pr[" not in out
+
+
+def test_the_python_engine_gives_the_compiled_estimate(capsys):
+    common = [SLACK, "--timed", "--platform", SMC / "slack.yaml", "--smc", "--time-bound", "15 ms", "--runs", "300"]
+    _, compiled, _ = verify(capsys, *common)
+    _, python, _ = verify(capsys, *common, "--engine", "python")
+    assert estimates(compiled) == estimates(python) and estimates(python)

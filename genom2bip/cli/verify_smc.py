@@ -57,6 +57,14 @@ def wanted(args: argparse.Namespace) -> bool:
         if not args.timed:
             error("--smc needs --timed")
             raise Failure(EXIT_USAGE)
+        other = [o for o, on in (("--deadlock", args.deadlock), ("--property", args.property), ("--aut", args.aut),
+                                 ("--dot", args.dot), ("--promela", args.promela), ("--por", args.por),
+                                 ("--trace-picture", args.trace_picture), ("--time-search", args.time_search),
+                                 ("--method", args.method != "explore")) if on]
+        if other:
+            error(f"{other[0]} belongs to exhaustive verification; --smc estimates the timing observers "
+                  "and the response times from runs")
+            raise Failure(EXIT_USAGE)
         return True
     given = [o for o in ("threshold", "runs", "proba", "smc_workers", "scheduler", "batch", "smc_trace", "histogram")
              if getattr(args, o, None) is not None]
@@ -119,7 +127,7 @@ def run(model, args: argparse.Namespace, smc) -> int:
         return EXIT_USAGE if isinstance(exc, UsageError) else EXIT_ERRORS
     print(f"model {model.title}")
     platform_line(model)
-    sim, why = simulator(model, config, args.externs)
+    sim, why = simulator(model, config, args.externs, compiled=args.engine != "python")
     if why:
         print(f"genom2bip: note: {why}", file=sys.stderr)
     runner, closing = _runner(model, args, config, sim)

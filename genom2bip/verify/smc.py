@@ -125,15 +125,18 @@ def sim_config(model: Model, settings: SmcSettings, warn: Callable[[str], None] 
                      schedulers=schedulers, durations=durations, weights=weights, keep_going=bool(watches))
 
 
-def simulator(model: Model, config: SimConfig, externs: str | None = None) -> tuple[Simulator, str]:
+def simulator(model: Model, config: SimConfig, externs: str | None = None,
+              compiled: bool = True) -> tuple[Simulator, str]:
     """The simulator of ``model`` on the compiled step (on the Python step where it cannot be compiled, with a
-    note saying why)."""
+    note saying why; always, with ``compiled`` false)."""
     from runtime.explore import StateSpace
     from runtime.native.compiled import compile_space
 
     space = StateSpace(model.package, model.root, _externs(externs), None, True, set())
-    compiled, why = compile_space(space)
-    return Simulator(space, compiled, config), why
+    if not compiled:
+        return Simulator(space, None, config), ""
+    step, why = compile_space(space)
+    return Simulator(space, step, config), why
 
 
 def _externs(module: str | None):
