@@ -65,7 +65,7 @@ def speed(args) -> None:
 
     platform, client = str(DALA / "platforms" / "one-core.yaml"), str(DALA / "missions" / "sensing.yaml")
     model = build_model([DALA], time=TimeSettings(platform=platform, client=client))
-    settings = _settings(args, runs=args.runs)
+    settings = _settings(args, runs=args.runs, batch=max(1, args.runs // 8))
     print(f"DALA sensing, one core, runs of {settings.horizon_us / 1000:g} ms, seed {args.seed}")
     estimate(model, _settings(args, runs=1))  # the compiled step built (and widened) once, outside the figures
     here = estimate(model, settings)
@@ -155,7 +155,7 @@ def quadcopter(args) -> int:
                          platform=str(args.platform) if args.platform else None, no_exceptions=True)
     print(f"quadcopter: runs of {args.time_bound}, {args.runs} runs, the artefact's all.proba")
     for n in args.workers:
-        settings = _settings(args, runs=args.runs, proba=str(art / "all.proba"))
+        settings = _settings(args, runs=args.runs, proba=str(art / "all.proba"), batch=max(1, args.runs // 8))
         _line(f"Dask, {n} worker{'s' if n > 1 else ''}", _dask(model, params, settings, n))
     if not args.queries:
         return 0
