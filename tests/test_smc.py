@@ -338,3 +338,20 @@ def test_the_python_engine_gives_the_compiled_estimate(capsys):
     _, compiled, _ = verify(capsys, *common)
     _, python, _ = verify(capsys, *common, "--engine", "python")
     assert estimates(compiled) == estimates(python) and estimates(python)
+
+
+def test_outputs_that_cannot_be_written_are_refused_before_any_run(capsys, tmp_path):
+    code, out, err = verify(capsys, SLACK, "--timed", "--platform", SMC / "slack.yaml", "--smc", "--runs", "5",
+                            "--histogram", tmp_path / "h.txt")
+    assert code == 2 and "--histogram: " in err and "must end in .png or .svg" in err and out == ""
+    platform = tmp_path / "slack.yaml"
+    platform.write_text((SMC / "slack.yaml").read_text())
+    before = platform.read_text()
+    code, out, err = verify(capsys, SLACK, "--timed", "--platform", platform, "--smc", "--runs", "5",
+                            "--smc-trace", SLACK)
+    assert code == 1 and "is an input of this command" in err and out == ""
+    code, out, err = verify(capsys, SLACK, "--timed", "--platform", platform, "--smc", "--runs", "5",
+                            "--histogram", tmp_path / "slack.svg", "--smc-trace", platform)
+    assert code == 1 and f"{platform} is an input of this command" in err and out == ""
+    assert not (tmp_path / "slack.svg").exists()
+    assert platform.read_text() == before and SLACK.read_text().startswith("/*")

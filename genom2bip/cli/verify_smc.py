@@ -100,7 +100,8 @@ def settings(args: argparse.Namespace):
             error(line)
         raise Failure(EXIT_USAGE) from None
     for path in (args.smc_trace, args.histogram):
-        if path and Path(path).resolve() in {Path(p).resolve() for p in (*args.paths, args.proba or "") if p}:
+        inputs = (*args.paths, args.proba, args.platform, args.client, args.observers, args.rules)
+        if path and Path(path).resolve() in {Path(p).resolve() for p in inputs if p}:
             error(f"{path} is an input of this command: it would be overwritten")
             raise Failure(EXIT_ERRORS)
     if args.histogram and Path(args.histogram).suffix.lower() not in (".png", ".svg"):
