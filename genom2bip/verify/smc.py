@@ -14,15 +14,20 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, ClassVar, Iterable, Iterator
+from typing import Callable, Iterable, Iterator
 
 from genom2bip.loading import InputError, UsageError
 from genom2bip.verify.model import Model, tick_us
-from genom2bip.verify.results import CheckResult, Figures, Trace, Verdict, timed
+from genom2bip.verify.results import Figures, Verdict
+from genom2bip.verify.smc_results import ResponseDistribution, SmcReport, SmcResult, SmcSummary, summary
+from genom2bip.verify.smc_traces import replay, witness
 from genom2bip.verify.timing import observers, subject
-from runtime.smc import Estimate, Goal, SimConfig, Simulator, Sprt, Watch, chernoff_runs, hoeffding_epsilon
+from runtime.smc import Goal, SimConfig, Simulator, Sprt, Watch, chernoff_runs, hoeffding_epsilon
+
+__all__ = ["BATCH", "BatchResult", "LocalRunner", "ResponseDistribution", "SmcReport", "SmcResult", "SmcSettings",
+           "SmcSummary", "estimate", "replay", "run_batch", "sim_config", "simulator", "summary", "witness"]
 
 #: Runs per batch: what one worker computes at a time (fixed: it is not a function of the number of workers).
 BATCH = 250
@@ -30,8 +35,6 @@ BATCH = 250
 SPRT_CAP = 10
 #: The final reports that end a service's response time.
 FINALS = ("finish", "fail", "interrupted", "reject")
-#: Percentile printed beside the mean and the maximum.
-PERCENTILE = 99
 
 
 @dataclass
@@ -198,113 +201,6 @@ class LocalRunner:
             yield run_batch(self.sim, seed, first, count)
 
 
-# --------------------------------------------------------------------------- results
-
-
-@dataclass
-class SmcResult(CheckResult):
-    """``Pr[<= T](<> phi)`` of one observer: its estimate and interval, or Wald's decision against a threshold."""
-
-    check: ClassVar[str] = "smc"
-
-    observer: str = ""
-    runs: int = 0
-    hits: int = 0
-    epsilon: float = 0.0
-    delta: float = 0.0
-    threshold: float | None = None
-    decision: bool | None = None  # Wald: True Pr >= threshold accepted, False Pr < threshold, None undecided
-    seed: int = 0
-    horizon_ms: float = 0.0
-    first_run: int | None = None  # the first run (index) that reached phi
-    first_ms: float | None = None  # when it reached it
-
-    @property
-    def estimate(self) -> Estimate:
-        return Estimate(self.runs, self.hits, self.epsilon, self.delta)
-
-    def details(self) -> dict[str, Any]:
-        e = self.estimate
-        return {"observer": self.observer, "runs": self.runs, "hits": self.hits, "estimate": e.value,
-                "low": e.low, "high": e.high, "epsilon": self.epsilon, "delta": self.delta,
-                "threshold": self.threshold, "decision": self.decision, "seed": self.seed,
-                "horizon_ms": self.horizon_ms, "first_run": self.first_run, "first_ms": self.first_ms}
-
-
-@dataclass
-class ResponseDistribution:
-    """The response times of one task or service seen over the runs: ticks -> times seen."""
-
-    owner: str
-    kind: str  # "task" or "service"
-    counts: dict[int, int]
-    tick_us: int
-
-    @property
-    def samples(self) -> int:
-        return sum(self.counts.values())
-
-    def ms(self, ticks: float) -> float:
-        return ticks * self.tick_us / 1000
-
-    @property
-    def mean_ms(self) -> float | None:
-        n = self.samples
-        return self.ms(sum(t * c for t, c in self.counts.items()) / n) if n else None
-
-    def percentile_ms(self, q: float = PERCENTILE) -> float | None:
-        """The nearest-rank percentile."""
-        n = self.samples
-        if not n:
-            return None
-        rank, seen = math.ceil(q / 100 * n), 0
-        for t in sorted(self.counts):
-            seen += self.counts[t]
-            if seen >= rank:
-                return self.ms(t)
-        return self.ms(max(self.counts))
-
-    @property
-    def max_ms(self) -> float | None:
-        return self.ms(max(self.counts)) if self.counts else None
-
-    def to_json(self) -> dict[str, Any]:
-        return {"owner": self.owner, "kind": self.kind, "samples": self.samples, "mean_ms": self.mean_ms,
-                f"p{PERCENTILE}_ms": self.percentile_ms(), "max_ms": self.max_ms,
-                "histogram_ms": {f"{self.ms(t):g}": c for t, c in sorted(self.counts.items())}}
-
-
-@dataclass
-class SmcReport:
-    """Every estimate of one SMC check, the response-time distributions, and what the runs cost."""
-
-    results: list[SmcResult]
-    responses: list[ResponseDistribution]
-    runs: int  # runs read (Wald's test may stop earlier for some observers)
-    seconds: float
-    steps: int
-    ticks: int
-    ends: dict[str, int]
-    method: str  # "Chernoff-Hoeffding" or "Wald SPRT"
-    runner: str
-    workers: int
-    seed: int
-    horizon_ms: float
-    tick_us: int
-    notes: list[str] = field(default_factory=list)
-
-    @property
-    def runs_per_second(self) -> float:
-        return self.runs / self.seconds if self.seconds else 0.0
-
-    def to_json(self) -> dict[str, Any]:
-        return {"method": self.method, "runs": self.runs, "seconds": self.seconds, "steps": self.steps,
-                "runs_per_second": self.runs_per_second, "ends": self.ends, "runner": self.runner,
-                "workers": self.workers, "seed": self.seed, "horizon_ms": self.horizon_ms, "tick_us": self.tick_us,
-                "results": [r.to_json() for r in self.results], "responses": [r.to_json() for r in self.responses],
-                "notes": self.notes}
-
-
 def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig | None = None,
              sim: Simulator | None = None) -> SmcReport:
     """Estimate every observer's ``Pr[<= T](<> phi)`` (and the response times) of ``model``.
@@ -380,79 +276,3 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
     return SmcReport(results, dists, runs, seconds, steps, ticks, dict(ends),
                      "Wald SPRT" if sprt else "Chernoff-Hoeffding", getattr(runner, "name", "?"),
                      getattr(runner, "workers", 1), settings.seed, config.horizon * tick / 1000, tick, notes)
-
-
-# --------------------------------------------------------------------------- traces
-
-
-def witness(sim: Simulator, seed: int, result: SmcResult) -> Trace | None:
-    """The run that first reached ``result``'s phi, up to the step that reached it, as a timed trace of the model
-    (rebuilt with the Python step, codel outcomes included); None when no run reached it."""
-    if result.first_run is None:
-        return None
-    goal = next(k for k, g in enumerate(sim.config.goals) if g.atom == result.observer)
-    run = sim.run(seed, result.first_run, record=True)
-    cut = run.reached_steps[goal]
-    if cut is None:  # not the same run: the simulator is not deterministic
-        raise RuntimeError(f"run {result.first_run} of seed {seed} did not reach {result.subject} again")
-    space = sim.space
-    state = space.state(run.start)
-    steps = []
-    from runtime.explore.space import Step
-
-    for index, rank in run.choices[:cut]:
-        options = [(inter, nxt, made) for inter, nxt, made in space._fire_all(state) if inter.index == index]
-        inter, state, made = options[min(rank, len(options) - 1)]
-        steps.append(Step(inter.label, index, tuple((c.name, pos) for c, pos in made),
-                          tuple(c.describe(pos) for c, pos in made)))
-    return timed(steps, sim.config.tick_us)
-
-
-def replay(model: Model, trace: dict[str, Any], atom: str | None = None) -> tuple:
-    """Replay a trace written as JSON (``Trace.to_json()``) on the model's engine, step by step, each step's codel
-    outcomes as written; the engine state reached.  ``atom``: the observer that must be in ERROR at the end.
-    ValueError naming the step that does not replay."""
-    from runtime.explore import StateSpace
-
-    space = StateSpace(model.package, model.root, None, None, False, set())
-    state = space.state(space.initial_ids[0])
-    for n, item in enumerate(trace["steps"], 1):
-        names = tuple(item.get("outcomes", ()))
-        options = space._fire_all(state)
-        match = next((nxt for inter, nxt, made in options if inter.label == item["label"]
-                      and tuple(c.describe(p) for c, p in made) == names), None)
-        if match is None:
-            enabled = ", ".join(sorted({i.label for i, _, _ in options})) or "none"
-            raise ValueError(f"step {n} ({item['label']}) does not replay: enabled are {enabled}")
-        state = match
-    if atom is not None:
-        fa = next(a for a in space.engine.flat.atoms if a.name == atom)
-        if not state[fa.offset] & (1 << fa.places.index("ERROR")):
-            raise ValueError(f"the trace replays but {atom} is not in ERROR at its end")
-    return state
-
-
-@dataclass
-class SmcSummary(CheckResult):
-    """A whole SMC report as one check's result (a campaign's job): violated when a run reached an observer's
-    ERROR, inconclusive when Wald's test stayed undecided, else holds; ``details`` has every estimate."""
-
-    check: ClassVar[str] = "smc"
-
-    report: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def estimates(self) -> list[dict[str, Any]]:
-        return self.report.get("results", [])
-
-    def details(self) -> dict[str, Any]:
-        return self.report
-
-
-def summary(report: SmcReport, subject: str) -> SmcSummary:
-    """``report`` as one :class:`~genom2bip.verify.CheckResult`."""
-    verdicts = {r.verdict for r in report.results}
-    verdict = (Verdict.VIOLATED if Verdict.VIOLATED in verdicts else
-               Verdict.INCONCLUSIVE if Verdict.INCONCLUSIVE in verdicts else Verdict.HOLDS)
-    return SmcSummary(subject, verdict, Figures(states=0, transitions=report.steps, seconds=report.seconds),
-                      method="smc", exhaustive=False, notes=list(report.notes), report=report.to_json())
