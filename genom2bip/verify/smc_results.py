@@ -13,7 +13,6 @@ from runtime.smc import Estimate
 PERCENTILE = 99
 
 
-
 @dataclass
 class SmcResult(CheckResult):
     """``Pr[<= T](<> phi)`` of one observer: its estimate and interval, or Wald's decision against a threshold."""
