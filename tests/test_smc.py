@@ -11,6 +11,7 @@ overrun too: 0.4 + 0.6 * 0.4 = 0.64.  Branch: the first codel goes on to a 10 ms
 from __future__ import annotations
 
 import json
+import math
 import re
 from pathlib import Path
 
@@ -355,3 +356,20 @@ def test_outputs_that_cannot_be_written_are_refused_before_any_run(capsys, tmp_p
     assert code == 1 and f"{platform} is an input of this command" in err and out == ""
     assert not (tmp_path / "slack.svg").exists()
     assert platform.read_text() == before and SLACK.read_text().startswith("/*")
+
+
+def test_one_ctrl_c_prints_the_estimates_of_the_runs_read(tmp_path):
+    from test_timing_interrupt import _interrupted
+
+    # a million runs of 1 s: far more than a machine computes before the first progress line
+    code, out, err = _interrupted(
+        [str(SLACK), "--timed", "--platform", str(SMC / "safe.yaml"), "--smc", "--time-bound", "1 s", "--runs",
+         "1000000", "--batch", "20", "--progress"], tmp_path,
+        lambda s: any(x.startswith("smc: ") and " of 1,000,000 runs" in x for x in s["err"]))
+    assert code == 5, out + err  # no run reached an overrun, and the estimate is not the one asked for
+    assert "genom2bip: stopping: what was found so far follows (Ctrl-C again stops at once)" in err
+    runs = int(re.search(r"interrupted by Ctrl-C after ([\d,]+) runs", out).group(1).replace(",", ""))
+    assert runs > 0 and runs % 20 == 0  # whole batches only
+    value, low, high, hits, counted = estimates(out)["period of Slack.cycle"]
+    assert (value, low, hits, counted) == (0.0, 0.0, 0, runs)
+    assert high == pytest.approx(min(1.0, (math.log(2 / 0.05) / (2 * runs)) ** 0.5), abs=1e-4)

@@ -133,36 +133,41 @@ def run(model, args: argparse.Namespace, smc) -> int:
         print(f"genom2bip: note: {why}", file=sys.stderr)
     runner, closing = _runner(model, args, config, sim)
     try:
-        report = estimate(model, smc, runner, config, sim)
+        report = estimate(model, smc, runner, config, sim, _progress(args))
     finally:
         closing()
+    if report.stopped:
+        print("genom2bip: stopping: what was found so far follows (Ctrl-C again stops at once)", file=sys.stderr,
+              flush=True)
     print(f"time: one tick is {config.tick_us / 1000:g} ms; runs of {report.horizon_ms:g} ms, seed {smc.seed}")
     how = (f"Chernoff-Hoeffding, epsilon {report.results[0].epsilon:.4g}, delta {smc.delta:g}"
            if report.method == "Chernoff-Hoeffding" and report.results else report.method)
     print(f"smc: {report.runs:,} runs ({how}) on {report.runner}, {report.seconds:.2f} s, "
           f"{report.runs_per_second:,.0f} runs/s")
+    if report.stopped:
+        print(f"smc: interrupted by Ctrl-C after {report.runs:,} runs: each interval is the one they give")
     for end, count in sorted(report.ends.items()):
         if end in ("deadlock", "zeno"):
             what = "a deadlock" if end == "deadlock" else "time blocked (no tick for too many steps)"
             print(f"warning: {count} run(s) stopped before the time bound: {what}")
     if not report.results:
         print("observers: none in the model")
-    worst = EXIT_OK
+    violated = undecided = False
     for r in report.results:
         e = r.estimate
         bound = f"Pr[<= {r.horizon_ms:g} ms](<> {'overrun' if 'period of' in r.subject else 'violation'})"
         if r.threshold is not None:
             answer = {True: f">= {r.threshold:g} accepted", False: f"< {r.threshold:g} accepted",
-                      None: "undecided (run cap reached)"}[r.decision]
+                      None: "undecided (" + ("interrupted" if report.stopped else "run cap reached") + ")"}[r.decision]
             print(f"{r.subject}: {bound} {answer} (Wald SPRT, {r.runs:,} runs, {r.hits:,} reached it, "
                   f"estimate {e.value:.4f})")
-            if r.decision is None:
-                worst = max(worst, EXIT_INCONCLUSIVE)
+            undecided = undecided or r.decision is None
         else:
             print(f"{r.subject}: {bound} = {e.value:.4f}  [{e.low:.4f}, {e.high:.4f}]  "
                   f"({r.hits:,} of {r.runs:,} runs reached it)")
-        if r.hits:
-            worst = EXIT_VIOLATED
+        violated = violated or r.hits > 0
+    undecided = undecided or bool(report.stopped)
+    worst = EXIT_VIOLATED if violated else EXIT_INCONCLUSIVE if undecided else EXIT_OK  # a run reaching ERROR answers
     traces = {}
     for r in report.results:
         trace = witness(sim, smc.seed, r)
@@ -186,6 +191,27 @@ def run(model, args: argparse.Namespace, smc) -> int:
             return EXIT_ERRORS
         print(f"wrote {args.histogram}")
     return worst
+
+
+#: Seconds between two progress lines.
+PROGRESS_PERIOD = 1.0
+
+
+def _progress(args):
+    """A progress line on stderr per batch read (at most one a second), where progress is shown."""
+    if args.quiet or not (args.progress or sys.stderr.isatty()):
+        return None
+    last = [-PROGRESS_PERIOD]
+
+    def show(runs: int, planned: int | None, seconds: float) -> None:
+        if seconds - last[0] < PROGRESS_PERIOD and runs != planned:
+            return
+        last[0] = seconds
+        of = f" of {planned:,}" if planned is not None else ""
+        print(f"smc: {runs:,}{of} runs, {seconds:.1f} s, {runs / seconds if seconds else 0:,.1f} runs/s",
+              file=sys.stderr, flush=True)
+
+    return show
 
 
 def _responses(report) -> None:

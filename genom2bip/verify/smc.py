@@ -202,11 +202,14 @@ class LocalRunner:
 
 
 def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig | None = None,
-             sim: Simulator | None = None) -> SmcReport:
+             sim: Simulator | None = None,
+             progress: Callable[[int, int | None, float], None] | None = None) -> SmcReport:
     """Estimate every observer's ``Pr[<= T](<> phi)`` (and the response times) of ``model``.
 
     ``runner`` computes the batches (:class:`LocalRunner` on ``sim`` by default); the runs are read in index
-    order, so the report depends on the settings alone, whatever the runner.
+    order, so the report depends on the settings alone, whatever the runner.  ``progress(runs, planned,
+    seconds)`` hears each batch read.  Ctrl-C (KeyboardInterrupt) stops the estimate with the whole batches
+    read so far: the report's ``stopped`` says so, and each interval is the one those runs give.
     """
     settings.check()
     config = config or sim_config(model, settings)
@@ -230,6 +233,7 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
     start = time.perf_counter()
     ranges = ((i, min(settings.batch, cap - i)) for i in range(0, cap, settings.batch))
     batches = runner.run(settings.seed, ranges)
+    stopped = ""
     try:
         for batch in batches:
             for offset, reached in enumerate(batch.reached):
@@ -246,13 +250,19 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
             ends.update(batch.ends)
             steps += batch.steps
             ticks += batch.ticks
+            if progress is not None:
+                progress(runs, None if sprt else cap, time.perf_counter() - start)
             if sprt and all(t.decision is not None for t in tests):
                 break
+    except KeyboardInterrupt:
+        stopped = "interrupted"
     finally:
         close = getattr(batches, "close", None)
         if close is not None:
             close()
     seconds = time.perf_counter() - start
+    if stopped and not sprt and runs < cap:  # the interval of the runs read
+        epsilon = hoeffding_epsilon(runs, settings.delta)
     tick = config.tick_us
     results = []
     for g, goal in enumerate(config.goals):
@@ -262,11 +272,11 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
             verdict = (Verdict.INCONCLUSIVE if test.decision is None else
                        Verdict.VIOLATED if test.decision else Verdict.HOLDS)
         else:
-            verdict = Verdict.VIOLATED if k else Verdict.HOLDS
+            verdict = Verdict.VIOLATED if k else Verdict.INCONCLUSIVE if stopped else Verdict.HOLDS
         where = first[g]
         results.append(SmcResult(
             goal.name, verdict, Figures(states=0, transitions=steps, seconds=seconds), method="smc",
-            limit="max-runs" if test is not None and test.decision is None else "", exhaustive=False,
+            limit=stopped or ("max-runs" if test is not None and test.decision is None else ""), exhaustive=False,
             observer=goal.atom, runs=n, hits=k, epsilon=epsilon, delta=settings.delta,
             threshold=settings.threshold if sprt else None, decision=test.decision if test else None,
             seed=settings.seed, horizon_ms=config.horizon * tick / 1000,
@@ -275,4 +285,5 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
     dists = [ResponseDistribution(w.name, kinds[w.name], dict(c), tick) for w, c in zip(config.watches, responses)]
     return SmcReport(results, dists, runs, seconds, steps, ticks, dict(ends),
                      "Wald SPRT" if sprt else "Chernoff-Hoeffding", getattr(runner, "name", "?"),
-                     getattr(runner, "workers", 1), settings.seed, config.horizon * tick / 1000, tick, notes)
+                     getattr(runner, "workers", 1), settings.seed, config.horizon * tick / 1000, tick, notes,
+                     stopped)

@@ -104,6 +104,7 @@ class SmcReport:
     horizon_ms: float
     tick_us: int
     notes: list[str] = field(default_factory=list)
+    stopped: str = ""  # "interrupted": Ctrl-C stopped it; the estimates are those of the runs read
 
     @property
     def runs_per_second(self) -> float:
@@ -114,7 +115,7 @@ class SmcReport:
                 "runs_per_second": self.runs_per_second, "ends": self.ends, "runner": self.runner,
                 "workers": self.workers, "seed": self.seed, "horizon_ms": self.horizon_ms, "tick_us": self.tick_us,
                 "results": [r.to_json() for r in self.results], "responses": [r.to_json() for r in self.responses],
-                "notes": self.notes}
+                "notes": self.notes, "stopped": self.stopped or None}
 
 
 @dataclass
