@@ -373,3 +373,35 @@ def test_one_ctrl_c_prints_the_estimates_of_the_runs_read(tmp_path):
     value, low, high, hits, counted = estimates(out)["period of Slack.cycle"]
     assert (value, low, hits, counted) == (0.0, 0.0, 0, runs)
     assert high == pytest.approx(min(1.0, (math.log(2 / 0.05) / (2 * runs)) ** 0.5), abs=1e-4)
+
+
+# --------------------------------------------------------------------------- waits drawn over their interval
+
+
+def test_a_first_period_delay_is_drawn_uniformly_over_its_interval():
+    # delay [0, 10] ms at 2 ms ticks: the first period opens at 2, 4, 6, 8 or 10 ms, each with probability 0.2
+    # (a race between time and the opening would open it within a tick or two most of the time)
+    from collections import Counter
+
+    model = build_model([SLACK], time=TimeSettings(platform=str(SMC / "delayed.yaml")))
+    config = sim_config(model, SmcSettings(horizon_us=12_000))
+    assert [(w.atom, w.end) for w in config.windows] == [("Slack.cycle.timer", "first")]
+    sim, _ = simulator(model, config)
+    opened: Counter = Counter()
+    for index in range(1000):
+        run = sim.run(5, index, record=True)
+        labels = [sim.space.interaction(i).label for i, _ in run.choices]
+        opened[labels[:labels.index("Slack.cycle:period")].count("tick")] += 1
+    assert set(opened) == {1, 2, 3, 4, 5}
+    assert all(abs(n / 1000 - 0.2) < 0.05 for n in opened.values()), opened
+
+
+def test_a_suspension_is_drawn_uniformly_over_its_interval(capsys):
+    # suspend [0, 4] ms, then 4 ms and 2 ms codels: a response of 8 or 10 ms, each half of the time
+    model = build_model([SLACK], time=TimeSettings(platform=str(SMC / "suspended.yaml")))
+    report = estimate(model, SmcSettings(horizon_us=100_000, runs=200))
+    [cycle] = [d for d in report.responses if d.owner == "Slack.cycle"]
+    assert set(cycle.counts) == {4, 5} and cycle.samples == 200 * 10
+    assert abs(cycle.counts[4] / cycle.samples - 0.5) < 0.05
+    code, out, _ = verify(capsys, SLACK, "--timed", "--platform", SMC / "suspended.yaml", "--response-times")
+    assert code == 0 and re.search(r"^  Slack.cycle\s+10 ms", out, re.M)  # the largest SMC saw is the bound

@@ -24,7 +24,7 @@ from genom2bip.verify.results import Figures, Verdict
 from genom2bip.verify.smc_results import ResponseDistribution, SmcReport, SmcResult, SmcSummary, summary
 from genom2bip.verify.smc_traces import replay, witness
 from genom2bip.verify.timing import observers, subject
-from runtime.smc import Goal, SimConfig, Simulator, Sprt, Watch, chernoff_runs, hoeffding_epsilon
+from runtime.smc import Goal, SimConfig, Simulator, Sprt, Watch, Window, chernoff_runs, hoeffding_epsilon
 
 __all__ = ["BATCH", "BatchResult", "LocalRunner", "ResponseDistribution", "SmcReport", "SmcResult", "SmcSettings",
            "SmcSummary", "estimate", "replay", "run_batch", "sim_config", "simulator", "summary", "witness"]
@@ -33,6 +33,9 @@ __all__ = ["BATCH", "BatchResult", "LocalRunner", "ResponseDistribution", "SmcRe
 BATCH = 250
 #: Wald's test gives up (inconclusive) past this many times the Chernoff–Hoeffding run count.
 SPRT_CAP = 10
+#: The waits of a platform model whose end is drawn uniformly (genom2bip/build/platform.py): a task's suspension
+#: (place, clock, bounds, end port of its scheduler) and the delay of its first period (of its timer).
+WINDOWS = (("SUSPENDED", "x", "s_lo", "s_hi", "back"), ("START", "t", "first_lo", "first_hi", "first"))
 #: The final reports that end a service's response time.
 FINALS = ("finish", "fail", "interrupted", "reject")
 
@@ -95,6 +98,9 @@ def sim_config(model: Model, settings: SmcSettings, warn: Callable[[str], None] 
                   and any(a.name == "scheduler" for a in fa.type.annotations)
                   and {"x", "lo", "hi"} <= {d.name for d in fa.variables}]
     goals = [Goal(subject(a, tick), a.path) for a in observers(model, settings.kinds)]
+    windows = [Window(fa.name, place, clock, lo, hi, end) for fa in flat.atoms
+               for place, clock, lo, hi, end in WINDOWS
+               if place in fa.places and lo in fa.constants and hi in fa.constants]
     durations = {}
     platform = model.platform
     if platform is not None:
@@ -125,7 +131,8 @@ def sim_config(model: Model, settings: SmcSettings, warn: Callable[[str], None] 
                 watches.append(Watch(f"{c.name}.{s.name}", (f"{c.name}.{s.name}:trigger",),
                                      tuple(f"{c.name}.{s.name}:{p}" for p in FINALS)))
     return SimConfig(tick_us=tick, horizon=settings.horizon_us // tick, goals=goals, watches=watches,
-                     schedulers=schedulers, durations=durations, weights=weights, keep_going=bool(watches))
+                     schedulers=schedulers, windows=windows, durations=durations, weights=weights,
+                     keep_going=bool(watches))
 
 
 def simulator(model: Model, config: SimConfig, externs: str | None = None,

@@ -3,7 +3,7 @@ drawn from them (docs/smc.md).  The runs are the exhaustive model's own runs, ch
 to the BIP semantics."""
 from runtime.smc.estimates import Estimate, Sprt, chernoff_runs, hoeffding_epsilon
 from runtime.smc.sampling import DISTRIBUTIONS, Distribution
-from runtime.smc.simulate import Goal, RunOutcome, SimConfig, Simulator, Watch, run_seed
+from runtime.smc.simulate import Goal, RunOutcome, SimConfig, Simulator, Watch, Window, run_seed
 
 __all__ = ["DISTRIBUTIONS", "Distribution", "Estimate", "Goal", "RunOutcome", "SimConfig", "Simulator", "Sprt",
-           "Watch", "chernoff_runs", "hoeffding_epsilon", "run_seed"]
+           "Watch", "Window", "chernoff_runs", "hoeffding_epsilon", "run_seed"]

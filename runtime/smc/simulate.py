@@ -9,6 +9,10 @@ successor per codel outcome).  The policy only *chooses* among them:
   interval from the codel's distribution; the codel's end (``done``) is then
   taken when ``x`` reaches ``D`` and not before, and time (``tick``) does not
   pass while a codel has reached its ``D``;
+* a *window* (an atom waiting in a place for a clock to reach a time drawn
+  in ``[lo, hi]``: a task's suspension, its first period's delay) is drawn
+  uniformly the same way when the atom enters the place, and its end port
+  is taken when the clock reaches it;
 * among the codel outcomes of one interaction, the outcome is drawn with the
   weights given for it (a GenoM3 ``.proba`` file), uniformly where none is
   given;
@@ -59,6 +63,19 @@ class Watch:
     closes: tuple[str, ...]
 
 
+@dataclass(frozen=True)
+class Window:
+    """Atom ``atom`` waits in ``place`` until its clock ``clock`` reaches a time in ``[lo, hi]`` (constants or
+    variables of the atom) and leaves by port ``end``: the time is drawn when it enters."""
+
+    atom: str
+    place: str
+    clock: str
+    lo: str
+    hi: str
+    end: str
+
+
 @dataclass
 class SimConfig:
     """What a simulator needs beside the model: plain data, sent to the workers as is."""
@@ -68,6 +85,7 @@ class SimConfig:
     goals: list[Goal] = field(default_factory=list)
     watches: list[Watch] = field(default_factory=list)
     schedulers: list[str] = field(default_factory=list)  # atoms whose BUSY codel duration is drawn
+    windows: list[Window] = field(default_factory=list)  # waits whose end is drawn uniformly
     durations: dict[str, Distribution] = field(default_factory=dict)  # "Component.Owner.codel"
     weights: dict[tuple[str, str, str], float] = field(default_factory=dict)  # ("Comp.Owner", state, outcome)
     tick_label: str = "tick"
@@ -101,6 +119,7 @@ class _Info:
     dones: tuple[int, ...]  # schedulers it ends the codel of
     opens: tuple[int, ...]
     closes: tuple[int, ...]
+    ends: tuple[int, ...] = ()  # windows it ends
     prefix: str = ""  # "Comp.Owner" of an exec_<state> label
     state: str = ""
     made: list[tuple[tuple[Any, int], ...]] | None = None  # per successor rank: the codel calls and outcomes
@@ -123,6 +142,12 @@ class Simulator:
             fa = atoms[name]
             self.scheds.append((name, fa.offset, 1 << fa.places.index(BUSY), fa.slot(CLOCK), fa.slot(LOW),
                                 fa.slot(HIGH)))
+        self.windows = []  # (marking slot, place bit, clock slot, lo, hi): lo and hi a constant or a slot
+        for w in config.windows:
+            fa = atoms[w.atom]
+            bounds = [("const", fa.constants[b][0]) if b in fa.constants else ("slot", fa.slot(b))
+                      for b in (w.lo, w.hi)]
+            self.windows.append((fa.offset, 1 << fa.places.index(w.place), fa.slot(w.clock), *bounds))
         self.infos: dict[int, _Info] = {}
         self.step = _CStep(compiled) if compiled is not None else _PyStep(space)
         self.weighted = {(p, s) for p, s, _ in config.weights}
@@ -140,8 +165,9 @@ class Simulator:
             closes = tuple(k for k, w in enumerate(self.config.watches) if label in w.closes)
             prefix, _, port = label.partition(":")
             state = port[len("exec_"):] if port.startswith("exec_") else ""
+            ends = tuple(k for k, w in enumerate(self.config.windows) if f"{w.atom}.{w.end}" in ports)
             got = self.infos[number] = _Info(inter.index, label, label == self.config.tick_label, execs, dones,
-                                             opens, closes, prefix, state)
+                                             opens, closes, ends, prefix, state)
         return got
 
     def _made(self, info: _Info, count: int) -> list | None:
@@ -170,6 +196,17 @@ class Simulator:
             return UNIFORM
         return self.config.durations.get(f"{info.prefix}.{made[0][0].name}", UNIFORM)
 
+    def _enter(self, waits: dict[int, int], rng: random.Random, step, tick_us: int) -> None:
+        """Draw the end of every window just entered; forget those left."""
+        for k, (mark, bit, _, lo, hi) in enumerate(self.windows):
+            inside = step.value(mark) & bit
+            if inside and k not in waits:
+                low = lo[1] if lo[0] == "const" else step.value(lo[1])
+                high = hi[1] if hi[0] == "const" else step.value(hi[1])
+                waits[k] = UNIFORM.draw_ticks(rng, low, high, tick_us)
+            elif not inside and k in waits:
+                del waits[k]
+
     # -- one run --------------------------------------------------------------------------------------------
     def run(self, seed: int, index: int, record: bool = False) -> RunOutcome:
         """Run ``index`` under ``seed``, up to the horizon (or until every goal is reached)."""
@@ -187,6 +224,10 @@ class Simulator:
         responses: list[list[int]] = [[] for _ in cfg.watches]
         since: list[int | None] = [None] * len(cfg.watches)
         drawn: dict[int, int] = {}  # scheduler -> drawn duration of its running codel
+        waits: dict[int, int] = {}  # window -> drawn time of its end
+        windows = self.windows
+        if windows:
+            self._enter(waits, rng, step, tick_us)
         scheds = self.scheds
         now = steps = 0
         limit = max(MIN_STEPS, STEPS_PER_TICK * (horizon + 1))
@@ -198,10 +239,14 @@ class Simulator:
                 end = "deadlock"
                 break
             allowed = groups
-            if drawn:
+            if drawn or waits:
                 due = False
                 for k, d in drawn.items():
                     if step.value(scheds[k][3]) >= d:
+                        due = True
+                        break
+                for k, d in waits.items():
+                    if step.value(windows[k][2]) >= d:
                         due = True
                         break
                 allowed = []
@@ -215,6 +260,14 @@ class Simulator:
                         for k in info.dones:
                             d = drawn.get(k)
                             if d is not None and step.value(scheds[k][3]) < d:
+                                early = True
+                        if early:
+                            continue
+                    if info.ends:
+                        early = False
+                        for k in info.ends:
+                            d = waits.get(k)
+                            if d is not None and step.value(windows[k][2]) < d:
                                 early = True
                         if early:
                             continue
@@ -249,6 +302,8 @@ class Simulator:
                 if step.value(mark) & busy:
                     dist = self._duration(info, made[rank] if made is not None else None)
                     drawn[k] = dist.draw_ticks(rng, step.value(lo), step.value(hi), tick_us)
+            if windows:
+                self._enter(waits, rng, step, tick_us)
             for w in info.opens:
                 if since[w] is None:
                     since[w] = now
