@@ -405,3 +405,17 @@ def test_a_suspension_is_drawn_uniformly_over_its_interval(capsys):
     assert abs(cycle.counts[4] / cycle.samples - 0.5) < 0.05
     code, out, _ = verify(capsys, SLACK, "--timed", "--platform", SMC / "suspended.yaml", "--response-times")
     assert code == 0 and re.search(r"^  Slack.cycle\s+10 ms", out, re.M)  # the largest SMC saw is the bound
+
+
+def test_a_scheduler_out_of_reach_is_said_and_nothing_written(capsys, monkeypatch, tmp_path):
+    pytest.importorskip("distributed")
+    from genom2bip.cli import verify_smc
+    from tests.test_campaign_dask import free_port
+
+    monkeypatch.setattr(verify_smc, "CONNECT_TIMEOUT", 2.0)
+    trace = tmp_path / "t.json"
+    address = f"tcp://127.0.0.1:{free_port()}"  # nobody listens there
+    code, out, err = verify(capsys, SLACK, "--timed", "--platform", SMC / "slack.yaml", "--smc", "--runs", "10",
+                            "--scheduler", address, "--smc-trace", trace)
+    assert code == 1 and f"cannot reach the Dask scheduler {address}" in err and "internal error" not in err
+    assert "Pr[" not in out and not trace.exists()

@@ -17,6 +17,8 @@ from pathlib import Path
 from genom2bip.cli.verbs import EXIT_ERRORS, EXIT_USAGE, Failure, error
 
 EXIT_OK, EXIT_VIOLATED, EXIT_INCONCLUSIVE = 0, 4, 5
+#: Seconds to reach a running Dask scheduler (--scheduler).
+CONNECT_TIMEOUT = 30.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -253,7 +255,12 @@ def _runner(model, args, config, sim):
     from genom2bip.campaign.smc import DaskRunner
 
     params = model_params(args)
-    runner = DaskRunner(ClusterSpec(scheduler=args.scheduler, workers=args.smc_workers), params, config)
+    spec = ClusterSpec(scheduler=args.scheduler, workers=args.smc_workers, connect_timeout=CONNECT_TIMEOUT)
+    try:
+        runner = DaskRunner(spec, params, config)
+    except (OSError, TimeoutError) as exc:
+        error(f"cannot reach the Dask scheduler {args.scheduler}: {exc}")
+        raise Failure(EXIT_ERRORS) from None
     return runner, runner.close
 
 
