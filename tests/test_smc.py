@@ -216,10 +216,18 @@ def test_a_bad_proba_line_is_named_at_its_line_and_column(capsys, tmp_path, text
     assert "Pr[" not in out and not trace.exists()  # nothing estimated, nothing written
 
 
-def test_a_missing_proba_file_is_said(capsys, tmp_path):
+def test_a_missing_or_unreadable_proba_file_is_said(capsys, tmp_path):
     code, out, err = verify(capsys, BRANCH, "--timed", "--platform", SMC / "branch.yaml", "--smc", "--runs", "10",
                             "--proba", tmp_path / "none.proba")
     assert code == 1 and "none.proba: no such .proba file" in err and "Pr[" not in out
+    code, out, err = verify(capsys, BRANCH, "--timed", "--platform", SMC / "branch.yaml", "--smc", "--runs", "10",
+                            "--proba", tmp_path)
+    assert code == 1 and f"{tmp_path}: not a file (a .proba file was expected)" in err and "Pr[" not in out
+    binary = tmp_path / "b.proba"
+    binary.write_bytes(b"cycle::branch_start::branch_short \xff3\n")
+    code, out, err = verify(capsys, BRANCH, "--timed", "--platform", SMC / "branch.yaml", "--smc", "--runs", "10",
+                            "--proba", binary)
+    assert code == 1 and f"{binary}: error: cannot read the .proba file: 'utf-8' codec" in err and "Pr[" not in out
 
 
 @pytest.mark.parametrize("option, value, message", [
@@ -231,6 +239,7 @@ def test_a_missing_proba_file_is_said(capsys, tmp_path):
     ("--runs", "0", "--runs is 0; expected at least 1"),
     ("--time-bound", "soon", "--time-bound: 'soon' is not a duration"),
     ("--smc-workers", "0", "--smc-workers must be >= 1"),
+    ("--batch", "0", "--batch is 0; expected at least 1"),
 ])
 def test_bad_smc_options_are_usage_errors(capsys, option, value, message):
     code, out, err = verify(capsys, SLACK, "--timed", "--platform", SMC / "slack.yaml", "--smc", option, value)

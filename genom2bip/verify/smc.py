@@ -69,7 +69,7 @@ class SmcSettings:
         if self.horizon_us <= 0:
             wrong.append("--time-bound must be a positive duration (e.g. 1 s)")
         if self.batch < 1:
-            wrong.append("the batch size must be at least 1")
+            wrong.append(f"--batch is {self.batch}; expected at least 1")
         if wrong:
             raise UsageError(wrong)
 
@@ -110,8 +110,10 @@ def sim_config(model: Model, settings: SmcSettings, warn: Callable[[str], None] 
         from genom2bip.proba import load_proba
         from runtime.diagnostics import Reporter
 
-        if not Path(settings.proba).is_file():
+        if not Path(settings.proba).exists():
             raise InputError([f"{settings.proba}: no such .proba file"])
+        if not Path(settings.proba).is_file():
+            raise InputError([f"{settings.proba}: not a file (a .proba file was expected)"])
         reporter = Reporter()
         proba = load_proba(Path(settings.proba), model.description, reporter)
         reporter.raise_if_errors()
