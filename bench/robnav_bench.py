@@ -1,6 +1,6 @@
 """RobNav's schedulability study run by genom2bip, beside the published UPPAAL results.
 
-Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--exceptions] [--keep DIR]``.
+Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--exceptions] [--keep DIR] [--smc RUNS]``.
 
 ARTEFACT_DIR is a clone of the public schedulability artefact of the RobNav
 functional level (four components robloco, robmotion, robmap, roblaser, each
@@ -225,8 +225,18 @@ def main() -> None:
                     help="suspension delays in ms of the task whose manager suspends in "
                          "robnav-artefact-edf-suspension.xta (a range 0-50 or a list 0,11,30): one row per value, "
                          "beside the artefact's res.csv")
+    ap.add_argument("--smc", type=int, metavar="RUNS",
+                    help="statistical model checking instead: RUNS random runs of 1 s per nc, the largest response "
+                         "time each task reaches beside the exhaustive one (bench/smc_bench.py --robnav)")
     args = ap.parse_args()
     cores = _numbers(args.cores)
+    if args.smc is not None:
+        import smc_bench
+
+        for nc in cores:
+            smc_bench.robnav(argparse.Namespace(robnav=args.artefact, cores=nc, runs=args.smc, seed=1,
+                                                time_bound="1 s"))
+        return
     if args.suspension is not None:
         return suspension_rows(args, cores, _numbers(args.suspension))
     paths, out, execution, offsets, requests, after = prepare(args)

@@ -15,6 +15,8 @@ A platform file (``verify --timed --platform FILE``)::
         priority: 10             # fixed-priority: 0 is the highest (overrides 'priority')
       robmotion.plan:
         suspend: 11 ms           # after each release the task waits this long before it asks for a core
+    distributions:               # statistical model checking only (docs/smc.md): how a duration is drawn
+      robloco.TrackSpeedStart.tssExec: {triangular: 8 ms}   # default uniform; or {normal: [mean, sd]}
 
 Codels are named ``Component.Owner.codel`` where the owner is the service or
 task whose automaton runs the codel.  Every problem is reported with the file,
@@ -35,6 +37,7 @@ from genom2bip.durations import parse_duration
 from genom2bip.rules import _suggest
 from genom2bip.yamlfile import compose_file
 from runtime.diagnostics import Reporter, Span
+from runtime.smc.sampling import DISTRIBUTIONS, Distribution
 
 POLICIES = ("edf", "fixed-priority")
 #: How the tasks released at one instant meet the cores: all queued before a core is granted (one timer interrupt
@@ -44,7 +47,7 @@ RELEASES = ("together", "one-by-one")
 #: the core, idle, through the suspension: the RobNav artefact's delay in the manager of a task).
 SUSPEND_AFTER = ("release", "grant")
 SUSPEND_KEYS = ("for", "after")
-KEYS = ("cores", "policy", "releases", "best", "execution", "tasks")
+KEYS = ("cores", "policy", "releases", "best", "execution", "tasks", "distributions")
 TASK_KEYS = ("delay", "priority", "suspend")
 #: More cores than this is a typing error, not a computer (each core is a value of the model's state).
 MAX_CORES = 256
@@ -86,6 +89,8 @@ class Platform:
     execution: dict[tuple[str, str, str], Interval] = field(default_factory=dict)  # (component, owner, codel)
     tasks: dict[tuple[str, str], TaskSettings] = field(default_factory=dict)  # (component, task)
     path: str = ""
+    # how statistical model checking draws a codel's duration in its interval (docs/smc.md); uniform when absent
+    distributions: dict[tuple[str, str, str], Distribution] = field(default_factory=dict)
 
     def describe(self) -> str:
         """One line for reports: ``2 cores, cooperative EDF``."""
@@ -255,6 +260,12 @@ class _Reader(rules._Reader):
             if key is not None and span is not None and self.sensible(v, f"execution of {k.value}", span,
                                                                       self.owner_task(key)):
                 out.execution[key] = span
+        distributions = self.mapping(fields["distributions"], "distributions") if "distributions" in fields else []
+        for k, v in distributions or []:
+            key = self.codel(k)
+            law = self.distribution(v, f"distribution of {k.value}")
+            if key is not None and law is not None:
+                out.distributions[key] = law
         tasks = self.mapping(fields["tasks"], "tasks") if "tasks" in fields else []
         for k, v in tasks or []:
             key = self.task(k)
@@ -262,6 +273,39 @@ class _Reader(rules._Reader):
             if key is not None and settings is not None:
                 out.tasks[key] = settings
         return out
+
+    def distribution(self, node: yaml.Node, what: str) -> Distribution | None:
+        """``uniform``, ``{triangular: MODE}`` or ``{normal: [MEAN, SD]}`` (durations)."""
+        hint = "write uniform, {triangular: 6 ms} (its mode) or {normal: [5 ms, 1 ms]} (mean, sd)"
+        if isinstance(node, yaml.ScalarNode):
+            if node.value != "uniform":
+                self.error(node, f"{what} is '{node.value}'; expected one of {', '.join(DISTRIBUTIONS)}",
+                           _suggest(node.value, list(DISTRIBUTIONS)) or hint)
+                return None
+            return Distribution()
+        items = self.mapping(node, what)
+        if items is None:
+            return None
+        if len(items) != 1:
+            self.error(node, f"{what} must name one distribution", hint)
+            return None
+        k, v = items[0]
+        if k.value == "triangular":
+            mode = self.duration(v, f"{what}: the mode")
+            return None if mode is None else Distribution("triangular", mode_us=mode)
+        if k.value == "normal":
+            if not isinstance(v, yaml.SequenceNode) or len(v.value) != 2:
+                self.error(v, f"{what}: normal takes [mean, sd]", hint)
+                return None
+            mean, sd = (self.duration(n, f"{what}: normal") for n in v.value)
+            if mean is None or sd is None:
+                return None
+            if sd <= 0:
+                self.error(v.value[1], f"{what}: the standard deviation must be positive")
+                return None
+            return Distribution("normal", mean_us=mean, sd_us=sd)
+        self.error(k, f"{what}: unknown distribution '{k.value}'", _suggest(str(k.value), list(DISTRIBUTIONS)) or hint)
+        return None
 
     def ir_task(self, key: tuple[str, str] | None) -> ir.Task | None:
         """The description's task named by ``key`` (None when the key was wrong)."""

@@ -66,7 +66,7 @@ def test_the_file_s_shape(tmp_path, text, line, token, message):
 
 @pytest.mark.parametrize("check, token, message", [
     ("{check: liveness, model: ndd}", "liveness", "check 1: unknown check 'liveness' (checks: deadlock, property, "
-                                                  "observer, response-times)"),
+                                                  "observer, response-times, smc)"),
     ("{check: deadlock, model: nope}", "nope", "check 1 (deadlock): no model 'nope' (models: cruise, ndd)"),
     ("{check: deadlock, model: ndd, method: magic}", "magic", "method: one of explore, compositional expected"),
     (f"{{check: deadlock, model: ndd, files: [{NDD_PROPS}]}}", "files",

@@ -37,6 +37,7 @@ class Job:
     timeout: float | None = None  # seconds of wall clock before the job is stopped (not part of its id)
     of: tuple[str, ...] = ()  # response times: whose are recorded (tasks, services); () all
     only: tuple[str, ...] | None = None  # response times: the owners recorded; None all
+    smc: tuple[tuple[str, Any], ...] = ()  # statistical model checking: SmcSettings fields
 
     @property
     def title(self) -> str:
@@ -57,6 +58,8 @@ class Job:
             out["of"] = list(self.of)
         if self.only is not None:
             out["only"] = list(self.only)
+        if self.smc:
+            out["smc"] = dict(self.smc)
         return out
 
 
@@ -143,7 +146,7 @@ def expand(campaign: Campaign, reporter: Reporter | None = None) -> Expansion:
                     options = tuple(sorted(check.options.items()))
                     job = Job("", spec.name, params, name, check.method, target, files, options,
                               tuple((a.key, v) for a, v, _ in point), len(out.jobs), check.timeout,
-                              *_selection(check, name))
+                              *_selection(check, name), check.smc if name == "smc" else ())
                     jid = job_id(campaign.base, params, name, check.method, target, files, options, job.selection())
                     if jid in seen:
                         continue  # the same job twice (two checks overlap): run once

@@ -159,6 +159,27 @@ def _response_figures(result, job) -> dict[str, float | str]:
     return result.values()
 
 
+# --------------------------------------------------------------------------- statistical model checking
+
+
+def _smc_targets(check, model) -> list[str]:
+    """One job per model and point: one set of runs estimates every observer (``kinds``) and response time."""
+    if check.method != "explore":
+        raise TargetError("method", "statistical model checking runs the model: method explore (the default)")
+    bound = dict(check.smc).get("horizon_us")
+    return [f"Pr[<= {bound / 1000:g} ms]" if bound else "Pr[<= 1000 ms]"]
+
+
+def _run_smc(model, job, options):
+    """Estimate every observer of the job's kinds here, in the worker (docs/smc.md)."""
+    from genom2bip.verify.smc import SmcSettings, estimate, summary
+
+    fields = {"horizon_us": 1_000_000, **dict(job.smc)}
+    fields["epsilon"], fields["delta"] = float(fields.get("epsilon", 0.01)), float(fields.get("delta", 0.05))
+    report = estimate(model, SmcSettings(**fields))
+    return summary(report, job.target)
+
+
 def _only(check, names: list[str], what: str) -> list[str]:
     if check.only is None:
         return names
@@ -179,4 +200,7 @@ KINDS: dict[str, CheckKind] = {k.name: k for k in (
     CheckKind("response-times", "every task's and service's largest response time, one job per point "
               "(of: [tasks, services], only: [owners])", ("of", "only"), (), _response_targets, _run_responses,
               timed=True, figures=_response_figures, params=lambda p: replace(p, responses=True)),
+    CheckKind("smc", "statistical model checking: each timing observer's Pr[<= T] and the response-time "
+              "distributions from random runs, one job per point (smc: {time-bound, epsilon, delta, threshold, "
+              "runs, seed, proba})", ("smc",), (), _smc_targets, _run_smc, timed=True),
 )}

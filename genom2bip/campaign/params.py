@@ -8,7 +8,7 @@ from typing import Any
 
 
 #: The fields of the platform, the client and the response times: left out of a job's id when unset.
-PLATFORM_FIELDS = ("platform", "client", "cores", "policy", "responses")
+PLATFORM_FIELDS = ("platform", "client", "cores", "policy", "responses", "no_exceptions")
 
 
 @dataclass(frozen=True)
@@ -31,6 +31,7 @@ class ModelParams:
     cores: int | None = None  # over the platform file's; without one, a platform of that many cores (EDF)
     policy: str | None = None  # over the platform file's
     responses: bool = False  # response-time observers (set by the response-times check)
+    no_exceptions: bool = False  # codels end by their declared yields only
     # the variant (genom2bip.variants.Variant)
     wcet_scale: float = 1.0
     periods: tuple[tuple[str, int], ...] = ()
@@ -42,7 +43,7 @@ class ModelParams:
 
         time = (TimeSettings(tick_us=self.tick_us, default_wcet_us=self.default_wcet_us, observers=self.observers,
                              platform=self.platform, client=self.client, cores=self.cores, policy=self.policy,
-                             responses=self.responses)
+                             responses=self.responses, exceptions=not self.no_exceptions)
                 if self.timed else None)
         return build_model(list(self.paths), rules=self.rules, no_rules=self.no_rules, defines=dict(self.defines),
                            include_dirs=list(self.include_dirs), root=self.root, time=time,

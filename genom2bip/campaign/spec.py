@@ -26,6 +26,10 @@ checks:
   - check: response-times           # one job per point: every task's response time (of: [tasks, services])
     model: sensing
     vary: {cores: [1, 2, 3, 4], policy: [edf, fixed-priority]}   # over the platform file's
+  - check: smc                      # statistical model checking (docs/smc.md): one job per point
+    model: sensing
+    smc: {time-bound: 1 s, epsilon: 0.01, delta: 0.05, seed: 1}   # or threshold, runs, proba
+    vary: {cores: [1, 2]}
 ```
 """
 from __future__ import annotations
@@ -50,6 +54,8 @@ MODEL_KEYS = ("paths", "each", "rules", "no-rules", "defines", "include", "root"
 TIME_KEYS = ("tick", "default-wcet", "observers", "platform", "client")
 CHECK_KEYS = ("check", "model", "method", "options", "timeout", "vary", "doc")
 OBSERVER_KINDS = ("overrun", "latency")
+#: Keys of a statistical model checking check's ``smc`` mapping.
+SMC_KEYS = ("time-bound", "epsilon", "delta", "threshold", "runs", "seed", "proba")
 #: Search options: key -> (SearchOptions field, reader).  Integers are 0 or more.
 OPTION_FIELDS = {
     "engine": "engine", "max-states": "max_states", "max-depth": "max_depth", "max-memory": "max_memory_mb",
@@ -99,6 +105,7 @@ class CheckSpec:
     axes: list[Axis] = field(default_factory=list)
     timeout: float | None = None  # seconds of wall clock a job may take before it is stopped
     spans: dict[str, Span] = field(default_factory=dict)  # key -> where its value is
+    smc: tuple[tuple[str, Any], ...] = ()  # statistical model checking: SmcSettings fields, as read
 
 
 @dataclass
@@ -408,6 +415,8 @@ class _Reader:
             for bad in (k for k in of if k not in RESPONSE_OWNERS):
                 self.error(fields["of"][1], f"{what}: of: {bad!r} is not one of {', '.join(RESPONSE_OWNERS)}")
             spec.of = tuple(of)
+        if "smc" in fields:
+            spec.smc = self.smc(fields["smc"][1], f"{what}: smc")
         spec.options = {**options, **(self.options(fields["options"][1], f"{what}: ") if "options" in fields else {})}
         spec.timeout = self.seconds(fields["timeout"][1], f"{what}: timeout") if "timeout" in fields else self.timeout
         own = self.axes(fields["vary"][1], f"{what}: ") if "vary" in fields else []
@@ -415,6 +424,42 @@ class _Reader:
         if model in models:
             self._fits(spec, kind, models[model], fields["model"][1], what)
         return spec
+
+    def smc(self, node: yaml.Node, what: str) -> tuple[tuple[str, Any], ...]:
+        """``{time-bound: 1 s, epsilon: 0.01, delta: 0.05, threshold: P, runs: N, seed: S, proba: FILE}``."""
+        from genom2bip.durations import parse_duration
+        from genom2bip.loading import UsageError
+        from genom2bip.verify.smc import SmcSettings
+
+        fields = self.mapping(node, what, SMC_KEYS)
+        out: dict[str, Any] = {}
+        for key, (_, v) in fields.items():
+            text = self.text(v, f"{what}: {key}")
+            if text is None:
+                continue
+            if key == "time-bound":
+                value = parse_duration(text)
+                if value is None:
+                    self.error(v, f"{what}: time-bound: {text!r} is not a duration (e.g. 1 s)")
+                    continue
+                out["horizon_us"] = int(value)
+            elif key == "proba":
+                path = self.file_path(v, f"{what}: proba")
+                if path:
+                    out["proba"] = path
+            else:
+                kind = int if key in ("runs", "seed") else float
+                try:
+                    out[key] = kind(text)
+                except ValueError:
+                    self.error(v, f"{what}: {key}: {text!r} is not {'a whole number' if kind is int else 'a number'}")
+                    continue
+            try:
+                SmcSettings(**{"horizon_us": 1, **out}).check()
+            except UsageError as exc:
+                self.error(v, f"{what}: {exc.messages[0].replace('--', '')}")
+                out.pop(key, None)
+        return tuple(sorted(out.items()))
 
     def _fits(self, spec: CheckSpec, kind, models: list[ModelSpec], node, what: str) -> None:
         """A timed check or a timed axis on a model without time is refused where the check names it; a policy

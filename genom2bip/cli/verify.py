@@ -86,6 +86,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     add_compositional_arguments(parser)
     from genom2bip.cli.verify_timed import add_time_arguments
     add_time_arguments(parser, verify=True)
+    from genom2bip.cli.verify_smc import add_arguments as add_smc_arguments
+    add_smc_arguments(parser)
 
 
 # --------------------------------------------------------------------------- loading
@@ -165,6 +167,10 @@ def verb_verify(args: argparse.Namespace) -> int:
 
     _check_options(args)
     check_compositional(args)
+    from genom2bip.cli import verify_smc
+
+    if verify_smc.wanted(args):  # statistical: its own lines (runs, estimates, intervals), no traces directory
+        return _verify_smc(args, verify_smc.settings(args))
     report = _report(args)
     try:
         with running(report):
@@ -218,6 +224,24 @@ def _verify(args: argparse.Namespace, report) -> int:
         from genom2bip.cli.verify_localized import run as run_localized
         return max(compositional, run_localized(localized, model, args, options, listener, compositional))
     return compositional
+
+
+def _verify_smc(args: argparse.Namespace, smc) -> int:
+    """Statistical model checking (genom2bip/cli/verify_smc.py) of the model the arguments name."""
+    from genom2bip.cli import verify_smc
+    from runtime.engine import EngineError
+    from runtime.native.build import tell
+
+    model = load_model(args)
+    try:
+        model.flat
+    except EngineError as exc:
+        error(f"{model.title}: {exc}")
+        return EXIT_ERRORS
+    shown = (args.progress or sys.stderr.isatty()) and not args.quiet  # a compile is said where progress is shown
+    tell((lambda text: print(f"genom2bip: {text}", file=sys.stderr, flush=True)) if shown else None)
+    load_externs(args.externs)
+    return verify_smc.run(model, args, smc)
 
 
 def _report(args: argparse.Namespace):

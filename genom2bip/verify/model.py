@@ -23,6 +23,8 @@ class Model:
     root: str
     title: str
     warnings: list[DiagnosticError] = field(default_factory=list)  # when no ``report`` was given
+    description: Any = None  # the description IR it was built from (None for a .bip file)
+    platform: Any = None  # the platform of a timed model (genom2bip.platform.Platform), None without
 
     @cached_property
     def flat(self):
@@ -101,7 +103,8 @@ def build_model(paths: Sequence[str | Path], *, rules: str | Path | None = None,
             time = replace(time, default_wcet_us=scaled(time.default_wcet_us, variant.wcet_scale))
     found = read_rules(description, paths, rules, no_rules, diagnostics)
     system = name or system_name([str(p) for p in paths])
-    package, built_root, _ = model_of(description, system, found,
-                                      time_options(description, paths, time, diagnostics))
+    timing = time_options(description, paths, time, diagnostics)
+    package, built_root, _ = model_of(description, system, found, timing)
     root = root or built_root
-    return Model(package, root, f"{system} ({root})", diagnostics.kept)
+    return Model(package, root, f"{system} ({root})", diagnostics.kept, description,
+                 timing.platform if timing is not None else None)
