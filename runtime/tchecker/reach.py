@@ -104,7 +104,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     goal_set = bool(labels) and not unknown
 
     start = time.perf_counter()
-    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True)
+    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
     if goal_set:
         z.goal = _Goal(z, tr, labels).need
     try:
@@ -145,7 +145,7 @@ def configurations(path: str | Path, grid: int | None = None) -> set[Configurati
     from runtime.zones.search import ZoneExplorer
 
     system, tr = load(path, grid, keep_integers=True)
-    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True)
+    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
     z.explore()
     atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
     where = {(tr.atoms[p], place): loc for (p, loc), place in tr.places.items()}
