@@ -43,11 +43,8 @@ def start(args: list[str], log: Path, env: dict) -> subprocess.Popen:
     return subprocess.Popen(args, stdout=log.open("w"), stderr=subprocess.STDOUT, env=env, start_new_session=True)
 
 
-@pytest.fixture
-def cluster(tmp_path):
-    """``(address, client, workers by name, gate file)``: a scheduler and two workers on loopback."""
-    gate = tmp_path / "gate"
-    env = {**os.environ, "GENOM2BIP_TEST_GATE": str(gate)}
+def start_cluster(tmp_path: Path, env: dict) -> tuple[str, list[subprocess.Popen], dict[str, subprocess.Popen]]:
+    """A real ``dask scheduler`` and two ``dask worker``s (a, b) on loopback: (address, processes, workers)."""
     address = f"tcp://127.0.0.1:{free_port()}"
     processes = [start([*DASK, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
                         "--no-dashboard"], tmp_path / "scheduler.log", env)]
@@ -56,6 +53,22 @@ def cluster(tmp_path):
         workers[name] = start([*DASK, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--name", name,
                                "--no-dashboard"], tmp_path / f"worker-{name}.log", env)
         processes.append(workers[name])
+    return address, processes, workers
+
+
+def stop_cluster(processes: list[subprocess.Popen]) -> None:
+    """Every process of the cluster killed with its group, and waited for."""
+    for p in processes:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+
+
+@pytest.fixture
+def cluster(tmp_path):
+    """``(address, client, workers by name, gate file)``: a scheduler and two workers on loopback."""
+    gate = tmp_path / "gate"
+    address, processes, workers = start_cluster(tmp_path, {**os.environ, "GENOM2BIP_TEST_GATE": str(gate)})
     client = None
     try:
         client = distributed.Client(address, timeout=PATIENCE)
@@ -64,10 +77,7 @@ def cluster(tmp_path):
     finally:
         if client is not None:
             client.close()
-        for p in processes:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
+        stop_cluster(processes)
 
 
 def test_a_worker_killed_mid_job_loses_nothing_and_changes_no_verdict(tmp_path, cluster):

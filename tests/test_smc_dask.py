@@ -17,7 +17,7 @@ import pytest
 from genom2bip.verify import TimeSettings, build_model
 from genom2bip.verify.smc import SmcSettings, estimate, sim_config
 from tests.nativekit import needs_cc
-from tests.test_campaign_dask import DASK, PATIENCE, free_port, start
+from tests.test_campaign_dask import PATIENCE, start_cluster, stop_cluster
 
 distributed = pytest.importorskip("distributed")
 pytestmark = needs_cc
@@ -62,14 +62,7 @@ def test_a_worker_killed_mid_estimate_gives_the_undisturbed_estimate(tmp_path):
     from genom2bip.campaign.smc import DaskRunner
 
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    address = f"tcp://127.0.0.1:{free_port()}"
-    processes = [start([*DASK, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                        "--no-dashboard"], tmp_path / "scheduler.log", env)]
-    workers = {}
-    for name in ("a", "b"):
-        workers[name] = start([*DASK, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--name", name,
-                               "--no-dashboard"], tmp_path / f"worker-{name}.log", env)
-        processes.append(workers[name])
+    address, processes, workers = start_cluster(tmp_path, env)
     runner = None
     try:
         platform = str(SMC / "slack.yaml")
@@ -86,10 +79,7 @@ def test_a_worker_killed_mid_estimate_gives_the_undisturbed_estimate(tmp_path):
     finally:
         if runner is not None:
             runner.close()
-        for p in processes:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
+        stop_cluster(processes)
     assert killing.victim in ("a", "b") and killing.held  # killed while it computed a batch
     assert workers[killing.victim].returncode is not None
     assert disturbed.runs == alone.runs == 160
