@@ -8,7 +8,8 @@ Each seed gives a world (genom2bip/mission/worlds: a cellular automaton's field,
 by default, seed by seed; ``--family u_trap`` for U-shaped traps), kept only when a path with the robot's
 clearance exists.  Its mission is descriptions/dala/missions/doorway.yaml's bring-up, POM anchored at the
 start and one GoTo to the goal, run as ``genom2bip mission`` runs it: the generated package, the codels,
-ir-sim, the services client, on the virtual clock.  The GoTo's timeout is the time NDD's progress rule
+ir-sim, the services client, on the virtual clock; the Planner is brought up after POM.Run
+(``--no-planner``: ND alone, as before the Planner).  The GoTo's timeout is the time NDD's progress rule
 allows the distance (NDD.PROGRESS closer within NDD.PROGRESS_TIMEOUT), plus 30 s: a GoTo still running then is a mission
 timeout, a failure of its own.
 
@@ -43,6 +44,16 @@ sys.path.insert(0, str(ROOT))
 TEMPLATE = ROOT / "descriptions/dala/missions/doorway.yaml"
 BARN_ROBOT_RADIUS = 0.215  # m: the Jackal's half-width (docs/missions.md, *The robot's footprint in BARN*)
 BARN_NDD = {"params": {"robot_radius": 0.22, "security_distance": 0.1, "goal_tolerance": 0.9}}
+PLANNER_PARAMS = {"robot_radius": 0.35, "clearance": 0.6, "lookahead": 2.0}  # the generated worlds'
+BARN_PLANNER_PARAMS = {"robot_radius": 0.2, "clearance": 0.45, "lookahead": 2.0}
+
+
+def planner_steps(params: dict | None) -> list[dict]:
+    """The Planner's bring-up (after POM.Run, as the rule planner-after-pom-run wants), none without ``params``."""
+    if params is None:
+        return []
+    return [{"send": "Planner.SetParams", "with": {"params": params}, "expect": "ok"},
+            {"send": "Planner.Run", "until": "started"}]
 ROBOT_WORLD = ROOT / "descriptions/dala/worlds/doorway.yaml"  # whose robot every generated world carries
 METRICS = ("closest", "dispersion", "dimension", "visibility", "tortuosity")
 LABELS = {"closest": "distance to the closest obstacle (m)", "dispersion": "dispersion (openings around)",
@@ -84,7 +95,7 @@ def _goto_outcome(run, world) -> dict:
             "left": round(math.dist((last.x, last.y), world.goal), 2), "controller_error": run.error}
 
 
-def run_world(seed: int, family: str | None, package: str, codels: str, out: str) -> dict:
+def run_world(seed: int, family: str | None, package: str, codels: str, out: str, planner: bool = True) -> dict:
     """Generate the world of ``seed``, write it and its mission under ``out``, run it; one result row."""
     from genom2bip.mission.session import load_package, run_mission
     from genom2bip.mission.spec import read_mission
@@ -99,7 +110,8 @@ def run_world(seed: int, family: str | None, package: str, codels: str, out: str
     world_path.write_text(world_file.text(world, robot))
     bound = give_up_bound(math.dist(world.start[:2], world.goal), codels)
     mission_path = folder / f"{world.name}.mission.yaml"
-    mission_path.write_text(mission_file.text(world, world_path.resolve(), TEMPLATE, bound + 30))
+    mission_path.write_text(mission_file.text(world, world_path.resolve(), TEMPLATE, bound + 30,
+                                              after_origin=planner_steps(PLANNER_PARAMS if planner else None)))
     mission = read_mission(mission_path)
     wall = time.perf_counter()
     run = run_mission(mission, load_package(package), codels, mission.world)
@@ -121,7 +133,7 @@ def barn_outcome(trajectory, world) -> dict:
             "barn_within_limit": time_taken is not None and time_taken <= barn.TIME_LIMIT}
 
 
-def run_barn_world(index: int, root: str, package: str, codels: str, out: str) -> dict:
+def run_barn_world(index: int, root: str, package: str, codels: str, out: str, planner: bool = True) -> dict:
     """Convert BARN world ``index`` of the challenge copy at ``root``, write it and its mission, run it."""
     from genom2bip.mission.session import load_package, run_mission
     from genom2bip.mission.spec import read_mission
@@ -139,7 +151,8 @@ def run_barn_world(index: int, root: str, package: str, codels: str, out: str) -
     world_path.write_text(barn.world_text(world, robot))
     mission_path = folder / f"{world.name}.mission.yaml"
     mission_path.write_text(mission_file.text(world, world_path.resolve(), TEMPLATE, barn.TIME_LIMIT + 15,
-                                              note=f"BARN world {index}", inputs={"NDD.SetParams": BARN_NDD}))
+                                              note=f"BARN world {index}", inputs={"NDD.SetParams": BARN_NDD},
+                                              after_origin=planner_steps(BARN_PLANNER_PARAMS if planner else None)))
     mission = read_mission(mission_path)
     wall = time.perf_counter()
     run = run_mission(mission, load_package(package), codels, mission.world)
@@ -310,6 +323,7 @@ def main() -> None:
     parser.add_argument("--worlds", type=int, help="how many seeds (default 100), or BARN worlds (default all)")
     parser.add_argument("--first", type=int, default=0, help="the first seed (default 0)")
     parser.add_argument("--family", help="one family for every seed (default: the mix, seed by seed)")
+    parser.add_argument("--no-planner", action="store_true", help="ND alone: the missions bring up no Planner")
     parser.add_argument("--barn", help="a copy of the BARN challenge repository: run its worlds instead")
     parser.add_argument("--every", type=int, default=1,
                         help="with --barn: the worlds whose index is a multiple of N (default 1; 6: DWA's 50)")
@@ -325,12 +339,12 @@ def main() -> None:
 
         last = args.first + (args.worlds if args.worlds is not None else 10 ** 6)
         indices = [i for i in barn.available(Path(args.barn)) if args.first <= i < last and i % args.every == 0]
-        jobs = [(i, args.barn, args.package, args.codels, str(out)) for i in indices]
+        jobs = [(i, args.barn, args.package, args.codels, str(out), not args.no_planner) for i in indices]
         work = run_barn_world
     else:
         args.worlds = 100 if args.worlds is None else args.worlds
         seeds = range(args.first, args.first + args.worlds)
-        jobs = [(s, args.family, args.package, args.codels, str(out)) for s in seeds]
+        jobs = [(s, args.family, args.package, args.codels, str(out), not args.no_planner) for s in seeds]
         work = run_world
     rows: list[dict] = []
     started = time.perf_counter()
