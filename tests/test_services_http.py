@@ -194,7 +194,7 @@ def test_a_second_request_to_a_busy_activity_is_refused_and_the_first_still_repo
 def test_components_services_and_openapi_describe_the_interface(ctl):
     _, _, client = ctl
     names = [c["name"] for c in client.components()]
-    assert names == ["Aspect", "LaserRF", "NDD", "POM", "RFLEX"]
+    assert names == ["Aspect", "LaserRF", "NDD", "POM", "Planner", "RFLEX"]
     goto = client.service("NDD", "GoTo")
     assert goto["kind"] == "activity" and not goto["reentrant"]
     assert goto["inputs"] == [{"name": "goal", "schema": {"$ref": "dala::pose"}, "doc": "Goal in the world frame",

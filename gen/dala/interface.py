@@ -974,7 +974,7 @@ INTERFACE = {
                                 {'arg': 'Nav', 'source': 'port', 'direction': 'in', 'path': 'Nav'},
                                 {'arg': 'Way', 'source': 'port', 'direction': 'out', 'path': 'Way'},
                             ],
-                            'wcet_us': 40000,
+                            'wcet_us': 14000,
                         },
                         'Planner_plnStop': {
                             'codel': 'plnStop',
@@ -1018,7 +1018,7 @@ INTERFACE = {
                                 {'arg': 'params', 'source': 'ids', 'direction': 'in', 'path': 'params'},
                                 {'arg': 'Pos', 'source': 'port', 'direction': 'in', 'path': 'Pos'},
                             ],
-                            'wcet_us': 40000,
+                            'wcet_us': 14000,
                         },
                     },
                 },

@@ -4745,7 +4745,7 @@ def Planner_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4758,7 +4758,7 @@ def Planner_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -4771,7 +4771,7 @@ def Planner_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -4784,7 +4784,7 @@ def Planner_Requests() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -4792,7 +4792,7 @@ def Planner_Requests() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '14', 'column': '11'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '16', 'column': '11'},
             ),
         ],
     )
@@ -4838,7 +4838,7 @@ def Planner_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '48', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '50', 'column': '14'},
                     ),
                 ],
             ),
@@ -4851,7 +4851,7 @@ def Planner_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4863,7 +4863,7 @@ def Planner_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4879,7 +4879,7 @@ def Planner_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4891,7 +4891,7 @@ def Planner_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4903,7 +4903,7 @@ def Planner_SetParams_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4911,7 +4911,7 @@ def Planner_SetParams_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
             ),
         ],
     )
@@ -4942,7 +4942,7 @@ def Planner_SetParams_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4953,7 +4953,7 @@ def Planner_SetParams_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -4961,7 +4961,7 @@ def Planner_SetParams_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
             ),
         ],
     )
@@ -5005,7 +5005,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5016,7 +5016,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5028,7 +5028,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5044,7 +5044,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5056,7 +5056,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5068,7 +5068,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5080,7 +5080,7 @@ def Planner_Run_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5088,7 +5088,7 @@ def Planner_Run_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
             ),
         ],
     )
@@ -5136,7 +5136,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5148,7 +5148,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '56', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '58', 'column': '19'},
                     ),
                 ],
             ),
@@ -5161,7 +5161,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '56', 'column': '48'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '58', 'column': '48'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5175,7 +5175,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '56', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '58', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5188,7 +5188,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '57', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '19'},
                     ),
                 ],
             ),
@@ -5201,7 +5201,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '58', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '60', 'column': '13'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5215,7 +5215,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '57', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5228,7 +5228,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '61', 'column': '18'},
                     ),
                 ],
             ),
@@ -5241,7 +5241,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '46'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '61', 'column': '46'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5255,7 +5255,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '46'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '61', 'column': '46'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5269,7 +5269,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '61', 'column': '18'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5281,7 +5281,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5292,7 +5292,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5303,7 +5303,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5314,7 +5314,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5326,7 +5326,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5338,7 +5338,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5350,7 +5350,7 @@ def Planner_Run_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -5358,7 +5358,7 @@ def Planner_Run_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
             ),
         ],
     )
@@ -5404,7 +5404,7 @@ def Planner_Plan_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '65', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '67', 'column': '14'},
                     ),
                 ],
             ),
@@ -5417,7 +5417,7 @@ def Planner_Plan_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5429,7 +5429,7 @@ def Planner_Plan_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5445,7 +5445,7 @@ def Planner_Plan_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5457,7 +5457,7 @@ def Planner_Plan_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5469,7 +5469,7 @@ def Planner_Plan_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5477,7 +5477,7 @@ def Planner_Plan_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
             ),
         ],
     )
@@ -5509,7 +5509,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5521,7 +5521,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '66', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '68', 'column': '19'},
                     ),
                 ],
             ),
@@ -5534,7 +5534,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '66', 'column': '76'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '68', 'column': '76'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5548,7 +5548,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '66', 'column': '76'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '68', 'column': '76'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5562,7 +5562,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '66', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '68', 'column': '19'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -5574,7 +5574,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5585,7 +5585,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5596,7 +5596,7 @@ def Planner_Plan_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -5604,7 +5604,7 @@ def Planner_Plan_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
             ),
         ],
     )
@@ -5646,7 +5646,7 @@ def Planner_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5658,7 +5658,7 @@ def Planner_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5674,7 +5674,7 @@ def Planner_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5686,7 +5686,7 @@ def Planner_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5698,7 +5698,7 @@ def Planner_Stop_Control() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5706,7 +5706,7 @@ def Planner_Stop_Control() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
             ),
         ],
     )
@@ -5737,7 +5737,7 @@ def Planner_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5748,7 +5748,7 @@ def Planner_Stop_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -5756,7 +5756,7 @@ def Planner_Stop_Activity() -> AtomType:
         annotations=[
             Annotation(
                 'source',
-                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
             ),
         ],
     )
@@ -9052,7 +9052,7 @@ def Planner_Plan_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '65', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '67', 'column': '14'},
                     ),
                 ],
                 comment='the validate codel plnCheckGoal refused the parameters',
@@ -9065,7 +9065,7 @@ def Planner_Plan_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -9077,7 +9077,7 @@ def Planner_Plan_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -9089,7 +9089,7 @@ def Planner_Plan_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -9101,7 +9101,7 @@ def Planner_Plan_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -9140,7 +9140,7 @@ def Planner_Run_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -9152,7 +9152,7 @@ def Planner_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -9164,7 +9164,7 @@ def Planner_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -9176,7 +9176,7 @@ def Planner_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -9188,7 +9188,7 @@ def Planner_Run_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -9223,7 +9223,7 @@ def Planner_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.SetParams:reject'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '48', 'column': '14'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '50', 'column': '14'},
                     ),
                 ],
                 comment='the validate codel plnCheckParams refused the parameters',
@@ -9236,7 +9236,7 @@ def Planner_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.SetParams:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -9248,7 +9248,7 @@ def Planner_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.SetParams:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -9260,7 +9260,7 @@ def Planner_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.SetParams:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -9272,7 +9272,7 @@ def Planner_SetParams_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.SetParams:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -9297,7 +9297,7 @@ def Planner_Stop_Service() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -9309,7 +9309,7 @@ def Planner_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Stop:finish'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -9321,7 +9321,7 @@ def Planner_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Stop:fail'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -9333,7 +9333,7 @@ def Planner_Stop_Service() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Stop:interrupted'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -9359,7 +9359,7 @@ def Planner_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.control:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '14', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '16', 'column': '11'},
                     ),
                 ],
             ),
@@ -9371,7 +9371,7 @@ def Planner_control_Task() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.control:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '14', 'column': '11'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '16', 'column': '11'},
                     ),
                 ],
             ),
@@ -9395,7 +9395,7 @@ def Planner_plan_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '39', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '41', 'column': '8'},
                     ),
                 ],
             ),
@@ -9406,7 +9406,7 @@ def Planner_plan_Task() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '39', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '41', 'column': '8'},
                     ),
                 ],
             ),
@@ -10697,7 +10697,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '56', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '58', 'column': '19'},
                     ),
                 ],
             ),
@@ -10712,7 +10712,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '57', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '19'},
                     ),
                 ],
             ),
@@ -10727,7 +10727,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '61', 'column': '18'},
                     ),
                 ],
             ),
@@ -10738,7 +10738,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '66', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '68', 'column': '19'},
                     ),
                 ],
             ),
@@ -10749,7 +10749,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -10760,7 +10760,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -10771,7 +10771,7 @@ def Planner_Module() -> CompoundType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
             ),
@@ -10783,7 +10783,7 @@ def Planner_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.plan:period'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '39', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '41', 'column': '8'},
                     ),
                 ],
                 comment='a period starts: paused activities wake up',
@@ -10796,7 +10796,7 @@ def Planner_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.SetParams:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '45', 'column': '13'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '47', 'column': '13'},
                     ),
                 ],
             ),
@@ -10808,7 +10808,7 @@ def Planner_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '62', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '64', 'column': '12'},
                     ),
                 ],
             ),
@@ -10820,7 +10820,7 @@ def Planner_Module() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Stop:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
             ),
@@ -11323,7 +11323,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '56', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '58', 'column': '19'},
                     ),
                 ],
                 comment='codel plnReset of state start',
@@ -11336,7 +11336,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:exec_watch'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '57', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '19'},
                     ),
                 ],
                 comment='codel plnWatch of state watch',
@@ -11349,7 +11349,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:exec_stop'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '59', 'column': '18'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '61', 'column': '18'},
                     ),
                 ],
                 comment='codel plnStop of state stop',
@@ -11362,7 +11362,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Plan:exec_start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '66', 'column': '19'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '68', 'column': '19'},
                     ),
                 ],
                 comment='codel plnPlan of state start',
@@ -11492,7 +11492,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Stop:start'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '70', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '72', 'column': '12'},
                     ),
                 ],
                 comment='Stop interrupts Run (Planner.Stop.interrupts)',
@@ -11554,7 +11554,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.plan:sleep'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '39', 'column': '8'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '41', 'column': '8'},
                     ),
                 ],
             ),
@@ -11647,7 +11647,7 @@ def DALA() -> CompoundType:
                     Annotation('label', arguments={'name': 'Planner.Run:trigger'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
                 comment='planner-after-pom-run: Planner.Run only after POM.Run completed',
@@ -11664,7 +11664,7 @@ def DALA() -> CompoundType:
                     Annotation('rule', arguments={'name': 'planner-after-pom-run'}),
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '52', 'column': '12'},
+                        arguments={'file': 'descriptions/dala/Planner.gen', 'line': '54', 'column': '12'},
                     ),
                 ],
                 comment='rule planner-after-pom-run: refuse the request unless Planner.Run only after POM.Run completed',
@@ -12310,7 +12310,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'plnPlan', 'yields': 'ether', 'throws': 'Planner::e_no_path', 'wcet_us': '40000'},
+                        arguments={'codel': 'plnPlan', 'yields': 'ether', 'throws': 'Planner::e_no_path', 'wcet_us': '14000'},
                     ),
                 ],
             ),
@@ -12340,7 +12340,7 @@ def package() -> Package:
                 annotations=[
                     Annotation(
                         'codel',
-                        arguments={'codel': 'plnWatch', 'yields': 'pause::watch', 'throws': '', 'wcet_us': '40000'},
+                        arguments={'codel': 'plnWatch', 'yields': 'pause::watch', 'throws': '', 'wcet_us': '14000'},
                     ),
                 ],
             ),
