@@ -134,7 +134,12 @@ def barn_outcome(trajectory, world) -> dict:
 
 
 def run_barn_world(index: int, root: str, package: str, codels: str, out: str, planner: bool = True) -> dict:
-    """Convert BARN world ``index`` of the challenge copy at ``root``, write it and its mission, run it."""
+    """Convert BARN world ``index`` of the challenge copy at ``root``, write it and its mission, run it: its row."""
+    return barn_run(index, root, package, codels, out, planner)[2]
+
+
+def barn_run(index: int, root: str, package: str, codels: str, out: str, planner: bool = True):
+    """(the BARN world, the mission's run, the result row) of world ``index``."""
     from genom2bip.mission.session import load_package, run_mission
     from genom2bip.mission.spec import read_mission
     from genom2bip.mission.worlds import barn, mission_file
@@ -166,7 +171,7 @@ def run_barn_world(index: int, root: str, package: str, codels: str, out: str, p
         row.update(dwa_success=round(world.dwa.success, 3), dwa_metric=round(world.dwa.metric(world.optimal_time), 4),
                    dwa_runs=world.dwa.runs)
     row["ratio"] = round(row["driven"] / world.length, 3) if row["success"] else None
-    return row
+    return world, run, row
 
 
 def _quantiles(values: list[float]) -> str:

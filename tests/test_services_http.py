@@ -113,7 +113,7 @@ def test_posters_show_the_last_written_value_to_clients_and_codels(ctl):
     assert client.poster("POM", "Pos")["value"]["estimate"] == ORIGIN
     with pytest.raises(ServiceError) as err:
         client.poster("NDD", "Obs")
-    assert err.value.status == 404 and "no poster 'Obs' (posters: Speed)" in err.value.message
+    assert err.value.status == 404 and "no poster 'Obs' (posters: Speed, Nav)" in err.value.message
 
 
 def test_outputs_come_back_in_the_ok_report(ctl):
