@@ -291,12 +291,13 @@ def test_shutdown_stops_every_module_and_its_codel_times_hold_every_codel_that_r
     assert run.ok, [o.problem for o in run.outcomes if not o.ok]
     assert _report(run, "NDD.GoTo")["status"] == "ok"
     for activity, stop in (("NDD.GoTo", "NDD.Stop"), ("RFLEX.TrackSpeed", "RFLEX.Stop"),
-                           ("LaserRF.Start", "LaserRF.Stop"), ("Aspect.Run", "Aspect.Stop")):
+                           ("LaserRF.Start", "LaserRF.Stop"), ("Aspect.Run", "Aspect.Stop"),
+                           ("Planner.Run", "Aspect.Stop")):
         ended = _report(run, activity, 1 if activity == "NDD.GoTo" else 0)
         assert (ended["status"], ended["by"]) == ("interrupted", stop), activity
     stopped_at = _report(run, "RFLEX.Stop")["time"]
     assert all(abs(s.v) < 1e-6 for s in run.world.trajectory if s.t > stopped_at + 0.1)  # the base braked
-    assert _report(run, "POM.Reset")["status"] == "ok"
+    assert _report(run, "POM.Reset")["status"] == "ok" and _report(run, "Planner.Plan")["status"] == "ok"
     # every codel a request can reach ran, and the times hold each of them with the calls it had
     times = run.codel_times
     assert times["clock"] == "virtual"
