@@ -332,6 +332,7 @@ def main() -> None:
     parser.add_argument("--barn", help="a copy of the BARN challenge repository: run its worlds instead")
     parser.add_argument("--every", type=int, default=1,
                         help="with --barn: the worlds whose index is a multiple of N (default 1; 6: DWA's 50)")
+    parser.add_argument("--offset", type=int, default=0, help="with --every N: the indices i with i %% N == offset")
     parser.add_argument("--workers", type=int, default=1, help="worlds run at a time, each in a process (default 1)")
     parser.add_argument("--package", default=str(ROOT / "gen/dala"), help="the generated package (default gen/dala)")
     parser.add_argument("--codels", default=str(ROOT / "descriptions/dala/codels"), help="the codels' directory")
@@ -343,7 +344,8 @@ def main() -> None:
         from genom2bip.mission.worlds import barn
 
         last = args.first + (args.worlds if args.worlds is not None else 10 ** 6)
-        indices = [i for i in barn.available(Path(args.barn)) if args.first <= i < last and i % args.every == 0]
+        indices = [i for i in barn.available(Path(args.barn))
+                   if args.first <= i < last and i % args.every == args.offset % args.every]
         jobs = [(i, args.barn, args.package, args.codels, str(out), not args.no_planner) for i in indices]
         work = run_barn_world
     else:
