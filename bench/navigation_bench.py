@@ -356,8 +356,13 @@ def main() -> None:
     rows: list[dict] = []
     started = time.perf_counter()
 
+    partial = out / "results.partial.jsonl"  # each row as it comes: a long run cut short keeps what it measured
+    partial.write_text("")
+
     def done(row: dict) -> None:
         rows.append(row)
+        with partial.open("a") as f:
+            f.write(json.dumps(row) + "\n")
         why = f" ({row['reason']})" if row["reason"] else ""
         if args.barn:
             dwa = f", DWA {row['dwa_success']:.1f}" if row.get("dwa_success") is not None else ""
@@ -378,6 +383,7 @@ def main() -> None:
                 done(row)
     rows.sort(key=lambda r: r["index"] if args.barn else r["seed"])
     (out / "results.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    partial.unlink()
     if args.barn:
         text = barn_summary(rows, args) + f"\n  wall clock: {time.perf_counter() - started:.0f} s"
         (out / "summary.txt").write_text(text + "\n")
