@@ -24,7 +24,7 @@ def test_ndd_is_deadlock_free_by_the_compositional_method(capsys):
     lines = out.splitlines()
     assert lines[0] == "model NDD (NDD())"
     assert lines[1] == "compositional analysis (component invariants, interaction invariants, DIS; SAT: cadical153)"
-    assert lines[2].startswith("  component invariants: ") and "16 atoms, 103 local states" in lines[2]
+    assert lines[2].startswith("  component invariants: ") and "17 atoms, 105 local states" in lines[2]
     assert lines[3].startswith("  formula: ") and "48 interactions" in lines[3]
     assert lines[4].startswith("  SAT: ") and "0 candidates" in lines[4]
     assert lines[-1].startswith("deadlock-free (compositional, ")

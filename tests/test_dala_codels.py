@@ -192,13 +192,15 @@ def test_ndd_throws_e_blocked_with_its_reason_and_stops_the_robot():
         obs["cells"][grid.cell_of(x, y, 0.1, 64)] = grid.OCCUPIED
     params = {"robot_radius": 0.35, "security_distance": 0.3, "goal_tolerance": 0.15}
     speed = Ref({"v": 0.3, "w": 0.0})
-    NDD.nddStartGoTo({"x": 5.0, "y": 0.0, "theta": 0.0}, Ref(None), Ref(False))
+    nav = Ref(None)
+    NDD.nddStartGoTo({"x": 5.0, "y": 0.0, "theta": 0.0}, Ref(None), Ref(False), nav)
+    assert nav.value["active"] and nav.value["goal"] == {"x": 5.0, "y": 0.0, "theta": 0.0}
     t, thrown = 0.0, None
     while thrown is None and t < 10:
         pos = {"estimate": {"x": 0.0, "y": 0.0, "theta": 0.0}, "covariance": [0.0] * 3, "stamp": t}
         try:
             assert NDD.nddPlan({"x": 5.0, "y": 0.0, "theta": 0.0}, params, {"v": 0.5, "w": 1.0}, obs, pos,
-                               speed) == "pause::plan"
+                               None, speed, nav) == "pause::plan"
         except Throw as err:
             thrown = err
         t += 0.1
@@ -207,3 +209,5 @@ def test_ndd_throws_e_blocked_with_its_reason_and_stops_the_robot():
     assert thrown.detail["where"] == {"x": 0.0, "y": 0.0, "theta": 0.0}
     assert NDD.NO_WAY_TIMEOUT < t < NDD.NO_WAY_TIMEOUT + 0.5
     assert speed.value == {"v": 0.0, "w": 0.0}
+    assert not nav.value["active"] and nav.value["stalls"] == 0  # no Planner: nothing asked, the planner told
+

@@ -291,12 +291,13 @@ def test_shutdown_stops_every_module_and_its_codel_times_hold_every_codel_that_r
     assert run.ok, [o.problem for o in run.outcomes if not o.ok]
     assert _report(run, "NDD.GoTo")["status"] == "ok"
     for activity, stop in (("NDD.GoTo", "NDD.Stop"), ("RFLEX.TrackSpeed", "RFLEX.Stop"),
-                           ("LaserRF.Start", "LaserRF.Stop"), ("Aspect.Run", "Aspect.Stop")):
+                           ("LaserRF.Start", "LaserRF.Stop"), ("Aspect.Run", "Aspect.Stop"),
+                           ("Planner.Run", "Aspect.Stop")):
         ended = _report(run, activity, 1 if activity == "NDD.GoTo" else 0)
         assert (ended["status"], ended["by"]) == ("interrupted", stop), activity
     stopped_at = _report(run, "RFLEX.Stop")["time"]
     assert all(abs(s.v) < 1e-6 for s in run.world.trajectory if s.t > stopped_at + 0.1)  # the base braked
-    assert _report(run, "POM.Reset")["status"] == "ok"
+    assert _report(run, "POM.Reset")["status"] == "ok" and _report(run, "Planner.Plan")["status"] == "ok"
     # every codel a request can reach ran, and the times hold each of them with the calls it had
     times = run.codel_times
     assert times["clock"] == "virtual"
@@ -308,3 +309,20 @@ def test_shutdown_stops_every_module_and_its_codel_times_hold_every_codel_that_r
     assert recorded == counted
     assert times["not_run"] == ["NDD.motion.nddShutdown", "POM.fusion.pomEnd", "RFLEX.servo.rflexClose"]
     assert set(times["codels"]) | set(times["not_run"]) == set(names)
+
+
+def test_with_the_planner_the_u_trap_goal_is_reached_where_nd_alone_ends_in_e_blocked():
+    """u_trap_planned.yaml is u_trap.yaml with the Planner brought up: the first GoTo reaches the goal behind the U."""
+    plain, planned = (yaml.safe_load((MISSIONS / m).read_text()) for m in ("u_trap.yaml", "u_trap_planned.yaml"))
+    same = [s for s in planned["steps"] if not s["send"].startswith("Planner.")]
+    assert same[:-2] == plain["steps"][:-2] and same[-2]["with"] == plain["steps"][-2]["with"]  # only the Planner
+    run = _run(MISSIONS / "u_trap_planned.yaml")
+    assert run.ok, [o.problem for o in run.outcomes if not o.ok]
+    first = _report(run, "NDD.GoTo", 0)
+    assert first["status"] == "ok"
+    at = next(s for s in run.world.trajectory if s.t >= first["time"])
+    assert math.dist((at.x, at.y), (11.0, 5.0)) < 0.3 and run.world.collisions == 0
+    # it drove into the U (what was never seen counts as free), saw its bottom, and went round an arm
+    assert any(s.x > 5.0 and 3.6 < s.y < 6.4 for s in run.world.trajectory)
+    assert any(6.0 < s.x < 8.5 and not 3.0 < s.y < 7.0 for s in run.world.trajectory)
+    assert _report(run, "NDD.GoTo", 1)["status"] == "ok"

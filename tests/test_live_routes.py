@@ -75,7 +75,7 @@ def test_a_modules_picture_has_its_services_atoms_and_an_unknown_module_is_a_404
     assert "<title>NDD.GoTo.control</title>" in body.decode() and "<title>NDD.GoTo.activity</title>" in body.decode()
     status, _, body = get(server, "/pictures/modules/XYZ.svg")
     assert status == 404
-    assert json.loads(body)["error"] == "no module 'XYZ' (modules: Aspect, LaserRF, NDD, POM, RFLEX)"
+    assert json.loads(body)["error"] == "no module 'XYZ' (modules: Aspect, LaserRF, NDD, POM, Planner, RFLEX)"
 
 
 def test_without_a_mission_there_is_no_scene(ctl):

@@ -157,7 +157,7 @@ def test_the_dala_rules_file_reads_on_the_whole_model():
                                   flatten(pkg, "DALA()"))
     assert [i.name for i in items] == ["goto_after_pom_run", "goto_needs_laser_and_map", "goto_waits_for_base",
                                        "base_stop_stops_navigation", "laser_stop_stops_navigation",
-                                       "no_reset_while_navigating"]
+                                       "no_reset_while_navigating", "planner_after_pom_run", "map_stop_stops_planner"]
 
 
 def package_of_dala():
@@ -189,8 +189,8 @@ def test_a_false_property_of_whole_dala_gets_a_counterexample_that_replays(capsy
                                       'wrong: "NDD.SetSpeed:finish" precedes "POM.Run:trigger";\n')
     assert code == 4, err
     assert "deadlock-free (compositional, " in out
-    assert "  round 1: 4 of 65 atoms kept" in out and ": violated, replayed on the model (" in out
-    assert "  violated (localization, 1 round, 4 of 65 atoms kept" in out
+    assert "  round 1: 4 of 79 atoms kept" in out and ": violated, replayed on the model (" in out
+    assert "  violated (localization, 1 round, 4 of 79 atoms kept" in out
     assert "  counterexample on the model (1 step):" in out
     assert "POM.Run:trigger" in out.split("counterexample on the model")[1]
     pkg = package_of_dala()
@@ -249,3 +249,26 @@ def test_goto_after_pom_run_holds_by_its_rule_and_fails_without_it(capsys, tmp_p
     assert "  counterexample on the model (" in out
     steps = out.split("counterexample on the model")[1]
     assert "NDD.GoTo:trigger" in steps and "POM.Run:finish" not in steps
+
+
+def test_planner_after_pom_run_holds_by_its_rule_and_fails_without_it(capsys, tmp_path):
+    """The Planner's rule is not vacuous either: without it, Planner.Run is accepted before POM.Run finished."""
+    import shutil
+
+    import yaml
+
+    stated = next(line for line in (Path(DALA) / "properties" / "rules.mcl").read_text().splitlines()
+                  if line.startswith("planner_after_pom_run:"))
+    loose = tmp_path / "dala"
+    loose.mkdir()
+    for f in Path(DALA).glob("*.gen"):
+        shutil.copy(f, loose)
+    shutil.copy(Path(DALA) / "dala.idl", loose)
+    rules = yaml.safe_load((Path(DALA) / "rules.yaml").read_text())
+    assert any(r["id"] == "planner-after-pom-run" for r in rules["rules"])
+    rules["rules"] = [r for r in rules["rules"] if r["id"] != "planner-after-pom-run"]
+    (loose / "rules.yaml").write_text(yaml.safe_dump(rules))
+    code, out, err, _ = localized(capsys, tmp_path, stated + "\n", model=str(loose))
+    assert code == 4, err
+    steps = out.split("counterexample on the model")[1]
+    assert "Planner.Run:trigger" in steps and "POM.Run:finish" not in steps

@@ -26,10 +26,11 @@ def run(package):
 # --------------------------------------------------------------------------- structure (Fig. 7)
 
 
-def test_six_services_a_control_task_and_a_poster(package):
+def test_six_services_a_control_task_and_their_posters(package):
+    """The paper's structure, with the Nav poster beside Speed (the goal NDD drives to, for the Planner)."""
     module = next(c for c in package.compound_types if c.name == "NDD_Module")
     assert [c.name for c in module.components] == [
-        "requests", "Speed", "motion", "control", "SetParams", "SetSpeed", "SetDataSource", "GoTo", "Stop"]
+        "requests", "Speed", "Nav", "motion", "control", "SetParams", "SetSpeed", "SetDataSource", "GoTo", "Stop"]
     motion = next(c for c in package.compound_types if c.name == "NDD_motion_Task")
     assert [(c.type, c.name) for c in motion.components] == [
         ("Timer", "timer"), ("Scheduler", "scheduler"), ("NDD_motion_Activity", "permanent")]

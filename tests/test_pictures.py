@@ -340,6 +340,6 @@ def test_generated_package_describe_prints_the_outline():
     result = subprocess.run([sys.executable, "-m", "dala", "describe"], cwd=ROOT / "gen", capture_output=True,
                             text=True, timeout=60)
     assert result.returncode == 0, result.stderr
-    assert "data flow (5):" in result.stdout
+    assert "data flow (9):" in result.stdout and "  NDD.Nav -> Planner (read by plnWatch)" in result.stdout
     assert "  NDD.Stop interrupts NDD.GoTo" in result.stdout
     assert "  NDD.GoTo guarded by the status of POM.Run (goto-after-pom-run)" in result.stdout

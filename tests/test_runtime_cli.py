@@ -46,7 +46,7 @@ def running():
 
 def test_run_prints_what_it_runs_and_where_it_listens(running):
     proc, url, lines = running
-    assert lines[0].startswith("dala controller: 5 components, 18 services; codels: ")
+    assert lines[0].startswith("dala controller: 6 components, 22 services; codels: ")
     assert str(DALA_CODELS) in lines[0]
 
 

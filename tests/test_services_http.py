@@ -113,7 +113,7 @@ def test_posters_show_the_last_written_value_to_clients_and_codels(ctl):
     assert client.poster("POM", "Pos")["value"]["estimate"] == ORIGIN
     with pytest.raises(ServiceError) as err:
         client.poster("NDD", "Obs")
-    assert err.value.status == 404 and "no poster 'Obs' (posters: Speed)" in err.value.message
+    assert err.value.status == 404 and "no poster 'Obs' (posters: Speed, Nav)" in err.value.message
 
 
 def test_outputs_come_back_in_the_ok_report(ctl):
@@ -190,7 +190,7 @@ def test_a_second_goto_interrupts_the_first_and_reaches_its_own_goal(ctl):
 def test_components_services_and_openapi_describe_the_interface(ctl):
     _, _, client = ctl
     names = [c["name"] for c in client.components()]
-    assert names == ["Aspect", "LaserRF", "NDD", "POM", "RFLEX"]
+    assert names == ["Aspect", "LaserRF", "NDD", "POM", "Planner", "RFLEX"]
     goto = client.service("NDD", "GoTo")
     assert goto["kind"] == "activity" and not goto["reentrant"]
     assert goto["inputs"] == [{"name": "goal", "schema": {"$ref": "dala::pose"}, "doc": "Goal in the world frame",
