@@ -63,7 +63,7 @@ def test_simulate_lines_of_the_whole_level_stay_within_120_columns(monkeypatch, 
     assert main(dala.package(), dala.ROOT, ["simulate", "--seed", "1", "--limit", "300"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) > 300 and max(len(line) for line in lines) <= 120
-    assert "(1 of 30 enabled)" in lines[0]  # the thirty alternatives are counted, not listed
+    assert "(1 of 36 enabled)" in lines[0]  # the thirty-six alternatives are counted, not listed
 
 
 def test_a_small_model_still_lists_its_alternatives():

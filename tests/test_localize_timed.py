@@ -81,7 +81,8 @@ def test_the_engine_says_which_ports_each_state_offers():
     assert len(ready) == len(flat.ports)
     due = {fp.path for fp in flat.ports if fp.name == "tick" and not ready[fp.id]}
     assert due == {"Aspect.map.timer.tick", "LaserRF.acquisition.timer.tick", "NDD.motion.timer.tick",
-                   "POM.fusion.timer.tick", "RFLEX.servo.timer.tick"}  # every period is due at time 0
+                   "Planner.plan.timer.tick", "POM.fusion.timer.tick",
+                   "RFLEX.servo.timer.tick"}  # every period is due at time 0
     # every port of every enabled interaction is offered, along the first few hundred states
     seen = 0
     for sid in range(400):
@@ -183,11 +184,11 @@ def test_the_timed_whole_level_is_verified_by_invariants_and_localization(capsys
     lines = out.splitlines()
     assert "deadlock-free (compositional" in out
     for task, period in (("Aspect.map", 100), ("LaserRF.acquisition", 75), ("NDD.motion", 100),
-                         ("POM.fusion", 50), ("RFLEX.servo", 25)):
+                         ("Planner.plan", 200), ("POM.fusion", 50), ("RFLEX.servo", 25)):
         assert any(x.startswith(f"period of {task} ({period} ms): no overrun reachable (localization, 1 round, ")
                    for x in lines), task
     assert any(x.startswith("latency obstacle_to_servo (within 1000 ms): no violation reachable (localization, "
-                            "1 round, 4 of 71 atoms kept") for x in lines)
+                            "1 round, 4 of 86 atoms kept") for x in lines), [x for x in lines if "latency" in x]
 
 
 def test_a_violated_observer_is_printed_with_its_timed_trace(capsys):

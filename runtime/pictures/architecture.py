@@ -35,6 +35,14 @@ def _module_table(module: str, rows: list[tuple[str, str, str]]) -> Html:
                 f'<tr><td bgcolor="#d5deee"><b>{escape(module)}</b></td></tr>{cells}</table>')
 
 
+def _grid(modules: list[str]) -> list[list[str]]:
+    """Columns of two modules each, in the description's order, when there are more than four; else none (the
+    data flow alone places them, left to right)."""
+    if len(modules) <= 4:
+        return []
+    return [modules[k:k + 2] for k in range(0, len(modules), 2)]
+
+
 def functional_level(s: Structure) -> str:
     """Modules with their tasks, services and posters, the data flow between them, and the links that cross modules.
 
@@ -58,9 +66,14 @@ def functional_level(s: Structure) -> str:
             rows[module].append((f"p_{name}", f"poster {name}", "poster"))
     for module in s.modules:
         dot.node(module, label=_module_table(module, rows.get(module, [])), shape="plain")
+    grid = _grid(list(s.modules))
+    for left, right in zip(grid, grid[1:]):  # more than four modules: two rows, so that it stays a screen wide
+        for a, b in zip(left, right):
+            dot.edge(a, b, style="invis", weight="10")
     for f in s.flows:
-        dot.edge(f.module, f.reader, tailport=f"{ports[f'{f.module}.{f.poster}']}:e", label=_wrap(f.codels),
-                 **style.EDGES["read"][0])
+        where = {"constraint": "false", "tailport": ports[f'{f.module}.{f.poster}']} if grid else \
+            {"tailport": f"{ports[f'{f.module}.{f.poster}']}:e"}
+        dot.edge(f.module, f.reader, label=_wrap(f.codels), **where, **style.EDGES["read"][0])
         kinds.append("read")
     crossing: dict[tuple[str, str, str], list[str]] = defaultdict(list)
     for link in s.links:
