@@ -95,7 +95,7 @@ def main() -> None:
         for name, model in built:
             _, off, t0 = search(model, "c", args.states)
             z, on, t1 = search(model, "c", args.states, reduce=True)
-            asked, smaller, left, _ = z.por.stats
+            asked, smaller, left = z.por.stats
             print(f"{name:24} {on.states:>9,} {off.discrete:>13,} {on.discrete:>12,} {asked:>10,} {smaller:>8,} "
                   f"{left:>14,} {t0:>6.1f} {t1:>6.1f}", flush=True)
     if not args.full:

@@ -457,7 +457,6 @@ class ZoneExplorer:
             old, fired = False, result.transitions  # the rest too when none of the set fires in this zone
             for first in ((True, False) if keep is not None else (True,)):
                 if not first and not old and result.transitions > fired:
-                    self.por.stats[3] += 1
                     break
                 for index, nxt in succ:
                     if keep is not None and (index in keep) != first:
