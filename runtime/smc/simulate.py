@@ -255,22 +255,10 @@ class Simulator:
                     if info.tick:
                         if due:
                             continue
-                    elif info.dones:
-                        early = False
-                        for k in info.dones:
-                            d = drawn.get(k)
-                            if d is not None and step.value(scheds[k][3]) < d:
-                                early = True
-                        if early:
-                            continue
-                    if info.ends:
-                        early = False
-                        for k in info.ends:
-                            d = waits.get(k)
-                            if d is not None and step.value(windows[k][2]) < d:
-                                early = True
-                        if early:
-                            continue
+                    elif _early(step, info.dones, drawn, scheds, 3):
+                        continue
+                    if _early(step, info.ends, waits, windows, 2):
+                        continue
                     allowed.append((number, handles))
                 if not allowed:  # the policy found nothing the model allows: keep to the model
                     allowed = groups
@@ -430,3 +418,8 @@ class _PyStep:
 
     def take(self, handle: int) -> None:
         self.state = self.succ[handle][1]
+
+
+def _early(step, keys, drawn_at: dict, table, column: int) -> bool:
+    """Some of ``keys`` has a drawn time its clock (``table[k][column]``, a slot of ``step``) has not reached yet."""
+    return any(drawn_at.get(k) is not None and step.value(table[k][column]) < drawn_at[k] for k in keys)

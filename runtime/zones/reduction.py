@@ -162,22 +162,21 @@ class PartialOrder:
         self.tick_rules = [r for r, rule in enumerate(rules) if any(c == tick for c, _ in rule.low)]
         self.stats = [0, 0, 0]  # nodes asked about, nodes given a smaller set, steps left out of those sets
 
-    def _offers(self, atom: int, marking: int) -> set[str]:
-        got = set()
-        bit = 1
+    @staticmethod
+    def _by_place(table: dict, atom: int, marking: int, empty):
+        """The union of ``table[(atom, place bit)]`` over the places marked (an atom may mark several)."""
+        got, bit = empty, 1
         while bit <= marking:
             if marking & bit:
-                got |= self.offers.get((atom, bit), set())
+                got = got | table.get((atom, bit), empty)
             bit <<= 1
         return got
 
+    def _offers(self, atom: int, marking: int) -> set[str]:
+        return self._by_place(self.offers, atom, marking, frozenset())
+
     def _leaving(self, atom: int, marking: int) -> int:
-        got, bit = 0, 1
-        while bit <= marking:
-            if marking & bit:
-                got |= self.leaving.get((atom, bit), 0)
-            bit <<= 1
-        return got
+        return self._by_place(self.leaving, atom, marking, 0)
 
     def _enablers(self, s: int, state: tuple, stub: int) -> int:
         """Sources one of which must fire before disabled source ``s`` can: those taking an atom of it that lacks
