@@ -138,14 +138,14 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
 Configuration = tuple[tuple[str, ...], tuple[tuple[str, int], ...]]
 
 
-def configurations(path: str | Path, grid: int | None = None) -> set[Configuration]:
+def configurations(path: str | Path, grid: int | None = None, **search) -> set[Configuration]:
     """The reachable configurations of a TChecker file without their clocks: each process's location (in file
     order) and the integer variables, every one kept (no dead-variable reduction).  What ``tck-reach -C graph``
-    lists, to compare with it."""
+    lists, to compare with it.  ``search``: ZoneExplorer's options (covreach's by default)."""
     from runtime.zones.search import ZoneExplorer
 
     system, tr = load(path, grid, keep_integers=True)
-    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
+    z = ZoneExplorer(tr.package, tr.root, **({"local_ceilings": True, "merge": False} | search))
     z.explore()
     atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
     where = {(tr.atoms[p], place): loc for (p, loc), place in tr.places.items()}
