@@ -77,6 +77,28 @@ def test_every_program_written_in_c_is_the_one_python_writes(tmp_path):
     assert compared > 500
 
 
+def test_programs_let_go_past_the_budget_are_written_again_and_change_nothing(tmp_path):
+    # With a budget of one byte, the program of every state whose nodes were all expanded is let go; a zone of
+    # that state arriving later has it written again.  The search stores the same nodes in the same order, and a
+    # program let go is written again when asked for after the search.
+    let_go = rewritten = 0
+    for name, gen, defines, platform, mission in CASES:
+        model = model_of(tmp_path, gen, defines, platform, mission)
+        held, rh = _explore(model, "c")
+        tight = ZoneExplorer(model.package, model.root, program_bytes=1)
+        rt = tight.explore()
+        assert (rt.states, rt.transitions, rt.violations, rt.maxima) == \
+            (rh.states, rh.transitions, rh.violations, rh.maxima), name
+        assert [_node(n) for n in tight.nodes] == [_node(n) for n in held.nodes], name
+        assert held.search.programs_let_go() == (0, 0), name
+        gone, again = tight.search.programs_let_go()
+        let_go, rewritten = let_go + gone, rewritten + again
+        assert tight.search.counts()[14] < held.search.counts()[14] or not gone, name
+        for k in range(len(tight.states)):
+            assert tight.search.program(k) == held.search.program(k), f"{name}: state {k}"
+    assert let_go and rewritten, (let_go, rewritten)
+
+
 def test_states_c_cannot_write_go_back_to_python(tmp_path, monkeypatch):
     # An expression the C code cannot say exactly (here: every one) sends its states to ZoneExplorer.program().
     from runtime.zones import ctables

@@ -53,7 +53,8 @@ def library():
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_por", None, [p, AMPLE]), ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
-            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)])):
+            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
+            ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -94,6 +95,7 @@ class CSearch:
                                        self.compiled.budget, self._inter)
             if status:
                 raise MemoryError("zone search: no memory for the model's tables")
+            lib.zs_set_budget(self.ctx, z.program_bytes)
             z._intern = self._intern
         self._ample = AMPLE(self._ask_ample)
         if z.por is not None:
@@ -239,6 +241,12 @@ class CSearch:
         counts = (ctypes.c_int64 * 16)()
         self.lib.zs_counts(self.ctx, counts)
         return list(counts)
+
+    def programs_let_go(self) -> tuple[int, int]:
+        """Programs let go past the budget, and programs written again for a state whose one was let go."""
+        out = (ctypes.c_int64 * 2)()
+        self.lib.zs_program_counts(self.ctx, out)
+        return out[0], out[1]
 
     def memory(self) -> int:
         """Bytes the search holds (zsearch.c's zs_memory)."""

@@ -51,6 +51,11 @@ class ZoneResult:
     merged: int = 0  # zones merged into another of their discrete state (their union being one zone)
 
 
+#: Bytes of discrete states' programs the C search holds before it lets go of those of the states whose nodes
+#: were all expanded (written again from the state's words if a new zone of the state arrives; 0: never).
+PROGRAM_BYTES = 1 << 30
+
+
 class ZoneExplorer:
     """Explores a timed model with zones; ``watch`` clocks get their largest value while their atom watches.
 
@@ -59,7 +64,8 @@ class ZoneExplorer:
     """
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
-                 merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False) -> None:
+                 merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False,
+                 program_bytes: int = PROGRAM_BYTES) -> None:
         self.model: TimedModel = analyse(package, root)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
         from runtime.native.compiled import compile_space
@@ -95,6 +101,7 @@ class ZoneExplorer:
         # Extra_LU with each place's bounds (model.py's _local_ceilings), off by default: measured, it changes nothing
         # on DALA and RobNav (their clocks are read by priorities or observers) and stores more on Fischer 6
         self.local_ceilings = local_ceilings
+        self.program_bytes = program_bytes
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)

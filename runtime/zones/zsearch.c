@@ -79,11 +79,87 @@ typedef struct {
     int amp_all;
     int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
     int64_t reduced;        /* expansions that left steps out */
+    /* programs let go (see let_go): per state, its nodes waiting and whether C wrote its program */
+    int32_t *pending, *plen;
+    uint8_t *in_c;
+    int64_t pcap;
+    VEC(int64_t) finished;  /* states whose nodes were all expanded, oldest first, from finished_head on */
+    int64_t finished_head;
+    int64_t budget;         /* bytes of programs held before finished states' are let go; 0: never */
+    int64_t pinned;         /* the state being expanded: its program is read while its successors arrive */
+    int64_t let_go, rewritten;
 } Ctx;
 
 
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
+
+/* -- programs let go ----------------------------------------------------------------------------------
+ * A discrete state's program is read when its nodes arrive and when they are expanded.  Once every node of a
+ * state was expanded, its program is needed again only if a new zone of that state arrives; a program written
+ * in C can then be written again from the state's words.  Past the budget, the programs of the states that
+ * finished first are let go (breadth-first, a state's zones mostly arrive within a few levels of each other). */
+static int grow_pending(Ctx *x, int64_t n)
+{
+    if (n <= x->pcap)
+        return 0;
+    int64_t cap = x->pcap ? x->pcap : 1024;
+    while (cap < n)
+        cap *= 2;
+    int32_t *pe = realloc(x->pending, cap * sizeof(int32_t)), *pl = pe ? realloc(x->plen, cap * sizeof(int32_t)) : 0;
+    uint8_t *c = pl ? realloc(x->in_c, cap) : 0;
+    if (pe)
+        x->pending = pe;
+    if (pl)
+        x->plen = pl;
+    if (!c)
+        return -9;
+    x->in_c = c;
+    memset(x->pending + x->pcap, 0, (cap - x->pcap) * sizeof(int32_t));
+    memset(x->plen + x->pcap, 0, (cap - x->pcap) * sizeof(int32_t));
+    memset(x->in_c + x->pcap, 0, cap - x->pcap);
+    x->pcap = cap;
+    return 0;
+}
+
+static void let_go(Ctx *x)
+{
+    while (x->budget > 0 && x->prog_words * 8 > x->budget && x->finished_head < x->finished.n) {
+        int64_t s = x->finished.a[x->finished_head++];
+        if (s == x->pinned || x->pending[s] || !x->in_c[s] || !x->prog.a[s])
+            continue;
+        free(x->prog.a[s]);
+        x->prog.a[s] = NULL;
+        x->prog_words -= x->plen[s];
+        x->let_go++;
+    }
+    if (x->finished_head > 4096 && x->finished_head * 2 > x->finished.n) {
+        memmove(x->finished.a, x->finished.a + x->finished_head,
+                (x->finished.n - x->finished_head) * sizeof(int64_t));
+        x->finished.n -= x->finished_head;
+        x->finished_head = 0;
+    }
+}
+
+/* A node of ``state`` leaves the waiting list (expanded or covered); -9: no memory. */
+static int node_done(Ctx *x, int64_t state)
+{
+    if (--x->pending[state] == 0 && x->budget > 0) {
+        PUSH(x->finished, state);
+    }
+    return 0;
+}
+
+void zs_set_budget(void *p, int64_t bytes)
+{
+    ((Ctx *)p)->budget = bytes;
+}
+
+void zs_program_counts(void *p, int64_t *out)
+{
+    Ctx *x = p;
+    out[0] = x->let_go, out[1] = x->rewritten;
+}
 
 void *zs_new(int d, const double *ceiling, int nobs, int merge)
 {
@@ -101,6 +177,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     for (int i = 0; i < d; i++)
         x->max_node[i] = -1;
     x->ntmp = 9;
+    x->pinned = -1;
     x->shorts.size = (int64_t)d * d * sizeof(int16_t);
     x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
@@ -121,6 +198,7 @@ void zs_free(void *p)
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
+    free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
@@ -590,6 +668,13 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
         int status = write_program(x, x->tables, s, x->d, T(x, 8), &prog);
         free(s);
         if (!status) {
+            if (grow_pending(x, state + 1)) {
+                free(prog.a);
+                return NULL;
+            }
+            let_go(x);  /* first: a state finished twice may still be queued, and this one must stay */
+            x->rewritten += x->in_c[state];
+            x->in_c[state] = 1, x->plen[state] = (int32_t)prog.n;
             x->prog_words += prog.n;
             x->prog.a[state] = prog.a ? prog.a : calloc(1, sizeof(int64_t));
             return x->prog.a[state];
@@ -598,7 +683,7 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
         if (status != BACK)
             return NULL;
     }
-    if (ask(state) != 0)
+    if (!ask || ask(state) != 0)
         return NULL;
     return x->prog.a[state];
 }
@@ -862,9 +947,10 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         Edge e = {parent, index, index};
         PUSH(x->edges, e);
     }
-    if (kept_push(kept, index))
+    if (kept_push(kept, index) || grow_pending(x, step.state + 1))
         return -9;
     PUSH(x->waiting, index);
+    x->pending[step.state]++;
     return 0;
 }
 
@@ -992,9 +1078,14 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
     int64_t count = 0;
     while (x->head < x->waiting.n) {
         int32_t k = x->waiting.a[x->head++];
+        if (node_done(x, x->nodes.a[k].state)) {  /* its program stays while it is pinned */
+            status = -9;
+            break;
+        }
         if (x->nodes.a[k].covered)
             continue;
         x->nodes.a[k].expanded = 1;
+        x->pinned = x->nodes.a[k].state;
         const int64_t *pr = program(x, x->nodes.a[k].state, ask);
         if (!pr) {
             status = -1;
@@ -1180,8 +1271,10 @@ void zs_results(void *p, int32_t *violation, double *max_value, int32_t *max_nod
 int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
 {
     Ctx *x = p;
-    if (state >= x->prog.n || !x->prog.a[state])
+    if (state >= x->prog.n)
         return -1;
+    if (!x->prog.a[state] && (state >= x->pcap || !x->in_c[state] || !program(x, state, NULL)))
+        return -1;  /* none, or let go and written again here (C writes it alike) */
     const int64_t *pr = x->prog.a[state];
     Parts q = parts(pr);
     const int64_t *s = q.succ;
