@@ -25,7 +25,7 @@ BY_HELP = {
     "genom2bip call": "talks to the controller that `run` serves",
     "--live": "opens a window on a display",
     "--view": "serves the live page for as long as the mission runs",
-    "--timed": "a timed exploration of minutes (docs/verification.md)",
+    "--timed": "a timed exploration of minutes (docs/verification/time.md)",
     "genom2bip campaign": "a campaign of minutes on Dask workers",
 }
 #: Lines whose answer is "found" (exit 4): the example model's deadlock, the timed example's end.

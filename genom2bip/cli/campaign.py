@@ -1,5 +1,5 @@
 """``genom2bip campaign FILE``: every job of a campaign file on Dask workers, one JSON line each, a summary table,
-a picture per numeric axis (docs/verification.md, Campaigns).
+a picture per numeric axis (docs/verification/campaigns.md).
 
 Exit status: 0 every job done and every check holds, 4 a check is violated
 (or meets a model error), 5 a job is inconclusive, failed, crashed or timed out, 1 bad

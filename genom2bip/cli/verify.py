@@ -35,7 +35,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     what = parser.add_argument_group("what to check (default: --deadlock, also with --aut/--dot)")
     what.add_argument("--deadlock", action="store_true", help="report every reachable deadlock with a shortest trace")
     what.add_argument("--property", metavar="FILE", action="append", default=[],
-                      help="check the properties of FILE (MCL-style; docs/verification.md); may be repeated")
+                      help="check the properties of FILE (MCL-style; docs/verification/properties.md); may be repeated")
     search = parser.add_argument_group("exploration")
     search.add_argument("--engine", choices=("compiled", "python", "spin", "explore"), default="compiled",
                         help="our explorer compiled to C (default; Python where it cannot be compiled), our explorer "
