@@ -8,7 +8,7 @@ process (the full state space: the Promela hand-off has no reduction), is
 interrupted after S seconds and prints its statistics.  Our progress goes to
 the terminal; SPIN's, one line a report, to ``out/dala-long-spin.log``.
 
-The estimate of the full state space (docs/verification.md, "How large is
+The estimate of the full state space (docs/verification/benchmark.md, "How large is
 whole DALA") is the product of the five modules' own reachable state counts,
 each found exactly by the compiled explorer in well under a second.
 """
@@ -152,7 +152,7 @@ def full_search(package, root, seconds: float) -> LongRow:
 
 def estimate_lines(counts: dict[str, int], rows: list[LongRow], pair: str) -> list[str]:
     product = math.prod(counts.values())
-    lines = ["Full size of whole DALA with its rules (docs/verification.md, \"How large is whole DALA\"):",
+    lines = ["Full size of whole DALA with its rules (docs/verification/benchmark.md, \"How large is whole DALA\"):",
              "  modules alone: " + ", ".join(f"{m} {n:,}" for m, n in counts.items()),
              f"  POM and Aspect side by side, no connector: {pair} states "
              f"(product {counts['POM'] * counts['Aspect']:,})",

@@ -3,7 +3,7 @@
 Run ``python bench/timed_bench.py [--default-wcet MS] [--max-states N] [--only MODULE]``.
 Each DALA module is built alone (its own constraints, no rule file), as
 ``genom2bip verify descriptions/dala/M.gen --no-rules`` builds it; the timed
-model is what ``--timed`` adds (docs/verification.md, *Time*).  The DALA
+model is what ``--timed`` adds (docs/verification/time.md).  The DALA
 descriptions declare no WCET, so every codel takes ``--default-wcet``
 (default 0: the periods alone make time; give e.g. 10 to charge each codel
 10 ms).  Figures are one run each, end to end: full exploration of the

@@ -22,7 +22,7 @@ Codels are named ``Component.Owner.codel`` where the owner is the service or
 task whose automaton runs the codel.  Every problem is reported with the file,
 line and column of the value at fault, as in rule files; nothing is built.
 ``genom2bip.build.platform`` turns a :class:`Platform` into atoms, connectors
-and priorities of the BIP model (docs/verification.md, *Platform*).
+and priorities of the BIP model (docs/verification/platform.md, *The platform*).
 """
 from __future__ import annotations
 

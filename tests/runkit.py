@@ -66,7 +66,7 @@ def dala_without_wcets() -> Path:
 
     For the tests of the timed model's mechanics written on DALA's shape when its codels declared no WCET (each
     codel then takes ``--default-wcet``); DALA's measured WCETs and what the timed check makes of them are in
-    docs/missions.md and docs/verification.md.
+    docs/missions.md and docs/verification/localization.md.
     """
     import atexit
     import re

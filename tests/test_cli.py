@@ -53,7 +53,7 @@ def test_check_prints_a_summary_of_a_genom2_module(capsys):
 def test_check_the_dala_directory(capsys):
     code, out, err = run(capsys, "check", DALA)
     assert code == 0, err
-    for name in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM"):
+    for name in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM", "Planner"):
         assert f"component {name} (genom3)" in out
     assert "after SetParams, SetSpeed, SetDataSource" in out
     assert "motion: period 100 ms" in out

@@ -77,3 +77,19 @@ def test_no_doc_names_a_section_of_the_old_single_file():
     named = re.compile(r"verification\.md,\s+\*")
     for path in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
         assert not named.search(path.read_text()), path
+
+
+def test_the_code_names_a_chapter_of_verification_not_the_index():
+    """Comments, docstrings and help texts that point to the verification docs name the chapter file (the index
+    docs/verification.md has no sections left to cite), and every docs/ file the code names exists; the same in
+    the comments of the example and DALA's property, observer and campaign files."""
+    sources = [p for d in ("genom2bip", "runtime", "bench", "tests") for p in sorted((ROOT / d).rglob("*.py"))
+               if p.name != "test_docs_site.py"]
+    sources += [p for d in ("examples", "descriptions") for ext in ("*.mcl", "*.yaml", "*.gen")
+                for p in sorted((ROOT / d).rglob(ext))]
+    assert len(sources) > 100 and ROOT / "examples" / "props.mcl" in sources
+    for path in sources:
+        text = path.read_text(encoding="utf-8")
+        assert "docs/verification.md" not in text, path
+        for name in re.findall(r"docs/[A-Za-z0-9_/.-]+?\.md", text):
+            assert (ROOT / name).is_file(), (path, name)

@@ -1,6 +1,8 @@
 """``genom2bip verify``: verdicts, traces, exit statuses, and the LTS exports."""
 import io
 
+import pytest
+
 from genom2bip.cli import main
 from runtime.explore import explore
 from runtime.export.lts import write_aut, write_dot
@@ -147,10 +149,35 @@ def test_dot_marks_initial_and_deadlock_states():
 def test_exports_from_the_command_line(capsys, tmp_path):
     aut, dot = tmp_path / "m.aut", tmp_path / "m.dot"
     code, out, _ = run(capsys, "verify", DINING, "--root", "Table3()", "--aut", str(aut), "--dot", str(dot))
-    assert code == 0  # exports alone: no deadlock check unless --deadlock is given
+    assert code == 4  # the exploration the exports need finds Table3's deadlock: the default check still runs
+    assert "deadlocks: 1 reachable state without enabled interaction" in out
     assert aut.read_text().splitlines()[0] == "des (0, 27, 14)"
     assert f"wrote {aut} (Aldebaran LTS: 14 states, 27 transitions)" in out
     assert dot.read_text().count(" -> ") == 27
+
+
+@pytest.mark.parametrize("engine", ["explore", "compiled", "python"])
+@pytest.mark.parametrize("export", ["--aut", "--dot"])
+def test_an_lts_export_of_a_model_that_deadlocks_exits_with_the_violation_status(capsys, tmp_path, engine, export):
+    path = tmp_path / "m.out"
+    code, out, err = run(capsys, "verify", DINING, "--root", "Table3()", export, str(path), "--engine", engine,
+                         "--traces", "terminal")
+    assert code == 4, err
+    assert "deadlock 1 of 1 (state 12, 3 steps):" in out and path.exists()
+
+
+def test_an_lts_export_of_a_model_without_deadlock_exits_zero(capsys, tmp_path):
+    code, out, err = run(capsys, "verify", str(FIXTURES / "Counters.bip"), "--aut", str(tmp_path / "c.aut"),
+                         "--traces", "terminal")
+    assert code == 0, err
+    assert "deadlocks: none reachable" in out
+
+
+def test_a_promela_translation_alone_explores_nothing(capsys, tmp_path):
+    pml = tmp_path / "m.pml"
+    code, out, err = run(capsys, "verify", DINING, "--root", "Table3()", "--promela", str(pml), "--traces", "terminal")
+    assert code == 0, err  # SPIN searches it; verify only translates
+    assert "explored" not in out and "deadlock" not in out and pml.exists()
 
 
 def test_truncated_lts_is_not_exported(capsys, tmp_path):

@@ -374,7 +374,7 @@ def test_every_module_view_has_its_edge_labels_apart_and_readable(browser, ctl):
     page = browser.new_page(viewport={"width": 1400, "height": 1000})
     page.goto(server.url + "/live/")
     ready(page)
-    for module in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM"):
+    for module in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM", "Planner"):
         page.click(f'#level g.node.module:has(title:text-is("{module}"))')
         wait(page, f'#module g.node:has(title:text-is("{module}.requests"))')
         found = page.evaluate(LABELS)

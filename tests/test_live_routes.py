@@ -62,7 +62,7 @@ def test_the_level_picture_is_the_graph_verbs_with_every_module(ctl):
     assert status == 200 and headers["content-type"].startswith("image/svg+xml")
     text = body.decode()
     assert text.lstrip().startswith("<?xml") and "<svg" in text
-    for module in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM"):
+    for module in ("LaserRF", "Aspect", "NDD", "RFLEX", "POM", "Planner"):
         assert f"<title>{module}</title>" in text
     for service in ("GoTo", "TrackSpeed", "SetParams"):
         assert f">{service}</text>" in text  # one line of text per service: the page colours it

@@ -178,7 +178,7 @@ def verify(capsys, *argv: str) -> tuple[int, str, str]:
 
 def test_the_timed_whole_level_is_verified_by_invariants_and_localization(capsys):
     """The command of the README's job, on DALA with 0 ms codels (what the same job gives with its measured WCETs
-    is in docs/verification.md, *DALA with its measured WCETs*)."""
+    is in docs/verification/localization.md, *DALA with its measured WCETs*)."""
     code, out, _ = verify(capsys, str(DALA), "--timed", "--method", "compositional")
     assert code == 0
     lines = out.splitlines()

@@ -120,6 +120,65 @@ def test_functional_level_of_dala_is_compact_and_its_text_readable(tmp_path):
     assert 800 < width <= 1600 and 300 < height <= 820, (width, height)
 
 
+def _laid_out_boxes(dot: str) -> tuple[list[tuple[str, tuple[float, ...]]], list[tuple[str, tuple[float, ...]]]]:
+    """(edge labels, nodes) of ``dot`` as the layout engine placed them: (text, (x0, y0, x1, y1)) in points.
+
+    A label's box is from its drawing operations (each line's anchor, width and font size: ascent 0.8, descent
+    0.25 of the size), an ``xlabel`` as well as a ``label``; a node's from its position and size."""
+    import json
+
+    from runtime.pictures.render import layout
+
+    laid = json.loads(layout(dot, "json"))
+    labels = []
+    for e in laid.get("edges", []):
+        size, lines = 10.0, []
+        for key in ("_ldraw_", "_hldraw_", "_tldraw_"):
+            for op in e.get(key, []):
+                if op["op"] == "F":
+                    size = op["size"]
+                elif op["op"] == "T":
+                    (x, y), w = op["pt"], op["width"]
+                    x0 = {"c": x - w / 2, "l": x, "r": x - w}[op["align"]]
+                    lines.append((op["text"], (x0, y - 0.25 * size, x0 + w, y + 0.8 * size)))
+        if lines:
+            boxes = [b for _, b in lines]
+            box = (min(b[0] for b in boxes), min(b[1] for b in boxes), max(b[2] for b in boxes),
+                   max(b[3] for b in boxes))
+            labels.append((" / ".join(t for t, _ in lines), box))
+    nodes_ = []
+    for n in laid.get("objects", []):
+        if "pos" in n and "width" in n:
+            (x, y), w, h = map(float, n["pos"].split(",")), float(n["width"]) * 36, float(n["height"]) * 36
+            nodes_.append((n["name"], (x - w, y - h, x + w, y + h)))
+    return labels, nodes_
+
+
+def _meet(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def test_functional_level_of_dala_has_no_label_over_another_nor_over_a_module():
+    """Six modules, two to a column: the labels of the edges between two modules of one column (NDD and POM) were
+    laid at one spot, over one another; each is now apart from every other label and every module."""
+    labels, tables = _laid_out_boxes(functional_level(dala()[3]))
+    texts = [t for t, _ in labels]
+    assert {"no-reset-while-navigating", "goto-after-pom-run", "aspFuse, aspWaitScan"} <= set(texts)
+    assert len(tables) == 6
+    over = [(a, b) for i, (a, x) in enumerate(labels) for b, y in labels[i + 1:] if _meet(x, y)]
+    over += [(a, m) for a, x in labels for m, y in tables if _meet(x, y)]
+    assert over == []
+
+
+def test_edges_between_modules_of_one_column_are_labelled_beside_them():
+    from runtime.pictures.architecture import _labeller
+
+    label = _labeller([["Aspect", "LaserRF"], ["NDD", "POM"]])
+    assert label("NDD", "POM", "rule") == {"xlabel": "rule"} and label("POM", "NDD", None) == {"xlabel": None}
+    assert label("Aspect", "NDD", "nddPlan") == {"label": "nddPlan"}
+    assert _labeller([])("NDD", "POM", "rule") == {"label": "rule"}  # four modules or fewer: no columns
+
+
 def test_wrapped_labels_keep_every_name_and_stay_short():
     from runtime.pictures.architecture import _wrap
 

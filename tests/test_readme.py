@@ -25,13 +25,14 @@ BY_HELP = {
     "genom2bip call": "talks to the controller that `run` serves",
     "--live": "opens a window on a display",
     "--view": "serves the live page for as long as the mission runs",
-    "--timed": "a timed exploration of minutes (docs/verification.md)",
+    "--timed": "a timed exploration of minutes (docs/verification/time.md)",
     "genom2bip campaign": "a campaign of minutes on Dask workers",
 }
-#: Lines whose answer is "found" (exit 4): the example model's deadlock, the timed example's end.
+#: Lines whose answer is "found" (exit 4): the example model's deadlock (an LTS export checks it too), the timed
+#: example's end.
 FOUND = ("examples/model.bip --root 'System()' --trace-picture", "examples/model.bip --root 'System()' --method both",
          "python -m runtime explore examples/timed.bip", "examples/model.bip --root 'System()' --traces traces",
-         "examples/model.bip --root 'System()' --json")
+         "examples/model.bip --root 'System()' --json", "examples/model.bip --root 'System()' --aut")
 
 
 def using_it() -> list[str]:

@@ -192,6 +192,15 @@ def test_json_of_a_deadlock_found(capsys, tmp_path):
     assert data["details"] == str(tmp_path / "t" / "verify.txt")
 
 
+def test_json_of_an_lts_export_that_meets_a_deadlock(capsys, tmp_path):
+    code, data = document(capsys, DINING, "--root", "Table3()", "--aut", tmp_path / "m.aut", "--engine", "explore",
+                          "--traces", tmp_path / "t")
+    assert code == 4 and data["exit_status"] == 4
+    (check,) = data["checks"]
+    assert (check["kind"], check["verdict"]) == ("deadlock", "violated")
+    assert (tmp_path / "m.aut").read_text().startswith("des (0, 27, 14)")
+
+
 def test_json_of_a_property_violated_with_traces_inline(capsys, tmp_path):
     code, data = document(capsys, SERVER, "--property", props(tmp_path), "--engine", "python",
                           "--traces", "terminal")

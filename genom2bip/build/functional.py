@@ -71,7 +71,7 @@ class FunctionalLevel:
     def __init__(self, description: ir.Description, system: str, rules: list[Rule] | None = None,
                  time=None) -> None:
         self.description = description
-        self.time = time  # genom2bip.build.timed.TimeOptions: add symbolic time (docs/verification.md, Time)
+        self.time = time  # genom2bip.build.timed.TimeOptions: add symbolic time (docs/verification/time.md)
         self.timing = None  # what the time transformation chose, once built
         self.system = system
         self.rules = description_rules(description) if rules is None else rules

@@ -22,7 +22,7 @@ Applied by :func:`genom2bip.build.timed.apply` when a platform is given
 * urgency is priority too: time (``tick``) may not pass while a grant, a
   codel start, a period's closing or a report is possible.
 
-docs/verification.md (*Platform*) says what each choice models and why.
+docs/verification/platform.md (*The platform*) says what each choice models and why.
 """
 from __future__ import annotations
 

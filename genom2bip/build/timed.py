@@ -19,7 +19,7 @@ the explorer and the run-time monitors all see the same atoms:
   ticks from its ``from`` event to its ``to`` event and goes to ``ERROR``
   once they exceed its bound.
 
-Ticks are ordinary ports and data (docs/verification.md, *Time* says why).
+Ticks are ordinary ports and data (docs/verification/time.md, *Ticks as ports and data* says why).
 """
 from __future__ import annotations
 
@@ -419,7 +419,7 @@ def arm_requests(level, watch) -> None:
     """The default environment is not Zeno: a service of a periodic task is requested at most once per period.
 
     The acceptor's port of such a service is armed when its task's period
-    opens and disarmed by the request it lets through (docs/verification.md,
+    opens and disarmed by the request it lets through (docs/verification/platform.md,
     *The environment*).
     """
     armed: dict[Path, dict[tuple[str, ...], list[str]]] = {}  # acceptor -> task -> services

@@ -73,6 +73,47 @@ class Run:
     where: str = ""  # the cluster, in words
 
 
+#: Dask settings of a local cluster: a job that keeps killing its workers is given up; no HTTP routes (no dashboard,
+#: no metrics, no health page) on the scheduler nor on the workers.
+LOCAL_CONFIG: dict[str, Any] = {"distributed.scheduler.allowed-failures": LOCAL_ALLOWED_FAILURES,
+                                "distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
+
+
+#: Where the HTTP servers of a local cluster's scheduler and workers listen: loopback, a port of their own.
+HTTP_LOOPBACK = f"{LOOPBACK}:0"
+
+
+def local_cluster_arguments(spec: ClusterSpec) -> dict[str, Any]:
+    """``LocalCluster``'s arguments for ``spec``: one single-threaded worker process per job slot, the scheduler's and
+    the workers' connections on ``spec.listen``, and no dashboard.
+
+    Dask's scheduler and workers start an HTTP server whatever the dashboard options say; a worker's binds to the
+    worker's own host unless told where, which ``--listen 0.0.0.0`` would open to every interface.  Both are bound
+    to loopback (:data:`HTTP_LOOPBACK`) whatever ``--listen`` says, the workers' by :func:`loopback_nanny`
+    (LocalCluster's own ``worker_dashboard_address`` would turn the worker's dashboard on); with no routes
+    (:data:`LOCAL_CONFIG`) they serve nothing, and the scheduler's is stopped as soon as it has started.
+    """
+    return {"n_workers": spec.workers or os.cpu_count() or 1, "threads_per_worker": 1, "processes": True,
+            "host": spec.listen, "scheduler_port": 0, "silence_logs": logging.CRITICAL,
+            "dashboard_address": HTTP_LOOPBACK, "scheduler_kwargs": {"dashboard": False},
+            "worker_class": loopback_nanny(),
+            "preload": ["genom2bip.campaign.session"]}  # each worker in a session of its own
+
+
+def loopback_nanny() -> type:
+    """Dask's ``Nanny`` whose worker has no dashboard and keeps its HTTP server on loopback."""
+    from distributed import Nanny
+
+    class LoopbackNanny(Nanny):
+        """A nanny starting a worker whose HTTP server listens on :data:`HTTP_LOOPBACK`, dashboard off."""
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            kwargs.update(dashboard_address=HTTP_LOOPBACK, dashboard=False)
+            super().__init__(*args, **kwargs)
+
+    return LoopbackNanny
+
+
 def connect(spec: ClusterSpec):
     """``(client, cluster)``: a client of the running scheduler (cluster None), or of a new local cluster."""
     import dask
@@ -83,15 +124,8 @@ def connect(spec: ClusterSpec):
     bound_frames()  # a peer announcing exabytes is refused before they are allocated
     if spec.scheduler:
         return Client(spec.scheduler, security=spec.security(), timeout=spec.connect_timeout), None
-    workers = spec.workers or os.cpu_count() or 1
-    # No dashboard: Dask's scheduler and workers start an HTTP server whatever dashboard_address says (the
-    # scheduler on 8787 when free); with no routes they serve nothing, and the scheduler's is stopped at once.
-    with dask.config.set({"distributed.scheduler.allowed-failures": LOCAL_ALLOWED_FAILURES,
-                          "distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}):
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=spec.listen,
-                               scheduler_port=0, dashboard_address=f"{spec.listen}:0", silence_logs=logging.CRITICAL,
-                               scheduler_kwargs={"dashboard": False},
-                               preload=["genom2bip.campaign.session"])  # each worker in a session of its own
+    with dask.config.set(LOCAL_CONFIG):
+        cluster = LocalCluster(**local_cluster_arguments(spec))
     http = getattr(cluster.scheduler, "http_server", None)
     if http is not None:
         http.stop()

@@ -1,5 +1,5 @@
 """``genom2bip campaign FILE``: every job of a campaign file on Dask workers, one JSON line each, a summary table,
-a picture per numeric axis (docs/verification.md, Campaigns).
+a picture per numeric axis (docs/verification/campaigns.md).
 
 Exit status: 0 every job done and every check holds, 4 a check is violated
 (or meets a model error), 5 a job is inconclusive, failed, crashed or timed out, 1 bad
@@ -38,6 +38,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--list", action="store_true", help="list the jobs and run nothing")
     parser.add_argument("--retry-failed", action="store_true",
                         help="run again the jobs recorded as failed or crashed (the others done are kept)")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON document instead of the job lines and the table: each job with its "
+                             "answer and record, the counts, the pictures, the exit status (schema: "
+                             "genom2bip/cli/campaign_schema.json; docs/output.md)")
     cluster = parser.add_argument_group("the Dask cluster (default: a local one, a worker process per core)")
     cluster.add_argument("--scheduler", metavar="ADDRESS",
                          help="a running cluster's scheduler, tcp://HOST:PORT or tls://HOST:PORT")
@@ -110,11 +114,14 @@ def _check_scheduler(address: str) -> None:
 @verb("campaign", help="run a campaign of checks (a YAML file) on Dask workers: JSON lines, a table, pictures",
       arguments=_arguments)
 def verb_campaign(args: argparse.Namespace) -> int:
-    """Read and expand the campaign (nothing runs on an error), run the jobs not done yet, report them all."""
-    from pathlib import Path
+    """Read and expand the campaign (nothing runs on an error), run the jobs not done yet, report them all (or, with
+    ``--json``, print one document saying it: the job lines and the table are not printed)."""
+    import contextlib
+    import io
+    import json
 
+    from genom2bip.campaign.document import CampaignAnswer, document
     from genom2bip.campaign.jobs import expand
-    from genom2bip.campaign.output import Output
     from genom2bip.campaign.spec import read_campaign
 
     settings, spec = _settings(args.settings), _cluster(args)
@@ -123,7 +130,21 @@ def verb_campaign(args: argparse.Namespace) -> int:
     if expansion.warnings:
         print_diagnostics(expansion.warnings, None)
     _warn_models(expansion)
-    jobs = expansion.jobs
+    answer = CampaignAnswer(campaign.name, str(args.file), expansion.jobs)
+    with contextlib.redirect_stdout(io.StringIO()) if args.json else contextlib.nullcontext():
+        status = _campaign(args, spec, campaign, answer)
+    if args.json:
+        print(json.dumps(document(answer, status), indent=1))
+    return status
+
+
+def _campaign(args: argparse.Namespace, spec, campaign, answer) -> int:
+    """List the jobs, or run those not done yet and report them all; ``answer`` gathers what is found."""
+    from pathlib import Path
+
+    from genom2bip.campaign.output import Output
+
+    jobs = answer.jobs
     if args.list:
         for job in jobs:
             print(f"{job.id}  {job.title}  ({job.method})")
@@ -143,14 +164,17 @@ def verb_campaign(args: argparse.Namespace) -> int:
     try:
         if out.dropped:
             print(f"note: {out.dropped} line(s) of {out.results} are not job records (cut short or edited): moved, "
-                  f"as they were, to {out.unreadable}; their jobs run again")
+                  f"as they were, to {out.unreadable}; their jobs run again", file=sys.stderr if args.json else None)
         todo = [j for j in jobs if j.id not in out.records
                 or (args.retry_failed and out.records[j.id].get("status") != "done")]
         print(f"campaign {campaign.name}: {len(jobs)} jobs, {len(jobs) - len(todo)} already in {out.results}, "
               f"{len(todo)} to run", flush=True)
         before = {j.id: out.records.get(j.id) for j in todo}  # a job is done in this run when its record changes
         run = _run(todo, client, out) if todo and client else None
-        return _report(campaign, jobs, out, run, todo, [j for j in todo if out.records.get(j.id) is before[j.id]])
+        answer.records, answer.directory, answer.results = out.records, str(out.directory), str(out.results)
+        answer.ran = {j.id for j in todo if out.records.get(j.id) is not before[j.id]}
+        return _report(campaign, jobs, out, run, todo, [j for j in todo if out.records.get(j.id) is before[j.id]],
+                       answer)
     finally:
         _close(client)
         out.close()
@@ -191,8 +215,9 @@ def _run(todo, connection, out):
         display.close()
 
 
-def _report(campaign, jobs, out, run, todo, undone) -> int:
-    """The summary table, the pictures, what a stop left undone; the exit status.
+def _report(campaign, jobs, out, run, todo, undone, answer) -> int:
+    """The summary table, the pictures, what a stop left undone; the exit status.  ``answer`` gathers the same for
+    ``--json``.
 
     ``undone``: the jobs of ``todo`` whose record did not change (counted from the records, as the table is,
     so that the job taken from the cluster when Ctrl-C came is counted and listed too).
@@ -208,10 +233,15 @@ def _report(campaign, jobs, out, run, todo, undone) -> int:
         cpu = sum(r.get("cpu_seconds") or 0 for r in run.written)
         print(f"{len(run.written)} jobs run in {run.seconds:.1f} s of wall clock ({busy:.1f} s of job time, "
               f"{cpu:.1f} s of CPU)")
+        answer.run = {"cluster": run.where, "jobs_run": len(run.written), "wall_s": round(run.seconds, 3),
+                      "job_s": round(busy, 3), "cpu_s": round(cpu, 3)}
     for path in draw(jobs, out.records, out.directory):
         print(f"picture: {path}")
+        answer.pictures.append(str(path))
     print(f"results: {out.results}")
     if run is not None and (run.interrupted or run.closed):
+        answer.stopped = "interrupted" if run.interrupted else "closed"
+        answer.undone = [j.id for j in sorted(undone, key=lambda j: j.index)]
         ran = len(todo) - len(undone)
         why = "interrupted" if run.interrupted else "stopped: the output was closed (nobody reads the rest)"
         print(f"{why}: {ran} jobs done in this run and written; {len(undone)} not done:", file=sys.stderr)

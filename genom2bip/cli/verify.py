@@ -32,10 +32,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--root", help="root instance of a .bip model (default: the last compound type)")
     add_rules_arguments(parser)
     parser.add_argument("--name", metavar="SYSTEM", help="system name when building from descriptions")
-    what = parser.add_argument_group("what to check (default: --deadlock)")
+    what = parser.add_argument_group("what to check (default: --deadlock, also with --aut/--dot)")
     what.add_argument("--deadlock", action="store_true", help="report every reachable deadlock with a shortest trace")
     what.add_argument("--property", metavar="FILE", action="append", default=[],
-                      help="check the properties of FILE (MCL-style; docs/verification.md); may be repeated")
+                      help="check the properties of FILE (MCL-style; docs/verification/properties.md); may be repeated")
     search = parser.add_argument_group("exploration")
     search.add_argument("--engine", choices=("compiled", "python", "spin", "explore"), default="compiled",
                         help="our explorer compiled to C (default; Python where it cannot be compiled), our explorer "
@@ -342,7 +342,10 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
         return EXIT_ERRORS
     observers = _observer_kinds(args)
     responses = bool(getattr(args, "response_times", False))
-    deadlock = args.deadlock or not (properties or args.aut or args.dot or args.promela or observers or responses)
+    # the default check is deadlock freedom: an LTS export explores the whole space anyway, so a deadlock it meets
+    # is reported (exit 4); a Promela translation alone explores nothing, it is for SPIN to search
+    promela_alone = args.promela and not (args.aut or args.dot)
+    deadlock = args.deadlock or not (properties or promela_alone or observers or responses)
     load_externs(args.externs)
     zones = bool(observers or responses) and _zones(model, args)
     if responses and not zones and not _response_observers(model):  # no clock at all: no task, no service

@@ -19,7 +19,7 @@ EXIT_OK, EXIT_VIOLATED, EXIT_INCONCLUSIVE = 0, 4, 5
 
 def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) -> None:
     """--timed and what it takes: resolution, default WCET, observer file (and, for verify, what to check)."""
-    time = parser.add_argument_group("symbolic time (docs/verification.md, Time)")
+    time = parser.add_argument_group("symbolic time (docs/verification/time.md)")
     time.add_argument("--timed", action="store_true",
                       help="add ticks, clocks, codel WCETs, a period observer per periodic task and the observers")
     time.add_argument("--tick", metavar="DURATION",
@@ -33,7 +33,7 @@ def add_time_arguments(parser: argparse.ArgumentParser, verify: bool = False) ->
                            "previous one is accepted, started or over (default: any request, once per period)")
     time.add_argument("--platform", metavar="FILE",
                       help="the computer: cores, scheduling policy, codel execution intervals, task offsets (YAML; "
-                           "docs/verification.md, Platform); default: a core per task, codels take their WCET")
+                           "docs/verification/platform.md); default: a core per task, codels take their WCET")
     if not verify:
         time.add_argument("--monitor", action="store_true",
                           help="add the observers without ticks: the controller measures them in real time "

@@ -1,4 +1,4 @@
-"""Property files (MCL-style, docs/verification.md) read against a model: the checkables the checks take."""
+"""Property files (MCL-style, docs/verification/properties.md) read against a model: the checkables the checks take."""
 from __future__ import annotations
 
 from pathlib import Path

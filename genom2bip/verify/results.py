@@ -159,7 +159,7 @@ class DeadlockResult(CheckResult):
 
 @dataclass
 class PropertyResult(CheckResult):
-    """A property (MCL-style, docs/verification.md): ``evidence`` says what ``trace`` is."""
+    """A property (MCL-style, docs/verification/properties.md): ``evidence`` says what ``trace`` is."""
 
     check: ClassVar[str] = "property"
 

@@ -4,7 +4,7 @@ One exploration by :class:`runtime.zones.search.ZoneExplorer` decides every
 observer (is its ERROR condition reachable?) and gives the largest value of
 every response-time observer; each verdict's trace is made concrete and
 replayed on the tick model (runtime/zones/trace.py), so the trace printed is
-the reference semantics' own.  docs/verification.md (*Clock zones*) says why
+the reference semantics' own.  docs/verification/platform.md (*Clock zones*) says why
 zones and not ticks for these models.
 """
 from __future__ import annotations

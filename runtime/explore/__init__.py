@@ -1,4 +1,4 @@
-"""State-space exploration of BIP models on the engine's own compiled step (docs/verification.md).
+"""State-space exploration of BIP models on the engine's own compiled step (docs/verification/explorer.md).
 
 ``StateSpace`` numbers packed states lazily (codel outcomes and the
 environment's requests are its choice points); ``explore`` walks it

@@ -7,7 +7,7 @@ dead variables have the same future (same interactions, same labels), so
 merging them is exact for deadlocks, properties and traces, and it removes
 the copies of a codel's last ``outcome`` or a validate's ``verdict`` that
 otherwise multiply the state space.  The analysis is per atom, over places
-(docs/verification.md has the rules); anything a connector, a priority, an
+(docs/verification/explorer.md, *Dead-variable reduction*); anything a connector, a priority, an
 atom invariant or a property can observe is always live.
 """
 from __future__ import annotations

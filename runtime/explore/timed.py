@@ -6,8 +6,8 @@ From a state, every interaction enabled now may fire (the engine's
 invariants still hold one tick later).  An atom whose transition has
 ``resume`` completes as early as its resume guard allows, as in simulated
 execution.  A clock compared only with constants is capped just above the
-largest of them, so the state space is finite; docs/verification.md, "Timed
-BIP2 models", says what this preserves.
+largest of them, so the state space is finite; docs/verification/timed-bip2.md
+says what this preserves.
 """
 from __future__ import annotations
 

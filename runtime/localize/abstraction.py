@@ -1,8 +1,7 @@
 """The localization abstraction of a model: a set K of atoms kept exact, every other atom a free environment.
 
 The abstraction is an ordinary BIP package, so the explorers, observers and
-traces run on it unchanged.  Every step only adds behaviour (docs/verification.md,
-"Localization"):
+traces run on it unchanged.  Every step only adds behaviour (docs/verification/localization.md):
 
 * a dropped atom that offers ports to a connector touching K becomes a *chaos
   atom* with the same ports and data: a port is always ready when no

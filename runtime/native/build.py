@@ -56,7 +56,7 @@ def compiler() -> str | None:
 
 #: The level of a step only called one state at a time from Python (the zone explorer's, a trace's): its compile
 #: is what costs, not its speed (RobNav nc = 4, cold: 2.1 s of gcc at -O0, 5.6 s at -O2, the same 6.5 s of search;
-#: docs/verification.md, *Compiled exploration*).  The C search itself is built at -O2 (DALA's deadlock search
+#: docs/verification/explorer.md, *Compiled exploration*).  The C search itself is built at -O2 (DALA's deadlock search
 #: runs twice as fast there).
 STEP_LEVEL = "0"
 

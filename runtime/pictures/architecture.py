@@ -43,6 +43,22 @@ def _grid(modules: list[str]) -> list[list[str]]:
     return [modules[k:k + 2] for k in range(0, len(modules), 2)]
 
 
+def _labeller(grid: list[list[str]]):
+    """How an edge between two modules is labelled: ``label``, or ``xlabel`` between two modules of one column.
+
+    Two modules of one column are of one rank: dot lays the labels of every edge between them at one spot, over one
+    another (three of them between NDD and POM).  An ``xlabel`` is placed once the layout is done, beside its edge
+    and clear of the nodes and of the other labels.
+    """
+    column = {m: k for k, modules in enumerate(grid) for m in modules}
+
+    def label(a: str, b: str, text: str | None) -> dict[str, str | None]:
+        same = a in column and column.get(a) == column.get(b)
+        return {"xlabel" if same else "label": text}
+
+    return label
+
+
 def functional_level(s: Structure) -> str:
     """Modules with their tasks, services and posters, the data flow between them, and the links that cross modules.
 
@@ -70,10 +86,11 @@ def functional_level(s: Structure) -> str:
     for left, right in zip(grid, grid[1:]):  # more than four modules: two rows, so that it stays a screen wide
         for a, b in zip(left, right):
             dot.edge(a, b, style="invis", weight="10")
+    label = _labeller(grid)
     for f in s.flows:
         where = {"constraint": "false", "tailport": ports[f'{f.module}.{f.poster}']} if grid else \
             {"tailport": f"{ports[f'{f.module}.{f.poster}']}:e"}
-        dot.edge(f.module, f.reader, label=_wrap(f.codels), **where, **style.EDGES["read"][0])
+        dot.edge(f.module, f.reader, **label(f.module, f.reader, _wrap(f.codels)), **where, **style.EDGES["read"][0])
         kinds.append("read")
     crossing: dict[tuple[str, str, str], list[str]] = defaultdict(list)
     for link in s.links:
@@ -84,7 +101,8 @@ def functional_level(s: Structure) -> str:
         if what not in crossing[(s.owner_of(link.tail), s.owner_of(link.head), link.kind)]:
             crossing[(s.owner_of(link.tail), s.owner_of(link.head), link.kind)].append(what)
     for (tail, head, kind), texts in crossing.items():
-        dot.edge(s.module_of(tail), s.module_of(head), label="\n".join(t for t in texts if t) or None,
+        a, b = s.module_of(tail), s.module_of(head)
+        dot.edge(a, b, **label(a, b, "\n".join(t for t in texts if t) or None),
                  tailport=ports.get(tail), headport=ports.get(head), constraint="false", **style.EDGES[kind][0])
         kinds.append(kind)
     dot.defaults("graph", label=style.title(f"functional level {s.system}", kinds))

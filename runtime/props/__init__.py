@@ -3,7 +3,7 @@
 ``read_properties(text, file, flat)`` gives checkable properties (static
 errors as ``DiagnosticError`` with ``file:line:column``); ``check(space, p)``
 answers one on a :class:`~runtime.explore.space.StateSpace` with a witness or
-a counterexample.  docs/verification.md is the language reference.
+a counterexample.  docs/verification/properties.md is the language reference.
 """
 from runtime.props.check import (
     Checkable,

@@ -7,7 +7,7 @@
     report = ndd.wait(rid)            # {"status": "ok", "outputs": {...}, ...}
     report = ndd.call("NDD", "SetSpeed", max_speed={"v": 0.2, "w": 0.4})
     ndd.poster("NDD", "Speed")["value"]
-    for event in ndd.events(types="report"): ...
+    for event in ndd.events(types="report"): ...   # ndd.events(...).dropped: events the server dropped
 
 Each thread gets its own keep-alive connection, so one client may be shared
 by threads.  Every 4xx/5xx answer raises :class:`ServiceError` with the
@@ -20,7 +20,7 @@ import json
 import os
 import threading
 import time
-from typing import Any, Iterator
+from typing import Any
 from urllib.parse import quote, urlencode, urlsplit
 
 from runtime.services.guard import TOKEN_ENV
@@ -203,32 +203,103 @@ class Client:
         """Period, periods run, lateness (p50/p99/max ms) and overruns of every task."""
         return self._call("GET", "/tasks")
 
-    def events(self, types: str | None = None, timeout: float | None = None) -> Iterator[dict[str, Any]]:
-        """The event stream, one dict per event (``{"event": "report", ...}``), on a connection of its own."""
-        conn = http.client.HTTPConnection(self.host, self.port, timeout=timeout)
+    def events(self, types: str | None = None, timeout: float | None = None) -> "EventStream":
+        """The event stream, one dict per event (``{"event": "report", ...}``), on a connection of its own, opened at
+        the first ``next``.  It holds one event at a time; how many events the server dropped because this client fell
+        behind (``gap`` events) is counted in the stream's ``dropped``."""
         path = "/events" + (f"?{urlencode({'types': types})}" if types else "")
+        return EventStream(self.host, self.port, path, self._auth, timeout)
+
+
+#: Bytes of one event of a stream (its ``data:`` lines together): the largest the interface sends is a poster's value,
+#: far below; a server that never ends an event (or a line) is cut here, not read until memory runs out.
+MAX_EVENT_BYTES = 1024 * 1024
+
+
+class EventStream:
+    """``GET /events`` as an iterator of dicts, on a connection of its own; memory is one event, however long it runs.
+
+    The server keeps at most 1 024 events for a client that reads slowly and
+    sends a ``gap`` event (``{"event": "gap", "dropped": n, "by_kind": {...}}``)
+    for those it had to drop; the stream yields it like any other event and
+    adds ``n`` to :attr:`dropped` (and one to :attr:`gaps`), so a long run can
+    tell whether it saw everything.  Iterating ends when the server closes
+    the stream; :meth:`close` (or ``with``) ends it earlier.
+    """
+
+    def __init__(self, host: str, port: int, path: str, headers: dict, timeout: float | None) -> None:
+        self._conn = http.client.HTTPConnection(host, port, timeout=timeout)
+        self._path, self._headers = path, headers
+        self._response: http.client.HTTPResponse | None = None
+        self.events = 0  # events yielded
+        self.dropped = 0  # events the server said it dropped for this stream (its ``gap`` events)
+        self.gaps = 0  # gap events received
+
+    def __iter__(self) -> "EventStream":
+        return self
+
+    def __enter__(self) -> "EventStream":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._conn.close()
+
+    def _open(self) -> http.client.HTTPResponse:
+        self._conn.request("GET", self._path, headers={"Accept": "text/event-stream", **self._headers})
+        response = self._conn.getresponse()
+        if response.status >= 400:
+            raw = _read_body(response)
+            self.close()
+            try:
+                payload = _decode(raw)
+            except BadReply:
+                payload = None
+            message = payload.get("error", str(payload)) if isinstance(payload, dict) else raw.decode(errors="replace")
+            raise ServiceError(response.status, str(message))
+        return response
+
+    def __next__(self) -> dict[str, Any]:
         try:
-            conn.request("GET", path, headers={"Accept": "text/event-stream", **self._auth})
-            response = conn.getresponse()
-            if response.status >= 400:
-                raw = response.read()
-                raise ServiceError(response.status, json.loads(raw).get("error", raw.decode()))
-            kind, data = None, []
-            while True:
-                line = response.readline()
-                if not line:
-                    return
-                text = line.decode().rstrip("\r\n")
-                if text == "":
-                    if data and kind != "hello":
-                        yield json.loads("\n".join(data))
-                    kind, data = None, []
-                elif text.startswith("event:"):
-                    kind = text[6:].strip()
-                elif text.startswith("data:"):
-                    data.append(text[5:].strip())
-        finally:
-            conn.close()
+            if self._response is None:
+                self._response = self._open()
+            event = self._read_event(self._response)
+        except BaseException:
+            self.close()
+            raise
+        if event is None:
+            self.close()
+            raise StopIteration
+        self.events += 1
+        if event.get("event") == "gap":
+            self.gaps += 1
+            dropped = event.get("dropped")
+            self.dropped += dropped if isinstance(dropped, int) and not isinstance(dropped, bool) else 0
+        return event
+
+    @staticmethod
+    def _read_event(response: http.client.HTTPResponse) -> dict[str, Any] | None:
+        """The next event but ``hello`` (None at the end of the stream); BadReply past MAX_EVENT_BYTES."""
+        kind, data, size = None, [], 0
+        while True:
+            line = response.readline(MAX_EVENT_BYTES + 1)
+            if not line:
+                return None
+            size += len(line)
+            if size > MAX_EVENT_BYTES:
+                raise BadReply(f"an event of the stream goes on past {MAX_EVENT_BYTES // 1024} kB, more than a "
+                               "services interface sends")
+            text = line.decode(errors="replace").rstrip("\r\n")
+            if text == "":
+                if data and kind != "hello":
+                    return _expect(_decode("\n".join(data).encode()), dict, "an event")
+                kind, data, size = None, [], 0
+            elif text.startswith("event:"):
+                kind = text[6:].strip()
+            elif text.startswith("data:"):
+                data.append(text[5:].strip())
 
 
 def parse_target(text: str) -> tuple[str, str]:

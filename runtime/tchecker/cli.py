@@ -17,7 +17,7 @@ from runtime.exits import EXIT_ERRORS, EXIT_INCONCLUSIVE, EXIT_OK, EXIT_VIOLATED
 def add_parser(sub) -> None:
     reach = sub.add_parser("reach", help="TChecker files: is a set of location labels reachable (clock zones)?",
                            description="Reachability of location labels in a TChecker file, explored with clock "
-                                       "zones by the engine's zone search (docs/verification.md, TChecker files).")
+                                       "zones by the engine's zone search (docs/verification/tchecker.md).")
     reach.add_argument("model", help="the TChecker file (.tck, TChecker's text format)")
     reach.add_argument("--labels", "-l", default="",
                        help="comma-separated labels: reachable when one configuration's locations carry them all "

@@ -6,7 +6,7 @@ clocks compared with integer variables, clock-to-clock assignments, invariants
 on integer variables, clocks shared by several processes, several initial
 locations in one process, ``/``, ``%``, conditional terms and ``if``/``while``/
 ``local`` statements.  Strict clock constraints (``x < c``, ``x > c``) are read
-only on a time grid chosen by the caller (docs/verification.md, *TChecker*).
+only on a time grid chosen by the caller (docs/verification/tchecker.md).
 """
 from __future__ import annotations
 

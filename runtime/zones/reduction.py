@@ -20,8 +20,8 @@ states by as many paths.  At such a state the search fires only a *stubborn set*
   require).
 
 The search keeps the cycle condition: when a step of the set reaches a state already stored, the state's other
-steps are fired too (the queue condition of breadth-first search, Bosnacki and Holzmann).  docs/verification.md
-argues why verdicts, maxima and traces stay those of the full search.
+steps are fired too (the queue condition of breadth-first search, Bosnacki and Holzmann).  docs/verification/platform.md
+(*Clock zones*) argues why verdicts, maxima and traces stay those of the full search.
 """
 from __future__ import annotations
 

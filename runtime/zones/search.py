@@ -11,7 +11,7 @@ Zones of one discrete state that another includes are not kept.
 
 What the tick semantics reaches, this reaches: every bound is an integer, so a
 zone's integer points are the clock values of the discrete-time states it
-stands for (docs/verification.md, *Clock zones*).
+stands for (docs/verification/platform.md, *Clock zones*).
 """
 from __future__ import annotations
 
