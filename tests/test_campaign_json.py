@@ -16,13 +16,10 @@ import pytest
 
 from genom2bip.campaign import expand, read_campaign
 from tests.nativekit import needs_cc
+from test_campaign_run import CRUISE, CRUISE_OBSERVERS, PATIENCE
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA = json.loads((ROOT / "genom2bip" / "cli" / "campaign_schema.json").read_text())
-CRUISE = ROOT / "tests" / "fixtures" / "timed" / "Cruise.gen"
-CRUISE_OBSERVERS = ROOT / "tests" / "fixtures" / "timed" / "observers.yaml"
-#: Far past what a loaded machine needs for these small campaigns: a hang fails, a slow machine does not.
-PATIENCE = 900
 
 SWEEP = f"""campaign: cruise
 models:
