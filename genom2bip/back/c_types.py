@@ -562,8 +562,10 @@ def c_layouts(description: ir.Description, component: ir.Component) -> dict:
                 kind = "value" if p.direction in (None, ir.Direction.IN) else "reference"
                 args.append([kind, layout(m, t, named)])
         codels[codel.name] = args
+    # a simple codel (a function's ``codel f()``) returns genom_ok for its one way on, ether (genom3's skeleton)
+    simple = sorted({x.name for s in component.services for x in s.codels if not x.triggers})
     exceptions = {}
     for name, decl in description.exceptions.items():
         exceptions[f"::{name}"] = [name, ["struct", [[x.name, layout(m, x.type, named)] for x in decl.members]]
                                    if decl.members else None]
-    return {"codels": codels, "exceptions": exceptions, "types": dict(sorted(named.items()))}
+    return {"codels": codels, "exceptions": exceptions, "types": dict(sorted(named.items())), "simple": simple}

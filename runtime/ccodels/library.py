@@ -163,6 +163,7 @@ class CodelLibrary:
             raise CodelLibraryError(f"{self.path}: cannot load the C codels of {component}: {err}") from None
         self.layouts = Layouts(spec["types"])
         self.codels: dict[str, list] = spec["codels"]
+        self.simple = set(spec.get("simple", ()))  # codels whose genom_ok is their one yield, ether
         self.exceptions: dict[str, list] = spec["exceptions"]
         self.prefix = f"::{component}::"
         self._made: dict[str, Callable] = {}
@@ -195,6 +196,7 @@ class CodelLibrary:
 
     def _caller(self, name: str, symbol: Any, args: list[list]) -> Callable:
         layouts = self.layouts
+        simple = name in self.simple
 
         def codel(**kwargs: Any) -> str | None:
             keep: list = []
@@ -239,7 +241,7 @@ class CodelLibrary:
                 if written and holder is not None:
                     holder.value = now
             if event is None:
-                return None
+                return "ether" if simple else None
             text = ctypes.string_at(event).decode(errors="replace")
             if raised.event is not None and raised.event == event or text in self.exceptions:
                 self._throw(text, raised.detail)
