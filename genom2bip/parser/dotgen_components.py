@@ -40,6 +40,10 @@ class ComponentReader(DotgenReader):
         if not self.open_scope(name, "interface", {c.name: c for c in self.desc.components}):
             return
         iface = self.desc.interfaces.get(str(name))
+        if iface is not None and iface.span == self.span(name):
+            # the same declaration again: a file that two descriptions of one level include (a provider's and
+            # a user's .gen), read once
+            return
         if iface is None:  # else reopened
             iface = Interface(str(name), span=self.span(name))
             self.desc.interfaces[str(name)] = iface

@@ -107,7 +107,8 @@ class IsolatedLibrary:
 
     def call(self, name: str, kwargs: dict[str, Any]) -> Any:
         refs = [k for k, v in kwargs.items() if isinstance(v, Ref)]
-        plain = {k: (v.value if isinstance(v, Ref) else v) for k, v in kwargs.items()}
+        # a remote's handle stays here: in the codels' process its call answers genom::no_such_remote
+        plain = {k: (v.value if isinstance(v, Ref) else None if callable(v) else v) for k, v in kwargs.items()}
         with self.lock:
             self.ready.wait()
             if self.broken is not None:
