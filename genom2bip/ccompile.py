@@ -26,6 +26,8 @@ from runtime.errors import Genom2bipError
 #: What the codels call for the wall clock: linked to the controller's clock (runtime/ccodels/clock/wallclock.c).
 WRAPPED = ("gettimeofday", "clock_gettime", "time")
 WALLCLOCK = INCLUDE.parent / "clock" / "wallclock.c"
+#: genom2bip_device(name): the devices the controller offers the codels (runtime/ccodels/devices/devices.c).
+DEVICES = INCLUDE.parent / "devices" / "devices.c"
 C_SUFFIXES = (".c",)
 CXX_SUFFIXES = (".cc", ".cpp", ".cxx", ".C")
 
@@ -138,10 +140,12 @@ def compile_codels(component: ir.Component, sources: list[Path], header: str, ti
             objects.append(str(obj))
         clock = work / "genom2bip_wallclock.o"  # the codels' wall clock can follow the controller's
         _run(["gcc", "-std=gnu99", "-fPIC", "-O2", "-c", str(WALLCLOCK), "-o", str(clock)], component, timeout)
+        devices = work / "genom2bip_devices.o"
+        _run(["gcc", "-std=gnu99", "-fPIC", "-O2", "-c", str(DEVICES), "-o", str(devices)], component, timeout)
         library = work / f"lib{component.name}_codels.so"
         wrap = [f"-Wl,--wrap={f}" for f in WRAPPED]
         _run(["g++" if cxx else "gcc", "-shared", *wrap, "-o", str(library), *objects, str(clock),
-              *flags.libs], component, timeout)
+              str(devices), *flags.libs], component, timeout)
         return Built(library.read_bytes(), list(sources))
 
 

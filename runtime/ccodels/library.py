@@ -23,6 +23,7 @@ EVENT = ctypes.c_void_p  # a genom_event (const char *), NULL for genom_ok
 RAISE = ctypes.CFUNCTYPE(EVENT, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
 RAISED = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p)
 NOW = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_int)  # genom2bip_now(realtime): runtime/ccodels/clock
+DEVICE = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.c_char_p)  # genom2bip_devices(name): runtime/ccodels/devices
 
 
 class Context(ctypes.Structure):
@@ -233,6 +234,28 @@ class CodelLibrary:
         epoch = time.time() - clock.now()
         self._now = NOW(lambda realtime: clock.now() + (epoch if realtime else 0.0))  # kept alive here
         hook.value = ctypes.cast(self._now, ctypes.c_void_p).value
+        return True
+
+    def offer(self, devices: dict[str, Callable[[], Any]]) -> bool:
+        """Give the codels ``devices`` (name -> a function making the device's table, a ctypes object, on first
+        use): what ``genom2bip_device(name)`` returns them (genom2bip/device.h)."""
+        try:
+            hook = ctypes.c_void_p.in_dll(self.lib, "genom2bip_devices")
+        except ValueError:
+            return False
+        made: dict[str, Any] = {}
+
+        def device(name: bytes) -> int | None:
+            key = name.decode(errors="replace")
+            if key not in made:
+                try:
+                    made[key] = devices[key]() if key in devices else None
+                except Exception:  # noqa: BLE001 - a device that cannot be made is none: the codel says so
+                    made[key] = None
+            return ctypes.addressof(made[key]) if made[key] is not None else None
+
+        self._devices = DEVICE(device)  # kept alive here
+        hook.value = ctypes.cast(self._devices, ctypes.c_void_p).value
         return True
 
     def get(self, name: str) -> Callable | None:
