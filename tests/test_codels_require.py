@@ -123,3 +123,14 @@ def test_without_pkg_config_the_error_says_so_in_one_line(tmp_path, monkeypatch,
     assert "the codels of needs require g2bfix >= 1.0 (codels-require), found with pkg-config, which is not " \
            "installed (Debian: apt-get install pkg-config)" in err
     assert len(err.splitlines()) == 1 and not (tmp_path / "gen").exists()
+
+
+def test_an_interfaces_codels_require_is_located_in_the_interface(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("PKG_CONFIG_PATH", str(tmp_path / "nowhere"))
+    folder = _component(tmp_path, GEN.replace('  codels-require "g2bfix >= 1.0";\n', "  provides needy;\n")
+                        .replace("/* needs:", 'interface needy {\n  codels-require "g2bfix";\n};\n/* needs:'))
+    assert main([str(folder), "-o", str(tmp_path / "gen")]) == 1
+    first = capsys.readouterr().err.strip().splitlines()[0]
+    assert first.startswith(f"{folder / 'needs.gen'}:2:18: error: codels-require \"g2bfix\" of needs: Package "
+                            "g2bfix was not found"), first
+    assert not (tmp_path / "gen").exists()

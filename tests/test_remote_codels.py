@@ -186,3 +186,13 @@ def test_a_remote_in_a_functions_codel_is_refused_as_genom3_does(tmp_path, capsy
     err = capsys.readouterr().err
     assert "fn.gen:5:29: error: remote 'Divide' is not allowed in simple codel 'fnAsk'" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_an_interface_file_two_descriptions_include_is_read_once(tmp_path):
+    """The provider's and the user's .gen both include calc.idl: one interface, each service once."""
+    from genom2bip.loading import read_description
+
+    description = read_description([FIXTURE / "divider.gen", FIXTURE / "asker.gen"])
+    calc = description.interfaces["calc"]
+    assert [s.name for s in calc.services] == ["Divide", "Sum"]
+    assert [s.name for s in description.component("divider").services] == ["Divide", "Sum", "GetCalls"]
