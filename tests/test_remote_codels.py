@@ -143,7 +143,7 @@ def test_connecting_a_remote_checks_both_names(level):
         controller.remotes.connect("asker", "Divide", "divider.Times")
 
 
-def test_in_a_process_of_their_own_the_codels_get_a_remote_that_says_it_cannot_be_reached(level, monkeypatch):
+def test_in_a_process_of_their_own_the_codels_call_remotes_through_their_pipe(level, monkeypatch):
     from runtime.controller import Controller
 
     monkeypatch.setenv("GENOM2BIP_CODELS_PROCESS", "1")
@@ -151,11 +151,14 @@ def test_in_a_process_of_their_own_the_codels_get_a_remote_that_says_it_cannot_b
     controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, None)
     controller.start()
     try:
-        final = controller.wait(controller.submit("asker", "Ask", {"num": 1.0, "den": 1.0}).id, 60).final
+        asked = controller.wait(controller.submit("asker", "Ask", {"num": 1.0, "den": 4.0}).id, 60).final
+        failed = controller.wait(controller.submit("asker", "Ask", {"num": 3.0, "den": 0.0}).id, 60).final
+        calls = controller.wait(controller.submit("divider", "GetCalls").id, 60).final
     finally:
         controller.stop(timeout=30)
-    assert final["status"] == "failed" and final["exception"] == "genom::no_such_remote"
-    assert final["detail"] == {"what": "remote Divide of asker is not reachable from here"}
+    assert asked["status"] == "ok" and asked["outputs"] == {"answer": 0.25, "text": "3 values", "total": 6.5}
+    assert failed["exception"] == "calc::e_div" and failed["detail"] == {"num": 3.0, "why": "3 / 0"}
+    assert calls["outputs"]["calls"] == 3  # Divide, Sum, Divide: served by the divider in its own process too
 
 
 @pytest.mark.parametrize("codel, message", [
