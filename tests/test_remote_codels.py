@@ -199,3 +199,17 @@ def test_an_interface_file_two_descriptions_include_is_read_once(tmp_path):
     calc = description.interfaces["calc"]
     assert [s.name for s in calc.services] == ["Divide", "Sum"]
     assert [s.name for s in description.component("divider").services] == ["Divide", "Sum", "GetCalls"]
+
+
+def test_a_controller_run_in_its_callers_thread_refuses_remote_calls_saying_why(level):
+    from runtime.controller import Controller
+    from runtime.controller.timing import VirtualClock
+
+    _, pkg = level
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, None, clock=VirtualClock())
+    req = controller.submit("asker", "Ask", {"num": 1.0, "den": 1.0})
+    controller.run(duration=1.0)  # here, not in a thread: nothing can go on while a codel waits
+    assert req.final["status"] == "failed" and req.final["exception"] == "genom::remote_io"
+    assert req.final["detail"] == {"what": "divider.Divide: a remote call needs the controller's engine in a thread "
+                                           "of its own (Controller.start()), which it leaves while the codel waits"}
+    assert not [r for r in controller.requests.values() if r.component == "divider"]  # nothing was sent

@@ -158,8 +158,8 @@ class Controller(Running):
             raise Throw(NO_SUCH_REMOTE, what=self.remotes.why_unconnected(component, remote))
         label = f"{target[0]}.{target[1]}"
         if not self.can_let_go():
-            raise Throw(REMOTE_IO, what=f"{label}: a remote is called from a codel of a controller whose engine runs "
-                                        "in a thread of its own (Controller.start())")
+            raise Throw(REMOTE_IO, what=f"{label}: a remote call needs the controller's engine in a thread of its "
+                                        "own (Controller.start()), which it leaves while the codel waits")
         try:
             req = self.submit(target[0], target[1], inputs)
         except RequestError as err:
