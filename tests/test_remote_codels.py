@@ -213,3 +213,37 @@ def test_a_controller_run_in_its_callers_thread_refuses_remote_calls_saying_why(
     assert req.final["detail"] == {"what": "divider.Divide: a remote call needs the controller's engine in a thread "
                                            "of its own (Controller.start()), which it leaves while the codel waits"}
     assert not [r for r in controller.requests.values() if r.component == "divider"]  # nothing was sent
+
+
+def test_a_codel_the_watchdog_went_on_without_then_calling_a_remote_leaves_one_engine_thread(level):
+    """The watchdog detaches a slow codel; its remote call then must not start a second engine thread."""
+    import threading
+    import time
+
+    from runtime.controller import Controller
+
+    _, pkg = level
+    seen: dict[str, object] = {}
+    holder: dict[str, Controller] = {}
+
+    def paAsk(num, den, answer, Divide):
+        record = holder["c"].binder.call  # this call, as the watchdog sees it
+        deadline = time.monotonic() + 60
+        while not record.detached and time.monotonic() < deadline:  # past its bound, the engine goes on
+            time.sleep(0.005)
+        seen["detached"] = record.detached
+        answer.value = Divide(num=num, den=den)["quotient"]
+        seen["engines"] = sum(1 for t in threading.enumerate() if t.name == "bip-controller" and t.is_alive())
+        return "ether"
+
+    controller = holder["c"] = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, {"pyasker": {"paAsk": paAsk}})
+    controller.start()
+    try:
+        final = controller.wait(controller.submit("pyasker", "PyAsk", {"num": 3.0, "den": 2.0}).id, 60).final
+        after = controller.wait(controller.submit("divider", "GetCalls").id, 60).final
+    finally:
+        controller.stop(timeout=30)
+    assert seen["detached"] is True
+    assert seen["engines"] == 2  # the engine going on, and this codel's thread (the old engine), waiting
+    assert final["status"] == "ok" and final["outputs"] == {"answer": 1.5}
+    assert after["outputs"]["calls"] == 1 and controller.error is None

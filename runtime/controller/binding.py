@@ -115,9 +115,10 @@ class CodelCall:
             return not self.detached
 
     def detach(self) -> bool:
-        """Let the engine go on without this call (False: it has just returned)."""
+        """Let the engine go on without this call (False: it has just returned, or is detached already: the
+        watchdog and a remote call may both want to, and only one engine thread may go on)."""
         with self.lock:
-            if self.done:
+            if self.done or self.detached:
                 return False
             self.detached = True
             return True
