@@ -247,3 +247,21 @@ def test_a_codel_the_watchdog_went_on_without_then_calling_a_remote_leaves_one_e
     assert seen["engines"] == 2  # the engine going on, and this codel's thread (the old engine), waiting
     assert final["status"] == "ok" and final["outputs"] == {"answer": 1.5}
     assert after["outputs"]["calls"] == 1 and controller.error is None
+
+
+def test_run_connects_a_remote_with_connect_as_it_does_a_port(level):
+    import argparse
+
+    from runtime.services.run import UsageError, _build, add_arguments
+
+    _, pkg = level
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args(["--connect", "asker.Divide=divider.Sum", "--port", "0"])
+    controller, server = _build(pkg.package(), pkg.ROOT, pkg.INTERFACE, args, None)
+    server.socket.close()  # never served
+    assert controller.remotes.target("asker", "Divide") == ("divider", "Sum")
+    assert controller.remotes.target("asker", "Sum") == ("divider", "Sum")
+    bad = parser.parse_args(["--connect", "asker.Divide=divider.Times"])
+    with pytest.raises(UsageError, match=r"^--connect: no service 'divider.Times' to connect asker.Divide to$"):
+        _build(pkg.package(), pkg.ROOT, pkg.INTERFACE, bad, None)
