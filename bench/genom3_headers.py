@@ -48,9 +48,10 @@ def declarations(header: str) -> dict[str, str]:
 
 def genom3_header(genom3: Path, gen: Path) -> tuple[str | None, str]:
     """genom3's mapping of ``gen`` (None and its message when genom3 refuses the file)."""
-    cmd = [str(genom3 / "bin" / "genom3"), "mappings", "--signature", "-l", "c", str(gen)]
+    cmd = [str(genom3 / "bin" / "genom3"), "mappings", "--signature", "-l", "c", str(gen.resolve())]
     try:
-        done = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=gen.parent)
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=gen.parent,
+                              stdin=subprocess.DEVNULL)  # genom3 reads its standard input for a file it cannot find
     except (OSError, subprocess.TimeoutExpired) as err:
         return None, str(err)
     if done.returncode != 0:

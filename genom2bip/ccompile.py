@@ -4,10 +4,14 @@ The sources are the component's ``codels/<Component>/`` folder beside its ``.gen
 ``codels/`` when the component is alone in its folder, else the files of ``codels/`` named ``<Component>*``
 (GenoM3's skeleton names them ``<comp>_codels.c``, ``<comp>_<task>_codels.c``).  ``.c`` files go to gcc (gnu99),
 ``.cc``/``.cpp``/``.cxx`` to g++; the library links with g++ when any file is C++.  Compiler messages keep
-the sources' own file:line:column.
+the sources' own file:line:column.  The packages the component's ``codels-require`` names are asked of
+pkg-config: their ``--cflags`` go to every compilation, their ``--libs`` to the link; a package pkg-config
+does not know stops the build at the ``codels-require`` that names it.
 """
 from __future__ import annotations
 
+import os
+import shlex
 import shutil
 import subprocess
 import tempfile
@@ -16,17 +20,65 @@ from pathlib import Path
 
 from genom2bip import ir
 from runtime.ccodels import INCLUDE
+from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache
 from runtime.errors import Genom2bipError
 
 #: What the codels call for the wall clock: linked to the controller's clock (runtime/ccodels/clock/wallclock.c).
 WRAPPED = ("gettimeofday", "clock_gettime", "time")
 WALLCLOCK = INCLUDE.parent / "clock" / "wallclock.c"
+#: genom2bip_device(name): the devices the controller offers the codels (runtime/ccodels/devices/devices.c).
+DEVICES = INCLUDE.parent / "devices" / "devices.c"
 C_SUFFIXES = (".c",)
 CXX_SUFFIXES = (".cc", ".cpp", ".cxx", ".C")
 
 
 class CodelBuildError(Genom2bipError):
     """The codels did not compile or link: the compiler's located messages, or the compiler is missing."""
+
+
+@dataclass
+class Flags:
+    """What the ``codels-require`` packages add: compiler flags and linker flags (pkg-config's words)."""
+
+    cflags: list[str]
+    libs: list[str]
+
+
+def required_flags(component: ir.Component, timeout: float = 60.0) -> Flags:
+    """pkg-config's ``--cflags`` and ``--libs`` for the component's ``codels-require`` packages (none: empty).
+
+    A package pkg-config does not know (or not in the version asked) is a :class:`DiagnosticError` located at
+    the ``codels-require`` string that names it, with pkg-config's own reason.
+    """
+    packages = list(dict.fromkeys(component.properties.get("codels-require", [])))
+    if not packages:
+        return Flags([], [])
+    if shutil.which("pkg-config") is None:
+        raise CodelBuildError(f"the codels of {component.name} require {', '.join(packages)} (codels-require), "
+                              "found with pkg-config, which is not installed (Debian: apt-get install pkg-config)")
+    for package in packages:
+        known = _pkg_config(["--exists", "--print-errors", package], component, timeout)
+        if known.returncode != 0:
+            span = component.ref_spans.get(f"codels-require:{package}", component.span)
+            said = [x.strip() for x in known.stderr.splitlines() if x.strip()]
+            reason = next((x for x in said if "has version" in x), said[0] if said else
+                          f"pkg-config knows no package {package!r}")  # the version found says most
+            where = os.environ.get("PKG_CONFIG_PATH")
+            hint = "install its development package, or add the folder of its .pc file to PKG_CONFIG_PATH" + (
+                f" (now {where})" if where else "")
+            raise DiagnosticError([Diagnostic(span, f"codels-require \"{package}\" of {component.name}: {reason}",
+                                              hint=hint)], SourceCache())
+    cflags = shlex.split(_pkg_config(["--cflags", *packages], component, timeout).stdout)
+    libs = shlex.split(_pkg_config(["--libs", *packages], component, timeout).stdout)
+    return Flags(cflags, libs)
+
+
+def _pkg_config(args: list[str], component: ir.Component, timeout: float) -> subprocess.CompletedProcess:
+    try:
+        return subprocess.run(["pkg-config", *args], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise CodelBuildError(f"pkg-config {' '.join(args)} (codels of {component.name}) took more than "
+                              f"{timeout:.0f} s") from None
 
 
 @dataclass
@@ -72,6 +124,7 @@ def compile_codels(component: ir.Component, sources: list[Path], header: str, ti
         if shutil.which(tool) is None:
             raise CodelBuildError(f"the codels of {component.name} ({', '.join(str(p) for p in sources)}) need "
                                   f"{tool}, which is not installed (Debian: apt-get install {tool})")
+    flags = required_flags(component)
     with tempfile.TemporaryDirectory(prefix=f"genom2bip-{component.name}-") as tmp:
         work = Path(tmp)
         (work / f"{component.name}_c_types.h").write_text(header, encoding="utf-8")
@@ -82,15 +135,17 @@ def compile_codels(component: ir.Component, sources: list[Path], header: str, ti
             tool = "g++" if src.suffix in CXX_SUFFIXES else "gcc"
             std = [] if tool == "g++" else ["-std=gnu99"]
             cmd = [tool, *std, "-fPIC", "-O2", "-Wall", f"-I{work}", f"-I{INCLUDE}", f"-I{src.parent}",
-                   "-c", str(src), "-o", str(obj)]
+                   *flags.cflags, "-c", str(src), "-o", str(obj)]
             _run(cmd, component, timeout)
             objects.append(str(obj))
         clock = work / "genom2bip_wallclock.o"  # the codels' wall clock can follow the controller's
         _run(["gcc", "-std=gnu99", "-fPIC", "-O2", "-c", str(WALLCLOCK), "-o", str(clock)], component, timeout)
+        devices = work / "genom2bip_devices.o"
+        _run(["gcc", "-std=gnu99", "-fPIC", "-O2", "-c", str(DEVICES), "-o", str(devices)], component, timeout)
         library = work / f"lib{component.name}_codels.so"
         wrap = [f"-Wl,--wrap={f}" for f in WRAPPED]
-        _run(["g++" if cxx else "gcc", "-shared", *wrap, "-o", str(library), *objects, str(clock)], component,
-             timeout)
+        _run(["g++" if cxx else "gcc", "-shared", *wrap, "-o", str(library), *objects, str(clock),
+              str(devices), *flags.libs], component, timeout)
         return Built(library.read_bytes(), list(sources))
 
 

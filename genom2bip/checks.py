@@ -272,6 +272,20 @@ class _Checker:
             elif param.source == Origin.IDS and head and comp.ids and head not in ids:
                 self.error(where, f"unknown ids member '{head}' in codel '{codel.name}'",
                            _suggest(head, ids, "ids members"))
+            elif param.source == Origin.REMOTE:
+                self._remote(comp, codel, service, param.path, where)
+
+    def _remote(self, comp: Component, codel: Codel, service: Service | None, name: str, where: Span) -> None:
+        """A ``remote`` argument names a service of an interface the component uses, in a codel of an activity
+        or a task (GenoM3 refuses one in a simple codel: a function's, an attribute's or a validate codel)."""
+        remotes = [s.name for i in comp.uses for s in getattr(self.d.interfaces.get(i), "services", [])]
+        if name not in remotes:
+            hint = _suggest(name, remotes, "remote services") if remotes else \
+                f"a remote is a service of an interface the component uses; {comp.name} uses none"
+            self.error(where, f"unknown remote '{name}' in codel '{codel.name}'", hint)
+        elif service is not None and (service.kind != ServiceKind.ACTIVITY or codel is service.validate):
+            self.error(where, f"remote '{name}' is not allowed in simple codel '{codel.name}'",
+                       "a remote is called from a codel of an activity or a task, as in GenoM3")
 
     # ------------------------------------------------------------------ exceptions
 

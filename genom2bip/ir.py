@@ -373,6 +373,8 @@ class Interface(Node):
     throws: list[str] = field(default_factory=list)
     properties: dict[str, Any] = field(default_factory=dict)
     tasks: list[Task] = field(default_factory=list)
+    # Where the names it refers to were written ("codels-require:eigen3"), for messages.
+    ref_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False, kw_only=True)
 
 
 @dataclass

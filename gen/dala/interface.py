@@ -1108,13 +1108,8 @@ INTERFACE = {
                             'codel': 'rflexOpen',
                             'role': 'fsm',
                             'params': [
-                                {
-                                    'arg': 'local_device',
-                                    'source': 'local',
-                                    'direction': 'in',
-                                    'path': 'device',
-                                },
-                                {'arg': 'ids_device', 'source': 'ids', 'direction': 'out', 'path': 'device'},
+                                {'arg': 'device', 'source': 'local', 'direction': 'in', 'path': 'device'},
+                                {'arg': 'opened', 'source': 'ids', 'direction': 'out', 'path': 'device'},
                             ],
                             'wcet_us': 1000,
                         },

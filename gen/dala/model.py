@@ -6737,7 +6737,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '68'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '76'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],
@@ -6751,7 +6751,7 @@ def RFLEX_Init_Activity() -> AtomType:
                 annotations=[
                     Annotation(
                         'source',
-                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '68'},
+                        arguments={'file': 'descriptions/dala/RFLEX.gen', 'line': '45', 'column': '76'},
                     ),
                     Annotation('SuppressWarning', arguments={'nondeterminism': ''}),
                 ],

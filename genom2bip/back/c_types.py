@@ -274,6 +274,19 @@ class CMapping:
         body = "\n".join(lines)
         self.parts.append(guard(f'\n#include "genom3/c/exception.h"\ntypedef struct {n} {{\n{body}\n}} {n};', n))
 
+    def remote(self, component: str, iface: ir.Interface, service: ir.Service) -> None:
+        """``struct comp_S { genom_event (*call)(params..., genom_context self); }``: a used interface's service."""
+        n = cname(f"{component}::{service.name}")
+        if n in self.done:
+            return
+        self.done.add(n)
+        args = []
+        for p, t in remote_parameters(self, iface, service):
+            args.append(self.argument(t, "value" if p.direction == ir.Direction.IN else "reference", p.name))
+        args.append("genom_context self")
+        self.parts.append(guard(f'\n#include "genom3/c/exception.h"\ntypedef struct {n} {{\n'
+                                f'  genom_event (*call)({", ".join(args)});\n}} {n};', n))
+
     def argument(self, t: ir.Type, kind: str, var: str) -> str:
         """A codel argument: ``in`` by value (structured types by const pointer), ``out``/``inout`` by pointer."""
         final = self.resolve(t)
@@ -384,6 +397,28 @@ def find_port(description: ir.Description, c: ir.Component, name: str) -> ir.Por
     return None
 
 
+def remotes(description: ir.Description, c: ir.Component) -> list[tuple[ir.Interface, ir.Service]]:
+    """The remote services of ``c``: every service of the interfaces it uses (GenoM3 imports them as remotes)."""
+    out = []
+    for name in dict.fromkeys(c.uses):
+        iface = description.interfaces.get(name)
+        if iface is not None:
+            out += [(iface, s) for s in iface.services]
+    return out
+
+
+def remote_parameters(mapping: CMapping, iface: ir.Interface, service: ir.Service
+                      ) -> list[tuple[ir.Parameter, ir.Type]]:
+    """A remote service's parameters with their IDL types (an ``ids`` parameter: the interface's member's)."""
+    out = []
+    for p in service.parameters:
+        t = p.type if p.type is not None else _path_type(mapping, iface.ids, p.member or p.name)
+        if t is None:
+            raise CMappingError(f"{p.span}: parameter {p.name} of {iface.name}.{service.name} has no C type")
+        out.append((p, t))
+    return out
+
+
 def _port_type(mapping: CMapping, c: ir.Component, name: str) -> ir.Type:
     port = find_port(mapping.d, c, name)
     if port is None:
@@ -428,6 +463,8 @@ def c_types_header(description: ir.Description, component: ir.Component, source:
     for iface in dict.fromkeys(component.provides + component.uses):  # and as the component's own
         for p in getattr(description.interfaces.get(iface), "ports", []):
             m.port(component.name, find_port(description, component, p.name))
+    for iface, service in remotes(description, component):
+        m.remote(component.name, iface, service)
     signatures: list[str] = []
     seen: set[str] = set()
     owners: list[tuple[ir.Codel, ir.Service | None]] = [(x, None) for t in component.tasks for x in t.codels]
@@ -552,18 +589,26 @@ def c_layouts(description: ir.Description, component: ir.Component) -> dict:
             continue
         args = []
         for p in codel.params:
+            if p.source == ir.Origin.REMOTE:
+                args.append(["remote", p.path])
+                continue
             t = _arg_type(m, component, codel, p, service)
             if p.source == ir.Origin.PORT:
                 port = find_port(description, component, p.path)
                 args.append(["port", str(port.direction), port.multiple, layout(m, t, named)])
-            elif p.source == ir.Origin.REMOTE:
-                args.append(["remote"])
             else:
                 kind = "value" if p.direction in (None, ir.Direction.IN) else "reference"
                 args.append([kind, layout(m, t, named)])
         codels[codel.name] = args
+    called = {}  # each remote service: its parameters' directions and layouts, for the handle's call()
+    for iface, service in remotes(description, component):
+        called[service.name] = [[str(p.direction), layout(m, t, named)]
+                                for p, t in remote_parameters(m, iface, service)]
+    # a simple codel (a function's ``codel f()``) returns genom_ok for its one way on, ether (genom3's skeleton)
+    simple = sorted({x.name for s in component.services for x in s.codels if not x.triggers})
     exceptions = {}
     for name, decl in description.exceptions.items():
         exceptions[f"::{name}"] = [name, ["struct", [[x.name, layout(m, x.type, named)] for x in decl.members]]
                                    if decl.members else None]
-    return {"codels": codels, "exceptions": exceptions, "types": dict(sorted(named.items()))}
+    return {"codels": codels, "exceptions": exceptions, "types": dict(sorted(named.items())), "simple": simple,
+            "remotes": called}

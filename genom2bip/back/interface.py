@@ -197,6 +197,21 @@ def _codels(m: str, codels: list[ir.Codel], locals_: set[str], ids_inputs: set[s
     return out
 
 
+def remote_entries(schemas: Schemas, description: ir.Description, c: ir.Component) -> dict[str, Any]:
+    """The remote services ``c`` may call (every service of the interfaces it uses): interface and parameters."""
+    out: dict[str, Any] = {}
+    for name in dict.fromkeys(c.uses):
+        iface = description.interfaces.get(name)
+        for s in getattr(iface, "services", []):
+            params = []
+            for p in s.parameters:
+                schema = schemas.of(p.type) if p.type is not None else _member_type(schemas, iface.ids,
+                                                                                      p.member or p.name)
+                params.append({"name": p.name, "direction": str(p.direction), "schema": schema})
+            out.setdefault(s.name, {"interface": name, "parameters": params})
+    return out
+
+
 def component_interface(schemas: Schemas, c: ir.Component) -> dict[str, Any]:
     m = ident(c.name)
     ids = {}
@@ -277,6 +292,12 @@ def interface_data(description: ir.Description, system: str, sources: str,
     if package_dir is not None:
         codels = PurePosixPath(os.path.relpath(os.path.abspath(codels), os.path.abspath(package_dir))).as_posix()
     components = {c.name: component_interface(schemas, c) for c in description.components}
+    for c in description.components:  # only where there are some: a level without interfaces is unchanged
+        if c.provides:
+            components[c.name]["provides"] = list(c.provides)
+        called = remote_entries(schemas, description, c)
+        if called:
+            components[c.name]["remotes"] = called
     types = dict(sorted(schemas.named.items()))
     return {"system": system, "codels": codels, "types": types, "components": components}
 

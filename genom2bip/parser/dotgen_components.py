@@ -40,6 +40,10 @@ class ComponentReader(DotgenReader):
         if not self.open_scope(name, "interface", {c.name: c for c in self.desc.components}):
             return
         iface = self.desc.interfaces.get(str(name))
+        if iface is not None and iface.span == self.span(name):
+            # the same declaration again: a file that two descriptions of one level include (a provider's and
+            # a user's .gen), read once
+            return
         if iface is None:  # else reopened
             iface = Interface(str(name), span=self.span(name))
             self.desc.interfaces[str(name)] = iface
@@ -123,7 +127,11 @@ class ComponentReader(DotgenReader):
             owner.properties[name] = self.strings(ch[0])
         elif name in ("require", "codels-require"):
             lst = ch[-1]
-            owner.properties.setdefault(name, []).extend(self.strings(s) for s in lst.children)
+            values = [self.strings(s) for s in lst.children]
+            owner.properties.setdefault(name, []).extend(values)
+            if name == "codels-require":  # where each package was named: a missing one is reported there
+                for value, s in zip(values, lst.children):
+                    owner.ref_spans.setdefault(f"codels-require:{value}", self.span(s))
         elif name == "clock-rate":
             d = self.duration(ch[1], ch[2] if len(ch) > 2 else None, "clock-rate")
             if isinstance(owner, Component):
@@ -328,3 +336,6 @@ class ComponentReader(DotgenReader):
             if key in iface.properties:
                 reqs = target.properties.setdefault(key, [])
                 reqs.extend(r for r in iface.properties[key] if r not in reqs)
+        for key, span in iface.ref_spans.items():
+            if key.startswith("codels-require:"):
+                target.ref_spans.setdefault(key, span)

@@ -6,7 +6,8 @@ holders) and comes back as the yield or the exception, with the holders' new val
 during a call (SIGSEGV, abort), the call raises :class:`CodelCrashed` naming the codel and the signal, and a
 new child is started in the background for the next call (which waits for it): what the codels kept in
 their own static variables is lost, the IDS is not (it lives in the controller).  Each call pays the round
-trip (docs/codels.md gives the figure).
+trip (docs/codels.md gives the figure).  A codel's remote call comes back over the same pipe and is made in
+the controller, which answers it before the codel's own answer.
 """
 from __future__ import annotations
 
@@ -34,10 +35,11 @@ def _serve(conn: Any, component: str, path: str, spec: dict[str, Any]) -> None:
     conn.send(("ready", None))
     while True:
         try:
-            name, plain, refs = conn.recv()
+            name, plain, refs, remotes = conn.recv()
         except (EOFError, OSError):
             return
         kwargs = {k: (Ref(v) if k in refs else v) for k, v in plain.items()}
+        kwargs.update({k: _RemoteProxy(conn, k, parameters) for k, parameters in remotes.items()})
         fn = library.get(name)
         try:
             result = fn(**kwargs)
@@ -47,6 +49,30 @@ def _serve(conn: Any, component: str, path: str, spec: dict[str, Any]) -> None:
         except Exception as err:  # noqa: BLE001 - said to the controller with the codel's name
             answer = ("error", f"{type(err).__name__}: {err}", None)
         conn.send((*answer, {k: kwargs[k].value for k in refs}))
+
+
+class _RemoteProxy:
+    """In the child: a remote's handle whose call goes back over the pipe to the controller's remote."""
+
+    def __init__(self, conn: Any, arg: str, parameters: list[dict[str, Any]]) -> None:
+        self.conn, self.arg, self.parameters = conn, arg, parameters
+
+    def __call__(self, **inputs: Any) -> dict[str, Any]:
+        self.conn.send(("remote", self.arg, inputs))
+        how, value, detail = self.conn.recv()
+        if how == "throw":
+            raise Throw(value, detail=detail)
+        return value
+
+
+def _remote_answer(remote: Any, inputs: dict[str, Any]) -> tuple[str, Any, Any]:
+    """In the controller: a remote called by a codel of the child, its answer for the pipe."""
+    try:
+        return "ok", remote(**inputs), None
+    except Throw as thrown:
+        return "throw", thrown.name, thrown.detail
+    except Exception as err:  # noqa: BLE001 - the child's codel gets it as the remote's failure
+        return "throw", "genom::remote_io", {"what": f"{type(err).__name__}: {err}"}
 
 
 class IsolatedLibrary:
@@ -107,14 +133,21 @@ class IsolatedLibrary:
 
     def call(self, name: str, kwargs: dict[str, Any]) -> Any:
         refs = [k for k, v in kwargs.items() if isinstance(v, Ref)]
-        plain = {k: (v.value if isinstance(v, Ref) else v) for k, v in kwargs.items()}
+        # a remote's handle stays here: the child's calls of it come back over the pipe and are made here
+        remotes = {k: v for k, v in kwargs.items() if callable(v)}
+        plain = {k: (v.value if isinstance(v, Ref) else None if callable(v) else v) for k, v in kwargs.items()}
         with self.lock:
             self.ready.wait()
             if self.broken is not None:
                 raise CodelCrashed(f"codel {name} of {self.component} cannot run: {self.broken}")
             try:
-                self.conn.send((name, plain, refs))
-                how, value, detail, written = self.conn.recv()
+                self.conn.send((name, plain, refs, {k: getattr(v, "parameters", []) for k, v in remotes.items()}))
+                while True:
+                    answer = self.conn.recv()
+                    if answer[0] != "remote":
+                        break
+                    self.conn.send(_remote_answer(remotes[answer[1]], answer[2]))
+                how, value, detail, written = answer
             except (EOFError, OSError):
                 self.process.join(5)
                 code = self.process.exitcode

@@ -23,6 +23,7 @@ EVENT = ctypes.c_void_p  # a genom_event (const char *), NULL for genom_ok
 RAISE = ctypes.CFUNCTYPE(EVENT, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
 RAISED = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p)
 NOW = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_int)  # genom2bip_now(realtime): runtime/ccodels/clock
+DEVICE = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.c_char_p)  # genom2bip_devices(name): runtime/ccodels/devices
 
 
 class Context(ctypes.Structure):
@@ -41,13 +42,14 @@ class Raised:
     def __init__(self) -> None:
         self.event: int | None = None
         self.detail = b""
+        self.plain: dict[str, Any] = {}  # the detail as plain data, when a remote answered the exception
         self.raise_ = RAISE(self._raise)
         self.raised = RAISED(self._raised)
         self.context = Context(self.raise_, self.raised, None)
         self._buffer: Any = None
 
     def _raise(self, ex: int | None, detail: int | None, size: int, _self: int | None) -> int | None:
-        self.event = ex
+        self.event, self.plain = ex, {}
         self.detail = ctypes.string_at(detail, size) if detail and size else b""
         return ex
 
@@ -151,6 +153,58 @@ class Port:
         return True, now
 
 
+class RemoteHandle:
+    """A remote's handle for the C codels: ``call(params..., self)`` converts its arguments to plain values, calls
+    the controller's remote (:class:`runtime.controller.remote.Remote`), writes the outputs back and returns
+    ``genom_ok`` or the exception's id (its detail given to the context, as ``raise()`` would)."""
+
+    def __init__(self, library: "CodelLibrary", name: str, params: list[list]) -> None:
+        self.library, self.name, self.params = library, name, params
+        layouts = library.layouts
+        types = [layouts.ctype(lay) if d == "in" and layouts.is_scalar(lay) else ctypes.c_void_p for d, lay in params]
+        self.kind = ctypes.CFUNCTYPE(EVENT, *types, ctypes.c_void_p)
+        self.struct = type(f"remote_{name}", (ctypes.Structure,), {"_fields_": [("call", self.kind)]})
+
+    def bind(self, remote: Any, raised: "Raised", keep: list) -> Any:
+        """The handle for one codel call: ``remote`` is the controller's (None: no controller reaches it)."""
+        layouts = self.library.layouts
+
+        def call(*args: Any) -> int | None:
+            try:
+                inputs: dict[str, Any] = {}
+                spec = getattr(remote, "parameters", None) or [{"name": f"arg{k}"} for k in range(len(self.params))]
+                for (direction, lay), p, raw in zip(self.params, spec, args):
+                    if direction == "out":
+                        continue
+                    if direction == "in" and layouts.is_scalar(lay):
+                        inputs[p["name"]] = layouts.value(lay, raw)
+                    else:
+                        inputs[p["name"]] = layouts.value(lay, layouts.ctype(lay).from_address(raw))
+                if remote is None:
+                    raise Throw("genom::no_such_remote", what=f"remote {self.name} of {self.library.component} "
+                                                              "is not reachable from here")
+                outputs = remote(**inputs)
+                for (direction, lay), p, raw in zip(self.params, spec, args):
+                    if direction != "in" and p["name"] in outputs:
+                        target = layouts.ctype(lay).from_address(raw)
+                        if layouts.is_scalar(lay):
+                            target.value = layouts.scalar(lay, outputs[p["name"]], keep)
+                        else:
+                            layouts.fill(lay, outputs[p["name"]], target, keep)
+                return None
+            except Throw as thrown:
+                return self.library.raise_into(raised, thrown, keep)
+            except Exception as err:  # noqa: BLE001 - said as the remote's failure, never through C
+                return self.library.raise_into(raised, Throw("genom::remote_io", what=f"{type(err).__name__}: {err}"),
+                                               keep)
+
+        fn = self.kind(call)
+        keep.append(fn)
+        handle = self.struct(fn)
+        keep.append(handle)
+        return handle
+
+
 class CodelLibrary:
     """The C codels of one component: ``find(name)`` gives the Python function that calls one."""
 
@@ -163,9 +217,13 @@ class CodelLibrary:
             raise CodelLibraryError(f"{self.path}: cannot load the C codels of {component}: {err}") from None
         self.layouts = Layouts(spec["types"])
         self.codels: dict[str, list] = spec["codels"]
+        self.simple = set(spec.get("simple", ()))  # codels whose genom_ok is their one yield, ether
         self.exceptions: dict[str, list] = spec["exceptions"]
         self.prefix = f"::{component}::"
+        self.remotes: dict[str, list] = spec.get("remotes", {})
         self._made: dict[str, Callable] = {}
+        self._remotes: dict[str, RemoteHandle] = {}
+        self._events: dict[str, Any] = {}
 
     def follow(self, clock: Any) -> bool:
         """Make the codels' wall clock (gettimeofday, clock_gettime, time) the controller's ``clock``."""
@@ -176,6 +234,28 @@ class CodelLibrary:
         epoch = time.time() - clock.now()
         self._now = NOW(lambda realtime: clock.now() + (epoch if realtime else 0.0))  # kept alive here
         hook.value = ctypes.cast(self._now, ctypes.c_void_p).value
+        return True
+
+    def offer(self, devices: dict[str, Callable[[], Any]]) -> bool:
+        """Give the codels ``devices`` (name -> a function making the device's table, a ctypes object, on first
+        use): what ``genom2bip_device(name)`` returns them (genom2bip/device.h)."""
+        try:
+            hook = ctypes.c_void_p.in_dll(self.lib, "genom2bip_devices")
+        except ValueError:
+            return False
+        made: dict[str, Any] = {}
+
+        def device(name: bytes) -> int | None:
+            key = name.decode(errors="replace")
+            if key not in made:
+                try:
+                    made[key] = devices[key]() if key in devices else None
+                except Exception:  # noqa: BLE001 - a device that cannot be made is none: the codel says so
+                    made[key] = None
+            return ctypes.addressof(made[key]) if made[key] is not None else None
+
+        self._devices = DEVICE(device)  # kept alive here
+        hook.value = ctypes.cast(self._devices, ctypes.c_void_p).value
         return True
 
     def get(self, name: str) -> Callable | None:
@@ -195,6 +275,7 @@ class CodelLibrary:
 
     def _caller(self, name: str, symbol: Any, args: list[list]) -> Callable:
         layouts = self.layouts
+        simple = name in self.simple
 
         def codel(**kwargs: Any) -> str | None:
             keep: list = []
@@ -211,7 +292,8 @@ class CodelLibrary:
                     ports.append((holder, port))
                     passed.append(ctypes.byref(port.handle))
                 elif kind == "remote":
-                    passed.append(None)
+                    handle = self.remote_handle(arg[1]).bind(value, raised, keep)
+                    passed.append(ctypes.byref(handle))
                 elif kind == "value":
                     lay = arg[1]
                     if layouts.is_scalar(lay):
@@ -239,9 +321,11 @@ class CodelLibrary:
                 if written and holder is not None:
                     holder.value = now
             if event is None:
-                return None
+                return "ether" if simple else None
             text = ctypes.string_at(event).decode(errors="replace")
             if raised.event is not None and raised.event == event or text in self.exceptions:
+                if raised.plain and text not in self.exceptions:  # a remote's answer the component does not declare
+                    raise Throw(text.removeprefix("::"), detail=raised.plain)
                 self._throw(text, raised.detail)
             if text.startswith(self.prefix):
                 return text[len(self.prefix):]
@@ -250,6 +334,37 @@ class CodelLibrary:
         codel.__name__ = name
         codel.__qualname__ = f"{self.component}.{name}"
         return codel
+
+    def remote_handle(self, name: str) -> RemoteHandle:
+        if name not in self._remotes:
+            self._remotes[name] = RemoteHandle(self, name, self.remotes.get(name, []))
+        return self._remotes[name]
+
+    def event_id(self, name: str) -> int:
+        """The address of the event ``::name``: the library's own ``<cname>_id`` when it has one (codels compare
+        events by address), else a string of ours."""
+        symbol = name.removeprefix("::").replace("::", "_") + "_id"
+        try:
+            return ctypes.addressof(ctypes.c_char.in_dll(self.lib, symbol))
+        except ValueError:
+            if name not in self._events:
+                self._events[name] = ctypes.create_string_buffer(f"::{name.removeprefix('::')}".encode())
+            return ctypes.addressof(self._events[name])
+
+    def raise_into(self, raised: Raised, thrown: Throw, keep: list) -> int:
+        """Give the codel's context the exception ``thrown`` (what a remote answered); its id, to return."""
+        key = f"::{thrown.name.removeprefix('::')}"
+        event = self.event_id(key)
+        raised.event, raised.detail, raised.plain = event, b"", dict(thrown.detail)
+        known = self.exceptions.get(key)
+        if known is not None and known[1] is not None and thrown.detail:
+            types = dict(self.layouts.types)
+            types[f"{known[0]}::detail"] = known[1]
+            writer = Layouts(types)
+            obj = writer.new(["ref", f"{known[0]}::detail"], thrown.detail, keep)
+            keep.append(obj)
+            raised.detail = ctypes.string_at(ctypes.addressof(obj), ctypes.sizeof(obj))
+        return event
 
     def _throw(self, text: str, detail: bytes) -> None:
         known = self.exceptions.get(text)

@@ -12,13 +12,15 @@ from runtime.ccodels.library import CodelLibrary, CodelLibraryError
 PROCESS_ENV = "GENOM2BIP_CODELS_PROCESS"
 
 
-def c_codels(interface: dict[str, Any], isolate: bool | None = None, clock: Any = None
+def c_codels(interface: dict[str, Any], isolate: bool | None = None, clock: Any = None,
+             devices: dict[str, Callable[[], Any]] | None = None
              ) -> tuple[dict[str, dict[str, Callable]], dict[str, str], list[str]]:
     """The C codels of every component the interface gives a library: (functions by component, problems by
     component, the libraries loaded).  Libraries are found relative to the package (``interface["where"]``);
     ``isolate`` (default: the environment variable ``GENOM2BIP_CODELS_PROCESS=1``) runs each library in a
     process of its own, so that a codel that crashes fails its request and the controller goes on.  On a
-    virtual ``clock`` the codels' wall clock follows it (in the controller's process)."""
+    virtual ``clock`` the codels' wall clock follows it (in the controller's process); ``devices`` are what
+    ``genom2bip_device(name)`` gives the codels (in the controller's process; in a process of their own, none)."""
     if isolate is None:
         isolate = os.environ.get(PROCESS_ENV, "") == "1"
     base = Path(interface.get("where") or ".")
@@ -36,6 +38,8 @@ def c_codels(interface: dict[str, Any], isolate: bool | None = None, clock: Any 
                 library = CodelLibrary(component, base / c["library"], c)
                 if clock is not None and getattr(clock, "virtual", False):
                     library.follow(clock)
+                if devices:
+                    library.offer(devices)
         except CodelLibraryError as err:
             problems[component] = str(err)
             continue

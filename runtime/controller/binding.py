@@ -115,9 +115,10 @@ class CodelCall:
             return not self.detached
 
     def detach(self) -> bool:
-        """Let the engine go on without this call (False: it has just returned)."""
+        """Let the engine go on without this call (False: it has just returned, or is detached already: the
+        watchdog and a remote call may both want to, and only one engine thread may go on)."""
         with self.lock:
-            if self.done:
+            if self.done or self.detached:
                 return False
             self.detached = True
             return True
@@ -173,6 +174,8 @@ class Binder:
         self.replay: dict[str, CodelCall] = {}  # extern -> a detached call whose step is fired again
         self.missing: list[str] = []
         self.times: CodelTimes | None = None  # set: every call's CPU and wall time is recorded there
+        # (component, remote) -> the handle a ``remote`` argument gets (runtime.controller.remote)
+        self.remotes: Callable[[str, str], Any] | None = None
         self._externs: dict[str, Callable[[], int]] | None = None
         # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
         self._anywhere: dict[str, tuple[str, list[Arg]]] = {}
@@ -309,8 +312,8 @@ class Binder:
                 value = get_path(ids, a.steps)
             elif a.source == "local":
                 value = get_path(self.locals, a.steps) if self.locals is not None else None
-            else:  # remote: the IR does not say which component serves it
-                kwargs[a.name] = None
+            else:  # remote: a handle whose call is a request to the component that serves it
+                kwargs[a.name] = self.remotes(component, a.port) if self.remotes is not None else None
                 continue
             if a.direction == "in":
                 kwargs[a.name] = clone(value)

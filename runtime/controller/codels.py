@@ -113,15 +113,28 @@ def _from_package(package: types.ModuleType, components: list[str], where: str) 
     return CodelSource(where, modules, package, problems)
 
 
+def c_devices(source: CodelSource) -> dict[str, Callable[[], Any]]:
+    """The devices the Python codels offer C codels: ``C_DEVICES = {name: make}`` in any of their modules, ``make()``
+    giving the device's table of C-callable functions (a ctypes object; genom2bip/device.h)."""
+    out: dict[str, Callable[[], Any]] = {}
+    for holder in [source.common, *source.modules.values()]:
+        offered = getattr(holder, "C_DEVICES", None) if holder is not None and not isinstance(holder, Mapping) \
+            else None
+        if isinstance(offered, Mapping):
+            out.update(offered)
+    return out
+
+
 def with_c_codels(source: CodelSource, interface: dict[str, Any], clock: Any = None) -> CodelSource:
     """``source`` with the C codel libraries the interface names (runtime.ccodels): a component's C codels
     serve it in place of Python ones; a library that cannot be loaded is reported per codel.  On a virtual
-    ``clock`` the C codels' wall clock is the controller's."""
+    ``clock`` the C codels' wall clock is the controller's.  The devices the Python codels offer (``C_DEVICES``,
+    :func:`c_devices`) are the C codels' ``genom2bip_device()``."""
     if not any(spec.get("c") for spec in interface["components"].values()):
         return source
     from runtime.ccodels import c_codels
 
-    found, problems, loaded = c_codels(interface, clock=clock)
+    found, problems, loaded = c_codels(interface, clock=clock, devices=c_devices(source))
     source.modules.update(found)
     source.problems.update(problems)
     if loaded:

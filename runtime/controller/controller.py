@@ -22,8 +22,10 @@ from runtime.controller.data import Data, PosterValue
 from runtime.controller.intake import checked_inputs, request_locals
 from runtime.controller.meaning import Meanings, StepInfo
 from runtime.controller.monitor import Monitor
+from runtime.controller.remote import NO_SUCH_REMOTE, REMOTE_IO, Remotes, remote_outcome
 from runtime.controller.reports import Listener, Reports
 from runtime.controller.requests import Request, RequestError, Service
+from runtime.genom import Throw
 from runtime.controller.running import Running
 from runtime.controller.timing import MonotonicClock, Timers
 from runtime.engine import Engine, Interaction
@@ -55,6 +57,8 @@ class Controller(Running):
         self.codels = with_c_codels(load_codels(codels, list(comps)), interface, self.clock)
         self.binder = Binder(interface, self.data, self.codels, codel_specs(package), on_poster=self._poster_written)
         self.binder.times = CodelTimes(interface) if times else None
+        self.remotes = Remotes(interface, self.call_remote)
+        self.binder.remotes = self.remotes.handle
         externs: dict[str, Callable] = dict(self.binder.externs())
         externs["request_pending"] = self._pending
         externs["take_request"] = self._take
@@ -145,6 +149,25 @@ class Controller(Running):
             self._epoch += 1
             self._wake.notify()
         return req
+
+    def call_remote(self, component: str, remote: str, inputs: dict[str, Any]) -> dict[str, Any]:
+        """A codel of ``component`` calls its remote ``remote``: a request to the service that serves it, the
+        engine going on without the codel until the request's final report; its outputs, or :class:`Throw`."""
+        target = self.remotes.target(component, remote)
+        if target is None:
+            raise Throw(NO_SUCH_REMOTE, what=self.remotes.why_unconnected(component, remote))
+        label = f"{target[0]}.{target[1]}"
+        if not self.can_let_go():
+            raise Throw(REMOTE_IO, what=f"{label}: a remote call needs the controller's engine in a thread of its "
+                                        "own (Controller.start()), which it leaves while the codel waits")
+        try:
+            req = self.submit(target[0], target[1], inputs)
+        except RequestError as err:
+            raise Throw(REMOTE_IO, what=f"{label} did not accept the request ({err.status}): {err}") from None
+        self.let_go()
+        with self._lock:
+            self.reports.done.wait_for(lambda: req.final is not None or self._stopping)
+        return remote_outcome(req.final, label)
 
     def get(self, request_id: int) -> Request:
         """The request ``request_id``; :class:`RequestError` 404 when it is unknown or forgotten."""

@@ -82,6 +82,7 @@ class Running(Takeover):
         with self._lock:
             self._stopping = True
             self._wake.notify_all()
+            self.reports.done.notify_all()  # a codel waiting for a remote's report stops waiting
             if self._thread is None or self._thread is threading.current_thread():
                 return
             # the run's end, whichever engine thread it is in (one may have taken over from a stuck codel)

@@ -67,6 +67,30 @@ class Takeover:
             self._thread = threading.Thread(target=self._drive, name="bip-controller", daemon=True)
             self._thread.start()
 
+    def can_let_go(self) -> bool:
+        """The codel under way may wait for the engine (a remote call): the engine runs in a thread it may leave."""
+        call = self.binder.call
+        return bool(getattr(self, "_threaded", False)) and call is not None and not call.done and (
+            call.detached or (call.thread is threading.current_thread() and self._step is not None))
+
+    def let_go(self) -> bool:
+        """From the codel under way, about to wait for another component (a remote call): the engine goes on in a
+        new thread without it, as for a stuck codel, but at once and without an overrun (False: already so)."""
+        call = self.binder.call
+        step = self._step
+        if call is None or step is None or call.thread is not threading.current_thread() or not call.detach():
+            return False
+        inter, info, req, at = step
+        d = Detached(call, inter, info, req, self._taken, atoms_of(inter), at)
+        with self._lock:
+            if self._finished:
+                return True
+            self.detached.append(d)
+            self.frozen |= d.atoms
+            self._thread = threading.Thread(target=self._drive, name="bip-controller", daemon=True)
+            self._thread.start()
+        return True
+
     def _held_up(self, task: str | None) -> bool:
         """Something waits for the engine: another task's period is due, a request is queued, a stop."""
         now = self.clock.now()

@@ -50,7 +50,8 @@ def add_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--codels", metavar="DIR|MODULE",
                      help="the codels package (default: codels/ next to the descriptions, see docs/runtime.md)")
     run.add_argument("--connect", metavar="C.IN=D.OUT", action="append", default=[],
-                     help="make port in IN of component C read poster OUT of D (default: the poster of that name)")
+                     help="make port in IN of component C read poster OUT of D (default: the poster of that name); "
+                          "C.R=D.S makes C's remote R call service S of D (default: the one provider)")
     run.add_argument("--duration", type=float, metavar="SECONDS", help="stop after this many seconds")
     run.add_argument("--limit", type=int, metavar="STEPS", help="stop after this many engine steps")
     run.add_argument("--seed", type=int, help="choose among ready interactions at random with this seed "
@@ -163,7 +164,10 @@ def _build(package: Package, root: str, interface: dict[str, Any], args, origin:
         for item in args.connect:
             left, _, right = item.partition("=")
             component, _, port_name = left.partition(".")
-            controller.data.connect(component, port_name, right)
+            if (component, port_name) in controller.remotes.specs:  # a remote: the service it calls
+                controller.remotes.connect(component, port_name, right)
+            else:
+                controller.data.connect(component, port_name, right)
     except EngineError as e:
         raise UsageError(str(e)) from None
     except KeyError as e:

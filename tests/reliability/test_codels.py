@@ -35,9 +35,9 @@ BROKEN_ODOMETRY = '''
 _broken = {"on": False}
 _open, _odometry = rflexOpen, rflexOdometry
 
-def rflexOpen(local_device, ids_device):
-    _broken["on"] = local_device == "/dev/broken"
-    return _open(local_device, ids_device)
+def rflexOpen(device, opened):
+    _broken["on"] = device == "/dev/broken"
+    return _open(device, opened)
 
 def rflexOdometry(Odo):
     if _broken["on"]:

@@ -4,8 +4,10 @@ The servo task's permanent activity advances the ir-sim world by one period
 (the base moves whether or not TrackSpeed runs) and integrates the speeds
 the base measures into the odometry pose, which starts at zero.
 """
-from . import odometry, world
+from . import base_device, odometry, world
 
+#: RFLEX's codels in C reach the same simulated base through this device (docs/codels.md).
+C_DEVICES = {"dala_base": base_device.make}
 PERIOD = 0.025  # s, the servo task's period
 STILL = {"v": 0.0, "w": 0.0}
 _state = {"pose": {"x": 0.0, "y": 0.0, "theta": 0.0}, "applied": dict(STILL)}
@@ -36,8 +38,8 @@ def rflexClose():
     return "ether"
 
 
-def rflexOpen(local_device, ids_device):
-    ids_device.value = local_device
+def rflexOpen(device, opened):
+    opened.value = device
     return "ether"
 
 
