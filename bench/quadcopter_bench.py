@@ -268,9 +268,15 @@ def _value(r) -> str:
     return f"{value:g} ms" if isinstance(value, float) else str(value)
 
 
-def main() -> int:
+def budget_seconds(text: str) -> float | None:
+    """``10 min``, ``30 s``, or ``10m`` as timeout(1) writes ten minutes: seconds; None when it is no duration."""
     from genom2bip.durations import parse_duration
 
+    us = parse_duration(re.sub(r"(\d)\s*m\Z", r"\1 min", text))
+    return us / 1e6 if us else None
+
+
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("artefact", type=Path)
     ap.add_argument("-I", dest="include", action="append", default=[], metavar="DIR",
@@ -288,10 +294,10 @@ def main() -> int:
     ap.add_argument("--keep", type=Path, help="write the client mission there")
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when not a terminal")
     args = ap.parse_args()
-    limit = parse_duration(re.sub(r"(\d)\s*m\Z", r"\1 min", args.time_limit))  # 10m: ten minutes, as in timeout(1)
+    limit = budget_seconds(args.time_limit)
     if limit is None:
         ap.error(f"--time-limit: not a duration: {args.time_limit!r}")
-    args.time_limit = limit / 1e6
+    args.time_limit = limit
     client_file = None
     if args.client == "artefact":
         from robnav_bench import request_inputs
