@@ -187,6 +187,7 @@ def run(args, client_file: Path | None) -> None:
 
     def keep(model, options=None):  # the explorer check_timing makes, kept for the depth of its search
         made.append(original(model, options))
+        made[-1].reduce = args.por  # the zone search's partial-order reduction (runtime/zones/reduction.py)
         return made[-1]
 
     from genom2bip.loading import TimeSettings
@@ -291,6 +292,9 @@ def main() -> int:
                     help="the artefact's client as a mission (default), or genom2bip's default environment")
     ap.add_argument("--waypoints", type=int, help="how many waypoint requests the client sends (default: the most "
                                                   "its automaton sends)")
+    ap.add_argument("--por", action="store_true",
+                    help="the zone search's partial-order reduction where time cannot pass "
+                         "(runtime/zones/reduction.py)")
     ap.add_argument("--keep", type=Path, help="write the client mission there")
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when not a terminal")
     args = ap.parse_args()
@@ -322,7 +326,8 @@ def main() -> int:
         print(f"mission in {client_file}")
     else:
         print("client: genom2bip's default environment (any service at most once per period of its task)")
-    print(f"platform: {args.platform or 'a core per task'}; budget {_budget(args)}", flush=True)
+    print(f"platform: {args.platform or 'a core per task'}; budget {_budget(args)}; partial-order reduction "
+          f"{'on' if args.por else 'off'}", flush=True)
     run(args, client_file)
     return 0
 
