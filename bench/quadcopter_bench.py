@@ -150,8 +150,9 @@ def bfs_depth(nodes) -> int:
     return max(depth, default=0)
 
 
-def run(args, client_file: Path | None) -> None:
-    """Build the model, search it within the budget, print the verdicts or how far it got."""
+def run(args, client_file: Path | None, platform: Path | None, time_limit: float) -> dict:
+    """Build the model, search it within the budget, print the verdicts or how far it got; the period results and
+    task response times by task."""
     import genom2bip.verify.zones as zones
     from genom2bip.verify.model import build_model
     from genom2bip.verify.options import Listener, SearchOptions
@@ -192,13 +193,13 @@ def run(args, client_file: Path | None) -> None:
 
     from genom2bip.loading import TimeSettings
 
-    settings = TimeSettings(platform=str(args.platform) if args.platform else None,
+    settings = TimeSettings(platform=str(platform) if platform else None,
                             client=str(client_file) if client_file else None, responses=True, exceptions=False)
     start = time.perf_counter()
     model = build_model([args.artefact / "all.gen"], include_dirs=[str(args.artefact), *args.include],
                         no_rules=True, time=settings)
     print(f"model built in {time.perf_counter() - start:.1f} s", flush=True)
-    options = SearchOptions(max_states=args.max_states, time_limit=args.time_limit)
+    options = SearchOptions(max_states=args.max_states, time_limit=time_limit)
     zones.explorer = keep
     start = time.perf_counter()
     try:
@@ -220,7 +221,7 @@ def run(args, client_file: Path | None) -> None:
         depth = bfs_depth(z.nodes) if z is not None else 0
         discrete = re.search(r"([\d,]+) discrete", figures_method(results))
         discrete = discrete.group(1) if discrete else "?"
-        print(f"stopped ({stopped}; budget: {_budget(args)}) after {seconds:.0f} s: "
+        print(f"stopped ({stopped}; budget: {_budget(args, time_limit)}) after {seconds:.0f} s: "
               f"{figures.states:,} symbolic states ({discrete} discrete), {figures.transitions:,} transitions, "
               f"depth {depth:,}, frontier {Recorded.frontier:,}, {mb:,.0f} MB")
     else:
@@ -237,6 +238,57 @@ def run(args, client_file: Path | None) -> None:
             print(f"  {owner:24} {'-':>9} {'-':>17} {_value(response):>22}")
     if services:
         print("  services: " + ", ".join(f"{r.owner} {_value(r)}" for r in services))
+    for r in periods:
+        if args.traces and r.trace is not None:
+            from genom2bip.cli.verify_timed import timed_trace
+
+            print(f"\n{r.subject}: violated; its trace, replayed on the tick model:")
+            timed_trace(r.trace)
+    return {r.observer.rsplit(".", 1)[0]: (r, tasks.get(r.observer.rsplit(".", 1)[0])) for r in periods}
+
+
+def exact_platform(platform: Path, out: Path) -> Path:
+    """The platform with every codel taking exactly its worst case (``best: wcet``, each listed interval at its
+    upper end): its runs are runs of the platform, so its overruns are the platform's and its response times
+    lower bounds of the platform's, and it branches only where tasks race, not on each codel's duration."""
+    import yaml
+
+    data = yaml.safe_load(platform.read_text()) or {}
+    data["best"] = "wcet"
+    for key, value in (data.get("execution") or {}).items():
+        if isinstance(value, list) and len(value) == 2:
+            data["execution"][key] = [value[1], value[1]]
+    path = out / f"{platform.stem}-exact.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def both(exact: dict, full: dict) -> None:
+    """Each task's answer on the platform from the two searches: an overrun of the exact search is one of the
+    platform's; a response time of either is a lower bound of the platform's, exact where the full search ended."""
+    from genom2bip.verify.results import Verdict
+
+    print("\non the platform, from both searches (an overrun with exact WCETs is an overrun of the platform):")
+    print(f"  {'task':24} {'keeps its period':>17} {'largest response time':>22}")
+    for owner, (r, response) in full.items():
+        first, first_response = exact.get(owner, (None, None))
+        verdict = r.verdict.value
+        if r.verdict is not Verdict.VIOLATED and first is not None and first.verdict is Verdict.VIOLATED:
+            verdict = "violated (exact)"
+        bounds = []  # (ms, above): a value reached, or past the observer's cap
+        for x in (response, first_response):
+            if x is not None and x.value_ticks is not None:
+                bounds.append((x.value_ms, False))
+            elif x is not None and x.message:
+                bounds.append((x.ms(x.cap_ticks), True))
+        if response is not None and response.verdict is not Verdict.INCONCLUSIVE:
+            shown = _value(response)
+        elif bounds:
+            ms, above = max(bounds)
+            shown = f"{'>' if above else '>='} {ms:g} ms"
+        else:
+            shown = _value(response)
+        print(f"  {owner:24} {verdict:>17} {shown:>22}")
 
 
 def figures_method(results) -> str:
@@ -244,10 +296,10 @@ def figures_method(results) -> str:
     return results[0].method if results else ""
 
 
-def _budget(args) -> str:
+def _budget(args, time_limit: float | None = None) -> str:
     parts = []
-    if args.time_limit:
-        parts.append(f"time limit {args.time_limit:g} s")
+    if time_limit or args.time_limit:
+        parts.append(f"time limit {time_limit or args.time_limit:g} s")
     if args.max_states:
         parts.append(f"{args.max_states:,} states")
     parts.append(f"{args.max_memory_mb:,} MB")
@@ -295,6 +347,10 @@ def main() -> int:
     ap.add_argument("--por", action="store_true",
                     help="the zone search's partial-order reduction where time cannot pass "
                          "(runtime/zones/reduction.py)")
+    ap.add_argument("--exact-first", metavar="DURATION",
+                    help="search first, for DURATION, the platform with every codel taking exactly its WCET: a subset "
+                         "of its runs, which reaches overruns deeper in time (their traces are the platform's)")
+    ap.add_argument("--traces", action="store_true", help="print the trace of each period overrun found")
     ap.add_argument("--keep", type=Path, help="write the client mission there")
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when not a terminal")
     args = ap.parse_args()
@@ -302,6 +358,10 @@ def main() -> int:
     if limit is None:
         ap.error(f"--time-limit: not a duration: {args.time_limit!r}")
     args.time_limit = limit
+    if args.exact_first is not None:
+        args.exact_first = budget_seconds(args.exact_first)
+        if args.exact_first is None:
+            ap.error("--exact-first: not a duration")
     client_file = None
     if args.client == "artefact":
         from robnav_bench import request_inputs
@@ -328,7 +388,15 @@ def main() -> int:
         print("client: genom2bip's default environment (any service at most once per period of its task)")
     print(f"platform: {args.platform or 'a core per task'}; budget {_budget(args)}; partial-order reduction "
           f"{'on' if args.por else 'off'}", flush=True)
-    run(args, client_file)
+    exact = {}
+    if args.exact_first and args.platform:
+        path = exact_platform(args.platform, client_file.parent if client_file else Path(tempfile.mkdtemp()))
+        print(f"\nfirst, every codel taking exactly its WCET ({path}), for {args.exact_first:g} s:", flush=True)
+        exact = run(args, client_file, path, args.exact_first)
+        print(f"\nthen the platform as given ({args.platform}):", flush=True)
+    full = run(args, client_file, args.platform, args.time_limit)
+    if exact:
+        both(exact, full)
     return 0
 
 
