@@ -76,3 +76,13 @@ def test_a_budget_in_minutes_is_read_as_timeout_writes_it():
     assert quadcopter_bench.budget_seconds("10m") == 600
     assert quadcopter_bench.budget_seconds("30 s") == 30
     assert quadcopter_bench.budget_seconds("ten minutes") is None
+
+
+def test_the_exact_platform_takes_each_codel_at_its_worst_case_and_keeps_the_rest(tmp_path):
+    platform = tmp_path / "p.yaml"
+    platform.write_text("cores: 8\npolicy: edf\nexecution:\n  alpha.main.step: [1 ms, 3 ms]\n"
+                        "tasks:\n  alpha.main:\n    delay: 2 ms\n")
+    exact = yaml.safe_load(quadcopter_bench.exact_platform(platform, tmp_path).read_text())
+    assert exact == {"cores": 8, "policy": "edf", "execution": {"alpha.main.step": ["3 ms", "3 ms"]},
+                     "tasks": {"alpha.main": {"delay": "2 ms"}}, "best": "wcet"}
+    assert platform.read_text().startswith("cores: 8\n")  # the given file is left as it was
