@@ -15,9 +15,15 @@ union of the runs for 0..max is the artefact's client.  ``--client default`` use
 environment instead (any service at most once per period of its task).
 
 One zone search (``verify --timed --platform P --client C --response-times`` through the verification API) with a
-budget (``--time-limit``, ``--max-states``).  Printed: per task whether it keeps its period and its largest
-response time; when the search stopped at its budget, how far it got (symbolic states, discrete states, depth of
-the breadth-first search, frontier, memory) and the largest response times reached so far as lower bounds.
+budget (``--time-limit``, ``--max-states``, ``--max-memory-mb``: past it the search is stopped as Ctrl-C stops it).
+Printed: per task whether it keeps its period and its largest response time; when the search stopped at its
+budget, how far it got (symbolic states, discrete states, depth of the breadth-first search, frontier, memory) and
+the largest response times reached so far as lower bounds.
+
+``--exact-first DURATION`` searches first the platform with every codel taking exactly its WCET: a subset of the
+platform's runs, so its overruns (``--traces`` prints them) are the platform's and its response times lower bounds
+of the platform's; a last table gives each task's answer from both.  ``--por`` turns on the zone search's
+partial-order reduction.  docs/verification/scale.md has the figures.
 """
 from __future__ import annotations
 
