@@ -273,6 +273,7 @@ def both(exact: dict, full: dict) -> None:
     """Each task's answer on the platform from the two searches: an overrun of the exact search is one of the
     platform's; a response time of either is a lower bound of the platform's, exact where the full search ended."""
     from genom2bip.verify.results import Verdict
+    from genom2bip.verify.zones import ABOVE_CAP
 
     print("\non the platform, from both searches (an overrun with exact WCETs is an overrun of the platform):")
     print(f"  {'task':24} {'keeps its period':>17} {'largest response time':>22}")
@@ -285,7 +286,7 @@ def both(exact: dict, full: dict) -> None:
         for x in (response, first_response):
             if x is not None and x.value_ticks is not None:
                 bounds.append((x.value_ms, False))
-            elif x is not None and x.message:
+            elif x is not None and x.message == ABOVE_CAP:
                 bounds.append((x.ms(x.cap_ticks), True))
         if response is not None and response.verdict is not Verdict.INCONCLUSIVE:
             shown = _value(response)
@@ -315,14 +316,16 @@ def _budget(args, time_limit: float | None = None) -> str:
 def _value(r) -> str:
     """A response time: its maximum, a lower bound when the search stopped, or why there is no number."""
     from genom2bip.verify.results import Verdict
-    from genom2bip.verify.zones import response_value
+    from genom2bip.verify.zones import ABOVE_CAP, response_value
 
     if r is None:
         return "-"
     if r.verdict is Verdict.INCONCLUSIVE:
         if r.value_ticks is not None:
             return f">= {r.value_ms:g} ms"
-        return f"> {r.ms(r.cap_ticks):g} ms" if r.message else "not reached yet"
+        if r.message == ABOVE_CAP:
+            return f"> {r.ms(r.cap_ticks):g} ms"
+        return "not requested yet" if r.message == "never requested" else "not reached yet"
     value = response_value(r)
     return f"{value:g} ms" if isinstance(value, float) else str(value)
 

@@ -86,3 +86,21 @@ def test_the_exact_platform_takes_each_codel_at_its_worst_case_and_keeps_the_res
     assert exact == {"cores": 8, "policy": "edf", "execution": {"alpha.main.step": ["3 ms", "3 ms"]},
                      "tasks": {"alpha.main": {"delay": "2 ms"}}, "best": "wcet"}
     assert platform.read_text().startswith("cores: 8\n")  # the given file is left as it was
+
+
+def _response(verdict: str, value_ticks=None, message: str = ""):
+    from genom2bip.verify.results import Verdict
+    from genom2bip.verify.zones import ResponseResult
+
+    return ResponseResult("response time of a.s", Verdict(verdict), value_ticks=value_ticks, message=message,
+                          cap_ticks=800, tick_us=10, owner="a.s", kind="service")
+
+
+def test_a_stopped_search_shows_a_lower_bound_past_the_cap_or_what_is_not_requested_yet():
+    from genom2bip.verify.zones import ABOVE_CAP
+
+    assert quadcopter_bench._value(_response("inconclusive", value_ticks=5)) == ">= 0.05 ms"
+    assert quadcopter_bench._value(_response("inconclusive", message=ABOVE_CAP)) == "> 8 ms"
+    assert quadcopter_bench._value(_response("inconclusive", message="never requested")) == "not requested yet"
+    assert quadcopter_bench._value(_response("inconclusive")) == "not reached yet"
+    assert quadcopter_bench._value(_response("holds", value_ticks=5)) == "0.05 ms"
