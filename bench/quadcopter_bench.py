@@ -51,6 +51,7 @@ INIT = re.compile(r"\binit\s+(\w+)\s*;")
 SEND = re.compile(r"sync\s+recv(?:_urg)?_(\w+)!\s*;\s*assign\s+req_\1\s*:=\s*(\w+)")
 WAIT = re.compile(r"guard\s+x\s*==\s*(\w+)\s*;")
 LOOP = re.compile(r"(\w+)\s*<\s*(\w+)")
+RESET = re.compile(r"[\s,;]x\s*:=\s*0\b")
 
 
 @dataclass
@@ -95,6 +96,7 @@ def read_client(xta: str) -> Client:
     for src, dst, label in TRANSITION.findall(body):
         edges.setdefault(src, []).append((dst, label))
     client, state, wait, seen = Client(), init.group(1), 0, set()
+    known = 0  # units since x was last reset, while that is known (x starts at 0; a request goes when it can)
     while state in edges and state not in seen:
         seen.add(state)
         out = edges[state]
@@ -113,11 +115,17 @@ def read_client(xta: str) -> Client:
         guard = WAIT.search(label)
         if guard:
             name = guard.group(1)
-            wait += constants[name] if name in constants else int(name)
+            at = constants[name] if name in constants else int(name)
+            if known is None or at < known:
+                raise ClientError(f"state {state}: waits for x == {name}, but the time since x was reset is not "
+                                  f"known there (a request was sent since, without resetting x)")
+            wait, known = wait + at - known, at
         send = SEND.search(label)
         if send:
             client.steps.append(Step(_request(*send.groups()), wait * UNIT_US))
-            wait = 0
+            wait, known = 0, None
+        if RESET.search(label):
+            known = 0
         state = dst
     if not client.steps:
         raise ClientError("the client sends no request")

@@ -63,6 +63,9 @@ def test_the_mission_sends_each_request_once_the_previous_is_queued_after_its_wa
      "state loop: 2 ways on and 1 loops (one and at most one expected)"),
     (CLIENT.replace("sync recv_urg_beta!; assign req_beta:= waypoint_beta", "assign x:=0"),
      "state loop: a loop that is not a bounded request"),
+    (CLIENT.replace("assign req_alpha:= go_alpha, x:=0;", "assign req_alpha:= go_alpha;"),
+     "state b: waits for x == t, but the time since x was reset is not known there (a request was sent since, "
+     "without resetting x)"),
     ("process client() {\n    clock x;\nstate ini, a;\ninit ini;\ntrans\n    ini -> a { guard x==5; };\n}\n",
      "the client sends no request"),
 ])
