@@ -298,6 +298,7 @@ class _Box:
 
 
 def _row(*arguments) -> dict:
+    """:func:`run` in a pool's process: its figures returned."""
     box = _Box()
     run(*arguments, box)
     return box.value
@@ -346,6 +347,7 @@ def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
     for nc, sd in grid:
         platforms.append(out / f"edf{nc}-sd{sd}.yaml")
         platforms[-1].write_text(platform_text(nc, execution, offsets, args.releases, {task: sd} if sd else None))
+    start = time.perf_counter()
     for (nc, sd), got in zip(grid, runs(args, paths, platforms, out)):
         ref = published.get(sd, {}) if nc == 4 else {}
         cells = []
@@ -356,6 +358,7 @@ def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
         track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
         print(f"{nc:>3} {sd:>3}  {track:8} " + " ".join(cells)
               + f" {got.get('states', 0):>9,} {got['seconds']:>6.1f}s", flush=True)
+    print(f"{len(grid)} row(s) in {time.perf_counter() - start:.1f} s wall clock, {args.jobs} at a time")
 
 
 def _track_ok(got: dict) -> bool:
