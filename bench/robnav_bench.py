@@ -1,6 +1,6 @@
 """RobNav's schedulability study run by genom2bip, beside the published UPPAAL results.
 
-Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--exceptions] [--keep DIR] [--smc RUNS]``.
+Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--jobs 2] [--exceptions] [--keep DIR] [--smc RUNS]``.
 
 ARTEFACT_DIR is a clone of the public schedulability artefact of the RobNav
 functional level (four components robloco, robmotion, robmap, roblaser, each
@@ -21,7 +21,9 @@ is granted) and a client mission (the first request sent once every
 component takes requests, each next one once the previous one is queued;
 ``--requests-at-start`` sends them at 0 ms instead), then runs
 ``verify --timed --platform P --client C --response-times`` through the
-verification API, one process per ``nc`` (for its peak memory).
+verification API, one process per ``nc`` (for its peak memory); ``--jobs 2``
+runs two of them at once, which is how a second core pays
+(docs/verification/scale.md).
 Printed per ``nc``: whether task ``track`` keeps its period, the largest
 response time of each task beside the published one, states, seconds, MB.
 
@@ -213,6 +215,7 @@ def main() -> None:
     ap.add_argument("--cores", default="1-5", help="a range (1-5) or a list (3,4)")
     ap.add_argument("--exceptions", action="store_true", help="codels may also end in their service's exceptions")
     ap.add_argument("--max-states", type=int, default=5_000_000)
+    ap.add_argument("--jobs", type=int, default=1, help="rows run at once, each in its own process (default 1)")
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when it is not a terminal")
     ap.add_argument("--keep", type=Path, help="write the platform files and the client mission there")
     ap.add_argument("--requests-at-start", action="store_true",
@@ -245,13 +248,15 @@ def main() -> None:
     print(f"exceptions: {'as genom2bip models them' if args.exceptions else 'none (as the artefact)'}; "
           f"releases at one instant: {args.releases}; files in {out}")
     rows = []
-    ctx = multiprocessing.get_context("spawn")
+    platforms = []
     for nc in cores:
-        platform = out / f"edf{nc}.yaml"
-        platform.write_text(platform_text(nc, execution, offsets, args.releases))
-        got = one_run(ctx, args, paths, platform, out)
+        platforms.append(out / f"edf{nc}.yaml")
+        platforms[-1].write_text(platform_text(nc, execution, offsets, args.releases))
+    start = time.perf_counter()
+    for nc, got in zip(cores, runs(args, paths, platforms, out)):
         rows.append((nc, got))
         show(nc, got)
+    print(f"\n{len(cores)} row(s) in {time.perf_counter() - start:.1f} s wall clock, {args.jobs} at a time")
     print()
     holds = [nc for nc, g in rows if _track_ok(g)]
     print(f"track keeps its period with {', '.join(map(str, holds)) or 'none'} of the cores tried "
@@ -285,6 +290,37 @@ def one_run(ctx, args, paths: list[str], platform: Path, out: Path) -> dict:
     return got
 
 
+class _Box:
+    """What :func:`run` puts, for a row run by a process pool (which returns it rather than queueing it)."""
+
+    def put(self, value) -> None:
+        self.value = value
+
+
+def _row(*arguments) -> dict:
+    """:func:`run` in a pool's process: its figures returned."""
+    box = _Box()
+    run(*arguments, box)
+    return box.value
+
+
+def runs(args, paths: list[str], platforms: list[Path], out: Path):
+    """Each platform file's checks, in order; with ``--jobs N``, N rows at once, each in a fresh process (its peak
+    memory its own): the rows are independent searches, which is how two cores pay (docs/verification/scale.md)."""
+    ctx = multiprocessing.get_context("spawn")
+    if args.jobs <= 1:
+        for platform in platforms:
+            yield one_run(ctx, args, paths, platform, out)
+        return
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(args.jobs, mp_context=ctx, max_tasks_per_child=1) as pool:
+        futures = [pool.submit(_row, paths, str(args.artefact), str(platform), str(out / "client.yaml"),
+                               args.exceptions, args.max_states, args.progress) for platform in platforms]
+        for future in futures:
+            yield future.result()
+
+
 def _numbers(text: str) -> list[int]:
     """``1-5`` or ``3,4``."""
     if "-" in text:
@@ -306,21 +342,23 @@ def suspension_rows(args, cores: list[int], delays: list[int]) -> None:
     print("response times in ms, genom2bip / published (res.csv, nc = 4)")
     print(f"{'nc':>3} {'sd':>3}  {'track ok':8} " + " ".join(f"{t.split('.')[1]:>9}" for t in order)
           + f" {'states':>9} {'time':>7}")
-    ctx = multiprocessing.get_context("spawn")
-    for nc in cores:
-        for sd in delays:
-            platform = out / f"edf{nc}-sd{sd}.yaml"
-            platform.write_text(platform_text(nc, execution, offsets, args.releases, {task: sd} if sd else None))
-            got = one_run(ctx, args, paths, platform, out)
-            ref = published.get(sd, {}) if nc == 4 else {}
-            cells = []
-            for t in order:
-                value = got["responses"].get(t)
-                mine = "inf" if value == "inf" else ("?" if value is None else f"{value:g}")
-                cells.append(f"{mine + '/' + str(ref[t]) if t in ref else mine:>9}")
-            track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
-            print(f"{nc:>3} {sd:>3}  {track:8} " + " ".join(cells)
-                  + f" {got.get('states', 0):>9,} {got['seconds']:>6.1f}s", flush=True)
+    grid = [(nc, sd) for nc in cores for sd in delays]
+    platforms = []
+    for nc, sd in grid:
+        platforms.append(out / f"edf{nc}-sd{sd}.yaml")
+        platforms[-1].write_text(platform_text(nc, execution, offsets, args.releases, {task: sd} if sd else None))
+    start = time.perf_counter()
+    for (nc, sd), got in zip(grid, runs(args, paths, platforms, out)):
+        ref = published.get(sd, {}) if nc == 4 else {}
+        cells = []
+        for t in order:
+            value = got["responses"].get(t)
+            mine = "inf" if value == "inf" else ("?" if value is None else f"{value:g}")
+            cells.append(f"{mine + '/' + str(ref[t]) if t in ref else mine:>9}")
+        track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
+        print(f"{nc:>3} {sd:>3}  {track:8} " + " ".join(cells)
+              + f" {got.get('states', 0):>9,} {got['seconds']:>6.1f}s", flush=True)
+    print(f"{len(grid)} row(s) in {time.perf_counter() - start:.1f} s wall clock, {args.jobs} at a time")
 
 
 def _track_ok(got: dict) -> bool:

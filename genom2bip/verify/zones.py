@@ -220,7 +220,8 @@ class _Watch:
         result = self.result or ZoneResult(0, 0, 0, 0.0, False)
         result.complete, result.stopped = False, reason
         result.states, result.seconds = len(self.z.nodes), seconds
-        result.discrete = len({n.state for n in self.z.nodes})
+        if not result.discrete:  # the C search counts them; the Python one only at its end
+            result.discrete = len({n.state for n in self.z.nodes})
         return result
 
     @contextlib.contextmanager
