@@ -99,6 +99,38 @@ def test_programs_let_go_past_the_budget_are_written_again_and_change_nothing(tm
     assert let_go and rewritten, (let_go, rewritten)
 
 
+class _Depths:
+    """A progress that keeps every (states, depth) it is told."""
+
+    def __init__(self) -> None:
+        self.seen: list[tuple[int, int | None]] = []
+
+    def tick(self, states, transitions, frontier, memory, depth=None) -> None:
+        self.seen.append((states, depth))
+
+    def done(self) -> None:
+        pass
+
+
+def test_progress_tells_the_breadth_first_depth_alike_in_c_and_python(tmp_path):
+    # The C search tells its progress every 1,024 expanded nodes, the Python one after each: where both speak, the
+    # depth is the same, and it is the parent chain's length of the node being expanded.
+    name, gen, defines, platform, mission = next(c for c in CASES if c[0] == "shared-slow")
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    told = {}
+    for engine in ("python", "c"):
+        z = ZoneExplorer(model.package, model.root, engine=engine)
+        told[engine] = _Depths()
+        z.explore(progress=told[engine])
+    assert len(told["c"].seen) >= 2, "the fixture is meant to need several progress lines"
+    assert set(told["c"].seen) <= set(told["python"].seen)
+    chain = [0] * len(z.nodes)
+    for k, n in enumerate(z.nodes):
+        chain[k] = chain[n.parent] + 1 if n.parent >= 0 else 0
+    deepest_expanded = max(chain[k] for k, n in enumerate(z.nodes) if n.expanded)
+    assert max(d for _, d in told["python"].seen) == deepest_expanded
+
+
 def test_states_c_cannot_write_go_back_to_python(tmp_path, monkeypatch):
     # An expression the C code cannot say exactly (here: every one) sends its states to ZoneExplorer.program().
     from runtime.zones import ctables

@@ -175,9 +175,9 @@ class CSearch:
         z, lib = self.z, self.lib
         watcher = z.watcher
 
-        def tick(nodes, transitions, waiting, memory, _depth) -> int:
+        def tick(nodes, transitions, waiting, memory, depth) -> int:
             try:
-                progress.tick(nodes, transitions, waiting, lambda: memory)
+                progress.tick(nodes, transitions, waiting, lambda: memory, depth)
                 if watcher is not None:
                     self._refresh(result, nodes=False)
                     watcher(result)

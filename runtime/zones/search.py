@@ -442,8 +442,12 @@ class ZoneExplorer:
             zone = self.forget(self.initial_zone(), state)
             for z, grown in self.elapse(zone, state):
                 add(state, z, -1, -1, [], grown)
+        popped, level_end, depth = 0, 0, -1  # breadth-first levels: nodes before level_end are at depth
         while waiting:
+            if popped >= level_end:
+                depth, level_end = depth + 1, len(self.nodes)
             k = waiting.popleft()
+            popped += 1
             node = self.nodes[k]
             if node.covered:
                 continue
@@ -483,7 +487,7 @@ class ZoneExplorer:
             if max_states is not None and len(self.nodes) >= max_states:
                 result.complete, result.stopped = False, "max-states"
                 break
-            progress.tick(len(self.nodes), result.transitions, len(waiting), self.memory)
+            progress.tick(len(self.nodes), result.transitions, len(waiting), self.memory, depth)
         progress.done()
         result.states = len(self.nodes)
         result.discrete = len(passed)

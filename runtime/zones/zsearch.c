@@ -88,6 +88,7 @@ typedef struct {
     int64_t budget;         /* bytes of programs held before finished states' are let go; 0: never */
     int64_t pinned;         /* the state being expanded: its program is read while its successors arrive */
     int64_t let_go, rewritten;
+    int64_t level_end, depth;  /* breadth-first levels: the waiting list's end when the current one began */
 } Ctx;
 
 
@@ -178,6 +179,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
         x->max_node[i] = -1;
     x->ntmp = 9;
     x->pinned = -1;
+    x->depth = -1;
     x->shorts.size = (int64_t)d * d * sizeof(int16_t);
     x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
@@ -1077,6 +1079,8 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
     int status = 0;
     int64_t count = 0;
     while (x->head < x->waiting.n) {
+        if (x->head >= x->level_end)  /* the nodes before level_end are at depth, those after at depth + 1 */
+            x->depth++, x->level_end = x->waiting.n;
         int32_t k = x->waiting.a[x->head++];
         if (node_done(x, x->nodes.a[k].state)) {  /* its program stays while it is pinned */
             status = -9;
@@ -1201,7 +1205,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             break;
         }
         if (progress && ++count % every == 0 &&
-            progress(x->nodes.n, x->transitions, x->waiting.n - x->head, zs_memory(x), 0)) {
+            progress(x->nodes.n, x->transitions, x->waiting.n - x->head, zs_memory(x), x->depth)) {
             status = 3;
             break;
         }
