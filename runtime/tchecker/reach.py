@@ -52,6 +52,16 @@ def load(path: str | Path, grid: int | None = None, keep_integers: bool = False)
     return system, translate(system, grid or 1, keep_integers)
 
 
+def explorer(tr: Translation):
+    """The zone explorer of a translated file: each place's LU bounds, no merging (tck-reach's covreach keeps
+    zones apart), and invariants part of the state, as a TChecker location's are."""
+    from runtime.zones.search import ZoneExplorer
+
+    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
+    z.invariants = True
+    return z
+
+
 class _Goal:
     """Which places of which atoms carry each label, as the zone explorer's atom indices and place bits."""
 
@@ -98,14 +108,13 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     """Is a configuration whose locations carry every label of ``labels`` reachable?  ``unknown`` when the
     search stops at ``max_states`` or after ``time_limit`` seconds."""
     from runtime.zones.node import GOAL
-    from runtime.zones.search import ZoneExplorer
 
     system, tr = load(path, grid)
     unknown = [lab for lab in labels if lab not in system.labels()]
     goal_set = bool(labels) and not unknown
 
     start = time.perf_counter()
-    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
+    z = explorer(tr)
     if goal_set:
         z.goal = _Goal(z, tr, labels).need
     if z.engine == "c":
@@ -147,10 +156,9 @@ def configurations(path: str | Path, grid: int | None = None) -> set[Configurati
     """The reachable configurations of a TChecker file without their clocks: each process's location (in file
     order) and the integer variables, every one kept (no dead-variable reduction).  What ``tck-reach -C graph``
     lists, to compare with it."""
-    from runtime.zones.search import ZoneExplorer
 
     system, tr = load(path, grid, keep_integers=True)
-    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
+    z = explorer(tr)
     z.explore()
     atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
     where = {(tr.atoms[p], place): loc for (p, loc), place in tr.places.items()}

@@ -95,6 +95,10 @@ class ZoneExplorer:
         # Extra_LU with each place's bounds (model.py's _local_ceilings), off by default: measured, it changes nothing
         # on DALA and RobNav (their clocks are read by priorities or observers) and stores more on Fischer 6
         self.local_ceilings = local_ceilings
+        #: Invariants are part of a state (a TChecker location's): where time may pass, the points of a zone past a
+        #: place's invariant (kept by extrapolation, which forgets bounds no guard ahead reads) are left out, as
+        #: tck-reach intersects every successor with the invariant; off, they stay as a piece where time cannot pass.
+        self.invariants = False
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
@@ -326,6 +330,11 @@ class ZoneExplorer:
         limits = self.limits(state, zone)
         if limits is None:
             return [(zone, False)]
+        if self.invariants:  # a point past an invariant is no state (``invariants``): nothing of it is stored
+            zone = dbm.constrain_all(zone, self._passing[state][1])
+            if zone is None:
+                return []
+            limits = self.limits(state, zone)
         # A tick needs x <= c - 1 before it (``before``), so after any number of them x <= c (``after``): from the
         # points that meet ``after``, time reaches exactly up(Z & after) & after, as a dense-time invariant would.
         _, after = limits

@@ -79,6 +79,7 @@ typedef struct {
     int amp_all;
     int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
     int64_t reduced;        /* expansions that left steps out */
+    int invariants;         /* points past an invariant are no state (search.py's ZoneExplorer.invariants) */
 } Ctx;
 
 
@@ -617,6 +618,12 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
     return 0;
 }
 
+/* Points past an invariant are no state (1) or a piece where time cannot pass (0, the default). */
+void zs_set_invariants(void *p, int on)
+{
+    ((Ctx *)p)->invariants = on;
+}
+
 /* The partial-order reduction on (``ask``: called with a node whose state lets no time pass, it answers with
  * zs_set_ample) or off (NULL). */
 void zs_set_por(void *p, ample_fn ask)
@@ -672,7 +679,7 @@ static Parts parts(const int64_t *p)
 /* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
 /* The pieces of z after time passes at the state of program pr, appended to out with their grown flags;
  * returns the number of pieces, or -2 for a wait that is not one lower bound (err_arg: the rule). */
-static int64_t elapse(Ctx *x, const int64_t *pr, const double *z, Doubles *out, Longs *grown)
+static int64_t elapse(Ctx *x, const int64_t *pr, double *z, Doubles *out, Longs *grown)
 {
     int d = x->d;
     int64_t len = (int64_t)d * d;
@@ -685,6 +692,8 @@ static int64_t elapse(Ctx *x, const int64_t *pr, const double *z, Doubles *out, 
         return 1;
     }
     const int64_t *before = p, *after = skip_bounds(before), *w = skip_bounds(after);
+    if (x->invariants && !constrain_all(z, d, after + 1, after[0]))
+        return 0;  /* z (the caller's scratch) is past an invariant everywhere: no state */
     int64_t nw = *w++;
     Longs extra_before = {0}, extra_after = {0};
     if (nw) {
