@@ -26,7 +26,7 @@ from runtime.engine.support import _matches, matches_low, rule_edges, top_connec
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.space import StateSpace
 from runtime.zones import dbm
-from runtime.zones.model import Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
+from runtime.zones.model import NO_BOUND, Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
 from runtime.zones.node import GOAL, Node
 
 
@@ -349,8 +349,12 @@ class ZoneExplorer:
         (model.py's _local_ceilings), ascending."""
         if not self.local_ceilings:
             return []
+        idle = self.idle(state)
         out = []
         for k, (atom, _) in enumerate(self.model.clocks, 1):
+            if k in idle:  # no guard reads it before its next reset: no bound on either side, as TChecker's ExtraLU+
+                out.append((k, NO_BOUND, NO_BOUND))
+                continue
             got = self.model.places[(atom, self.place_bit(state, atom))].ceilings.get(k)
             if got is not None:
                 out.append((k, *got))
