@@ -80,6 +80,8 @@ typedef struct {
     int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
     int64_t reduced;        /* expansions that left steps out */
     int invariants;         /* points past an invariant are no state (search.py's ZoneExplorer.invariants) */
+    int16_t *z16;           /* scratch: a zone being stored, in 16 bits */
+    VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
 } Ctx;
 
 
@@ -105,6 +107,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->shorts.size = (int64_t)d * d * sizeof(int16_t);
     x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
+    x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
     return x;
 }
 
@@ -121,7 +124,7 @@ void zs_free(void *p)
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
-    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
+    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->under.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
@@ -494,6 +497,24 @@ static int slot_leq(Ctx *x, int64_t s, const double *z)  /* z includes the store
     return 1;
 }
 
+/* Both inclusions between two 16-bit zones at once (SHORT_INF, the largest value, stands for infinity): *ge when a
+ * includes b, *le when b includes a; it stops as soon as neither can hold. */
+static void compare16(const int16_t *a, const int16_t *b, int64_t len, int *ge, int *le)
+{
+    int g = 1, l = 1;
+    int64_t k = 0;
+    for (; k + 16 <= len && (g | l); k += 16)
+        for (int j = 0; j < 16; j++) {
+            g &= a[k + j] >= b[k + j];
+            l &= a[k + j] <= b[k + j];
+        }
+    for (; k < len && (g | l); k++) {
+        g &= a[k] >= b[k];
+        l &= a[k] <= b[k];
+    }
+    *ge = g, *le = l;
+}
+
 static int slot_drop(Ctx *x, int64_t s)
 {
     if (--*slot_refs(x, s) > 0)
@@ -829,8 +850,25 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     for (int64_t k = 0; k < 3 * nguard; k++)
         PUSH(x->guards, guard[k]);
     if (kept->n) {
-        for (int32_t i = 0; i < kept->n; i++)
-            if (slot_geq(x, x->nodes.a[kept->a[i]].zone, zone)) {
+        /* one pass over the state's zones: the first that includes the new one covers it; those it includes are
+         * covered by it once no zone covers it (the order of search.py's two passes, which give the same) */
+        int64_t len = (int64_t)d * d;
+        int16_t *mine = x->z16;
+        int small = fits_short(zone, len);
+        if (small)
+            for (int64_t k = 0; k < len; k++)
+                mine[k] = zone[k] == INFINITY ? SHORT_INF : (int16_t)zone[k];
+        x->under.n = 0;
+        for (int32_t i = 0; i < kept->n; i++) {
+            int64_t slot = x->nodes.a[kept->a[i]].zone;
+            int ge, le;
+            if (small && !(slot & 1)) {
+                compare16((const int16_t *)x->shorts.a + (slot >> 1) * len, mine, len, &ge, &le);
+            } else {
+                ge = slot_geq(x, slot, zone);
+                le = !ge && slot_leq(x, slot, zone);
+            }
+            if (ge) {
                 x->old_hit = 1;
                 if (parent >= 0) {
                     step.by = kept->a[i];
@@ -840,18 +878,20 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
                 }
                 return 0;
             }
-        for (int32_t i = 0; i < kept->n; i++) {
-            Node *old = &x->nodes.a[kept->a[i]];
-            if (slot_leq(x, old->zone, zone)) {
-                old->covered = 1, old->by = (int32_t)x->nodes.n;
-                if (!old->expanded) {
-                    slot_drop(x, old->zone);
-                    old->zone = -1;
-                    x->dropped++;
-                }
+            if (le)
+                PUSH(x->under, i);
+        }
+        for (int64_t u = 0; u < x->under.n; u++) {
+            Node *old = &x->nodes.a[kept->a[x->under.a[u]]];
+            old->covered = 1, old->by = (int32_t)x->nodes.n;
+            if (!old->expanded) {
+                slot_drop(x, old->zone);
+                old->zone = -1;
+                x->dropped++;
             }
         }
-        kept_prune(x, kept);
+        if (x->under.n)
+            kept_prune(x, kept);
     }
     if (x->merge && kept->n) {
         double *own = T(x, 3);
