@@ -117,6 +117,13 @@ def best(run, repeat: int, under: float = 1.0) -> Run:
     return min((r for r in runs if r.verdict == first.verdict), key=lambda r: r.seconds)
 
 
+def time_bound(mine: Run, theirs: Run) -> str:
+    """'>' before the time ratio when our run stopped at the limit, '<' when theirs did (the ratio is a bound)."""
+    if mine.verdict == "unknown":
+        return ">"
+    return "<" if theirs.verdict == "unknown" else ""
+
+
 def verdict_cell(reach: Run, cov: Run, mine: Run) -> str:
     """The table's verdict: the one all answers agree on; ours stopped at a limit is "unknown (time limit ...)" with
     how far it got, and tck-reach's answer beside it; DISAGREE when two answers differ."""
@@ -214,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"| {cell(cov.states, ',')} | {cell(mine.states, ',')}{more} ({cell(mine.stored, ',')}) "
                   f"| {'>' if more else ''}{ratio(mine.states, cov.states)} | {seconds(reach)} "
                   f"| {seconds(cov)} "
-                  f"| {cell(mine.seconds, '.3f')}{more} | {'>' if more else ''}{ratio(mine.seconds, cov.seconds)} "
+                  f"| {cell(mine.seconds, '.3f')}{more} | {time_bound(mine, cov)}{ratio(mine.seconds, cov.seconds)} "
                   f"| {cell(mine.wall, '.2f')} | {cell(cov.rss_mib, '.1f')} "
                   f"| {cell(mine.rss_mib, '.1f')} | {agree or '—'} |", flush=True)
             if mine.verdict == "error":

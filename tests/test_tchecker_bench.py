@@ -96,3 +96,9 @@ def test_best_of_several_runs_only_where_the_first_was_quick():
     assert tb.best(run, 3).seconds == 9.0 and len(calls) == 4  # a slow first run is not repeated
     stopped = tb.Run("unknown", None, None, 0.1, None, "time limit")
     assert tb.best(lambda: stopped, 3) is stopped
+
+
+def test_a_time_ratio_against_a_run_stopped_at_the_limit_is_a_bound():
+    done, stopped = tb.Run("unreachable", 5, 4, 24.0, 8.0), tb.Run("unknown", None, None, 60.0, None, "time limit")
+    assert tb.time_bound(done, stopped) + tb.ratio(done.seconds, stopped.seconds) == "<0.4×"
+    assert tb.time_bound(stopped, done) == ">" and tb.time_bound(done, done) == ""
