@@ -274,3 +274,62 @@ def test_local_lu_bounds_change_no_verdict_and_no_configuration(name):
             assert result.complete
             seen.add(frozenset(n.state for n in z.nodes))
     assert len(seen) == 1
+
+
+@pytest.mark.parametrize("name", ["fischer2.tck", "fischer2_nonstrict.tck", "philosophers2.tck"])
+def test_no_zone_is_stored_that_a_later_one_covers(name):
+    # Each zone is stored under one matrix (extrapolation puts a raised lower bound back to x >= 0), and a clock
+    # idle at a state keeps no bound at all (minus infinity on both sides, as TChecker's ExtraLU+): the search
+    # then never stores a zone that one reached later covers.  tck-reach -a covreach visits 18, 28 and 11 nodes on
+    # these files and covers none it stored; we stored 22, 32 and 14.
+    r = reach(FIXTURES / name, [], 2)
+    assert r.verdict == "unreachable"
+    assert r.states == r.kept
+    assert r.kept == {"fischer2.tck": 18, "fischer2_nonstrict.tck": 28, "philosophers2.tck": 11}[name]
+
+
+def test_two_philosophers_never_eat_at_once():
+    # philosophers2.tck: each eats holding both forks; tck-reach says unreachable too
+    assert reach(FIXTURES / "philosophers2.tck", ["eating1", "eating2"]).verdict == "unreachable"
+    assert reach(FIXTURES / "philosophers2.tck", ["eating2"]).verdict == "reachable"
+
+
+@pytest.mark.parametrize("name", ["fischer2.tck", "fischer2_nonstrict.tck", "committed_window.tck", "urgent.tck",
+                                  "sync.tck", "weak.tck"])
+def test_points_past_an_invariant_are_no_state_and_change_nothing_reachable(name):
+    # With invariants part of the state (ZoneExplorer.invariants, as reach runs), the points extrapolation keeps
+    # past a place's invariant are not stored as a piece where time cannot pass: fewer steps, the same
+    # configurations and the same zones kept; the C search stores what the Python one does.
+    from runtime.tchecker.reach import explorer, load
+
+    _, tr = load(FIXTURES / name, 2)
+    runs = {}
+    for engine in ("python", "c"):
+        for hard in (False, True):
+            z = explorer(tr)
+            z.engine, z.invariants = engine, hard
+            result = z.explore()
+            assert result.complete
+            kept = sorted((n.state, n.zone.tobytes()) for n in z.nodes if not n.covered)
+            steps = sum(len(out) for out in z.out)
+            nodes = [(n.state, n.parent, n.via, n.covered, n.by, None if n.stored is None else n.stored.tobytes())
+                     for n in z.nodes]
+            runs[engine, hard] = (frozenset(n.state for n in z.nodes), kept, steps, nodes)
+    assert runs["python", True] == runs["c", True] and runs["python", False] == runs["c", False]
+    assert runs["c", True][:2] == runs["c", False][:2]
+    assert runs["c", True][2] <= runs["c", False][2]
+
+
+def test_fischer_stores_no_piece_past_an_invariant():
+    # Fischer 2: in req (x <= 2) a clock no guard ahead reads from below loses its upper bound to extrapolation;
+    # the successors of such a zone were cut in two, the piece past x <= 2 stored and then covered.
+    from runtime.tchecker.reach import explorer, load
+
+    _, tr = load(FIXTURES / "fischer2.tck", 2)
+    counts = []
+    for hard in (False, True):
+        z = explorer(tr)
+        z.invariants = hard
+        z.explore()
+        counts.append(len(z.search.steps))
+    assert counts[1] < counts[0]

@@ -3,7 +3,7 @@
 The oracle (tests/randomtimed.py) explores each network's integer-time semantics state by state, written from the
 TChecker format's meaning, without the zone engine or the translation to BIP.  The zone engine must reach the same
 configurations (locations and integer) whatever its options: merging zones (``merge``), Extra_LU+ by place
-(``local_ceilings``), the C or the Python search; with the partial-order reduction (``reduce``), which keeps out
+(``local_ceilings``), invariants kept in the state (``invariants``), the C or the Python search; with the partial-order reduction (``reduce``), which keeps out
 orders of commuting zero-time steps, every location must keep its reachability verdict.
 """
 from __future__ import annotations
@@ -19,8 +19,8 @@ from runtime.zones.csearch import library
 from runtime.zones.search import ZoneExplorer
 
 #: The options of the zone search, each one on and off; the C search where it builds.
-OPTIONS = [dict(engine=e, merge=m, local_ceilings=lu) for e in ["python"] + (["c"] if library() else [])
-           for m in (False, True) for lu in (False, True)]
+OPTIONS = [dict(engine=e, merge=m, local_ceilings=lu, invariants=inv) for e in ["python"] + (["c"] if library() else [])
+           for m in (False, True) for lu in (False, True) for inv in (False, True)]
 SEEDS = range(96)
 #: Networks on which each location's verdict is compared with the partial-order reduction on and off.
 POR_SEEDS = range(96, 128)

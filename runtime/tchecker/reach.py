@@ -27,7 +27,7 @@ class Reach:
     discrete: int  # distinct discrete states among them
     kept: int  # stored states no larger zone came to cover
     transitions: int  # symbolic transitions computed
-    seconds: float
+    seconds: float  # the search (what tck-reach's RUNNING_TIME_SECONDS measures of its own)
     zone_bytes: int  # what the search holds (ZoneExplorer.memory)
     peak_rss: int  # bytes, the whole process
     grid: int  # strict constraints read on a 1/grid time grid (1: no strict constraint)
@@ -36,6 +36,7 @@ class Reach:
     trace_note: str = ""
     stopped: str = ""  # "max-states" or "time-limit" when the verdict is unknown
     unknown_labels: list[str] = field(default_factory=list)  # carried by no location
+    build_seconds: float = 0.0  # the zone model built from the translation, before the search
 
 
 def load(path: str | Path, grid: int | None = None, keep_integers: bool = False) -> tuple[System, Translation]:
@@ -49,6 +50,17 @@ def load(path: str | Path, grid: int | None = None, keep_integers: bool = False)
     if grid is not None and grid < 1:
         raise DiagnosticError([])  # pragma: no cover - the command line checks it first
     return system, translate(system, grid or 1, keep_integers)
+
+
+def explorer(tr: Translation, invariants: bool = True, **options):
+    """The zone explorer of a translated file: each place's LU bounds, no merging (tck-reach's covreach keeps
+    zones apart), and invariants part of the state, as a TChecker location's are; ``options`` change
+    ZoneExplorer's."""
+    from runtime.zones.search import ZoneExplorer
+
+    z = ZoneExplorer(tr.package, tr.root, **({"local_ceilings": True, "merge": False} | options))
+    z.invariants = invariants
+    return z
 
 
 class _Goal:
@@ -97,16 +109,18 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     """Is a configuration whose locations carry every label of ``labels`` reachable?  ``unknown`` when the
     search stops at ``max_states`` or after ``time_limit`` seconds."""
     from runtime.zones.node import GOAL
-    from runtime.zones.search import ZoneExplorer
 
     system, tr = load(path, grid)
     unknown = [lab for lab in labels if lab not in system.labels()]
     goal_set = bool(labels) and not unknown
 
     start = time.perf_counter()
-    z = ZoneExplorer(tr.package, tr.root, local_ceilings=True, merge=False)
+    z = explorer(tr)
     if goal_set:
         z.goal = _Goal(z, tr, labels).need
+    if z.engine == "c":
+        from runtime.zones import csearch, ctables  # noqa: F401 - code loaded before the search, not during it
+    built = time.perf_counter()
     try:
         result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)
     except _OutOfTime as stop:
@@ -116,7 +130,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
         if z.search is None:  # the Python search counts its discrete states when it ends, which it did not
             result.states, result.discrete = len(z.nodes), len({n.state for n in z.nodes})
             result.transitions = stop.transitions
-    seconds = time.perf_counter() - start
+    seconds = time.perf_counter() - built
     found = result.violations.get(GOAL)
     if found is not None:
         verdict = "reachable"
@@ -130,6 +144,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
                 verdict == "reachable" or system.strict is None)
     out.unknown_labels = unknown
     out.stopped = result.stopped
+    out.build_seconds = built - start
     if found is not None and want_trace:
         out.trace, out.trace_note = _trace(z, tr, found)
     return out
@@ -141,11 +156,10 @@ Configuration = tuple[tuple[str, ...], tuple[tuple[str, int], ...]]
 def configurations(path: str | Path, grid: int | None = None, **search) -> set[Configuration]:
     """The reachable configurations of a TChecker file without their clocks: each process's location (in file
     order) and the integer variables, every one kept (no dead-variable reduction).  What ``tck-reach -C graph``
-    lists, to compare with it.  ``search``: ZoneExplorer's options (covreach's by default)."""
-    from runtime.zones.search import ZoneExplorer
+    lists, to compare with it.  ``search``: the explorer's options (covreach's by default, see :func:`explorer`)."""
 
     system, tr = load(path, grid, keep_integers=True)
-    z = ZoneExplorer(tr.package, tr.root, **({"local_ceilings": True, "merge": False} | search))
+    z = explorer(tr, **search)
     z.explore()
     atoms = {fa.name.rsplit(".", 1)[-1]: fa for fa in z.flat.atoms}
     where = {(tr.atoms[p], place): loc for (p, loc), place in tr.places.items()}

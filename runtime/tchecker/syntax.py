@@ -201,7 +201,9 @@ def _parser():
     from lark import Lark
 
     grammar = (Path(__file__).parent / "expressions.lark").read_text(encoding="utf-8")
-    return Lark(grammar, parser="lalr", propagate_positions=True, start=["expression", "statements"])
+    # cache: lark keeps the built tables in a temporary file named by the grammar's and lark's hash (building them
+    # took about as long as a small model's whole search)
+    return Lark(grammar, parser="lalr", propagate_positions=True, start=["expression", "statements"], cache=True)
 
 
 _UNSUPPORTED_WORDS = re.compile(r"\b(if|while|local|then|else|end)\b")

@@ -264,7 +264,11 @@ class _Builder:
             connectors.append((f"c{k}", refs, label))
         components = [ComponentInstance(t.name, self.atoms[p]) for t, p in zip(types, self.s.processes)]
         if g_transitions:
-            data = [DataDecl("int", self.vars[v], Const(iv.init), exported=self.keep) for v, iv in self.s.ints.items()]
+            # each variable's declared bounds as its domain: the edges keep it there (an assignment that would leave
+            # it disables the edge), and the compiled step then packs it in a field of the right width at once
+            data = [DataDecl("int", self.vars[v], Const(iv.init), exported=self.keep,
+                             annotations=[Annotation("domain", {"range": f"{iv.low}..{iv.high}"})])
+                    for v, iv in self.s.ints.items()]
             init = [Assign(Var(self.vars[v]), Const(iv.init)) for v, iv in self.s.ints.items()]
             if self.committed:
                 n = sum(p.initial.committed for p in self.s.processes.values())

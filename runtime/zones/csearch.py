@@ -52,9 +52,15 @@ def library():
             ("zs_intern", i64, [p, ctypes.POINTER(i64)]), ("zs_state_words", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
+<<<<<<< HEAD
             ("zs_set_por", None, [p, AMPLE]), ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
             ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
             ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)])):
+=======
+            ("zs_set_por", None, [p, AMPLE]), ("zs_set_invariants", None, [p, i32]),
+            ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
+            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)])):
+>>>>>>> tck
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -79,6 +85,7 @@ class CSearch:
         self.ctx = lib.zs_new(self.d, _dbl(ceiling), len(self.observers), int(z.merge))
         if not self.ctx:
             raise MemoryError("zone search: no memory for its context")
+        lib.zs_set_invariants(self.ctx, int(z.invariants))
         self.error: BaseException | None = None
         self._program = PROGRAM(self._ask)
         self._inter = PROGRAM(self._ask_interaction)

@@ -82,7 +82,9 @@ int z_extrapolate(double *m, int d, const double *ceiling)
 
 /* Extra_LU+ (Behrmann, Bouyer, Larsen, Pelanek) where plus[k]: a clock above its lower-bound constant has no
  * bound left in its row, one above its upper-bound constant none in its column (its lower bound raised to it);
- * only between clocks both marked (no priority compares them), Extra_LU elsewhere (dbm.py's extrapolate_lu_plus). */
+ * only between clocks both marked (no priority compares them), Extra_LU elsewhere (dbm.py's extrapolate_lu_plus).
+ * A lower bound raised above 0 (NO_BOUND's -U - 1 = 1, or dropped) is put back to x >= 0: clocks are never negative,
+ * so the zone is the same, and its matrix is the one every other path to it gives (inclusion is then exact). */
 int z_extrapolate_lu_plus(double *m, int d, const double *lower, const double *upper, const unsigned char *plus)
 {
     double first[256];
@@ -109,6 +111,11 @@ int z_extrapolate_lu_plus(double *m, int d, const double *lower, const double *u
                 *v = to;
                 changed = 1;
             }
+        }
+    for (int j = 1; j < d; j++)  /* row 0: clocks are >= 0 */
+        if (m[j] > 0) {
+            m[j] = 0;
+            changed = 1;
         }
     if (changed)
         z_close(m, d);

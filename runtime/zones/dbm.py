@@ -222,7 +222,8 @@ def extrapolate_lu(m: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.nd
 def extrapolate_lu_plus(m: np.ndarray, lower: np.ndarray, upper: np.ndarray, plus: np.ndarray) -> np.ndarray:
     """Extra_LU+ where ``plus`` (one bool per clock): a clock above its lower-bound constant has no bound left in its
     row, one above its upper-bound constant none in its column (its lower bound raised to it); only between clocks
-    both marked (no priority compares them), Extra_LU elsewhere."""
+    both marked (no priority compares them), Extra_LU elsewhere.  A lower bound raised above 0 (a side no guard
+    bounds) is put back to ``x >= 0``, which every clock meets: equal zones then have equal matrices."""
     first = -m[0, :]
     n = m.shape[0]
     idx = np.arange(n)
@@ -241,6 +242,7 @@ def extrapolate_lu_plus(m: np.ndarray, lower: np.ndarray, upper: np.ndarray, plu
     out[(drop_l | drop_u | above) & ~diag] = INF
     clamp = (raise_u | low) & ~diag
     out[clamp] = np.broadcast_to(-(upper[None, :] + 1), out.shape)[clamp]
+    out[0, 1:] = np.minimum(out[0, 1:], 0)  # clocks are >= 0: one form per zone, so inclusion is exact
     if np.array_equal(out, m):
         return m
     return close_np(out)

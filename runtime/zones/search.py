@@ -26,7 +26,7 @@ from runtime.engine.support import _matches, matches_low, rule_edges, top_connec
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.space import StateSpace
 from runtime.zones import dbm
-from runtime.zones.model import Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
+from runtime.zones.model import NO_BOUND, Atom, Diagonal, TimedModel, Unsupported, analyse, holds as _holds, value
 from runtime.zones.node import GOAL, Node
 
 
@@ -102,6 +102,10 @@ class ZoneExplorer:
         # on DALA and RobNav (their clocks are read by priorities or observers) and stores more on Fischer 6
         self.local_ceilings = local_ceilings
         self.program_bytes = program_bytes
+        #: Invariants are part of a state (a TChecker location's): where time may pass, the points of a zone past a
+        #: place's invariant (kept by extrapolation, which forgets bounds no guard ahead reads) are left out, as
+        #: tck-reach intersects every successor with the invariant; off, they stay as a piece where time cannot pass.
+        self.invariants = False
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
@@ -333,6 +337,11 @@ class ZoneExplorer:
         limits = self.limits(state, zone)
         if limits is None:
             return [(zone, False)]
+        if self.invariants:  # a point past an invariant is no state (``invariants``): nothing of it is stored
+            zone = dbm.constrain_all(zone, self._passing[state][1])
+            if zone is None:
+                return []
+            limits = self.limits(state, zone)
         # A tick needs x <= c - 1 before it (``before``), so after any number of them x <= c (``after``): from the
         # points that meet ``after``, time reaches exactly up(Z & after) & after, as a dense-time invariant would.
         _, after = limits
@@ -347,8 +356,12 @@ class ZoneExplorer:
         (model.py's _local_ceilings), ascending."""
         if not self.local_ceilings:
             return []
+        idle = self.idle(state)
         out = []
         for k, (atom, _) in enumerate(self.model.clocks, 1):
+            if k in idle:  # no guard reads it before its next reset: no bound on either side, as TChecker's ExtraLU+
+                out.append((k, NO_BOUND, NO_BOUND))
+                continue
             got = self.model.places[(atom, self.place_bit(state, atom))].ceilings.get(k)
             if got is not None:
                 out.append((k, *got))

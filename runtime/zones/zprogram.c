@@ -18,6 +18,7 @@ typedef int (*inter_fn)(int64_t number);
 enum { OP_END, OP_CONST, OP_SLOT, OP_NEG, OP_ADD, OP_SUB, OP_MUL, OP_LT, OP_LE, OP_GT, OP_GE, OP_EQ, OP_NE,
        OP_AND, OP_OR, OP_NOT };
 #define BACK 1  /* "send this state back to Python" */
+#define NO_BOUND -2  /* model.py's NO_BOUND: the L or U of a side no guard ahead bounds (minus infinity) */
 
 /* The step's successors of one state: words, interactions, room for cap; ``state``: whose, -1 none. */
 typedef struct { int64_t *words, *via; int cap, n; int64_t state; } SuccBuf;
@@ -584,11 +585,17 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
             lpush(&idle, k);
     }
     lpush(prog, idle.n), lcat(prog, idle.a, idle.n);
-    free(idle.a);
-    /* clocks whose ceiling here is their place's */
+    /* clocks whose ceiling here is their place's; an idle one has no bound on either side (search.py's ceilings) */
     {
         L over = {0};
         for (int k = 1; k <= t->n && t->local; k++) {
+            int is_idle = 0;
+            for (int64_t a = 0; a < idle.n; a++)
+                is_idle |= idle.a[a] == k;
+            if (is_idle) {
+                lpush(&over, k), lpush(&over, NO_BOUND), lpush(&over, NO_BOUND);
+                continue;
+            }
             int64_t atom = t->clock_atom[k];
             int pi = one_place(s[t->atom_offset[atom]]);
             const int64_t *pl = t->place[t->place_base[atom] + pi];
@@ -601,7 +608,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
                 }
         }
         lpush(prog, over.n / 3), lcat(prog, over.a, over.n);
-        free(over.a);
+        free(over.a), free(idle.a);
     }
     /* time passing (search.py's _passing_at) */
     {

@@ -89,6 +89,9 @@ typedef struct {
     int64_t pinned;         /* the state being expanded: its program is read while its successors arrive */
     int64_t let_go, rewritten;
     int64_t level_end, depth;  /* breadth-first levels: the waiting list's end when the current one began */
+    int invariants;         /* points past an invariant are no state (search.py's ZoneExplorer.invariants) */
+    int16_t *z16;           /* scratch: a zone being stored, in 16 bits */
+    VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
 } Ctx;
 
 
@@ -183,6 +186,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->shorts.size = (int64_t)d * d * sizeof(int16_t);
     x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
+    x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
     return x;
 }
 
@@ -199,7 +203,7 @@ void zs_free(void *p)
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
-    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp);
+    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->under.a);
     free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
@@ -573,6 +577,24 @@ static int slot_leq(Ctx *x, int64_t s, const double *z)  /* z includes the store
     return 1;
 }
 
+/* Both inclusions between two 16-bit zones at once (SHORT_INF, the largest value, stands for infinity): *ge when a
+ * includes b, *le when b includes a; it stops as soon as neither can hold. */
+static void compare16(const int16_t *a, const int16_t *b, int64_t len, int *ge, int *le)
+{
+    int g = 1, l = 1;
+    int64_t k = 0;
+    for (; k + 16 <= len && (g | l); k += 16)
+        for (int j = 0; j < 16; j++) {
+            g &= a[k + j] >= b[k + j];
+            l &= a[k + j] <= b[k + j];
+        }
+    for (; k < len && (g | l); k++) {
+        g &= a[k] >= b[k];
+        l &= a[k] <= b[k];
+    }
+    *ge = g, *le = l;
+}
+
 static int slot_drop(Ctx *x, int64_t s)
 {
     if (--*slot_refs(x, s) > 0)
@@ -704,6 +726,12 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
     return 0;
 }
 
+/* Points past an invariant are no state (1) or a piece where time cannot pass (0, the default). */
+void zs_set_invariants(void *p, int on)
+{
+    ((Ctx *)p)->invariants = on;
+}
+
 /* The partial-order reduction on (``ask``: called with a node whose state lets no time pass, it answers with
  * zs_set_ample) or off (NULL). */
 void zs_set_por(void *p, ample_fn ask)
@@ -759,7 +787,7 @@ static Parts parts(const int64_t *p)
 /* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
 /* The pieces of z after time passes at the state of program pr, appended to out with their grown flags;
  * returns the number of pieces, or -2 for a wait that is not one lower bound (err_arg: the rule). */
-static int64_t elapse(Ctx *x, const int64_t *pr, const double *z, Doubles *out, Longs *grown)
+static int64_t elapse(Ctx *x, const int64_t *pr, double *z, Doubles *out, Longs *grown)
 {
     int d = x->d;
     int64_t len = (int64_t)d * d;
@@ -772,6 +800,8 @@ static int64_t elapse(Ctx *x, const int64_t *pr, const double *z, Doubles *out, 
         return 1;
     }
     const int64_t *before = p, *after = skip_bounds(before), *w = skip_bounds(after);
+    if (x->invariants && !constrain_all(z, d, after + 1, after[0]))
+        return 0;  /* z (the caller's scratch) is past an invariant everywhere: no state */
     int64_t nw = *w++;
     Longs extra_before = {0}, extra_after = {0};
     if (nw) {
@@ -907,8 +937,25 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     for (int64_t k = 0; k < 3 * nguard; k++)
         PUSH(x->guards, guard[k]);
     if (kept->n) {
-        for (int32_t i = 0; i < kept->n; i++)
-            if (slot_geq(x, x->nodes.a[kept->a[i]].zone, zone)) {
+        /* one pass over the state's zones: the first that includes the new one covers it; those it includes are
+         * covered by it once no zone covers it (the order of search.py's two passes, which give the same) */
+        int64_t len = (int64_t)d * d;
+        int16_t *mine = x->z16;
+        int small = fits_short(zone, len);
+        if (small)
+            for (int64_t k = 0; k < len; k++)
+                mine[k] = zone[k] == INFINITY ? SHORT_INF : (int16_t)zone[k];
+        x->under.n = 0;
+        for (int32_t i = 0; i < kept->n; i++) {
+            int64_t slot = x->nodes.a[kept->a[i]].zone;
+            int ge, le;
+            if (small && !(slot & 1)) {
+                compare16((const int16_t *)x->shorts.a + (slot >> 1) * len, mine, len, &ge, &le);
+            } else {
+                ge = slot_geq(x, slot, zone);
+                le = !ge && slot_leq(x, slot, zone);
+            }
+            if (ge) {
                 x->old_hit = 1;
                 if (parent >= 0) {
                     step.by = kept->a[i];
@@ -918,18 +965,20 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
                 }
                 return 0;
             }
-        for (int32_t i = 0; i < kept->n; i++) {
-            Node *old = &x->nodes.a[kept->a[i]];
-            if (slot_leq(x, old->zone, zone)) {
-                old->covered = 1, old->by = (int32_t)x->nodes.n;
-                if (!old->expanded) {
-                    slot_drop(x, old->zone);
-                    old->zone = -1;
-                    x->dropped++;
-                }
+            if (le)
+                PUSH(x->under, i);
+        }
+        for (int64_t u = 0; u < x->under.n; u++) {
+            Node *old = &x->nodes.a[kept->a[x->under.a[u]]];
+            old->covered = 1, old->by = (int32_t)x->nodes.n;
+            if (!old->expanded) {
+                slot_drop(x, old->zone);
+                old->zone = -1;
+                x->dropped++;
             }
         }
-        kept_prune(x, kept);
+        if (x->under.n)
+            kept_prune(x, kept);
     }
     if (x->merge && kept->n) {
         double *own = T(x, 3);
