@@ -3,8 +3,9 @@
 The oracle (tests/randomtimed.py) explores each network's integer-time semantics state by state, written from the
 TChecker format's meaning, without the zone engine or the translation to BIP.  The zone engine must reach the same
 configurations (locations and integer) whatever its options: merging zones (``merge``), Extra_LU+ by place
-(``local_ceilings``), invariants kept in the state (``invariants``), the C or the Python search; with the partial-order reduction (``reduce``), which keeps out
-orders of commuting zero-time steps, every location must keep its reachability verdict.
+(``local_ceilings``), invariants kept in the state (``invariants``), the C or the Python search.  With the
+partial-order reduction (``reduce``), which keeps out orders of commuting zero-time steps, every location must keep
+its reachability verdict.
 """
 from __future__ import annotations
 

@@ -52,15 +52,10 @@ def library():
             ("zs_intern", i64, [p, ctypes.POINTER(i64)]), ("zs_state_words", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
-<<<<<<< HEAD
-            ("zs_set_por", None, [p, AMPLE]), ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
-            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
-            ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)])):
-=======
             ("zs_set_por", None, [p, AMPLE]), ("zs_set_invariants", None, [p, i32]),
             ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
-            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)])):
->>>>>>> tck
+            ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
+            ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
