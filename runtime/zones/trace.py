@@ -11,6 +11,7 @@ is the tick model's own, and the goal is checked on its last state.
 """
 from __future__ import annotations
 
+import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -172,6 +173,10 @@ def _shortest(n: int, edges: list[tuple[int, int, float]]) -> list[float]:
     raise ConcretizeError("the path's clock bounds have no solution")
 
 
+#: Per zone explorer, the erased state of each tick model state its traces went through.
+_ERASED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]],
            space: StateSpace) -> tuple[list[TimedStep], tuple]:
     """``path`` (:func:`paths_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
@@ -189,14 +194,20 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
         if "ERROR" in fa.places:
             errors[fa.offset] = (fa.place_mask(["ERROR"]), fa.place_mask([watching]))
 
+    memo = _ERASED.setdefault(z, {})  # the traces of one search meet the same states
+
     def erased(full: tuple) -> tuple:
+        got = memo.get(full)
+        if got is not None:
+            return got
         values = list(full[:z.space.width])
         for s in clocks:
             values[s] = 0
         for offset, (error, watching) in errors.items():
             if values[offset] == error:
                 values[offset] = watching
-        return z.space.canonical(tuple(values) + tuple(full[z.space.width:]))
+        got = memo[full] = z.space.canonical(tuple(values) + tuple(full[z.space.width:]))
+        return got
 
     def tick(s: tuple, count: int) -> tuple:
         for _ in range(count):
