@@ -41,47 +41,12 @@ def _digest(source: str) -> str:
     return hashlib.sha1(source.encode("utf-8")).hexdigest()[:12]
 
 
-#: Generated sources from this many characters on are compiled once and their code kept on disk (a model's step:
-#: hundreds of KB whose compile takes longer than reading its code back), beside the compiled C steps.
-CACHE_FROM = 64 * 1024
-
-
 def compile_generated(source: str, what: str) -> CodeType:
     """``compile(source)`` under a name that finds its text again: ``<what #hash>``, or a dumped file."""
     path = dumped(source, what)
     if path is not None:
-        return compile(source, str(path), "exec")
-    name = f"<{what} #{_digest(source)}>"
-    linecache.cache[name] = (len(source), None, source.splitlines(keepends=True), name)
-    if len(source) < CACHE_FROM:
-        return compile(source, name, "exec")
-    return _cached(source, name)
-
-
-def _cached(source: str, name: str) -> CodeType:
-    """The code of a large source, from the cache when this Python compiled it before (else compiled and kept).
-
-    The file is named after the source, the name and the interpreter's bytecode version; a file that does not
-    read back (cut short, another format) is compiled again; a cache that cannot be written is done without.
-    """
-    import importlib.util
-    import marshal
-    import sys
-
-    from runtime.native.build import _write, cache_dir
-
-    key = hashlib.sha256("\0".join((source, name, importlib.util.MAGIC_NUMBER.hex(), sys.version)).encode())
-    file = cache_dir() / f"py-{key.hexdigest()[:24]}.marshal"
-    try:
-        code = marshal.loads(file.read_bytes())
-        if isinstance(code, CodeType) and code.co_filename == name:
-            return code
-    except (OSError, EOFError, ValueError, TypeError):
-        pass
-    code = compile(source, name, "exec")
-    try:
-        file.parent.mkdir(parents=True, exist_ok=True)
-        _write(file, marshal.dumps(code))
-    except OSError:
-        pass
-    return code
+        name = str(path)
+    else:
+        name = f"<{what} #{_digest(source)}>"
+        linecache.cache[name] = (len(source), None, source.splitlines(keepends=True), name)
+    return compile(source, name, "exec")
