@@ -192,3 +192,18 @@ def test_check_timing_results_do_not_depend_on_earlier_checks(tmp_path):
 
     first = shown(check_timing(model, (), responses=True))
     assert first == shown(check_timing(model, (), responses=True))
+
+
+@needs_cc
+def test_states_with_more_successors_than_the_first_room_step_alike(tmp_path):
+    _, gen, defines, platform, mission = CASES[2]
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    z = ZoneExplorer(model.package, model.root)
+    z.explore()
+    states = list({n.state for n in z.nodes})[:100]
+    roomy = [z.compiled.successors(s) for s in states]
+    assert max(len(s) for s in roomy) > 1
+    small, _ = compile_space(z.space, wide_fields=True)
+    small._cap = 1  # grown as states need
+    assert [small.successors(s) for s in states] == roomy
+    assert small._cap > 1

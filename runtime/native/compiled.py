@@ -102,6 +102,7 @@ class CompiledSpace:
         self.parallel = False  # the loaded library is the threaded build
         self.searching = False  # the loaded library runs the C search (built at -O2), not single steps (-O0)
         self.lossiness = None
+        self._cap = 64  # successors one call of successors() has room for (the output is width words each)
 
     def build(self, parallel: bool | None = None) -> None:
         """Generate, compile (or find in the cache) and load the library for the current field widths.
@@ -145,7 +146,7 @@ class CompiledSpace:
 
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
         """``(interaction index, next state)`` for every successor of an explorer state, dead variables reset."""
-        cap = 1024
+        cap = self._cap  # room for this many successors: grown when a state has more (a few dozen, mostly)
         while True:
             s = (ctypes.c_int64 * self.width)(*to_words(self.model, state))
             out = (ctypes.c_int64 * (self.width * cap))()
@@ -159,7 +160,7 @@ class CompiledSpace:
                 self._widen(arg.value)
                 continue
             if code.value == 10 and cap < 65536:
-                cap *= 16
+                cap = self._cap = cap * 16
                 continue
             raise _CError(code.value, arg.value)
 
