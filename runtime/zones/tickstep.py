@@ -28,6 +28,7 @@ class TickSteps:
         self._compiled = None
         self._tried = False
         self._succ: dict[tuple, list[tuple[Interaction, tuple]]] = {}
+        self._steps: dict[tuple, Step] = {}  # the traces of one model share their beginnings
         self._made: dict[tuple, list[tuple]] = {}  # Python's successors where they were computed: their outcomes
         self.note = ""
 
@@ -62,6 +63,13 @@ class TickSteps:
     def step(self, state: tuple, inter: Interaction, nxt: tuple) -> Step:
         """The trace step of ``inter`` from ``state`` to ``nxt`` (one of :meth:`successors`), with the codel outcomes
         that lead there."""
+        key = (state, inter.index, nxt)
+        got = self._steps.get(key)
+        if got is None:
+            got = self._steps[key] = self._step(state, inter, nxt)
+        return got
+
+    def _step(self, state: tuple, inter: Interaction, nxt: tuple) -> Step:
         fired = self._made.get(state)
         if fired is not None:
             for i, n, made in fired:
