@@ -103,6 +103,7 @@ class CompiledSpace:
         self.searching = False  # the loaded library runs the C search (built at -O2), not single steps (-O0)
         self.lossiness = None
         self._cap = 64  # successors one call of successors() has room for (the output is width words each)
+        self._index: dict[int, int] = {}  # the compiled step's interaction numbers -> the engine's indices
 
     def build(self, parallel: bool | None = None) -> None:
         """Generate, compile (or find in the cache) and load the library for the current field widths.
@@ -117,6 +118,7 @@ class CompiledSpace:
                               None if self.searching else STEP_LEVEL))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
+        self._index = {}  # numbered by this build
 
     def _widen(self, slot: int) -> None:
         """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits, for it and for
@@ -141,8 +143,11 @@ class CompiledSpace:
 
     def interaction_index(self, number: int) -> int:
         """The engine's index of the interaction the compiled search numbers ``number`` (runtime.native.numbering)."""
-        src, mask = self.model.numbering.interaction(number)
-        return self.engine._make(src, mask).index
+        got = self._index.get(number)
+        if got is None:
+            src, mask = self.model.numbering.interaction(number)
+            got = self._index[number] = self.engine._make(src, mask).index
+        return got
 
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
         """``(interaction index, next state)`` for every successor of an explorer state, dead variables reset."""
