@@ -14,7 +14,7 @@ from runtime.native.compiled import CompiledSpace, compile_space
 from runtime.zones import trace as trace_module
 from runtime.zones.csearch import library
 from runtime.zones.search import ZoneExplorer
-from runtime.zones.tickstep import TickSteps, _STEPS
+from runtime.zones.tickstep import TickSteps
 from runtime.zones.trace import ConcretizeError, paths_to, replay
 from test_platform_responses import CASES, model_of
 
@@ -27,9 +27,9 @@ def _traces(model, compiled: bool, monkeypatch) -> list:
     made = []
 
     def steps(space, externs=None):
-        got = _STEPS.get(space)
+        got = getattr(space, "tick_steps", None)
         if got is None:
-            got = _STEPS[space] = TickSteps(space, externs, compiled=compiled)
+            got = space.tick_steps = TickSteps(space, externs, compiled=compiled)
             made.append(got)
         return got
 
@@ -99,7 +99,7 @@ def _a_path(tmp_path):
 @pytest.mark.parametrize("compiled", [pytest.param(True, marks=needs_cc), False], ids=["compiled", "python"])
 def test_a_step_the_tick_model_does_not_take_there_is_refused(tmp_path, compiled):
     z, path, goal, space = _a_path(tmp_path)
-    _STEPS[space] = TickSteps(space, compiled=compiled)
+    space.tick_steps = TickSteps(space, compiled=compiled)
     steps, _ = replay(z, path, goal, space)  # the path itself replays
     assert len(steps) >= len(path) - 1
     # a zero-time step said to stay where it was: its interaction changes the state on the tick model
@@ -114,7 +114,7 @@ def test_a_step_the_tick_model_does_not_take_there_is_refused(tmp_path, compiled
 @pytest.mark.parametrize("compiled", [pytest.param(True, marks=needs_cc), False], ids=["compiled", "python"])
 def test_time_passing_where_the_tick_model_lets_none_pass_is_refused(tmp_path, compiled, monkeypatch):
     z, path, goal, space = _a_path(tmp_path)
-    _STEPS[space] = TickSteps(space, compiled=compiled)
+    space.tick_steps = TickSteps(space, compiled=compiled)
     real = trace_module.times
 
     def late(z, path, goal):  # every step from the first one on a thousand ticks later
@@ -207,3 +207,33 @@ def test_states_with_more_successors_than_the_first_room_step_alike(tmp_path):
     small._cap = 1  # grown as states need
     assert [small.successors(s) for s in states] == roomy
     assert small._cap > 1
+
+
+def test_a_check_keeps_nothing_once_it_returns(tmp_path, monkeypatch):
+    # the tick model's steps, the erased states and the lassos' graph go with the check's explorer and tick model
+    import gc
+    import weakref
+
+    import genom2bip.verify.zones as zones
+
+    _, gen, defines, platform, mission = next(c for c in CASES if c[0] == "endless")
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    kept = []
+    real_explorer, real_steps = zones.explorer, trace_module.tick_steps
+
+    def explorer(*args):
+        z = real_explorer(*args)
+        kept.append(weakref.ref(z))
+        return z
+
+    def steps(space, externs=None):
+        kept.append(weakref.ref(space))
+        return real_steps(space, externs)
+
+    monkeypatch.setattr(zones, "explorer", explorer)
+    monkeypatch.setattr(trace_module, "tick_steps", steps)
+    results = check_timing(model, (), responses=True)
+    assert any(r.trace is not None for r in results) and len(kept) > 1
+    del results
+    gc.collect()
+    assert [r() for r in kept] == [None] * len(kept)

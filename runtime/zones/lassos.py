@@ -6,7 +6,6 @@ in numpy and plain integers; Node objects are made only for the steps of the las
 """
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,13 +57,10 @@ def find(z, watch: np.ndarray, limit: int = 200):
     yield from _graph_lassos(g, watch, rep)
 
 
-#: Per explorer, its search's graph, representatives and tree shape: the same for every watch (one per response
-#: observer), computed once while the nodes stay those of the same search.
-_PREPARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def _prepared(z) -> tuple[Graph, np.ndarray, tuple]:
-    got = _PREPARED.get(z)
+    """The search's graph, representatives and tree shape: the same for every watch (one per response observer),
+    kept on the explorer while its nodes stay those of the same search."""
+    got = z.lasso_graph
     if got is not None and got[0] is z.nodes and got[1] == len(z.nodes):
         return got[2:]
     g = z.graph()
@@ -75,8 +71,8 @@ def _prepared(z) -> tuple[Graph, np.ndarray, tuple]:
         if covered[k] and by[k] >= 0:
             rl[k] = rl[by[k]]
     rep = np.array(rl, dtype=np.int64)
-    _PREPARED[z] = (z.nodes, len(z.nodes), g, rep, _shape(g))
-    return g, rep, _PREPARED[z][4]
+    z.lasso_graph = (z.nodes, len(z.nodes), g, rep, _shape(g))
+    return g, rep, z.lasso_graph[4]
 
 
 def _shape(g: Graph) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:

@@ -111,6 +111,7 @@ class ZoneExplorer:
         self._intern = None  # while a C search keeps the states: its numbering
         self.search = None  # the C search that ran (runtime/zones/csearch.py), if one did
         self.result: ZoneResult | None = None  # the last search's result, as far as it went (also when it raised)
+        self.lasso_graph = None  # the graph lassos walk, made once per search (runtime/zones/lassos.py)
         #: A goal (reachability of places): groups of ``(state offset, place mask)``, the goal holding at a discrete
         #: state where each group has one alternative marked; its first node goes into violations under GOAL.
         self.goal: list[list[tuple[int, int]]] | None = None

@@ -11,7 +11,6 @@ outcomes of a step taken are the Python engine's, firing that one interaction.
 """
 from __future__ import annotations
 
-import weakref
 from typing import Any
 
 from runtime.engine import Interaction
@@ -90,13 +89,9 @@ def _step(inter: Interaction, made: tuple) -> Step:
     return Step(inter.label, inter.index, tuple((c.name, p) for c, p in made), tuple(c.describe(p) for c, p in made))
 
 
-#: Per tick model, its steps (the traces of one check share them).
-_STEPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def tick_steps(space: StateSpace, externs: dict[str, Any] | None = None) -> TickSteps:
-    """The :class:`TickSteps` of ``space``, made on first use."""
-    got = _STEPS.get(space)
+    """The :class:`TickSteps` of ``space``, made on first use and kept on it (they go with it)."""
+    got = getattr(space, "tick_steps", None)
     if got is None:
-        got = _STEPS[space] = TickSteps(space, externs)
+        got = space.tick_steps = TickSteps(space, externs)
     return got
