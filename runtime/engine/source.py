@@ -41,12 +41,63 @@ def _digest(source: str) -> str:
     return hashlib.sha1(source.encode("utf-8")).hexdigest()[:12]
 
 
+#: Generated sources from this many characters on (a model's step: hundreds of KB, whose compile takes longer than
+#: reading its code back) are compiled once per text without its comments, the code kept beside the compiled C.
+CACHE_FROM = 64 * 1024
+#: A comment ending a line, with no quote in it: the part of a line that never reaches the code.
+_COMMENT = re.compile(r"  # [^'\"\n]*$", re.M)
+
+
 def compile_generated(source: str, what: str) -> CodeType:
     """``compile(source)`` under a name that finds its text again: ``<what #hash>``, or a dumped file."""
     path = dumped(source, what)
     if path is not None:
-        name = str(path)
-    else:
-        name = f"<{what} #{_digest(source)}>"
-        linecache.cache[name] = (len(source), None, source.splitlines(keepends=True), name)
-    return compile(source, name, "exec")
+        return compile(source, str(path), "exec")
+    name = f"<{what} #{_digest(source)}>"
+    linecache.cache[name] = (len(source), None, source.splitlines(keepends=True), name)
+    if len(source) < CACHE_FROM or _open_strings(source):
+        return compile(source, name, "exec")
+    return _cached(source, name)
+
+
+def _open_strings(source: str) -> bool:
+    """Some line opens a triple-quoted string it does not close (a comment-like text could be inside it)."""
+    return any(line.count('"""') % 2 or line.count("'''") % 2 for line in source.splitlines())
+
+
+def _cached(source: str, name: str) -> CodeType:
+    """The code of a large generated source, read back when a source with the same text but for its comments
+    (the model's file names in them: a client in another temporary directory) was compiled before.
+
+    Comments end lines, so removing them moves no line or column: the code is the same but for its file name,
+    which is set to ``name``.  The file is keyed by the text without comments and the interpreter's bytecode
+    version; one that does not read back is compiled again; a cache that cannot be written is done without.
+    """
+    import importlib.util
+    import marshal
+    import sys
+
+    from runtime.native.build import _write, cache_dir
+
+    bare = _COMMENT.sub("", source)
+    key = hashlib.sha256("\0".join((bare, importlib.util.MAGIC_NUMBER.hex(), sys.version)).encode())
+    file = cache_dir() / f"py-{key.hexdigest()[:24]}.marshal"
+    try:
+        code = marshal.loads(file.read_bytes())
+        if isinstance(code, CodeType):
+            return _named(code, name)
+    except (OSError, EOFError, ValueError, TypeError):
+        pass
+    code = compile(bare, name, "exec")
+    try:
+        file.parent.mkdir(parents=True, exist_ok=True)
+        _write(file, marshal.dumps(code))
+    except OSError:
+        pass
+    return code
+
+
+def _named(code: CodeType, name: str) -> CodeType:
+    """``code`` and the functions in it under the file name ``name``."""
+    consts = tuple(_named(c, name) if isinstance(c, CodeType) else c for c in code.co_consts)
+    return code.replace(co_filename=name, co_consts=consts)

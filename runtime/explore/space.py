@@ -243,16 +243,27 @@ class StateSpace:
                                "exploration can branch only in actions")
         out = []
         for inter in enabled:
-            oracle.start()
-            while True:
-                env.taken.clear()
-                nxt = engine.fire(base, inter)
-                out.append((inter, nxt + env.after(counts), oracle.made()))
-                script = oracle.next_script()
-                if script is None:
-                    break
-                oracle.start(script)
+            out += [(inter, nxt, made) for nxt, made in self._outcomes(base, counts, inter)]
         return out
+
+    def fire_one(self, state: tuple, inter: Interaction) -> list[tuple[tuple, tuple]]:
+        """``(next explorer state, choices made)`` of one interaction enabled at ``state``, per outcome vector
+        (what :meth:`_fire_all` gives for it, without enumerating the others)."""
+        self.environment.current = state[self.width:]
+        return self._outcomes(state[: self.width], state[self.width:], inter)
+
+    def _outcomes(self, base: tuple, counts: tuple, inter: Interaction) -> list[tuple[tuple, tuple]]:
+        engine, oracle, env = self.engine, self.oracle, self.environment
+        out = []
+        oracle.start()
+        while True:
+            env.taken.clear()
+            nxt = engine.fire(base, inter)
+            out.append((nxt + env.after(counts), oracle.made()))
+            script = oracle.next_script()
+            if script is None:
+                return out
+            oracle.start(script)
 
     def successors(self, sid: int) -> tuple[int, ...]:
         """``(label, target, label, target, ...)`` of state ``sid``; new targets are numbered on the way."""

@@ -51,13 +51,15 @@ def exploration_choices(package, externs: dict[str, Any] | None) -> dict[str, Ch
     return out
 
 
-def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
-                  monitors=(), wide_numbers: bool = False) -> tuple[CompiledSpace | None, str]:
+def compile_space(space: StateSpace, externs: dict[str, Any] | None = None, monitors=(), wide_numbers: bool = False,
+                  wide_fields: bool = False) -> tuple[CompiledSpace | None, str]:
     """The compiled step and search of ``space``, or None and why not (one line).
 
     ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction;
     ``wide_numbers`` stores 64-bit interaction numbers even when 32 bits hold them (what tests and benches
-    compare the two layouts with).
+    compare the two layouts with); ``wide_fields`` gives every int without a declared domain 64 bits from the
+    start, for a step called one state at a time (whose packed size does not matter): it never widens, so it
+    is generated and compiled once instead of once per field that outgrows its first bits.
     """
     if space.engine.invariants:
         return None, "the compiled explorer does not check atom invariants: exploring with the Python step"
@@ -65,6 +67,8 @@ def compile_space(space: StateSpace, externs: dict[str, Any] | None = None,
     if cc is None:
         return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
     cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc, monitors, wide_numbers)
+    if wide_fields:
+        cs.widths.update({k: 64 for k, s in enumerate(space.slots) if s.kind == "int" and s.domain is None})
     try:
         cs.build()
     except Unsupported as exc:
@@ -98,6 +102,8 @@ class CompiledSpace:
         self.parallel = False  # the loaded library is the threaded build
         self.searching = False  # the loaded library runs the C search (built at -O2), not single steps (-O0)
         self.lossiness = None
+        self._cap = 64  # successors one call of successors() has room for (the output is width words each)
+        self._index: dict[int, int] = {}  # the compiled step's interaction numbers -> the engine's indices
 
     def build(self, parallel: bool | None = None) -> None:
         """Generate, compile (or find in the cache) and load the library for the current field widths.
@@ -112,6 +118,7 @@ class CompiledSpace:
                               None if self.searching else STEP_LEVEL))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
+        self._index = {}  # numbered by this build
 
     def _widen(self, slot: int) -> None:
         """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits, for it and for
@@ -136,12 +143,15 @@ class CompiledSpace:
 
     def interaction_index(self, number: int) -> int:
         """The engine's index of the interaction the compiled search numbers ``number`` (runtime.native.numbering)."""
-        src, mask = self.model.numbering.interaction(number)
-        return self.engine._make(src, mask).index
+        got = self._index.get(number)
+        if got is None:
+            src, mask = self.model.numbering.interaction(number)
+            got = self._index[number] = self.engine._make(src, mask).index
+        return got
 
     def successors(self, state: tuple) -> list[tuple[int, tuple]]:
         """``(interaction index, next state)`` for every successor of an explorer state, dead variables reset."""
-        cap = 1024
+        cap = self._cap  # room for this many successors: grown when a state has more (a few dozen, mostly)
         while True:
             s = (ctypes.c_int64 * self.width)(*to_words(self.model, state))
             out = (ctypes.c_int64 * (self.width * cap))()
@@ -155,7 +165,7 @@ class CompiledSpace:
                 self._widen(arg.value)
                 continue
             if code.value == 10 and cap < 65536:
-                cap *= 16
+                cap = self._cap = cap * 16
                 continue
             raise _CError(code.value, arg.value)
 

@@ -263,6 +263,38 @@ class CSearch:
         self.lib.zs_program(self.ctx, state_id, out, n)
         return list(out)
 
+    def passing(self, state: tuple):
+        """Where time may pass at a discrete state, as the program the search used says (ZoneExplorer.passing's
+        value: ``(before, after, waits)``, None where no time passes), or False where the search kept no program
+        for it (none was needed, or it was let go past the budget)."""
+        if self.compiled is None:
+            return False
+        words = self.program(self._intern(state))
+        if words is None:
+            return False
+        at = 1 + words[0]  # the idle clocks
+        at += 1 + 3 * words[at]  # the clocks whose ceilings are their place's
+        if not words[at]:
+            return None
+        at += 1
+
+        def bounds() -> list[tuple[int, int, int]]:
+            nonlocal at
+            count = words[at]
+            out = [tuple(words[at + 1 + 3 * k:at + 4 + 3 * k]) for k in range(count)]
+            at += 1 + 3 * count
+            return out
+
+        before, after = bounds(), bounds()
+        waits = []
+        count, at = words[at], at + 1
+        for _ in range(count):
+            b = bounds()
+            has_lower, lower, r = words[at], (words[at + 1], words[at + 2]), words[at + 3]
+            at += 4
+            waits.append((b, r, lower if has_lower else None))
+        return before, after, waits
+
     def _raise(self, status: int, unsupported) -> None:
         if status == -1:
             error, self.error = self.error, None

@@ -52,6 +52,17 @@ def python_graph(z) -> Graph:
 
 def find(z, watch: np.ndarray, limit: int = 200):
     """Lassos through nodes where ``watch`` (one bool per node) holds: see runtime/zones/search.py's lassos."""
+    g, rep, shape = _prepared(z)
+    yield from _tree_lassos(g, watch, rep, limit, shape)
+    yield from _graph_lassos(g, watch, rep)
+
+
+def _prepared(z) -> tuple[Graph, np.ndarray, tuple]:
+    """The search's graph, representatives and tree shape: the same for every watch (one per response observer),
+    kept on the explorer while its nodes stay those of the same search."""
+    got = z.lasso_graph
+    if got is not None and got[0] is z.nodes and got[1] == len(z.nodes):
+        return got[2:]
     g = z.graph()
     n = len(g.parent)
     covered, by = g.covered.tolist(), g.by.tolist()
@@ -60,22 +71,20 @@ def find(z, watch: np.ndarray, limit: int = 200):
         if covered[k] and by[k] >= 0:
             rl[k] = rl[by[k]]
     rep = np.array(rl, dtype=np.int64)
-    yield from _tree_lassos(g, watch, rep, limit)
-    yield from _graph_lassos(g, watch, rep)
+    z.lasso_graph = (z.nodes, len(z.nodes), g, rep, _shape(g))
+    return g, rep, z.lasso_graph[4]
 
 
-def _tree(g: Graph, watch: np.ndarray):
-    """Depths in the search's tree, the depth each watching run starts at, entry and exit numbers of a depth-first
-    walk (an ancestor test), computed once rather than walking up from every state."""
-    parent, w = g.parent.tolist(), watch.tolist()
+def _shape(g: Graph) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:
+    """Depths in the search's tree, and entry and exit numbers of a depth-first walk (an ancestor test)."""
+    parent = g.parent.tolist()
     n = len(parent)
-    depth, top = [0] * n, [0] * n
+    depth = [0] * n
     children: list[list[int]] = [[] for _ in range(n)]
     for u in range(n):  # a parent is stored before its children
         p = parent[u]
         if p >= 0:
             depth[u] = depth[p] + 1
-            top[u] = top[p] if w[p] and w[u] else depth[u]
             children[p].append(u)
     enter, leave, clock = [0] * n, [0] * n, 0
     for root in (u for u in range(n) if parent[u] < 0):
@@ -89,13 +98,25 @@ def _tree(g: Graph, watch: np.ndarray):
             clock += 1
             stack.append((u, True))
             stack.extend((c, False) for c in children[u])
-    return np.array(depth), np.array(top), np.array(enter), np.array(leave)
+    return depth, np.array(depth), np.array(enter), np.array(leave)
 
 
-def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int):
+def _tree(g: Graph, watch: np.ndarray, shape: tuple):
+    """Depths in the search's tree, the depth each watching run starts at, entry and exit numbers of a depth-first
+    walk (an ancestor test), the shape computed once rather than walking up from every state."""
+    depth, depths, enter, leave = shape
+    parent, w = g.parent.tolist(), watch.tolist()
+    top = [0] * len(parent)
+    for u, p in enumerate(parent):
+        if p >= 0:
+            top[u] = top[p] if w[p] and w[u] else depth[u]
+    return depths, np.array(top), enter, leave
+
+
+def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape: tuple):
     if not len(g.frm):
         return
-    depth, top, enter, leave = _tree(g, watch)
+    depth, top, enter, leave = _tree(g, watch, shape)
     u, t, ref = g.frm, g.target, g.ref
     real = ref >= 0
     own = real & g.zoned[np.where(real, ref, 0)] & (rep[t] == t)  # into a zone of its own: the tree goes on

@@ -67,10 +67,12 @@ class ZoneExplorer:
                  merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False,
                  program_bytes: int = PROGRAM_BYTES) -> None:
         self.model: TimedModel = analyse(package, root)
+        self.externs = externs  # the tick model's replay compiles its step with them (runtime/zones/tickstep.py)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
         from runtime.native.compiled import compile_space
 
-        self.compiled, self.note = compile_space(self.space, externs)
+        # its step is only called one state at a time (the C search keeps words): fields of 64 bits never widen
+        self.compiled, self.note = compile_space(self.space, externs, wide_fields=True)
         flat = self.space.engine.flat
         self.flat = flat
         self.n = len(self.model.clocks)
@@ -113,6 +115,7 @@ class ZoneExplorer:
         self._intern = None  # while a C search keeps the states: its numbering
         self.search = None  # the C search that ran (runtime/zones/csearch.py), if one did
         self.result: ZoneResult | None = None  # the last search's result, as far as it went (also when it raised)
+        self.lasso_graph = None  # the graph lassos walk, made once per search (runtime/zones/lassos.py)
         #: A goal (reachability of places): groups of ``(state offset, place mask)``, the goal holding at a discrete
         #: state where each group has one alternative marked; its first node goes into violations under GOAL.
         self.goal: list[list[tuple[int, int]]] | None = None
@@ -311,6 +314,10 @@ class ZoneExplorer:
         """Bounds before a tick and after it at ``state`` from ``zone``: invariants, and urgent priorities that
         ``zone`` can reach as time passes; None when time cannot pass at all."""
         fixed = self._passing.get(state, False)
+        if fixed is False and self.search is not None:  # after a C search: what its program for the state said
+            fixed = self.search.passing(state)
+            if fixed is not False:
+                self._passing[state] = fixed
         if fixed is False:
             enabled = sorted({i for i, _ in self.successors(state)})
             fixed = self.passing(state, self.blocking(state, enabled))

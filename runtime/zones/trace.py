@@ -12,7 +12,6 @@ is the tick model's own, and the goal is checked on its last state.
 from __future__ import annotations
 
 import weakref
-
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -22,6 +21,7 @@ from runtime.explore.space import StateSpace, Step
 from runtime.zones import dbm
 from runtime.zones.node import Node
 from runtime.zones.search import ZoneExplorer
+from runtime.zones.tickstep import tick_steps
 
 
 class ConcretizeError(Exception):
@@ -173,16 +173,17 @@ def _shortest(n: int, edges: list[tuple[int, int, float]]) -> list[float]:
     raise ConcretizeError("the path's clock bounds have no solution")
 
 
-#: Per tick model, the successors of the states traces went through.
-_FIRED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: Per zone explorer, the erased state of each tick model state its traces went through.
+_ERASED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]],
            space: StateSpace) -> tuple[list[TimedStep], tuple]:
     """``path`` (:func:`paths_to`, or a lasso's prefix and loop) on the tick model ``space``: steps with the ticks
-    before each, and the last state."""
+    before each, and the last state.  Each step and each tick is one of the tick model's successors where the
+    trace is (runtime/zones/tickstep.py: computed once per state for every trace of the model)."""
     at, end = times(z, path, goal)
-    engine = space.engine
+    steps = tick_steps(space, z.externs)
     state = space.state(space.initial_ids[0])
     ticks_before, out = 0, []
     clocks = {z.flat.atoms[a].slot(v) for a, v in z.model.clocks}
@@ -193,26 +194,24 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
         if "ERROR" in fa.places:
             errors[fa.offset] = (fa.place_mask(["ERROR"]), fa.place_mask([watching]))
 
+    memo = _ERASED.setdefault(z, {})  # the traces of one search meet the same states
+
     def erased(full: tuple) -> tuple:
+        got = memo.get(full)
+        if got is not None:
+            return got
         values = list(full[:z.space.width])
         for s in clocks:
             values[s] = 0
         for offset, (error, watching) in errors.items():
             if values[offset] == error:
                 values[offset] = watching
-        return z.space.canonical(tuple(values) + tuple(full[z.space.width:]))
-
-    fired = _FIRED.setdefault(space, {})  # the traces of one search share their beginnings
-
-    def fire_all(s: tuple) -> list:
-        got = fired.get(s)
-        if got is None:
-            got = fired[s] = space._fire_all(s)
+        got = memo[full] = z.space.canonical(tuple(values) + tuple(full[z.space.width:]))
         return got
 
     def tick(s: tuple, count: int) -> tuple:
         for _ in range(count):
-            nxt = [n for inter, n, _ in fire_all(s) if inter.label == "tick"]
+            nxt = [n for inter, n in steps.successors(s) if inter.label == "tick"]
             if len(nxt) != 1:
                 raise ConcretizeError("time cannot pass where the zones said it could")
             s = nxt[0]
@@ -223,11 +222,10 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
         wait = at[step] - at[step - 1]
         state = tick(state, wait)
         _, ports, label = z.interaction(n.via)
-        target = n.state
-        for inter, nxt, made in fire_all(state):
-            if inter.label == label and erased(nxt) == z.space.canonical(target):
-                out.append(TimedStep(wait, Step(inter.label, inter.index, tuple((c.name, p) for c, p in made),
-                                                tuple(c.describe(p) for c, p in made))))
+        target = z.space.canonical(n.state)
+        for inter, nxt in steps.successors(state):
+            if inter.label == label and erased(nxt) == target:
+                out.append(TimedStep(wait, steps.step(state, inter, nxt)))
                 state = nxt
                 break
         else:
@@ -236,5 +234,4 @@ def replay(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]
     ticks_before = end - at[-1]
     if ticks_before:
         out.append(TimedStep(ticks_before, Step("", -1, (), ())))
-    del engine
     return out, state
