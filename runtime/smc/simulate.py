@@ -49,11 +49,15 @@ def run_seed(seed: int, index: int) -> random.Random:
 
 @dataclass(frozen=True)
 class Goal:
-    """phi: atom ``atom`` has place ``place`` marked (an observer in ERROR)."""
+    """phi: atom ``atom`` has place ``place`` marked (an observer in ERROR); or, with ``label``, ``psi U chi``:
+    an interaction labelled ``label`` is taken before any labelled in ``before`` (``atom`` then only names the
+    goal)."""
 
     name: str
     atom: str
     place: str = "ERROR"
+    label: str = ""
+    before: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,7 @@ class SimConfig:
     tick_label: str = "tick"
     keep_going: bool = False  # run to the horizon even when every goal is reached (response times)
     leap: bool = True  # take the ticks that change nothing but clocks in one leap (runtime/smc/leaps.py)
+    native: bool = True  # the run loop in C (runtime/smc/srun.c) when the step is compiled
 
 
 @dataclass
@@ -124,6 +129,8 @@ class _Info:
     opens: tuple[int, ...]
     closes: tuple[int, ...]
     ends: tuple[int, ...] = ()  # windows it ends
+    hits: tuple[int, ...] = ()  # goals ``label U`` it reaches
+    cancels: tuple[int, ...] = ()  # goals it makes unreachable (one of their ``before``)
     prefix: str = ""  # "Comp.Owner" of an exec_<state> label
     state: str = ""
     made: list[tuple[tuple[Any, int], ...]] | None = None  # per successor rank: the codel calls and outcomes
@@ -139,6 +146,9 @@ class Simulator:
         atoms = {fa.name: fa for fa in flat.atoms}
         self.goal_slots = []
         for g in config.goals:
+            if g.label:
+                self.goal_slots.append((-1, 0))  # reached by an interaction (_Info.hits), not by a place
+                continue
             fa = atoms[g.atom]
             self.goal_slots.append((fa.offset, 1 << fa.places.index(g.place)))
         self.scheds = []  # (name, marking slot, BUSY bit, x, lo, hi)
@@ -162,6 +172,13 @@ class Simulator:
                 self.leaps = Leaps(flat.package, flat.root, flat)
             except Unsupported as exc:
                 self.no_leaps = f"runs tick by tick: {exc}"
+        self.native = None  # the runs in C (CRuns), when the step is compiled and a C compiler is found
+        if compiled is not None and config.native:
+            from runtime.smc.crun import CRuns, library
+
+            lib = library()
+            if lib is not None:
+                self.native = CRuns(self, lib)
 
     # -- interactions ---------------------------------------------------------------------------------
     def info(self, number: int) -> _Info:
@@ -177,8 +194,10 @@ class Simulator:
             prefix, _, port = label.partition(":")
             state = port[len("exec_"):] if port.startswith("exec_") else ""
             ends = tuple(k for k, w in enumerate(self.config.windows) if f"{w.atom}.{w.end}" in ports)
+            hits = tuple(k for k, g in enumerate(self.config.goals) if g.label and g.label == label)
+            cancels = tuple(k for k, g in enumerate(self.config.goals) if g.label and label in g.before)
             got = self.infos[number] = _Info(inter.index, label, label == self.config.tick_label, execs, dones,
-                                             opens, closes, ends, prefix, state)
+                                             opens, closes, ends, hits, cancels, prefix, state)
         return got
 
     def _made(self, info: _Info, count: int) -> list | None:
@@ -243,12 +262,20 @@ class Simulator:
         step = self.step
         initial = self.space.initial_ids
         start = initial[rng.randrange(len(initial))] if len(initial) > 1 else initial[0]
-        step.start(self.space.state(start))
         horizon, tick_us = cfg.horizon, cfg.tick_us
+        limit = max(MIN_STEPS, STEPS_PER_TICK * (horizon + 1))
+        if self.native is not None:
+            words = [rng.getrandbits(64) for _ in range(4)]
+            end, reached, at_step, responses, ticks, steps, made = self.native.run(
+                words, self.space.state(start), horizon, limit, record)
+            choices = None if made is None else [((self.infos.get(n) or self.info(n)).index, r) for n, r in made]
+            return RunOutcome(index, reached, responses, ticks, steps, end, choices, at_step, start)
+        step.start(self.space.state(start))
         goals = self.goal_slots
         reached: list[int | None] = [None] * len(goals)
         at_step: list[int | None] = [None] * len(goals)
         left = len(goals)
+        cancelled: set[int] = set()  # goals ``U`` whose ``before`` came first
         responses: list[list[int]] = [[] for _ in cfg.watches]
         since: list[int | None] = [None] * len(cfg.watches)
         drawn: dict[int, int] = {}  # scheduler -> drawn duration of its running codel
@@ -258,7 +285,6 @@ class Simulator:
             self._enter(waits, rng, step, tick_us)
         scheds = self.scheds
         now = steps = 0
-        limit = max(MIN_STEPS, STEPS_PER_TICK * (horizon + 1))
         choices: list[tuple[int, int]] | None = [] if record else None
         end = "horizon"
         leaps = self.leaps
@@ -323,7 +349,7 @@ class Simulator:
                             choices.extend([(self.infos[allowed[tick][0]].index, 0)] * n)
                         if left:
                             for g, (slot, bit) in enumerate(goals):
-                                if reached[g] is None and step.value(slot) & bit:
+                                if reached[g] is None and slot >= 0 and step.value(slot) & bit:
                                     reached[g], at_step[g] = now, len(choices) if record else steps
                                     left -= 1
                             if not left and not cfg.keep_going:
@@ -373,8 +399,16 @@ class Simulator:
                     responses[w].append(now - since[w])
                     since[w] = None
             if left:
+                for g in info.cancels:
+                    if reached[g] is None and g not in cancelled:
+                        cancelled.add(g)
+                        left -= 1
+                for g in info.hits:
+                    if reached[g] is None and g not in cancelled:
+                        reached[g], at_step[g] = now, len(choices) if record else steps
+                        left -= 1
                 for g, (slot, bit) in enumerate(goals):
-                    if reached[g] is None and step.value(slot) & bit:
+                    if reached[g] is None and slot >= 0 and step.value(slot) & bit:
                         reached[g], at_step[g] = now, len(choices) if record else steps
                         left -= 1
                 if not left and not cfg.keep_going:
