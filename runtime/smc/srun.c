@@ -53,7 +53,7 @@ typedef struct {
     Rank *ranks; int nrank, crank;
     /* the run */
     uint64_t s[4];
-    int64_t *drawn, *waits, *since, *rates;
+    int64_t *drawn, *waits, *since, *rates, *slot_rate; /* slot_rate: per slot, 0 but for clocks */
     int *gstart, *gcount, *ginfo, *allowed; int gcap;
     /* results */
     int64_t *reached, *at_step, ticks, steps, err_code, err_arg;
@@ -182,13 +182,14 @@ Ctx *sr_new(int w, int nsched, const int64_t *sched, int nwin, const int64_t *wi
     c->ngap = ngap; c->gaps = copy64(gaps, 3 * ngap);
     c->leap = leap; c->tick_us = tick_us; c->keep_going = keep_going;
     c->cur = malloc(w * sizeof(int64_t));
+    c->slot_rate = calloc(w, sizeof(int64_t));
     c->out = malloc((size_t)w * c->cap * sizeof(int64_t));
     c->via = malloc(c->cap * sizeof(int64_t));
     c->drawn = malloc((nsched + 1) * sizeof(int64_t)); c->waits = malloc((nwin + 1) * sizeof(int64_t));
     c->since = malloc((nwatch + 1) * sizeof(int64_t)); c->rates = malloc((nclock + 1) * sizeof(int64_t));
     c->reached = malloc((ngoal + 1) * sizeof(int64_t)); c->at_step = malloc((ngoal + 1) * sizeof(int64_t));
     if (!c->sched || !c->win || !c->goal || !c->clocks || !c->cons || !c->dyn || !c->gaps || !c->cur || !c->out
-        || !c->via || !c->drawn || !c->waits || !c->since || !c->rates || !c->reached || !c->at_step) {
+        || !c->via || !c->slot_rate || !c->drawn || !c->waits || !c->since || !c->rates || !c->reached || !c->at_step) {
         sr_free(c);
         return NULL;
     }
@@ -197,7 +198,8 @@ Ctx *sr_new(int w, int nsched, const int64_t *sched, int nwin, const int64_t *wi
 
 void sr_free(Ctx *c) {
     if (!c) return;
-    void *ps[] = {c->sched, c->win, c->goal, c->clocks, c->cons, c->dyn, c->gaps, c->cur, c->out, c->via, c->drawn,
+    void *ps[] = {c->sched, c->win, c->goal, c->clocks, c->cons, c->dyn, c->gaps, c->cur, c->slot_rate, c->out,
+                  c->via, c->drawn,
                   c->waits, c->since, c->rates, c->reached, c->at_step, c->infos, c->keys, c->vals, c->pool,
                   c->ranks, c->gstart, c->gcount, c->ginfo, c->allowed, c->resp, c->choices};
     for (size_t i = 0; i < sizeof ps / sizeof *ps; i++) free(ps[i]);
@@ -277,14 +279,14 @@ static int64_t nearer(int64_t best, int64_t gap) {
     if (0 < gap + 1 && gap + 1 < best) best = gap + 1;
     return best;
 }
-static int64_t rate_of(Ctx *c, int64_t slot) {
-    for (int i = 0; i < c->nclock; i++) if (c->clocks[i] == slot) return c->rates[i];
-    return 0;
-}
+static inline int64_t rate_of(Ctx *c, int64_t slot) { return c->slot_rate[slot]; }
 /* runtime/smc/leaps.py's Leaps.length, the drawn ends included; rates read on the tick successor `t`. */
 static int64_t span_of(Ctx *c, const int64_t *t) {
     int64_t best = FAR;
-    for (int i = 0; i < c->nclock; i++) c->rates[i] = t[c->clocks[i]] - c->cur[c->clocks[i]];
+    for (int i = 0; i < c->nclock; i++) {
+        c->rates[i] = t[c->clocks[i]] - c->cur[c->clocks[i]];
+        c->slot_rate[c->clocks[i]] = c->rates[i];
+    }
     for (int i = 0; i < c->ncons; i++)
         if (rate_of(c, c->cons[2 * i])) best = nearer(best, c->cons[2 * i + 1] - c->cur[c->cons[2 * i]]);
     for (int i = 0; i < c->ndyn; i++)
