@@ -47,6 +47,48 @@ def test_leaps_estimate_the_overrun_probability_computed_by_hand(native, bound_u
     assert result.estimate.low <= exact <= result.estimate.high
 
 
+@pytest.mark.parametrize("gen, platform", [("Two.gen", "two.yaml"), ("Request.gen", "request.yaml")])
+def test_a_leap_spans_ticks_that_change_nothing_but_clocks(gen, platform):
+    # along tick-by-tick runs, wherever time may pass: the K ticks Leaps.length promises, stepped one by one on
+    # the Python step, enable what the first state enables and only add each clock's rate (Two: EDF compares the
+    # time left of two tasks, a difference of clocks)
+    from runtime.smc import Simulator
+    from runtime.smc.leaps import Leaps
+
+    model = build_model([SMC / gen], time=TimeSettings(platform=str(SMC / platform)))
+    config = replace(sim_config(model, SmcSettings(horizon_us=60_000)), leap=False, native=False)
+    sim = Simulator(simulator(model, config, compiled=False)[0].space, None, config)
+    space = sim.space
+    flat = space.engine.flat
+    leaps = Leaps(flat.package, flat.root, flat)
+    assert leaps.gaps if gen == "Two.gen" else leaps.dynamic
+
+    def successors(state):
+        return {(inter.label, tuple(c.describe(p) for c, p in made)): nxt
+                for inter, nxt, made in space._fire_all(state)}
+
+    long_leaps = 0
+    for index in range(4):
+        run = sim.run(2, index, record=True)
+        state = space.state(run.start)
+        for number, rank in run.choices:
+            now = successors(state)
+            if ("tick", ()) in now:
+                rates = {slot: now[("tick", ())][slot] - state[slot] for slot in leaps.clocks}
+                span = leaps.length(lambda slot, s=state: s[slot], rates)
+                long_leaps += span > 1
+                here = state
+                for _ in range(1, min(span, 60)):
+                    ahead = list(here)
+                    for slot, r in rates.items():
+                        ahead[slot] += r
+                    assert successors(here)[("tick", ())] == tuple(ahead)
+                    here = tuple(ahead)
+                    assert set(successors(here)) == set(now)
+            state = [nxt for inter, nxt, _ in space._fire_all(state) if inter.index == number][rank]
+    assert long_leaps > 50
+
+
 @needs_cc
 def test_leaps_and_runs_in_c_draw_the_tick_by_tick_distribution():
     runs = 3000
