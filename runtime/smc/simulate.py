@@ -21,6 +21,12 @@ successor per codel outcome).  The policy only *chooses* among them:
 
 A run is identified by ``(seed, index)`` alone (:func:`run_seed`): the same
 run comes out on any worker, in any order.
+
+Two things make runs cheap without changing their distribution: ticks that
+change nothing but clocks are taken in one *leap* (runtime/smc/leaps.py),
+the ticks a race with other interactions lets pass drawn at once from the
+geometric law the tick-by-tick choice gives; and on the compiled step the
+loop runs in C (runtime/smc/srun.c, from other random numbers).
 """
 from __future__ import annotations
 
