@@ -78,6 +78,7 @@ class CRuns:
         if not self.ctx:
             raise MemoryError("SMC runs in C: no memory for their context")
         self.error: BaseException | None = None
+        self.defined: dict[tuple[int, int], tuple] = {}  # (number, count) -> sr_define's arguments
         self._define = DEFINE(self._on_define)
         self._bind()
 
@@ -95,6 +96,9 @@ class CRuns:
         try:
             sim = self.sim
             info = sim.info(number)
+            args = self.defined.get((number, count))
+            if args is not None:  # seen with this many successors before: the same answer, without the engine
+                return self.lib.sr_define(self.ctx, number, *args)
             made = None
             if count > 1 or info.execs:
                 state = self.cs._typed(words[:self.w])
@@ -111,10 +115,10 @@ class CRuns:
                 params += [math.nan if v is None else float(v) for v in
                            ((law.mode_us, law.mean_us, law.sd_us) if law is not None else (None, None, None))]
             kinds = [LAWS.get(law.kind, 0) if law is not None else 0 for law in laws]
-            status = self.lib.sr_define(self.ctx, number, int(info.tick), lens, (I32 * max(1, len(items)))(*items),
-                                        count, (DBL * max(1, count))(*weights), (I32 * max(1, count))(*kinds),
-                                        (DBL * max(3, 3 * count))(*params))
-            return status
+            args = (int(info.tick), lens, (I32 * max(1, len(items)))(*items), count, (DBL * max(1, count))(*weights),
+                    (I32 * max(1, count))(*kinds), (DBL * max(3, 3 * count))(*params))
+            self.defined[(number, count)] = args
+            return self.lib.sr_define(self.ctx, number, *args)
         except BaseException as exc:  # raised again by run(), not lost in the callback
             self.error = exc
             return -1
@@ -137,6 +141,7 @@ class CRuns:
                 self.cs._widen(out[5])
                 self.sim.step.numbers.clear()
                 self.sim.infos.clear()
+                self.defined.clear()
                 lib.sr_forget(ctx)
                 self._bind()
                 continue

@@ -28,7 +28,7 @@ typedef struct {
     int tick;
     int at[NLISTS], n[NLISTS];  /* into the pool */
     int64_t count;              /* successors the ranks were given for (-1: none) */
-    int rank_at;                /* into ranks */
+    int rank_at, rank_cap;      /* into ranks; room there (a count that comes back smaller reuses it) */
 } Info;
 
 typedef struct {
@@ -217,14 +217,28 @@ void sr_forget(Ctx *c) {
  * (kinds[count], params[3 * count]: mode, mean, sd in us, NaN for none).  Answered from the define callback. */
 int sr_define(Ctx *c, int64_t number, int tick, const int *lens, const int *items, int64_t count,
               const double *weights, const int *kinds, const double *params) {
-    int k = lookup(c, number);
-    if (k < 0) {
+    int k = lookup(c, number), known = k >= 0;
+    if (!known) {
         if (grow((void **)&c->infos, &c->cinfo, c->ninfo + 1, sizeof(Info))) return ERR_MEMORY;
         k = c->ninfo;
         if (insert(c, number, k)) return ERR_MEMORY;
         c->ninfo++;
+        memset(&c->infos[k], 0, sizeof(Info));
     }
     Info *in = &c->infos[k];
+    if (known) { /* known: new ranks only (the lists do not change) */
+        if (count > in->rank_cap) {
+            if (grow((void **)&c->ranks, &c->crank, c->nrank + (int)count, sizeof(Rank))) return ERR_MEMORY;
+            in->rank_at = c->nrank; in->rank_cap = (int)count; c->nrank += (int)count;
+        }
+        in->count = count;
+        for (int64_t r = 0; r < count; r++) {
+            Rank *x = &c->ranks[in->rank_at + r];
+            x->w = weights[r]; x->kind = kinds[r];
+            x->a = params[3 * r]; x->b = params[3 * r + 1]; x->c = params[3 * r + 2];
+        }
+        return 0;
+    }
     in->number = number; in->tick = tick;
     int total = 0;
     for (int l = 0; l < NLISTS; l++) total += lens[l];
@@ -234,7 +248,7 @@ int sr_define(Ctx *c, int64_t number, int tick, const int *lens, const int *item
         for (int i = 0; i < lens[l]; i++) c->pool[c->npool++] = items[at++];
     }
     if (grow((void **)&c->ranks, &c->crank, c->nrank + (int)count, sizeof(Rank))) return ERR_MEMORY;
-    in->count = count; in->rank_at = c->nrank;
+    in->count = count; in->rank_at = c->nrank; in->rank_cap = count > 0 ? (int)count : 1;
     for (int64_t r = 0; r < count; r++) {
         Rank *x = &c->ranks[c->nrank++];
         x->w = weights[r]; x->kind = kinds[r];
