@@ -134,3 +134,19 @@ def test_an_until_is_estimated_as_computed_by_hand(native):
         result = next(r for r in report.results if r.observer == "slow-first")
         assert result.runs == 1656 and result.estimate.contains(exact) and not result.estimate.contains(other)
         assert report.results[0].runs == 1656  # the overrun, estimated from the same runs
+
+
+@needs_cc
+def test_runs_in_c_widen_the_step_and_make_the_same_run_again():
+    model = build_model([SMC / "Slack.gen"], time=TimeSettings(platform=str(SMC / "fine.yaml")))
+    settings = SmcSettings(horizon_us=15_000, epsilon=0.05, delta=0.01)
+    config = sim_config(model, settings)
+    assert config.tick_us == 10
+    sim, why = simulator(model, config)
+    assert not why and sim.native is not None and not sim.step.cs.widths
+    first = sim.run(1, 0)
+    assert sim.step.cs.widths  # a value outgrew its field in C: the step was rebuilt wider and the run made again
+    again = sim.run(1, 0)
+    assert (first.reached, first.responses, first.steps) == (again.reached, again.responses, again.steps)
+    [result] = estimate(model, settings, config=config, sim=sim).results
+    assert result.runs == 1060 and result.estimate.contains(3.99 / 9.99)

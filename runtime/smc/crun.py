@@ -137,7 +137,8 @@ class CRuns:
                 raise error
             out = (I64 * 6)()
             lib.sr_results(ctx, out)
-            if status == ERR_STEP and out[4] == WIDEN:  # a field too narrow: widen (a rebuild), run again
+            if status == ERR_STEP and out[4] == WIDEN and self.cs.lib.c_width(out[5]) < 64:
+                # a field too narrow: widen (a rebuild), run again
                 self.cs._widen(out[5])
                 self.sim.step.numbers.clear()
                 self.sim.infos.clear()
