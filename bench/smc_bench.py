@@ -11,10 +11,12 @@
     above it, and the run after which SMC came within 5 ms of it.
 
 ``python bench/smc_bench.py --quadcopter ARTEFACT_DIR [-I DIR] [--platform P] [--runs N] [--queries]``
-    Foughali's quadcopter (Mo-F/uppaal-smc-exp: ``all.gen``, ``all.proba``, ``quadcopter.q``): runs per second
-    on 1 and 2 Dask workers; with ``--queries``, each query of ``quadcopter.q`` that is a period overrun, at
-    epsilon 0.01 and delta 0.05 over 10 s (1,000,000 units of 10 us).  Its components include openrobots interfaces
-    (``or/pose/pose_estimator.gen``...) that the artefact does not ship: give their directory with ``-I``.
+    Foughali's quadcopter (Mo-F/uppaal-smc-exp: ``all.gen``, ``all.proba``, ``quadcopter.q``), with the artefact's
+    client written as a mission (``--default-environment``: without it): runs per second on 1 and 2 Dask workers;
+    with ``--queries``, every query of ``quadcopter.q`` (period overruns, and its until formulas translated) at
+    epsilon 0.01 and delta 0.05 over 10 s (1,000,000 units of 10 us), all from the same runs (``--query-runs``,
+    ``--budget`` for fewer).  Its components include openrobots interfaces (``or/pose/pose_estimator.gen``...) that
+    the artefact does not ship: give their directory with ``-I``.
 """
 from __future__ import annotations
 
@@ -39,15 +41,28 @@ def _settings(args, **kw):
     return SmcSettings(horizon_us=int(parse_duration(args.time_bound)), seed=args.seed, **kw)
 
 
-def _dask(model, params, settings, workers: int):
+def _dask(model, params, settings, workers: int, config=None, budget: float = 0, warm: bool = False):
+    """The estimate on a local Dask cluster of ``workers``; after ``budget`` seconds (0: none), the runs read so
+    far (the estimate stops as on Ctrl-C).  ``warm``: each worker builds the model and its compiled step first, in
+    a run of its own (seed 0) outside the figures."""
+    from dataclasses import replace
+
     from genom2bip.campaign.cluster import ClusterSpec
     from genom2bip.campaign.smc import DaskRunner
     from genom2bip.verify.smc import estimate, sim_config
 
-    config = sim_config(model, settings)
+    config = config or sim_config(model, settings)
     runner = DaskRunner(ClusterSpec(workers=workers), params, config)
+    if warm:
+        estimate(model, replace(settings, runs=runner.workers, batch=1, seed=0), runner, config)
+
+    def progress(runs, planned, seconds) -> None:
+        print(f"  ... {runs:,} of {planned:,} runs, {seconds:.0f} s", file=sys.stderr, flush=True)
+        if budget and seconds > budget:
+            raise KeyboardInterrupt
+
     try:
-        return estimate(model, settings, runner, config)
+        return estimate(model, settings, runner, config, progress=progress)
     finally:
         runner.close()
 
@@ -128,20 +143,82 @@ def robnav(args) -> None:
 
 #: ``Pr[<=T] (<> Man_TASK_COMPONENT.manage and tick_TASK_COMPONENT)``: the period overrun of TASK.
 OVERRUN_QUERY = re.compile(r"Pr\[<=(\d+)\]\s*\(\s*<>\s*Man_(\w+?)_(\w+)\.manage\s+and\s+tick_\w+\)")
+#: ``Pr[<=T]((cl.A or cl.B ...) U SERVICE_INSTANCE_COMPONENT.LOCATION)``: an activity reaches LOCATION while the
+#: artefact's client is still in one of the locations listed.
+UNTIL_QUERY = re.compile(r"Pr\[<=(\d+)\]\s*\(\s*\(((?:cl\.\w+)(?:\s+or\s+cl\.\w+)*)\)\s+U\s+"
+                         r"(\w+?)_(\d+)_([a-z]+)\.(\w+)\)")
 #: One time unit of the quadcopter model, in µs.
 UNIT_US = 10
+#: The artefact's client (``quadcopter.xta``, process ``client``) as a mission: 10 ms in ``ini``, then
+#: mikrokopter.start, mikrokopter.servo and nhfc.servo sent one after the other (``start``, ``start2``,
+#: ``start3``), 5.5 ms in ``hold``, then maneuver's set_current_state, take_off, five waypoints, wait and take_off.
+#: Inputs are not part of the timed model; those given are plausible values the services accept.
+CLIENT = """mission: quadcopter-client
+steps:
+  - wait: 0.01
+  - send: mikrokopter.start
+    until: queued
+  - send: mikrokopter.servo
+    until: queued
+  - send: nhfc.servo
+    until: queued
+  - wait: 0.0055
+  - send: maneuver.set_current_state
+    until: queued
+  - send: maneuver.take_off
+    with: {height: 1.0, duration: 0.0}
+    until: queued
+""" + "".join("""  - send: maneuver.waypoint
+    with: {x: 0.0, y: 0.0, z: 1.0, yaw: 0.0, vx: 0.0, vy: 0.0, vz: 0.0, wz: 0.0, ax: 0.0, ay: 0.0, az: 0.0,
+           duration: 0.0}
+    until: queued
+""" for _ in range(5)) + """  - send: maneuver.wait
+    until: queued
+  - send: maneuver.take_off
+    with: {height: 0.0, duration: 0.0}
+    until: queued
+"""
+#: The client's locations up to ``hold``; it leaves them when it sends maneuver.set_current_state.
+BEFORE_HOLD_ENDS = ("ini", "start", "start2", "start3", "hold")
+LEAVES_HOLD = "maneuver.set_current_state:trigger"
+
+
+def until_goal(service: str, component: str, location: str, locations: list[str]):
+    """The Goal of ``(cl.L1 or ...) U SERVICE_1_COMPONENT.LOCATION``, or a string saying why it has none.
+
+    In the artefact's activity templates ``S_`` is the activity in state S waiting for its task and ``S_2`` the
+    codel of S running: ``start_`` is ``C.S:start`` here (the activity starts) and ``S_2`` is ``C.S:exec_S``."""
+    from runtime.smc import Goal
+
+    if any(loc not in BEFORE_HOLD_ENDS for loc in locations):
+        return f"client locations {', '.join(locations)}: only those up to hold are translated"
+    if location == "start_":
+        label = f"{component}.{service}:start"
+    elif location.endswith("_2"):
+        label = f"{component}.{service}:exec_{location[:-2]}"
+    else:
+        return f"location {location} of {service}: not translated"
+    name = f"({' or '.join('cl.' + loc for loc in locations)}) U {service}_1_{component}.{location}"
+    return Goal(name, f"until:{label}", label=label, before=(LEAVES_HOLD,))
 
 
 def quadcopter(args) -> int:
+    import tempfile
+
     from genom2bip.campaign.params import ModelParams
     from genom2bip.loading import InputError
     from genom2bip.verify import TimeSettings, build_model
-    from genom2bip.verify.smc import estimate
+    from genom2bip.verify.smc import sim_config
     from runtime.diagnostics import DiagnosticError
 
     art = args.quadcopter
     includes = [str(art), *args.include]
-    time_settings = TimeSettings(exceptions=False, platform=str(args.platform) if args.platform else None)
+    client = None
+    if not args.default_environment:
+        client = Path(tempfile.mkdtemp(prefix="quadcopter-")) / "client.yaml"
+        client.write_text(CLIENT)
+    platform = str(args.platform) if args.platform else None
+    time_settings = TimeSettings(exceptions=False, platform=platform, client=str(client) if client else None)
     try:
         model = build_model([art / "all.gen"], include_dirs=includes, time=time_settings)
     except (DiagnosticError, InputError) as exc:
@@ -152,26 +229,57 @@ def quadcopter(args) -> int:
         print("give the directory of the openrobots interfaces with -I DIR (they are not in the artefact)")
         return 1
     params = ModelParams(paths=(str(art / "all.gen"),), include_dirs=tuple(includes), timed=True,
-                         platform=str(args.platform) if args.platform else None, no_exceptions=True)
-    print(f"quadcopter: runs of {args.time_bound}, {args.runs} runs, the artefact's all.proba")
+                         platform=platform, client=str(client) if client else None, no_exceptions=True)
+    where = "the artefact's client as a mission" if client else "the default environment"
+    print(f"quadcopter ({where}): runs of {args.time_bound}, {args.runs} runs, the artefact's all.proba")
     for n in args.workers:
-        settings = _settings(args, runs=args.runs, proba=str(art / "all.proba"), batch=max(1, args.runs // 8))
-        _line(f"Dask, {n} worker{'s' if n > 1 else ''}", _dask(model, params, settings, n))
+        settings = _settings(args, runs=args.runs, proba=str(art / "all.proba"), batch=max(1, args.runs // (4 * n)),
+                             responses=False)
+        _line(f"Dask, {n} worker{'s' if n > 1 else ''}", _dask(model, params, settings, n, warm=True))
     if not args.queries:
         return 0
-    queries = OVERRUN_QUERY.findall((art / "quadcopter.q").read_text())
-    print(f"{len(queries)} period-overrun queries of quadcopter.q (the others are not translated), "
-          f"epsilon 0.01, delta 0.05")
-    for bound, task, component in queries:
-        settings = _settings(args, epsilon=0.01, delta=0.05, proba=str(art / "all.proba"))
-        settings.horizon_us = int(bound) * UNIT_US
-        report = estimate(model, settings)
+    text = (art / "quadcopter.q").read_text()
+    overruns = OVERRUN_QUERY.findall(text)
+    untils = UNTIL_QUERY.findall(text)
+    bounds = {int(b) for b, *_ in overruns + untils}
+    if len(bounds) != 1:
+        print(f"quadcopter.q's queries have time bounds {sorted(bounds)}: one estimate per bound is not done here")
+        return 1
+    settings = _settings(args, epsilon=0.01, delta=0.05, proba=str(art / "all.proba"), responses=False,
+                         batch=args.batch, runs=args.query_runs)
+    settings.horizon_us = bounds.pop() * UNIT_US
+    config = sim_config(model, settings)
+    config.keep_going = False
+    subjects = {}
+    for _, task, component in overruns:
         want = f"period of {component}.{task} "
-        for r in report.results:
-            if r.subject.startswith(want):
-                e = r.estimate
-                print(f"  {r.subject}: Pr[<= {settings.horizon_us / 1e6:g} s] = {e.value:.4f} "
-                      f"[{e.low:.4f}, {e.high:.4f}] ({report.runs:,} runs, {report.runs_per_second:.1f} runs/s)")
+        goal = next((g for g in config.goals if g.name.startswith(want)), None)
+        subjects[f"<> Man_{task}_{component}.manage and tick_{task}_{component}"] = goal.atom if goal else None
+    for _, locations, service, _, component, location in untils:
+        locs = [loc.strip()[3:] for loc in locations.split(" or ")]
+        goal = until_goal(service, component, location, locs)
+        name = f"({locations}) U {service}_1_{component}.{location}"
+        if isinstance(goal, str):
+            print(f"  not translated: {name}: {goal}")
+            continue
+        config.goals.append(goal)
+        subjects[name] = goal.atom
+        print(f"  {name}: translated as '{goal.label}' before '{LEAVES_HOLD}'")
+    print(f"{len(subjects)} queries of quadcopter.q from the same runs, Pr[<= {settings.horizon_us / 1e6:g} s], "
+          f"epsilon 0.01, delta 0.05 ({settings.planned:,} runs) on {args.query_workers} Dask worker(s)"
+          + (f", stopped after {args.budget:g} s" if args.budget else ""))
+    report = _dask(model, params, settings, args.query_workers, config, args.budget, warm=True)
+    by_atom = {r.observer: r for r in report.results}
+    for query, atom in subjects.items():
+        r = by_atom.get(atom)
+        if r is None:
+            print(f"  Pr[{query}]: no observer of this task in the model")
+            continue
+        e = r.estimate
+        print(f"  Pr[<= {settings.horizon_us / 1e6:g} s]({query}) = {e.value:.4f}  [{e.low:.4f}, {e.high:.4f}]  "
+              f"({e.hits:,} of {e.runs:,} runs)")
+    print(f"  {report.runs:,} runs in {report.seconds:.0f} s ({report.runs_per_second:.2f} runs/s, "
+          f"{report.steps / max(report.runs, 1):,.0f} steps a run){' - ' + report.stopped if report.stopped else ''}")
     return 0
 
 
@@ -187,8 +295,15 @@ def main() -> int:
     ap.add_argument("-I", dest="include", action="append", default=[], metavar="DIR")
     ap.add_argument("--platform", type=Path, help="quadcopter: a platform file (default: a core per task)")
     ap.add_argument("--queries", action="store_true",
-                    help="quadcopter: answer quadcopter.q's overrun queries at epsilon 0.01, delta 0.05 (18,445 runs "
-                         "of 10 s each)")
+                    help="quadcopter: answer quadcopter.q's queries at epsilon 0.01, delta 0.05 (18,445 runs "
+                         "of 10 s each, the same runs for every query)")
+    ap.add_argument("--query-runs", type=int, help="quadcopter: this many runs for the queries instead")
+    ap.add_argument("--query-workers", type=int, default=2, help="quadcopter: Dask workers for the queries")
+    ap.add_argument("--budget", type=float, default=0,
+                    help="quadcopter: stop the queries' runs after this many seconds (the intervals of the runs read)")
+    ap.add_argument("--batch", type=int, default=20, help="quadcopter: runs per batch for the queries")
+    ap.add_argument("--default-environment", action="store_true",
+                    help="quadcopter: the default environment instead of the artefact's client")
     args = ap.parse_args()
     args.workers = [int(n) for n in args.workers.split(",") if n]
     if args.robnav:

@@ -121,10 +121,12 @@ def test_batches_of_any_size_give_the_same_estimate():
 
 @needs_cc
 def test_the_python_step_and_the_compiled_step_make_the_same_runs():
+    from dataclasses import replace
+
     from runtime.smc import Simulator
 
     model = slack()
-    config = sim_config(model, SmcSettings(horizon_us=24_000))
+    config = replace(sim_config(model, SmcSettings(horizon_us=24_000)), native=False)  # the loop in Python
     compiled, why = simulator(model, config)
     assert not why
     python = Simulator(compiled.space, None, config)
@@ -343,11 +345,15 @@ def test_smc_refuses_what_belongs_to_exhaustive_verification(capsys, tmp_path):
     assert code == 2 and "--smc takes description files (a .bip file has no platform" in err and "Pr[" not in out
 
 
-def test_the_python_engine_gives_the_compiled_estimate(capsys):
+def test_the_python_engine_and_the_compiled_one_both_contain_the_probability(capsys):
+    # the compiled engine runs its loop in C, from other random numbers than the Python loop's: other runs, drawn
+    # from the same distribution (tests/test_smc_leaps.py)
     common = [SLACK, "--timed", "--platform", SMC / "slack.yaml", "--smc", "--time-bound", "15 ms", "--runs", "300"]
     _, compiled, _ = verify(capsys, *common)
     _, python, _ = verify(capsys, *common, "--engine", "python")
-    assert estimates(compiled) == estimates(python) and estimates(python)
+    for out in (compiled, python):
+        _, low, high, _, runs = estimates(out)["period of Slack.cycle"]
+        assert runs == 300 and low <= 0.4 <= high
 
 
 def test_outputs_that_cannot_be_written_are_refused_before_any_run(capsys, tmp_path):

@@ -140,15 +140,14 @@ def sim_config(model: Model, settings: SmcSettings, warn: Callable[[str], None] 
 def simulator(model: Model, config: SimConfig, externs: str | None = None,
               compiled: bool = True) -> tuple[Simulator, str]:
     """The simulator of ``model`` on the compiled step (on the Python step where it cannot be compiled, with a
-    note saying why; always, with ``compiled`` false)."""
+    note saying why; always, with ``compiled`` false); the note also says why runs go tick by tick, if they do."""
     from runtime.explore import StateSpace
     from runtime.native.compiled import compile_space
 
     space = StateSpace(model.package, model.root, _externs(externs), None, True, set())
-    if not compiled:
-        return Simulator(space, None, config), ""
-    step, why = compile_space(space)
-    return Simulator(space, step, config), why
+    step, why = compile_space(space) if compiled else (None, "")
+    sim = Simulator(space, step, config)
+    return sim, "; ".join(note for note in (why, sim.no_leaps) if note)
 
 
 def _externs(module: str | None):

@@ -26,11 +26,30 @@ def witness(sim: Simulator, seed: int, result: SmcResult) -> Trace | None:
     steps = []
     from runtime.explore.space import Step
 
-    for index, rank in run.choices[:cut]:
+    choices = run.choices[:cut]
+    k = 0
+    while k < len(choices):
+        index, rank = choices[k]
         options = [(inter, nxt, made) for inter, nxt, made in space._fire_all(state) if inter.index == index]
-        inter, state, made = options[min(rank, len(options) - 1)]
+        inter, nxt, made = options[min(rank, len(options) - 1)]
+        if inter.label == sim.config.tick_label and sim.leaps is not None:
+            # a run of ticks: those that only add to clocks (Leaps.length) rebuilt by arithmetic, not one by one
+            ticks = next((j for j in range(k, len(choices)) if choices[j][0] != index), len(choices)) - k
+            rates = {slot: nxt[slot] - state[slot] for slot in sim.leaps.clocks}
+            span = sim.leaps.length(lambda slot, s=state: s[slot], rates)
+            if span > 1:
+                n = min(ticks, span - 1)
+                ahead = list(state)
+                for slot, r in rates.items():
+                    ahead[slot] += r * n
+                state = tuple(ahead)
+                steps.extend([Step(inter.label, index, (), ())] * n)
+                k += n
+                continue
+        state = nxt
         steps.append(Step(inter.label, index, tuple((c.name, pos) for c, pos in made),
                           tuple(c.describe(pos) for c, pos in made)))
+        k += 1
     return timed(steps, sim.config.tick_us)
 
 

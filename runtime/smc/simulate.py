@@ -21,15 +21,24 @@ successor per codel outcome).  The policy only *chooses* among them:
 
 A run is identified by ``(seed, index)`` alone (:func:`run_seed`): the same
 run comes out on any worker, in any order.
+
+Two things make runs cheap without changing their distribution: ticks that
+change nothing but clocks are taken in one *leap* (runtime/smc/leaps.py),
+the ticks a race with other interactions lets pass drawn at once from the
+geometric law the tick-by-tick choice gives; and on the compiled step the
+loop runs in C (runtime/smc/srun.c, from other random numbers).
 """
 from __future__ import annotations
 
 import ctypes
+import math
 import random
 from dataclasses import dataclass, field
 from typing import Any
 
+from runtime.smc.leaps import FAR, Leaps, _nearer
 from runtime.smc.sampling import UNIFORM, Distribution
+from runtime.zones.model import Unsupported
 
 #: Steps a run may take per tick of its horizon (and a floor) before it is stopped as time-blocked (Zeno).
 STEPS_PER_TICK = 1000
@@ -46,11 +55,15 @@ def run_seed(seed: int, index: int) -> random.Random:
 
 @dataclass(frozen=True)
 class Goal:
-    """phi: atom ``atom`` has place ``place`` marked (an observer in ERROR)."""
+    """phi: atom ``atom`` has place ``place`` marked (an observer in ERROR); or, with ``label``, ``psi U chi``:
+    an interaction labelled ``label`` is taken before any labelled in ``before`` (``atom`` then only names the
+    goal)."""
 
     name: str
     atom: str
     place: str = "ERROR"
+    label: str = ""
+    before: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -90,6 +103,8 @@ class SimConfig:
     weights: dict[tuple[str, str, str], float] = field(default_factory=dict)  # ("Comp.Owner", state, outcome)
     tick_label: str = "tick"
     keep_going: bool = False  # run to the horizon even when every goal is reached (response times)
+    leap: bool = True  # take the ticks that change nothing but clocks in one leap (runtime/smc/leaps.py)
+    native: bool = True  # the run loop in C (runtime/smc/srun.c) when the step is compiled
 
 
 @dataclass
@@ -120,6 +135,8 @@ class _Info:
     opens: tuple[int, ...]
     closes: tuple[int, ...]
     ends: tuple[int, ...] = ()  # windows it ends
+    hits: tuple[int, ...] = ()  # goals ``label U`` it reaches
+    cancels: tuple[int, ...] = ()  # goals it makes unreachable (one of their ``before``)
     prefix: str = ""  # "Comp.Owner" of an exec_<state> label
     state: str = ""
     made: list[tuple[tuple[Any, int], ...]] | None = None  # per successor rank: the codel calls and outcomes
@@ -135,6 +152,9 @@ class Simulator:
         atoms = {fa.name: fa for fa in flat.atoms}
         self.goal_slots = []
         for g in config.goals:
+            if g.label:
+                self.goal_slots.append((-1, 0))  # reached by an interaction (_Info.hits), not by a place
+                continue
             fa = atoms[g.atom]
             self.goal_slots.append((fa.offset, 1 << fa.places.index(g.place)))
         self.scheds = []  # (name, marking slot, BUSY bit, x, lo, hi)
@@ -151,6 +171,20 @@ class Simulator:
         self.infos: dict[int, _Info] = {}
         self.step = _CStep(compiled) if compiled is not None else _PyStep(space)
         self.weighted = {(p, s) for p, s, _ in config.weights}
+        self.leaps: Leaps | None = None
+        self.no_leaps = ""  # why the runs go tick by tick (config.leap asked for leaps)
+        if config.leap:
+            try:
+                self.leaps = Leaps(flat.package, flat.root, flat)
+            except Unsupported as exc:
+                self.no_leaps = f"runs tick by tick: {exc}"
+        self.native = None  # the runs in C (CRuns), when the step is compiled and a C compiler is found
+        if compiled is not None and config.native:
+            from runtime.smc.crun import CRuns, library
+
+            lib = library()
+            if lib is not None:
+                self.native = CRuns(self, lib)
 
     # -- interactions ---------------------------------------------------------------------------------
     def info(self, number: int) -> _Info:
@@ -166,8 +200,10 @@ class Simulator:
             prefix, _, port = label.partition(":")
             state = port[len("exec_"):] if port.startswith("exec_") else ""
             ends = tuple(k for k, w in enumerate(self.config.windows) if f"{w.atom}.{w.end}" in ports)
+            hits = tuple(k for k, g in enumerate(self.config.goals) if g.label and g.label == label)
+            cancels = tuple(k for k, g in enumerate(self.config.goals) if g.label and label in g.before)
             got = self.infos[number] = _Info(inter.index, label, label == self.config.tick_label, execs, dones,
-                                             opens, closes, ends, prefix, state)
+                                             opens, closes, ends, hits, cancels, prefix, state)
         return got
 
     def _made(self, info: _Info, count: int) -> list | None:
@@ -207,6 +243,23 @@ class Simulator:
             elif not inside and k in waits:
                 del waits[k]
 
+    def _leap(self, step, handle: int, drawn: dict[int, int], waits: dict[int, int]) -> int:
+        """How many ticks from here compare every clock alike (Leaps.length), the drawn ends of codels and waits
+        included; ``self.rates`` becomes each clock's change by one tick (read on the tick successor ``handle``)."""
+        value = step.value
+        rates = {slot: step.peek(handle, slot) - value(slot) for slot in self.leaps.clocks}
+        self.rates = rates
+        span = self.leaps.length(value, rates)
+        for k, d in drawn.items():
+            x = self.scheds[k][3]
+            if rates.get(x):
+                span = _nearer(span, d - value(x))
+        for k, d in waits.items():
+            c = self.windows[k][2]
+            if rates.get(c):
+                span = _nearer(span, d - value(c))
+        return span
+
     # -- one run --------------------------------------------------------------------------------------------
     def run(self, seed: int, index: int, record: bool = False) -> RunOutcome:
         """Run ``index`` under ``seed``, up to the horizon (or until every goal is reached)."""
@@ -215,12 +268,20 @@ class Simulator:
         step = self.step
         initial = self.space.initial_ids
         start = initial[rng.randrange(len(initial))] if len(initial) > 1 else initial[0]
-        step.start(self.space.state(start))
         horizon, tick_us = cfg.horizon, cfg.tick_us
+        limit = max(MIN_STEPS, STEPS_PER_TICK * (horizon + 1))
+        if self.native is not None:
+            words = [rng.getrandbits(64) for _ in range(4)]
+            end, reached, at_step, responses, ticks, steps, made = self.native.run(
+                words, self.space.state(start), horizon, limit, record)
+            choices = None if made is None else [((self.infos.get(n) or self.info(n)).index, r) for n, r in made]
+            return RunOutcome(index, reached, responses, ticks, steps, end, choices, at_step, start)
+        step.start(self.space.state(start))
         goals = self.goal_slots
         reached: list[int | None] = [None] * len(goals)
         at_step: list[int | None] = [None] * len(goals)
         left = len(goals)
+        cancelled: set[int] = set()  # goals ``U`` whose ``before`` came first
         responses: list[list[int]] = [[] for _ in cfg.watches]
         since: list[int | None] = [None] * len(cfg.watches)
         drawn: dict[int, int] = {}  # scheduler -> drawn duration of its running codel
@@ -230,9 +291,10 @@ class Simulator:
             self._enter(waits, rng, step, tick_us)
         scheds = self.scheds
         now = steps = 0
-        limit = max(MIN_STEPS, STEPS_PER_TICK * (horizon + 1))
         choices: list[tuple[int, int]] | None = [] if record else None
         end = "horizon"
+        leaps = self.leaps
+        forced = False  # the last leap ended where the race with time is lost: one of the others fires now
         while True:
             groups = step.expand()
             if not groups:
@@ -262,6 +324,49 @@ class Simulator:
                     allowed.append((number, handles))
                 if not allowed:  # the policy found nothing the model allows: keep to the model
                     allowed = groups
+            if leaps is not None:
+                tick = next((k for k, (n, _) in enumerate(allowed) if (self.infos.get(n) or self.info(n)).tick),
+                            None)
+                if tick is not None:
+                    others = len(allowed) - 1
+                    # the ticks the tick path takes before one of the others: P(at least j) = (1/(others+1))^j
+                    passing = 0 if forced else FAR if not others else _geometric(rng, 1 / (others + 1))
+                    forced = False
+                    if passing:
+                        if now >= horizon:
+                            break
+                        handle = allowed[tick][1][0]
+                        span = self._leap(step, handle, drawn, waits)
+                        n = min(passing, span, horizon - now)
+                        if n == span and n > 1:
+                            # the tick that ends the span may do more than add to clocks: stop one before it (the
+                            # race starts again there; the ticks still to pass are geometric again, memoryless)
+                            n -= 1
+                            step.advance(self.rates, n)
+                            forced = False
+                        else:
+                            step.take(handle)
+                            if n > 1:
+                                step.advance(self.rates, n - 1)
+                            forced = n == passing and n < span  # the race is lost at the n-th tick
+                        now += n
+                        steps += 1
+                        if record:
+                            choices.extend([(self.infos[allowed[tick][0]].index, 0)] * n)
+                        if left:
+                            for g, (slot, bit) in enumerate(goals):
+                                if reached[g] is None and slot >= 0 and step.value(slot) & bit:
+                                    reached[g], at_step[g] = now, len(choices) if record else steps
+                                    left -= 1
+                            if not left and not cfg.keep_going:
+                                end = "goals"
+                                break
+                        if steps >= limit:
+                            end = "zeno"
+                            break
+                        continue
+                    allowed = allowed[:tick] + allowed[tick + 1:]
+                forced = False
             number, handles = allowed[rng.randrange(len(allowed))] if len(allowed) > 1 else allowed[0]
             info = self.infos.get(number) or self.info(number)
             if info.tick and now >= horizon:
@@ -300,9 +405,17 @@ class Simulator:
                     responses[w].append(now - since[w])
                     since[w] = None
             if left:
+                for g in info.cancels:
+                    if reached[g] is None and g not in cancelled:
+                        cancelled.add(g)
+                        left -= 1
+                for g in info.hits:
+                    if reached[g] is None and g not in cancelled:
+                        reached[g], at_step[g] = now, len(choices) if record else steps
+                        left -= 1
                 for g, (slot, bit) in enumerate(goals):
-                    if reached[g] is None and step.value(slot) & bit:
-                        reached[g], at_step[g] = now, steps
+                    if reached[g] is None and slot >= 0 and step.value(slot) & bit:
+                        reached[g], at_step[g] = now, len(choices) if record else steps
                         left -= 1
                 if not left and not cfg.keep_going:
                     end = "goals"
@@ -385,6 +498,20 @@ class _CStep:
     def take(self, handle: int) -> None:
         self.src, self.base = self.out, handle * self.w
 
+    def peek(self, handle: int, slot: int) -> int:
+        """The value of ``slot`` in successor ``handle`` of the last expansion."""
+        return self.out[handle * self.w + slot]
+
+    def advance(self, rates: dict[int, int], times: int) -> None:
+        """Add ``times`` ticks' worth of each clock's rate to the current state."""
+        if self.src is not self.cur:
+            ctypes.memmove(self.cur, ctypes.byref(self.out, self.base * 8), self.w * 8)
+            self.src, self.base = self.cur, 0
+        cur = self.cur
+        for slot, r in rates.items():
+            if r:
+                cur[slot] += r * times
+
 
 class _PyStep:
     """The Python step (no C compiler): the engine's own successors."""
@@ -418,6 +545,22 @@ class _PyStep:
 
     def take(self, handle: int) -> None:
         self.state = self.succ[handle][1]
+
+    def peek(self, handle: int, slot: int):
+        return self.succ[handle][1][slot]
+
+    def advance(self, rates: dict[int, int], times: int) -> None:
+        state = list(self.state)
+        for slot, r in rates.items():
+            if r:
+                state[slot] += r * times
+        self.state = tuple(state)
+
+
+def _geometric(rng: random.Random, q: float) -> int:
+    """A count ``G`` with ``P(G >= j) = q^j`` (``0 < q < 1``): the ticks that pass before a race with time is lost."""
+    u = 1.0 - rng.random()  # in (0, 1]
+    return int(math.log(u) / math.log(q))
 
 
 def _early(step, keys, drawn_at: dict, table, column: int) -> bool:
