@@ -43,9 +43,16 @@ sys.path.insert(0, str(ROOT))
 
 TEMPLATE = ROOT / "descriptions/dala/missions/doorway.yaml"
 BARN_ROBOT_RADIUS = 0.215  # m: the Jackal's half-width (docs/missions.md, *The robot's footprint in BARN*)
-BARN_NDD = {"params": {"robot_radius": 0.22, "security_distance": 0.1, "goal_tolerance": 0.9}}
-PLANNER_PARAMS = {"robot_radius": 0.35, "clearance": 0.6, "lookahead": 2.0}  # the generated worlds'
-BARN_PLANNER_PARAMS = {"robot_radius": 0.2, "clearance": 0.45, "lookahead": 2.0}
+MAP_CELL = 0.1  # m: Aspect's cell in these missions (its default)
+# NDD's R is the robot's radius plus half a map cell (the rule of the shipped missions, 0.3 + 0.05): ND's obstacle
+# points are cell centres, and a return lies up to half a cell nearer than its cell's centre.
+BARN_NDD = {"params": {"robot_radius": round(BARN_ROBOT_RADIUS + MAP_CELL / 2, 3), "security_distance": 0.1,
+                       "goal_tolerance": 0.9}}
+# The generated worlds' robot, a disc of 0.3 m (doorway.yaml's): the Planner takes the robot's own radius and
+# counts the map's precision itself, where NDD's robot_radius (0.35) is the disc plus half a cell.
+PLANNER_PARAMS = {"robot_radius": 0.3, "clearance": 0.6, "lookahead": 2.0}
+# The Planner's robot_radius is the robot's own: it counts the map's precision itself (planning.precision).
+BARN_PLANNER_PARAMS = {"robot_radius": BARN_ROBOT_RADIUS, "clearance": 0.45, "lookahead": 2.0}
 
 
 def planner_steps(params: dict | None) -> list[dict]:

@@ -1,8 +1,10 @@
 """The BARN challenge's worlds converted at true scale (genom2bip/mission/worlds/barn.py), on a world of our own."""
 from __future__ import annotations
 
+import importlib
 import math
 import shutil
+import sys
 
 import numpy as np
 import pytest
@@ -10,7 +12,11 @@ import yaml
 
 from genom2bip.mission.world import check_world
 from genom2bip.mission.worlds import barn
+from runtime.controller.codels import load_codels
 from tests.runkit import ROOT
+
+sys.path.insert(0, str(ROOT / "bench"))
+import navigation_bench  # noqa: E402
 
 FIXTURE = ROOT / "tests/fixtures/barn/world_3.world"
 ROBOT = yaml.safe_load((ROOT / "descriptions/dala/worlds/doorway.yaml").read_text())["robot"][0]
@@ -95,3 +101,20 @@ def test_a_bad_line_of_dwa_s_runs_is_named_and_a_folder_without_worlds_refused(c
         barn.dwa_runs(challenge / barn.DWA_RUNS)
     with pytest.raises(barn.BarnError, match=r"expected the challenge repository \(no jackal_helper/worlds/BARN/"):
         barn.available(tmp_path / "elsewhere")
+
+
+def test_the_barn_robot_s_ndd_stops_short_of_a_cylinder_its_body_would_touch():
+    # ND's "how far straight on" counts a disc of R less half a cell (its points are cell centres): R must be the
+    # robot's radius plus half a cell, or a return 0.2 m aside of a 0.215 m robot's way does not stop it.
+    ndd = load_codels(str(ROOT / "descriptions/dala/codels"), ["NDD"]).modules["NDD"]
+    nd = importlib.import_module(f"{ndd.__package__}.nd")
+    params = navigation_bench.BARN_NDD["params"]
+    robot = navigation_bench.BARN_ROBOT_RADIUS
+    setting = nd.Params(radius=params["robot_radius"], security=params["security_distance"], dmax=3.2,
+                        cell=navigation_bench.MAP_CELL)
+    for aside in (0.0, 0.1, robot - 0.015, -(robot - 0.015)):
+        sectors = nd.sectorise([(1.0, aside)], setting.sectors, setting.cell, setting.dmax)
+        touch = 1.0 - math.sqrt(robot ** 2 - aside ** 2)
+        assert nd.ahead(sectors, setting) == pytest.approx(touch, abs=1e-9)
+    clear_of_it = nd.sectorise([(1.0, robot + 0.01)], setting.sectors, setting.cell, setting.dmax)
+    assert nd.ahead(clear_of_it, setting) == math.inf

@@ -62,6 +62,39 @@ def test_the_intermediate_goal_is_seen_straight_from_the_robot_within_the_lookah
     assert point[0] < 6.0 and planning.visible(inside, (6.0, 5.0), point)
 
 
+def _cylinder_row(first_x: float, y: float, count: int) -> list[tuple[float, float]]:
+    """Laser returns all round a row of BARN's cylinders (0.075 m, every 0.15 m): a wall with a thin tip."""
+    return [(first_x + 0.15 * i + 0.075 * math.cos(a * math.pi / 12), y + 0.075 * math.sin(a * math.pi / 12))
+            for i in range(count) for a in range(24)]
+
+
+def _segment_distance(a, b, q) -> float:
+    ab = (b[0] - a[0], b[1] - a[1])
+    length = ab[0] ** 2 + ab[1] ** 2
+    t = max(0.0, min(1.0, ((q[0] - a[0]) * ab[0] + (q[1] - a[1]) * ab[1]) / length)) if length else 0.0
+    return math.dist(q, (a[0] + t * ab[0], a[1] + t * ab[1]))
+
+
+def test_the_way_to_the_intermediate_goal_keeps_the_radius_from_the_returns_wherever_they_fell_in_their_cells():
+    # A wall of cylinders whose tip the way to the goal rounds: the robot (0.215 m, the BARN runs') must not cut
+    # the corner on its straight way to the intermediate goal.  A cell stands for a return anywhere in it, up to
+    # half its diagonal (7 cm) from its centre: distances counted between centres let the robot graze the tip.
+    returns = _cylinder_row(0.375, 2.0, 18)
+    seen = planning.Seen(0.1)
+    seen.add(returns)
+    closest, tried = math.inf, 0
+    for k in range(20):
+        for m in range(10):
+            here = (0.6 + 0.05 * m, 0.3 + 0.07 * k)
+            p = planning.plan(seen, here, (here[0], 3.6), 0.215, 0.45)
+            assert min(x for x, _ in p.points) < 0.375  # round the tip, not through the wall
+            point, _ = planning.target(p, here, 2.0)
+            closest = min(closest, *(_segment_distance(here, point, q) for q in returns))
+            assert min(math.dist(q, h) for q in p.points[1:-1] for h in returns) >= 0.215
+            tried += 1
+    assert tried == 200 and 0.215 <= closest < 0.35  # near the tip, yet never nearer than the robot's radius
+
+
 def test_a_stalled_way_costs_more_and_the_next_plan_takes_the_other_side():
     seen = planning.Seen(0.1)
     _u_trap(seen)

@@ -5,8 +5,9 @@ pose of the sweep) and, while NDD publishes an active goal in Nav, plans to
 it when the map grew, the goal changed, NDD asked for a way round (Nav's
 ``stalls``: the cells of the way it could not follow then cost AVOID times
 more) or the robot left the path; every period it publishes in Way the
-farthest point of the path within the lookahead that the robot sees in a
-straight line, and the length of the path left.  No path: Way is invalid,
+farthest point of the path within the lookahead that the robot reaches in a
+straight line keeping its radius from what the laser saw, and the length of
+the path left.  No path: Way is invalid,
 ``blocked``, with the reason.  Plan answers once whether a way exists.
 """
 import math

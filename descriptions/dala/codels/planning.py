@@ -3,14 +3,18 @@
 What Aspect's map showed is kept for good in the world frame (``Seen``: the
 cells of every sweep, placed at the pose of the sweep); what was never seen
 counts as free, as D* Lite and its kin assume, and the plan changes as the
-map grows.  ``plan`` searches the 8-connected grid of the cells where the
-robot fits (at least ``radius`` from every obstacle cell) with scipy's
+map grows.  A cell seen stands for a laser return anywhere inside it, up to
+half its diagonal from its centre (``precision``): every distance to an
+obstacle is counted from there.  ``plan`` searches the 8-connected grid of
+the cells where the robot fits (at least ``radius`` from every place an
+obstacle cell may hold) with scipy's
 Dijkstra from the goal, each step's cost its length times a penalty that
 grows as the cell comes within ``clearance`` of an obstacle (the plan keeps
 to the middle of passages where it can, squeezes through where it must) and
 times ``avoid`` on the cells of a way the robot could not follow; ``target``
 takes the farthest point of the path within ``lookahead`` that the robot
-sees in a straight line: the intermediate goal ND drives to.
+reaches in a straight line keeping ``radius`` from every such place: the
+intermediate goal ND drives to.
 """
 from __future__ import annotations
 
@@ -18,12 +22,17 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage, sparse
+from scipy import ndimage, sparse, spatial
 from scipy.sparse import csgraph
 
 MARGIN = 2.0  # m of grid round the robot, the goal and the obstacles seen
 CROWD = 3.0  # the cost of a step at ``radius`` from an obstacle, over one at ``clearance`` or more
 SNAP = 1.0  # m: a start or goal inside the obstacles' margin moves to the nearest free cell within this
+
+
+def precision(resolution: float) -> float:
+    """How far from its cell's centre the return that marked the cell may lie: half the cell's diagonal."""
+    return resolution * math.sqrt(2) / 2
 
 
 class NoPath(Exception):
@@ -58,6 +67,8 @@ class Plan:
     free: np.ndarray
     origin: tuple[int, int]  # the cell of free[0, 0]
     resolution: float
+    radius: float = 0.0  # m the robot keeps from every place an obstacle cell may hold
+    obstacles: spatial.cKDTree | None = None  # the obstacle cells' centres (world frame)
 
 
 def _graph(free: np.ndarray, cost: np.ndarray, resolution: float) -> sparse.csr_matrix:
@@ -107,7 +118,8 @@ def plan(seen: Seen, start: tuple[float, float], goal: tuple[float, float], radi
     if seen.cells:
         cells = np.array(list(seen.cells))
         occupied[cells[:, 1] - j0, cells[:, 0] - i0] = True
-    distance = ndimage.distance_transform_edt(~occupied) * r  # centre to centre, m
+    # from a cell's centre to the nearest place an obstacle cell may hold its return, m
+    distance = ndimage.distance_transform_edt(~occupied) * r - precision(r)
     free = distance >= radius
     depth = np.clip((clearance - distance) / max(clearance - radius, 1e-9), 0.0, 1.0)
     cost = 1.0 + (CROWD - 1.0) * depth
@@ -133,18 +145,33 @@ def plan(seen: Seen, start: tuple[float, float], goal: tuple[float, float], radi
     points = [((c % cols + i0 + 0.5) * r, (c // cols + j0 + 0.5) * r) for c in chain]
     points = [tuple(start), *points[1:-1], tuple(goal)] if len(points) > 1 else [tuple(start), tuple(goal)]
     length = sum(math.dist(a, b) for a, b in zip(points, points[1:]))
-    return Plan(points, length, free, (i0, j0), r)
+    centres = [((i + 0.5) * r, (j + 0.5) * r) for i, j in seen.cells]
+    return Plan(points, length, free, (i0, j0), r, radius, spatial.cKDTree(centres) if centres else None)
+
+
+def clearance_of(p: Plan, a: tuple[float, float], b: tuple[float, float]) -> float:
+    """The least distance from the segment a-b to a place an obstacle cell may hold (inf when none is seen)."""
+    if p.obstacles is None:
+        return math.inf
+    mid, half = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2), math.dist(a, b) / 2
+    reach = half + p.radius + 2 * precision(p.resolution)
+    near = p.obstacles.query_ball_point(mid, reach)
+    if not near:
+        return math.inf
+    q = p.obstacles.data[near]
+    ab = np.array(b) - np.array(a)
+    t = np.clip(((q - np.array(a)) @ ab) / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+    closest = np.array(a) + t[:, None] * ab
+    return float(np.min(np.hypot(*(q - closest).T))) - precision(p.resolution)
 
 
 def visible(p: Plan, a: tuple[float, float], b: tuple[float, float]) -> bool:
-    """Does the segment a-b stay on the plan's free cells (sampled every half cell)?"""
-    n = max(1, math.ceil(math.dist(a, b) / (p.resolution / 2)))
-    for k in range(n + 1):
-        x, y = a[0] + (b[0] - a[0]) * k / n, a[1] + (b[1] - a[1]) * k / n
+    """Can the robot drive straight from a to b, on the plan's grid, keeping ``p.radius`` from every obstacle?"""
+    for x, y in (a, b):
         i, j = math.floor(x / p.resolution) - p.origin[0], math.floor(y / p.resolution) - p.origin[1]
-        if not (0 <= j < p.free.shape[0] and 0 <= i < p.free.shape[1] and p.free[j, i]):
+        if not (0 <= j < p.free.shape[0] and 0 <= i < p.free.shape[1]):
             return False
-    return True
+    return clearance_of(p, a, b) >= p.radius
 
 
 def target(p: Plan, here: tuple[float, float], lookahead: float) -> tuple[tuple[float, float], float]:
