@@ -77,7 +77,7 @@ def _cached(source: str, name: str) -> CodeType:
     import marshal
     import sys
 
-    from runtime.native.build import _write, cache_dir
+    from runtime.cachefiles import cache_dir, write_atomic
 
     bare = _COMMENT.sub("", source)
     key = hashlib.sha256("\0".join((bare, importlib.util.MAGIC_NUMBER.hex(), sys.version)).encode())
@@ -91,7 +91,7 @@ def _cached(source: str, name: str) -> CodeType:
     code = compile(bare, name, "exec")
     try:
         file.parent.mkdir(parents=True, exist_ok=True)
-        _write(file, marshal.dumps(code))
+        write_atomic(file, marshal.dumps(code))
     except OSError:
         pass
     return code

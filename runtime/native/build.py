@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
+from runtime.cachefiles import cache_dir, write_atomic as _write
 from runtime.engine.source import dumped
 
 HERE = Path(__file__).parent
@@ -71,14 +72,6 @@ def flags(parallel: bool = False, level: str | None = None) -> tuple[str, ...]:
     return base + PARALLEL_FLAGS if parallel else base
 
 
-def cache_dir() -> Path:
-    base = os.environ.get("GENOM2BIP_CACHE")
-    if base:
-        return Path(base)
-    xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(xdg) / "genom2bip" / "native"
-
-
 def _headers() -> str:
     return "".join((HERE / n).read_text() for n in ("prelude.h", "odometer.h", "search.c"))
 
@@ -121,23 +114,6 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
     if notice is not None:
         notice(f"{what}: compiled in {time.perf_counter() - start:.1f} s (kept in {out_dir} for the next run)")
     return lib
-
-
-def _write(path: Path, data: bytes) -> None:
-    """Write atomically: concurrent builds of the same model never see half a file.
-
-    Each writer has a temporary file of its own (not one per process: two threads of a campaign's worker, or
-    two hosts sharing the cache, may build the same library at once); the rename is atomic, the last one wins.
-    """
-    fd, partial = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(partial, 0o644)
-        os.replace(partial, path)
-    except BaseException:
-        Path(partial).unlink(missing_ok=True)
-        raise
 
 
 class Result(ctypes.Structure):
