@@ -354,10 +354,8 @@ class Simulator:
                         if record:
                             choices.extend([(self.infos[allowed[tick][0]].index, 0)] * n)
                         if left:
-                            for g, (slot, bit) in enumerate(goals):
-                                if reached[g] is None and slot >= 0 and step.value(slot) & bit:
-                                    reached[g], at_step[g] = now, len(choices) if record else steps
-                                    left -= 1
+                            left -= _places_reached(goals, reached, at_step, step, now,
+                                                    len(choices) if record else steps)
                             if not left and not cfg.keep_going:
                                 end = "goals"
                                 break
@@ -413,10 +411,7 @@ class Simulator:
                     if reached[g] is None and g not in cancelled:
                         reached[g], at_step[g] = now, len(choices) if record else steps
                         left -= 1
-                for g, (slot, bit) in enumerate(goals):
-                    if reached[g] is None and slot >= 0 and step.value(slot) & bit:
-                        reached[g], at_step[g] = now, len(choices) if record else steps
-                        left -= 1
+                left -= _places_reached(goals, reached, at_step, step, now, len(choices) if record else steps)
                 if not left and not cfg.keep_going:
                     end = "goals"
                     break
@@ -424,6 +419,17 @@ class Simulator:
                 end = "zeno"
                 break
         return RunOutcome(index, reached, responses, now, steps, end, choices, at_step, start)
+
+
+def _places_reached(goals, reached, at_step, step, now: int, at: int) -> int:
+    """The goals given as a place (``(slot, bit)``, slot >= 0) that the step's state is in, marked reached now at
+    step ``at``: how many were not reached before."""
+    met = 0
+    for g, (slot, bit) in enumerate(goals):
+        if reached[g] is None and slot >= 0 and step.value(slot) & bit:
+            reached[g], at_step[g] = now, at
+            met += 1
+    return met
 
 
 class _CStep:
