@@ -119,6 +119,36 @@ def serving_dala():
     assert controller.error is None
 
 
+def import_generated(directory: Path, name: str):
+    """The generated package in ``directory``/``name`` under a private module name (tests generate it again)."""
+    import importlib.util
+
+    alias = f"{name}_{abs(hash(str(directory)))}"
+    spec = importlib.util.spec_from_file_location(alias, directory / name / "__init__.py",
+                                                  submodule_search_locations=[str(directory / name)])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[alias] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+@contextmanager
+def serving_package(pkg, codels: str, **controller):
+    """A generated package's controller with ``codels``, running, and a client of its server; stopped after."""
+    from runtime.controller import Controller
+    from runtime.services.client import Client
+    from runtime.services.server import ServiceServer
+
+    running = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, codels, **controller)
+    running.start()
+    server = ServiceServer(running).start()
+    try:
+        yield running, Client(server.url, timeout=30)
+    finally:
+        server.stop()
+        running.stop(timeout=30)
+
+
 def dala():
     """The committed generated DALA package (gen/dala)."""
     if str(ROOT / "gen") not in sys.path:

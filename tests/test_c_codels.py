@@ -1,17 +1,15 @@
 """A component whose codels are C (and one in C++) generated, compiled and run under the controller, through HTTP."""
 from __future__ import annotations
 
-import importlib.util
 import os
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from genom2bip.cli import main
-from runkit import ROOT
+from runkit import ROOT, import_generated, serving_package
 
 FIXTURE = ROOT / "tests" / "fixtures" / "ccodels" / "cdemo"
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None or shutil.which("g++") is None,
@@ -19,40 +17,19 @@ pytestmark = pytest.mark.skipif(shutil.which("gcc") is None or shutil.which("g++
                                        "gcc g++)")
 
 
-def _import(directory: Path, name: str):
-    """The generated package in ``directory``/``name`` under a private module name (tests generate it again)."""
-    alias = f"{name}_{abs(hash(str(directory)))}"
-    spec = importlib.util.spec_from_file_location(alias, directory / name / "__init__.py",
-                                                  submodule_search_locations=[str(directory / name)])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[alias] = module
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
 def cdemo(tmp_path_factory):
     out = tmp_path_factory.mktemp("cgen")
     assert main([str(FIXTURE), "-o", str(out)]) == 0
-    return out, _import(out, "cdemo")
+    return out, import_generated(out, "cdemo")
 
 
 @pytest.fixture
 def serving(cdemo):
-    from runtime.controller import Controller
-    from runtime.services.client import Client
-    from runtime.services.server import ServiceServer
-
     _, pkg = cdemo
     codels = str(FIXTURE / "codels")  # the Python codels of pywatch (the C ones are in the package's libraries)
-    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, codels, times=True)
-    controller.start()
-    server = ServiceServer(controller).start()
-    try:
-        yield controller, Client(server.url, timeout=30)
-    finally:
-        server.stop()
-        controller.stop(timeout=30)
+    with serving_package(pkg, codels, times=True) as (controller, client):
+        yield controller, client
     assert controller.error is None
 
 

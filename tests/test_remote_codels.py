@@ -1,53 +1,30 @@
 """Remote services: a codel calls a service of the component that provides an interface, through the controller."""
 from __future__ import annotations
 
-import importlib.util
 import shutil
-import sys
-from pathlib import Path
 
 import pytest
 
 from genom2bip.cli import main
-from runkit import ROOT
+from runkit import ROOT, import_generated, serving_package
 
 FIXTURE = ROOT / "tests" / "fixtures" / "ccodels" / "remote"
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc compiles the fixture's C codels "
                                                                     "(Debian: apt-get install gcc)")
 
 
-def _import(directory: Path, name: str):
-    alias = f"{name}_{abs(hash(str(directory)))}"
-    spec = importlib.util.spec_from_file_location(alias, directory / name / "__init__.py",
-                                                  submodule_search_locations=[str(directory / name)])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[alias] = module
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
 def level(tmp_path_factory):
     out = tmp_path_factory.mktemp("remote")
     assert main([str(FIXTURE), "-o", str(out)]) == 0
-    return out, _import(out, "remote")
+    return out, import_generated(out, "remote")
 
 
 @pytest.fixture
 def serving(level):
-    from runtime.controller import Controller
-    from runtime.services.client import Client
-    from runtime.services.server import ServiceServer
-
     _, pkg = level
-    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(FIXTURE / "codels"))
-    controller.start()
-    server = ServiceServer(controller).start()
-    try:
-        yield controller, Client(server.url, timeout=30)
-    finally:
-        server.stop()
-        controller.stop(timeout=30)
+    with serving_package(pkg, str(FIXTURE / "codels")) as (controller, client):
+        yield controller, client
     assert controller.error is None
 
 
@@ -116,7 +93,7 @@ def test_a_remote_no_component_serves_fails_the_request_saying_so(tmp_path):
     from runtime.controller import Controller
 
     assert main([str(FIXTURE / "asker.gen"), "-o", str(tmp_path)]) == 0  # the asker alone: nobody provides calc
-    pkg = _import(tmp_path, "asker")
+    pkg = import_generated(tmp_path, "asker")
     controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, None)
     assert controller.remotes.target("asker", "Divide") is None
     controller.start()
