@@ -297,7 +297,7 @@ def test_two_philosophers_never_eat_at_once():
 @pytest.mark.parametrize("name", ["fischer2.tck", "fischer2_nonstrict.tck", "committed_window.tck", "urgent.tck",
                                   "sync.tck", "weak.tck"])
 def test_points_past_an_invariant_are_no_state_and_change_nothing_reachable(name):
-    # With invariants part of the state (ZoneExplorer.invariants, as reach runs), the points extrapolation keeps
+    # With invariants part of the state (ZoneExplorer's invariants, as reach runs), the points extrapolation keeps
     # past a place's invariant are not stored as a piece where time cannot pass: fewer steps, the same
     # configurations and the same zones kept; the C search stores what the Python one does.
     from runtime.tchecker.reach import explorer, load
@@ -306,8 +306,7 @@ def test_points_past_an_invariant_are_no_state_and_change_nothing_reachable(name
     runs = {}
     for engine in ("python", "c"):
         for hard in (False, True):
-            z = explorer(tr)
-            z.engine, z.invariants = engine, hard
+            z = explorer(tr, invariants=hard, engine=engine)
             result = z.explore()
             assert result.complete
             kept = sorted((n.state, n.zone.tobytes()) for n in z.nodes if not n.covered)
@@ -328,8 +327,7 @@ def test_fischer_stores_no_piece_past_an_invariant():
     _, tr = load(FIXTURES / "fischer2.tck", 2)
     counts = []
     for hard in (False, True):
-        z = explorer(tr)
-        z.invariants = hard
+        z = explorer(tr, invariants=hard)
         z.explore()
         counts.append(len(z.search.steps))
     assert counts[1] < counts[0]

@@ -58,9 +58,8 @@ def explorer(tr: Translation, invariants: bool = True, **options):
     ZoneExplorer's."""
     from runtime.zones.search import ZoneExplorer
 
-    z = ZoneExplorer(tr.package, tr.root, **({"local_ceilings": True, "merge": False} | options))
-    z.invariants = invariants
-    return z
+    return ZoneExplorer(tr.package, tr.root, **({"local_ceilings": True, "merge": False} | options),
+                        invariants=invariants)
 
 
 class _Goal:

@@ -65,7 +65,7 @@ class ZoneExplorer:
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
                  merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False,
-                 program_bytes: int = PROGRAM_BYTES) -> None:
+                 program_bytes: int = PROGRAM_BYTES, invariants: bool = False) -> None:
         self.model: TimedModel = analyse(package, root)
         self.externs = externs  # the tick model's replay compiles its step with them (runtime/zones/tickstep.py)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
@@ -107,7 +107,7 @@ class ZoneExplorer:
         #: Invariants are part of a state (a TChecker location's): where time may pass, the points of a zone past a
         #: place's invariant (kept by extrapolation, which forgets bounds no guard ahead reads) are left out, as
         #: tck-reach intersects every successor with the invariant; off, they stay as a piece where time cannot pass.
-        self.invariants = False
+        self.invariants = invariants
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
