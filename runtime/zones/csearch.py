@@ -265,8 +265,8 @@ class CSearch:
 
     def passing(self, state: tuple):
         """Where time may pass at a discrete state, as the program the search used says (ZoneExplorer.passing's
-        value: ``(before, after, waits)``, None where no time passes), or False where the search kept no program
-        for it (none was needed, or it was let go past the budget)."""
+        value: ``(before, after, waits)``, None where no time passes), or False where the search needed no program
+        for it or Python wrote it (a program C wrote and let go past the budget is written again)."""
         if self.compiled is None:
             return False
         words = self.program(self._intern(state))

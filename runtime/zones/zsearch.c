@@ -80,9 +80,8 @@ typedef struct {
     int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
     int64_t reduced;        /* expansions that left steps out */
     /* programs let go (see let_go): per state, its nodes waiting and whether C wrote its program */
-    int32_t *pending, *plen;
+    int32_t *pending, *plen;  /* grown with prog (grow_states) */
     uint8_t *in_c;
-    int64_t pcap;
     VEC(int64_t) finished;  /* states whose nodes were all expanded, oldest first, from finished_head on */
     int64_t finished_head;
     int64_t budget;         /* bytes of programs held before finished states' are let go; 0: never */
@@ -103,29 +102,6 @@ static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
  * state was expanded, its program is needed again only if a new zone of that state arrives; a program written
  * in C can then be written again from the state's words.  Past the budget, the programs of the states that
  * finished first are let go (breadth-first, a state's zones mostly arrive within a few levels of each other). */
-static int grow_pending(Ctx *x, int64_t n)
-{
-    if (n <= x->pcap)
-        return 0;
-    int64_t cap = x->pcap ? x->pcap : 1024;
-    while (cap < n)
-        cap *= 2;
-    int32_t *pe = realloc(x->pending, cap * sizeof(int32_t)), *pl = pe ? realloc(x->plen, cap * sizeof(int32_t)) : 0;
-    uint8_t *c = pl ? realloc(x->in_c, cap) : 0;
-    if (pe)
-        x->pending = pe;
-    if (pl)
-        x->plen = pl;
-    if (!c)
-        return -9;
-    x->in_c = c;
-    memset(x->pending + x->pcap, 0, (cap - x->pcap) * sizeof(int32_t));
-    memset(x->plen + x->pcap, 0, (cap - x->pcap) * sizeof(int32_t));
-    memset(x->in_c + x->pcap, 0, cap - x->pcap);
-    x->pcap = cap;
-    return 0;
-}
-
 static void let_go(Ctx *x)
 {
     while (x->budget > 0 && x->prog_words * 8 > x->budget && x->finished_head < x->finished.n) {
@@ -277,11 +253,17 @@ static int grow_states(Ctx *x, int64_t n)
             x->prog.cap = x->prog.cap ? 2 * x->prog.cap : 1024;
             int64_t **a = realloc(x->prog.a, x->prog.cap * sizeof(int64_t *));
             Kept *k = realloc(x->kept.a, x->prog.cap * sizeof(Kept));
-            if (!a || !k)
+            int32_t *pe = realloc(x->pending, x->prog.cap * sizeof(int32_t));
+            int32_t *pl = realloc(x->plen, x->prog.cap * sizeof(int32_t));
+            uint8_t *c = realloc(x->in_c, x->prog.cap);
+            x->prog.a = a ? a : x->prog.a, x->kept.a = k ? k : x->kept.a;  /* what moved is kept, to be freed */
+            x->pending = pe ? pe : x->pending, x->plen = pl ? pl : x->plen, x->in_c = c ? c : x->in_c;
+            if (!a || !k || !pe || !pl || !c)
                 return -9;
-            x->prog.a = a, x->kept.a = k, x->kept.cap = x->prog.cap;
+            x->kept.cap = x->prog.cap;
         }
         Kept none = {0};
+        x->pending[x->prog.n] = 0, x->plen[x->prog.n] = 0, x->in_c[x->prog.n] = 0;
         x->prog.a[x->prog.n++] = NULL;
         x->kept.a[x->kept.n++] = none;
     }
@@ -692,10 +674,6 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
         int status = write_program(x, x->tables, s, x->d, T(x, 8), &prog);
         free(s);
         if (!status) {
-            if (grow_pending(x, state + 1)) {
-                free(prog.a);
-                return NULL;
-            }
             let_go(x);  /* first: a state finished twice may still be queued, and this one must stay */
             x->rewritten += x->in_c[state];
             x->in_c[state] = 1, x->plen[state] = (int32_t)prog.n;
@@ -998,7 +976,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         Edge e = {parent, index, index};
         PUSH(x->edges, e);
     }
-    if (kept_push(kept, index) || grow_pending(x, step.state + 1))
+    if (kept_push(kept, index))
         return -9;
     PUSH(x->waiting, index);
     x->pending[step.state]++;
@@ -1326,7 +1304,7 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
     Ctx *x = p;
     if (state >= x->prog.n)
         return -1;
-    if (!x->prog.a[state] && (state >= x->pcap || !x->in_c[state] || !program(x, state, NULL)))
+    if (!x->prog.a[state] && (!x->in_c[state] || !program(x, state, NULL)))
         return -1;  /* none, or let go and written again here (C writes it alike) */
     const int64_t *pr = x->prog.a[state];
     Parts q = parts(pr);
