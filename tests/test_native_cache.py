@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 
-from runtime.native import build
+from runtime import cachefiles
 
 
 def test_two_threads_writing_one_library_at_once_both_succeed_and_leave_a_whole_file(tmp_path, monkeypatch):
@@ -12,7 +12,7 @@ def test_two_threads_writing_one_library_at_once_both_succeed_and_leave_a_whole_
     completely; then A renames.  Each writer's temporary file is its own, so both renames succeed."""
     target = tmp_path / "step-x.so"
     a_ready, b_done = threading.Event(), threading.Event()
-    rename = build.os.replace
+    rename = cachefiles.os.replace
 
     def held_replace(src, dst):
         if threading.current_thread().name == "A":
@@ -20,12 +20,12 @@ def test_two_threads_writing_one_library_at_once_both_succeed_and_leave_a_whole_
             b_done.wait()
         rename(src, dst)
 
-    monkeypatch.setattr(build.os, "replace", held_replace)
+    monkeypatch.setattr(cachefiles.os, "replace", held_replace)
     failures = []
 
     def write(data: bytes) -> None:
         try:
-            build._write(target, data)
+            cachefiles.write_atomic(target, data)
         except OSError as exc:
             failures.append(exc)
 

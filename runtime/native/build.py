@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from runtime.cachefiles import cache_dir, write_atomic as _write
+from runtime.cachefiles import cache_dir, write_atomic
 from runtime.engine.source import dumped
 
 HERE = Path(__file__).parent
@@ -97,7 +97,7 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
         return lib
     out_dir.mkdir(parents=True, exist_ok=True)
     if dump is None:
-        _write(c_file, source.encode("utf-8"))
+        write_atomic(c_file, source.encode("utf-8"))
     if lib.exists():
         return lib
     level = next((f for f in opts if f.startswith("-O")), "")
@@ -110,7 +110,7 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
                               capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{proc.stderr[-4000:]}")
-        _write(lib, so.read_bytes())
+        write_atomic(lib, so.read_bytes())
     if notice is not None:
         notice(f"{what}: compiled in {time.perf_counter() - start:.1f} s (kept in {out_dir} for the next run)")
     return lib
