@@ -155,9 +155,62 @@ def test_the_dala_rules_file_reads_on_the_whole_model():
     pkg = package_of_dala()
     items, _ = read_property_file(ROOT / "descriptions" / "dala" / "properties" / "rules.mcl",
                                   flatten(pkg, "DALA()"))
-    assert [i.name for i in items] == ["goto_after_pom_run", "goto_needs_laser_and_map", "goto_waits_for_base",
+    assert [i.name for i in items] == ["goto_after_pom_run", "goto_needs_laser", "goto_needs_map", "goto_waits_for_base",
                                        "base_stop_stops_navigation", "laser_stop_stops_navigation",
                                        "no_reset_while_navigating", "planner_after_pom_run", "map_stop_stops_planner"]
+
+
+#: Runs of one service's events (T trigger, S start, E its ends, X its module's Stop starting) then a GoTo, and
+#: whether the service runs when the GoTo comes: the controller's ``running`` (a Stop cancels a request only
+#: before it starts; a trigger in a run renews it, the old request's end leaving the new one running).
+RUNS = [
+    ("G", False), ("T G", True), ("T S G", True), ("T X G", False), ("T S X G", True), ("T S X E G", False),
+    ("T S E G", False), ("T S T E G", True), ("T S T E S G", True), ("T S T E S E G", False),
+    ("T S T X G", True), ("T S T X E G", False), ("T S T E X G", False), ("T S E T S G", True),
+    ("T S T E S T E S E G", False), ("T S T E S T X E G", False),
+]
+
+
+@pytest.mark.parametrize("name, module, service", [("goto_needs_laser", "LaserRF", "Start"),
+                                                   ("goto_needs_map", "Aspect", "Run"),
+                                                   ("goto_waits_for_base", "RFLEX", "TrackSpeed")])
+def test_a_rule_s_running_service_is_read_from_its_events(name, module, service):
+    """The path of each "runs" property of rules.mcl matches exactly the runs where GoTo comes while the service
+    does not run, with other modules' events anywhere in between."""
+    from runtime.props.actions import matcher
+    from runtime.props.normal import positive
+    from runtime.props.safety import automaton
+
+    (item,) = [i for i in read_property_file(ROOT / "descriptions" / "dala" / "properties" / "rules.mcl")[0]
+               if i.name == name]
+    auto = automaton(positive(item.property.formula).path)
+    matches = [matcher(x) for x in auto.actions]
+
+    def violated(labels):
+        qs = auto.closure([auto.start])
+        for lab in labels:
+            qs = auto.closure([q2 for q in qs for (k, q2) in auto.moves[q] if matches[k](lab)])
+        return auto.accept in qs
+
+    ends = ("finish", "fail", "interrupted")
+    for word, running in RUNS:
+        for end, other in itertools.product(ends, ("POM.Run:trigger", f"{module}.{service}:exec_start")):
+            labels = [{"T": f"{module}.{service}:trigger", "S": f"{module}.{service}:start",
+                       "E": f"{module}.{service}:{end}", "X": f"{module}.Stop:start", "G": "NDD.GoTo:trigger"}[e]
+                      for e in word.split()]
+            padded = [x for lab in labels for x in (other, lab)]
+            assert violated(labels) is not running and violated(padded) is not running, (word, end, other)
+
+
+def test_the_base_rule_holds_on_the_whole_level_in_one_round():
+    """TrackSpeed renews itself: a GoTo after the old request's end but during the new one keeps to the rule, and
+    the property says so (its first writing stopped at the round limit, its counterexample allowed by the rule)."""
+    pkg = package_of_dala()
+    items, _ = read_property_file(ROOT / "descriptions" / "dala" / "properties" / "rules.mcl", flatten(pkg, "DALA()"))
+    (item,) = [i for i in items if i.name == "goto_waits_for_base"]
+    found = check_localized(pkg, "DALA()", item, max_states=3_000_000)
+    assert found.verdict.holds is True, found.verdict.note
+    assert [r.outcome for r in found.rounds] == ["holds"] and found.rounds[0].kept < 10
 
 
 def package_of_dala():

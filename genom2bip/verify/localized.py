@@ -14,8 +14,9 @@ from genom2bip.verify.search import extern_bindings, limit_of, property_result
 from genom2bip.verify.timing import ObserverAtom, check_observer
 
 #: States one round's search may visit unless ``max_states`` says otherwise: the rounds that prove DALA's properties
-#: and observers take at most a few hundred thousand; past this, refinement has kept too much to stay cheap.
-ROUND_STATES = 5_000_000
+#: and observers take at most about five million (goto_needs_map); past this, refinement has kept too much to stay
+#: cheap.
+ROUND_STATES = 10_000_000
 
 
 def refuse_unlocalizable(items) -> None:
