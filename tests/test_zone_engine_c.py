@@ -131,6 +131,37 @@ def test_progress_tells_the_breadth_first_depth_alike_in_c_and_python(tmp_path):
     assert max(d for _, d in told["python"].seen) == deepest_expanded
 
 
+def test_a_long_search_goes_on_with_the_step_built_at_o2_and_stores_the_same_nodes(tmp_path, monkeypatch):
+    # A search past OPTIMISE_AFTER nodes has the step compiled at -O2 on another thread and steps with it once it
+    # is built: the same words and numbers, so the same nodes.  The next explorer finds it in the cache.
+    from runtime.native import build
+    from runtime.zones import csearch
+
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv("GENOM2BIP_OPT", raising=False)  # the tests' one level for every build (conftest.py)
+    name, gen, defines, platform, mission = next(c for c in CASES if c[0] == "shared-slow")
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    plain, rp = _explore(model, "c")
+    assert not plain.compiled.optimised  # the fixture is shorter than OPTIMISE_AFTER
+    monkeypatch.setattr(csearch, "OPTIMISE_AFTER", 0)
+    told = []
+    monkeypatch.setattr(build, "notice", told.append)
+    z = ZoneExplorer(model.package, model.root, engine="c")
+    quick = z.compiled.lib
+    z.compiled.optimise_later()
+    z.compiled._later[1].join()  # built: the search's first progress report takes it
+    assert not z.compiled.optimised and z.compiled.lib is quick
+    r = z.explore()
+    assert z.compiled.optimised and z.compiled.lib is not quick
+    assert [t for t in told if "takes over" in t] == [
+        f"compiled step: {model.package.name} {model.root}: the -O2 build, compiled in "
+        f"{told[-1].split('compiled in ')[1].split(' s')[0]} s beside the search, takes over"]
+    assert (r.states, r.transitions, r.violations, r.maxima) == (rp.states, rp.transitions, rp.violations, rp.maxima)
+    assert [_node(n) for n in z.nodes] == [_node(n) for n in plain.nodes]
+    again = ZoneExplorer(model.package, model.root, engine="c")
+    assert again.compiled.optimised  # from the cache, without a second compile
+
+
 def test_states_c_cannot_write_go_back_to_python(tmp_path, monkeypatch):
     # An expression the C code cannot say exactly (here: every one) sends its states to ZoneExplorer.program().
     from runtime.zones import ctables

@@ -9,18 +9,21 @@ caller explores in Python.
 """
 from __future__ import annotations
 
+import atexit
 import ctypes
 import hashlib
 import os
 import shutil
+import signal
 import subprocess
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Callable
 
 from runtime.cachefiles import cache_dir, write_atomic
-from runtime.engine.source import dumped
+from runtime.engine.source import DUMP_ENV, dumped
 
 HERE = Path(__file__).parent
 FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w")
@@ -76,20 +79,35 @@ def _headers() -> str:
     return "".join((HERE / n).read_text() for n in ("prelude.h", "odometer.h", "search.c"))
 
 
-def build(source: str, cc: str, parallel: bool = False, what: str = "compiled step", level: str | None = None) -> Path:
+def _key(source: str, cc: str, opts: tuple[str, ...], dump: Path | None) -> str:
+    parts = (source, _headers(), " ".join(opts), cc) + ((str(dump),) if dump is not None else ())
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()
+
+
+def cached(source: str, cc: str, parallel: bool = False, level: str | None = None) -> Path | None:
+    """The library :func:`build` would return for these arguments if it is in the cache already, else None."""
+    if os.environ.get(DUMP_ENV):  # a dumped step is built from the dump, with line tables
+        return None
+    opts = flags(parallel, level)
+    lib = cache_dir() / f"step-{_key(source, cc, opts, None)[:24]}.so"
+    return lib if lib.exists() and lib.with_suffix(".c").exists() else None
+
+
+def build(source: str, cc: str, parallel: bool = False, what: str = "compiled step", level: str | None = None,
+          told: bool = True) -> Path:
     """The shared library for ``source``, compiled now or found in the cache; ``parallel``: the threaded build.
 
     The C text is kept next to the library (``step-<key>.c``) and compiled from there, so a profiler or a
     debugger finds the lines it was built from (``level``: gcc's, see :func:`flags`).  With ``GENOM2BIP_DUMP=DIR``
     it is written to DIR instead
     (named after ``what``) and compiled from that file with ``-g``: gdb and perf then show its lines.
+    ``told``: :data:`notice` hears of the compile (not from a compile on another thread).
     """
     opts = flags(parallel, level)
     dump = dumped(source, what, ".c")
     if dump is not None:
         opts += DEBUG_FLAGS
-    parts = (source, _headers(), " ".join(opts), cc) + ((str(dump),) if dump is not None else ())
-    key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
+    key = _key(source, cc, opts, dump)
     out_dir = cache_dir()
     lib = out_dir / f"step-{key[:24]}.so"
     c_file = dump or lib.with_suffix(".c")
@@ -101,19 +119,53 @@ def build(source: str, cc: str, parallel: bool = False, what: str = "compiled st
     if lib.exists():
         return lib
     level = next((f for f in opts if f.startswith("-O")), "")
-    if notice is not None:
+    told = told and notice is not None
+    if told:
         notice(f"{what}: compiling {len(source) // 1024:,} KB of C ({Path(cc).name} {level}) ...")
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="genom2bip-c-") as tmp:
         so = Path(tmp) / "model.so"
-        proc = subprocess.run([cc, *opts, f"-I{HERE}", "-o", str(so), str(c_file)], check=False,
-                              capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{proc.stderr[-4000:]}")
+        code, err = _compile([cc, *opts, f"-I{HERE}", "-o", str(so), str(c_file)], tmp)
+        if code != 0:
+            raise BuildError(f"{cc} failed on the generated step ({c_file}):\n{err[-4000:]}")
         write_atomic(lib, so.read_bytes())
-    if notice is not None:
+    if told:
         notice(f"{what}: compiled in {time.perf_counter() - start:.1f} s (kept in {out_dir} for the next run)")
     return lib
+
+
+#: Compilers running now, with the folder they write in: a compile on another thread may still run when the
+#: process ends, and is then stopped and its folder removed rather than left behind.
+_running: dict[subprocess.Popen, str] = {}
+_lock = threading.Lock()
+
+
+def _compile(argv: list[str], tmp: str) -> tuple[int, str]:
+    """Run the compiler, its own temporary files in ``tmp`` and its processes a group of their own (so that
+    :func:`_stop_compiles` stops them all); its exit status and error output."""
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, TMPDIR=tmp), start_new_session=True)
+    with _lock:
+        _running[proc] = tmp
+    try:
+        _, err = proc.communicate()
+    finally:
+        with _lock:
+            _running.pop(proc, None)
+    return proc.returncode, err
+
+
+@atexit.register
+def _stop_compiles() -> None:
+    with _lock:
+        left = list(_running.items())
+    for proc, tmp in left:
+        try:
+            os.killpg(proc.pid, signal.SIGTERM)  # the driver, cc1 and as
+        except ProcessLookupError:
+            pass
+        proc.wait()
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 class Result(ctypes.Structure):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import signal
+import threading
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -21,7 +22,8 @@ from runtime.explore.choices import Choice, codel_choices
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.search import ExploreResult, Finding
 from runtime.explore.space import StateSpace, Step
-from runtime.native.build import PROGRESS, STEP_LEVEL, BuildError, Result, build, compiler, load
+from runtime.native import build as builds
+from runtime.native.build import PROGRESS, STEP_LEVEL, BuildError, Result, build, cached, compiler, load
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
 from runtime.native.values import from_words, to_words
@@ -104,6 +106,8 @@ class CompiledSpace:
         self.lossiness = None
         self._cap = 64  # successors one call of successors() has room for (the output is width words each)
         self._index: dict[int, int] = {}  # the compiled step's interaction numbers -> the engine's indices
+        self.optimised = False  # the loaded library is built at -O2 (the search's level)
+        self._later: tuple[str, threading.Thread, list] | None = None  # optimise_later's source, thread, result
 
     def build(self, parallel: bool | None = None) -> None:
         """Generate, compile (or find in the cache) and load the library for the current field widths.
@@ -113,12 +117,49 @@ class CompiledSpace:
         if parallel is not None:
             self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors, self.wide_numbers)
-        flat = self.engine.flat
-        self.lib = load(build(model.source, self.cc, self.parallel, f"compiled step: {flat.package.name} {flat.root}",
-                              None if self.searching else STEP_LEVEL))
+        faster = None if self.searching else cached(model.source, self.cc, self.parallel)
+        self.optimised = self.searching or faster is not None
+        self.lib = load(faster or build(model.source, self.cc, self.parallel, self._what(),
+                                        None if self.searching else STEP_LEVEL))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
         self._index = {}  # numbered by this build
+
+    def _what(self) -> str:
+        flat = self.engine.flat
+        return f"compiled step: {flat.package.name} {flat.root}"
+
+    def optimise_later(self) -> None:
+        """Compile the loaded step at -O2 on another thread, for :meth:`adopt` to load: a long search called one
+        state at a time (the zone search's) goes on meanwhile with the quick -O0 build."""
+        if self.optimised or self._later is not None and self._later[0] == self.source:
+            return
+        source, parallel, done = self.source, self.parallel, []
+
+        def work() -> None:
+            start = time.perf_counter()
+            try:
+                done.append((build(source, self.cc, parallel, self._what(), None, told=False),
+                             time.perf_counter() - start))
+            except (BuildError, OSError):
+                done.append(None)  # the -O0 build goes on serving
+
+        thread = threading.Thread(target=work, name="genom2bip -O2 build", daemon=True)
+        self._later = (source, thread, done)
+        thread.start()
+
+    def adopt(self) -> bool:
+        """Load the -O2 build that :meth:`optimise_later` finished, if it is of the current step: True when
+        ``self.lib`` changed (the same step, state words and numbers, only faster)."""
+        if self._later is None or self._later[0] != self.source or not self._later[2]:
+            return False
+        got, self._later = self._later[2][0], None
+        if got is None or self.optimised:
+            return False
+        self.lib, self.optimised = load(got[0]), True
+        if builds.notice is not None:
+            builds.notice(f"{self._what()}: the -O2 build, compiled in {got[1]:.1f} s beside the search, takes over")
+        return True
 
     def _widen(self, slot: int) -> None:
         """A value outgrew the field of slot ``slot`` (position in the layout): twice as many bits, for it and for
