@@ -234,6 +234,9 @@ typedef struct {
     L memo_off;            /* per memo entry: where its result starts in pool */
     L pool;                /* results: count (-1: everywhere), then per region: n, triples... */
     int64_t gen;           /* this program's number (Tables' top_gen) */
+    /* per rule, the enabled interactions on its high side, in engine order (built at the first region) */
+    int64_t *high_off;     /* nrules + 1 offsets into high_en, NULL until built */
+    int64_t *high_en;
 } Prog;
 
 /* Some clock values meet every bound (i, j, c: x_i - x_j <= c, clock 0 the zero): no negative cycle among the
@@ -358,6 +361,42 @@ static int memo_find(Prog *g, int64_t r, const int64_t *acc, int64_t nacc)
     return -1;
 }
 
+/* g->high_off and high_en: for each rule, the enabled interactions whose high side names it (a rule's region is
+ * asked for once per acc: scanning every enabled interaction each time cost a tenth of whole DALA's search).
+ * 0, or -9 without memory. */
+static int index_highs(Prog *g)
+{
+    int64_t nrules = g->t->nrules, total = 0;
+    g->high_off = calloc(nrules + 2, sizeof(int64_t));
+    if (!g->high_off)
+        return -9;
+    for (int pass = 0; pass < 2; pass++) {  /* count, then fill: off[r + 1] is rule r's cursor as it fills */
+        for (int64_t e = 0; e < g->nen; e++) {
+            const int64_t *hl = lows(g->row[e]);
+            hl += 1 + hl[0];
+            for (int64_t k = 0; k < hl[0]; k++) {
+                int64_t r = hl[1 + k], seen = r < 0 || r >= nrules;
+                for (int64_t j = 0; j < k && !seen; j++)
+                    seen = hl[1 + j] == r;  /* an interaction once per rule */
+                if (seen)
+                    continue;
+                if (pass)
+                    g->high_en[g->high_off[r + 1]++] = e;
+                else
+                    g->high_off[r + 2]++, total++;
+            }
+        }
+        if (pass)
+            break;
+        for (int64_t r = 0; r < nrules; r++)
+            g->high_off[r + 2] += g->high_off[r + 1];
+        g->high_en = malloc((total + 1) * sizeof(int64_t));
+        if (!g->high_en)
+            return -9;
+    }
+    return 0;  /* high_off[r] .. high_off[r + 1]: rule r's */
+}
+
 static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *path, L *out, int *everywhere)
 {
     const Tables *t = g->t;
@@ -415,14 +454,12 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
             status = BACK;  /* a priority cycle: Python names it */
             goto done;
         }
-    for (int64_t e = 0; e < g->nen; e++) {
-        const int64_t *hl = lows(g->row[e]);
-        hl += 1 + hl[0];
-        int high = 0;
-        for (int64_t k = 0; k < hl[0]; k++)
-            high |= hl[1 + k] == r;
-        if (!high)
-            continue;
+    if (!g->high_off && index_highs(g)) {
+        status = -9;
+        goto done;
+    }
+    for (int64_t h = g->high_off[r]; h < g->high_off[r + 1]; h++) {
+        int64_t e = g->high_en[h];
         L need = {0};
         lcat(&need, acc.a, acc.n);
         if (need_of(g, g->row[e], &need, NULL)) {
@@ -536,7 +573,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     if (n == -9)
         return -9;
     int status = 0;
-    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, ++t->gen};
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, ++t->gen, NULL, NULL};
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
     if (n < 0) {
@@ -785,6 +822,6 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     }
 out:
     free(sidx), free(srow), free(g.index), free(g.row);
-    free(g.memo_key.a), free(g.memo_off.a), free(g.pool.a);
+    free(g.memo_key.a), free(g.memo_off.a), free(g.pool.a), free(g.high_off), free(g.high_en);
     return status;
 }
