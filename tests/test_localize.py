@@ -181,8 +181,9 @@ def test_a_rule_s_running_service_is_read_from_its_events(name, module, service)
     from runtime.props.normal import positive
     from runtime.props.safety import automaton
 
-    (item,) = [i for i in read_property_file(ROOT / "descriptions" / "dala" / "properties" / "rules.mcl")[0]
-               if i.name == name]
+    items, _ = read_property_file(ROOT / "descriptions" / "dala" / "properties" / "rules.mcl",
+                                  flatten(package_of_dala(), "DALA()"))
+    (item,) = [i for i in items if i.name == name]
     auto = automaton(positive(item.property.formula).path)
     matches = [matcher(x) for x in auto.actions]
 

@@ -134,7 +134,8 @@ def read_properties(text: str, file: str, flat: FlatSystem | None = None) -> tup
     sources = SourceCache()
     sources.add(file, text)
     problems: list[Diagnostic] = []
-    typed = type_properties(parse_properties(text, file), problems)
+    typed = type_properties(parse_properties(text, file), problems,
+                            (lambda service: cancel_labels(flat, service)) if flat is not None else None)
     out = []
     labels = model_labels(flat) if flat is not None else []
     for prop in typed:
@@ -155,6 +156,21 @@ def read_properties(text: str, file: str, flat: FlatSystem | None = None) -> tup
                 unique.append(d)
         raise DiagnosticError(unique, sources)
     return out, [d for d in problems if d.severity == "warning"]
+
+
+def cancel_labels(flat: FlatSystem, service: str) -> list[str] | None:
+    """The labels of the interactions that cancel a request of ``service`` (``M.S``) before it starts: the starts
+    of the services that interrupt it (their connector takes its controller's ``cancel``).  None when the model
+    has no controller for it."""
+    control = f"{service}.control"
+    if not any(a.name == control for a in flat.atoms):
+        return None
+    port = f"{control}.cancel"
+    out = []
+    for fc in flat.connectors:
+        if fc.top and fc.label and fc.label not in out and any(flat.ports[p].path == port for p in flat.leaves(fc)):
+            out.append(fc.label)
+    return sorted(out)
 
 
 def _unmatched(a, labels: list[str]) -> list[Diagnostic]:

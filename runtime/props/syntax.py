@@ -49,7 +49,7 @@ TERMINALS = {
     "MORETHAN": "'>'", "LBRACE": "'{'", "RBRACE": "'}'", "DOT": "'.'", "VBAR": "'|'", "STAR": "'*'", "PLUS": "'+'",
     "SEMICOLON": "';'", "COLON": "':'", "AT": "'@'", "$END": "the end of the file", "NOT": "not", "AND": "and",
     "OR": "or", "IMPLIES": "implies", "NEVER": "never", "PRECEDES": "precedes", "LEADS": "leads", "TO": "to",
-    "WITHIN": "within", "STEPS": "steps", "INVARIANT": "invariant", "DEADLOCK": "deadlock", "FREE": "free",
+    "WITHIN": "within", "STEPS": "steps", "ONLY": "only", "WHILE": "while", "RUNS": "runs", "INVARIANT": "invariant", "DEADLOCK": "deadlock", "FREE": "free",
 }
 
 
@@ -97,6 +97,7 @@ class _Build(Transformer):
     never = _unary_rule("never")
     precedes = _unary_rule("precedes")
     leads_to = _unary_rule("leads_to")
+    only_while = _unary_rule("only_while")
     invariant = _unary_rule("invariant")
     deadlock_free = _unary_rule("deadlock_free")
     implies = _unary_rule("implies")

@@ -9,6 +9,8 @@ unfolded into fixed points (:mod:`runtime.props.normal`).
 from __future__ import annotations
 
 import re
+from functools import reduce
+from typing import Callable
 
 from runtime.diagnostics import Diagnostic, Span
 from runtime.props.formulas import (
@@ -214,6 +216,43 @@ def leads_to(r: Regular, b: Action, n: int, sp: Span) -> State:
     return SBox(RSeq(RStar(RAct(AConst(True, sp), sp), sp), r, sp), within(b, n, sp), sp)
 
 
+def only_while(a: Action, service: str, cancels: list[str], sp: Span) -> State:
+    """``A only while "M.S" runs`` = ``[B . A] false``, B every path after which service M.S does not run.
+
+    A request of S runs from the request it accepts (T, ``trigger``) to its end (E: ``finish``, ``fail``,
+    ``interrupted``), or to the start of a service that interrupts S (X, ``cancels``) if that comes before the
+    request has started (``start``).  A T while a request runs renews the run: the new request is accepted before
+    the old one ends (GenoM3's ``interrupts`` naming the service itself), so the old request's E leaves the new
+    one running.  B follows S's controller by these events, the others (O) anywhere:
+    ``(O | X | T.O*.X | T.O*.S.(O | X | T.O*.X | T.O*.E.O*.S)*.(E | T.O*.E.O*.X))*``.
+    """
+    def one(port: str) -> Action:
+        return ALabel(f"{service}:{port}", sp)
+
+    def any_of(actions: list[Action]) -> Action:
+        return reduce(lambda x, y: AOr(x, y, sp), actions)
+
+    def seq(*parts: Regular) -> Regular:
+        return reduce(lambda x, y: RSeq(x, y, sp), parts)
+
+    def alt(*parts: Regular) -> Regular:
+        return reduce(lambda x, y: RAlt(x, y, sp), parts)
+
+    ends = any_of([one(p) for p in ("finish", "fail", "interrupted")])
+    cancel = any_of([ALabel(label, sp) for label in cancels]) if cancels else None
+    named = any_of([one("trigger"), one("start"), ends] + ([cancel] if cancel is not None else []))
+    t, s, e, o = (RAct(f, sp) for f in (one("trigger"), one("start"), ends, ANot(named, sp)))
+    os_ = RStar(o, sp)
+    if cancel is None:  # nothing interrupts S but S itself
+        inner = alt(o, seq(t, os_, e, os_, s))
+        back = alt(o, seq(t, os_, s, RStar(inner, sp), e))
+    else:
+        x = RAct(cancel, sp)
+        inner = alt(o, x, seq(t, os_, x), seq(t, os_, e, os_, s))
+        back = alt(o, x, seq(t, os_, x), seq(t, os_, s, RStar(inner, sp), alt(e, seq(t, os_, e, os_, x))))
+    return SBox(RSeq(RStar(back, sp), RAct(a, sp), sp), SConst(False, sp), sp)
+
+
 def invariant(p: Pred, sp: Span) -> State:
     """``invariant P`` = ``[true*] {P}``: P holds in every reachable state."""
     return SBox(RStar(RAct(AConst(True, sp), sp), sp), SPred(p, sp), sp)
@@ -228,7 +267,12 @@ def deadlock_free(sp: Span) -> State:
 MAX_WITHIN = 10_000
 
 
-def property_of(raw: RawProperty) -> Property:
+#: What interrupts a service, for ``only while "M.S" runs``: the labels of the interactions that cancel a request of
+#: M.S before it starts (None: there is no such service).  Read from the model (runtime/props/check.py).
+Cancels = Callable[[str], "list[str] | None"]
+
+
+def property_of(raw: RawProperty, cancels: Cancels | None = None) -> Property:
     body = raw.body
     op, a, sp = body.op, body.args, body.span
     if op == "formula":
@@ -242,6 +286,16 @@ def property_of(raw: RawProperty) -> Property:
         if n < 1 or n > MAX_WITHIN:
             raise TypeProblem(sp, f"'within {n} steps': the bound must be between 1 and {MAX_WITHIN}")
         return Property(raw.name, leads_to(regular(a[0]), action(a[1]), n, sp), raw.span, "leads to")
+    if op == "only_while":
+        service = a[1]
+        if cancels is None:
+            raise TypeProblem(sp, f'only while "{service}" runs: what interrupts {service} is read from a model; '
+                                  "check this property against one")
+        labels = cancels(service)
+        if labels is None:
+            raise TypeProblem(sp, f'only while "{service}" runs: the model has no service {service} '
+                                  "(write it MODULE.SERVICE)")
+        return Property(raw.name, only_while(action(a[0]), service, labels, sp), raw.span, "only while")
     if op == "invariant":
         return Property(raw.name, invariant(pred(a[0]), sp), raw.span, "invariant")
     if op == "deadlock_free":
@@ -284,13 +338,15 @@ def check_variables(f: State, problems: list[Diagnostic]) -> None:
     walk(f, {}, True, [])
 
 
-def type_properties(raws: list[RawProperty], problems: list[Diagnostic]) -> list[Property]:
-    """Typed properties; problems are appended (several per file are reported together)."""
+def type_properties(raws: list[RawProperty], problems: list[Diagnostic],
+                    cancels: Cancels | None = None) -> list[Property]:
+    """Typed properties; problems are appended (several per file are reported together).  ``cancels``: the
+    model's interrupters, for ``only while ... runs``."""
     out = []
     seen: dict[str, Span] = {}
     for raw in raws:
         try:
-            prop = property_of(raw)
+            prop = property_of(raw, cancels)
             prop.text = raw.text
         except TypeProblem as err:
             problems.append(Diagnostic(err.span, err.message))
