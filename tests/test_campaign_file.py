@@ -189,8 +189,8 @@ def test_deadlock_freedom_in_a_property_file_is_the_deadlock_check_s_job_composi
     jobs = expand(read_campaign(DALA / "campaign.yaml")).jobs
     dala = [j for j in jobs if j.model == "dala"]
     assert [j.target for j in dala].count("deadlock freedom") == 1
-    assert len([j for j in dala if j.check == "property"]) == 12  # NDD.mcl's 4 others and rules.mcl's 8
-    assert len(jobs) == 5 + 1 + 12 + 1 + 7 + 4  # the timed level: time-locks, six periods, a latency; 1 to 4 cores
+    assert len([j for j in dala if j.check == "property"]) == 13  # NDD.mcl's 4 others and rules.mcl's 9
+    assert len(jobs) == 5 + 1 + 13 + 1 + 7 + 4  # the timed level: time-locks, six periods, a latency; 1 to 4 cores
 
 
 @pytest.mark.parametrize("axis, value, verdict", [
