@@ -155,9 +155,10 @@ def test_the_dala_rules_file_reads_on_the_whole_model():
     pkg = package_of_dala()
     items, _ = read_property_file(ROOT / "descriptions" / "dala" / "properties" / "rules.mcl",
                                   flatten(pkg, "DALA()"))
-    assert [i.name for i in items] == ["goto_after_pom_run", "goto_needs_laser", "goto_needs_map", "goto_waits_for_base",
-                                       "base_stop_stops_navigation", "laser_stop_stops_navigation",
-                                       "no_reset_while_navigating", "planner_after_pom_run", "map_stop_stops_planner"]
+    assert [i.name for i in items] == ["goto_after_pom_run", "goto_needs_laser", "goto_needs_map",
+                                       "goto_waits_for_base", "base_stop_stops_navigation",
+                                       "laser_stop_stops_navigation", "no_reset_while_navigating",
+                                       "planner_after_pom_run", "map_stop_stops_planner"]
 
 
 #: Runs of one service's events (T trigger, S start, E its ends, X its module's Stop starting) then a GoTo, and

@@ -46,6 +46,17 @@ def tell(fn: Callable[[str], None] | None) -> None:
     notice = fn
 
 
+def say(message: str) -> None:
+    """Tell :data:`notice` a line about compiles, if anyone hears of them."""
+    if notice is not None:
+        notice(message)
+
+
+def forced() -> bool:
+    """``GENOM2BIP_OPT`` sets one gcc level for every build: there is no faster build to make beside."""
+    return bool(os.environ.get("GENOM2BIP_OPT", "").strip())
+
+
 class BuildError(Exception):
     """The C compiler failed on generated text (a bug of the generator: the message carries its output)."""
 
@@ -68,7 +79,7 @@ STEP_LEVEL = "0"
 def flags(parallel: bool = False, level: str | None = None) -> tuple[str, ...]:
     """gcc's flags: :data:`FLAGS` at ``level`` (None: -O2), ``GENOM2BIP_OPT``'s level if set (whatever the use),
     the threaded build's if ``parallel``."""
-    level = os.environ.get("GENOM2BIP_OPT", "").strip() or level
+    level = os.environ.get("GENOM2BIP_OPT", "").strip() or level  # forced()
     if level and level not in LEVELS:
         raise BuildError(f"GENOM2BIP_OPT={level!r}: expected one of {', '.join(LEVELS)} (gcc's -O level)")
     base = tuple(f"-O{level}" if f == "-O2" and level else f for f in FLAGS)

@@ -22,8 +22,8 @@ from runtime.explore.choices import Choice, codel_choices
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.search import ExploreResult, Finding
 from runtime.explore.space import StateSpace, Step
-from runtime.native import build as builds
-from runtime.native.build import PROGRESS, STEP_LEVEL, BuildError, Result, build, cached, compiler, load
+from runtime.native.build import (PROGRESS, STEP_LEVEL, BuildError, Result, build, cached, compiler, forced, load,
+                                  say)
 from runtime.native.cexpr import Unsupported
 from runtime.native.cstep import generate
 from runtime.native.values import from_words, to_words
@@ -106,7 +106,7 @@ class CompiledSpace:
         self.lossiness = None
         self._cap = 64  # successors one call of successors() has room for (the output is width words each)
         self._index: dict[int, int] = {}  # the compiled step's interaction numbers -> the engine's indices
-        self.optimised = False  # the loaded library is built at -O2 (the search's level)
+        self.optimised = False  # the loaded library is built at -O2 (the search's level), or GENOM2BIP_OPT's
         self._later: tuple[str, threading.Thread, list] | None = None  # optimise_later's source, thread, result
 
     def build(self, parallel: bool | None = None) -> None:
@@ -118,7 +118,7 @@ class CompiledSpace:
             self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors, self.wide_numbers)
         faster = None if self.searching else cached(model.source, self.cc, self.parallel)
-        self.optimised = self.searching or faster is not None
+        self.optimised = self.searching or faster is not None or forced()
         self.lib = load(faster or build(model.source, self.cc, self.parallel, self._what(),
                                         None if self.searching else STEP_LEVEL))
         self.width, self.source, self.bits = model.width, model.source, model.bits
@@ -157,8 +157,7 @@ class CompiledSpace:
         if got is None or self.optimised:
             return False
         self.lib, self.optimised = load(got[0]), True
-        if builds.notice is not None:
-            builds.notice(f"{self._what()}: the -O2 build, compiled in {got[1]:.1f} s beside the search, takes over")
+        say(f"{self._what()}: the -O2 build, compiled in {got[1]:.1f} s beside the search, takes over")
         return True
 
     def _widen(self, slot: int) -> None:

@@ -49,7 +49,8 @@ TERMINALS = {
     "MORETHAN": "'>'", "LBRACE": "'{'", "RBRACE": "'}'", "DOT": "'.'", "VBAR": "'|'", "STAR": "'*'", "PLUS": "'+'",
     "SEMICOLON": "';'", "COLON": "':'", "AT": "'@'", "$END": "the end of the file", "NOT": "not", "AND": "and",
     "OR": "or", "IMPLIES": "implies", "NEVER": "never", "PRECEDES": "precedes", "LEADS": "leads", "TO": "to",
-    "WITHIN": "within", "STEPS": "steps", "ONLY": "only", "WHILE": "while", "RUNS": "runs", "INVARIANT": "invariant", "DEADLOCK": "deadlock", "FREE": "free",
+    "WITHIN": "within", "STEPS": "steps", "ONLY": "only", "WHILE": "while", "RUNS": "runs",
+    "INVARIANT": "invariant", "DEADLOCK": "deadlock", "FREE": "free",
 }
 
 

@@ -74,6 +74,7 @@ def _longs(a: np.ndarray):
 #: over in about a second, and never pays for the second compile.
 OPTIMISE_AFTER = 50_000
 
+
 class CSearch:
     """One C search over a ZoneExplorer's model; ``run`` fills the explorer's nodes and result."""
 
