@@ -459,17 +459,34 @@ static int zkey_grow(Ctx *x)
     return 0;
 }
 
-/* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory. */
-static int64_t slot_new(Ctx *x, const double *z)
+/* z's 16-bit form into out (infinity as SHORT_INF); 1 when every entry fits, else out is not z. */
+static int to_short(const double *z, int64_t len, int16_t *out)
+{
+    int fits = 1;
+    for (int64_t k = 0; k < len; k++) {
+        double v = z[k];
+        int ok = v <= SHORT_INF - 1 && v >= -(SHORT_INF - 1);
+        fits &= ok | (v == INFINITY);
+        out[k] = v == INFINITY ? SHORT_INF : ok ? (int16_t)v : 0;
+    }
+    return fits;
+}
+
+/* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory.  ``z16``: z's
+ * 16-bit form if the caller has it (to_short said it fits), else NULL. */
+static int64_t slot_new(Ctx *x, const double *z, const int16_t *z16)
 {
     int64_t len = (int64_t)x->d * x->d;
     int64_t s;
-    if (fits_short(z, len)) {
+    if (z16 || fits_short(z, len)) {
         if ((s = pool_take(&x->shorts)) < 0)
             return -1;
         int16_t *dst = (int16_t *)x->shorts.a + s * len;
-        for (int64_t k = 0; k < len; k++)
-            dst[k] = z[k] == INFINITY ? SHORT_INF : (int16_t)z[k];
+        if (z16)
+            memcpy(dst, z16, len * sizeof(int16_t));
+        else
+            for (int64_t k = 0; k < len; k++)
+                dst[k] = z[k] == INFINITY ? SHORT_INF : (int16_t)z[k];
         s = 2 * s;
     } else {
         if ((s = pool_take(&x->floats)) < 0)
@@ -912,6 +929,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
     Node step = {(int32_t)state, parent, via, -1, -1, -1, -1, x->guards.n, (int32_t)nguard, (uint8_t)grown, 0, 0};
+    const int16_t *ready = NULL;  /* the zone's 16-bit form, once computed and while it is the zone's */
     for (int64_t k = 0; k < 3 * nguard; k++)
         PUSH(x->guards, guard[k]);
     if (kept->n) {
@@ -919,10 +937,8 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
          * covered by it once no zone covers it (the order of search.py's two passes, which give the same) */
         int64_t len = (int64_t)d * d;
         int16_t *mine = x->z16;
-        int small = fits_short(zone, len);
-        if (small)
-            for (int64_t k = 0; k < len; k++)
-                mine[k] = zone[k] == INFINITY ? SHORT_INF : (int16_t)zone[k];
+        int small = to_short(zone, len, mine);
+        ready = small ? mine : NULL;
         x->under.n = 0;
         for (int32_t i = 0; i < kept->n; i++) {
             int64_t slot = x->nodes.a[kept->a[i]].zone;
@@ -964,11 +980,13 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         int got = merge_into(x, &step, zone, kept);
         if (got < 0)
             return got;
+        if (got)
+            ready = NULL;  /* the zone is now the hull */
         x->merged += got;
-        if (step.members >= 0 && (step.own = (int32_t)slot_new(x, own)) < 0)
+        if (step.members >= 0 && (step.own = (int32_t)slot_new(x, own, NULL)) < 0)
             return -9;
     }
-    if ((step.zone = (int32_t)slot_new(x, zone)) < 0)
+    if ((step.zone = (int32_t)slot_new(x, zone, ready)) < 0)
         return -9;
     int32_t index = (int32_t)x->nodes.n;
     PUSH(x->nodes, step);
