@@ -101,21 +101,30 @@ def build(tmp_path: Path, text: str, name: str = "tick"):
 
 
 @contextmanager
-def serving_dala():
-    """The generated DALA controller with the stub codels, running, its server and a client; stopped after."""
-    from runtime.controller import Controller
+def serving(controller, client_timeout: float = 10, stop_timeout: float | None = None):
+    """``controller`` started, with its service server and a client of it (``client_timeout`` s a call); the server
+    and the controller stopped after (the controller waiting up to ``stop_timeout`` s)."""
     from runtime.services.client import Client
     from runtime.services.server import ServiceServer
 
-    pkg = dala()
-    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
     controller.start()
     server = ServiceServer(controller).start()
     try:
-        yield controller, server, Client(server.url, timeout=10)
+        yield server, Client(server.url, timeout=client_timeout)
     finally:
         server.stop()
-        controller.stop()
+        controller.stop(timeout=stop_timeout)
+
+
+@contextmanager
+def serving_dala():
+    """The generated DALA controller with the stub codels, running, its server and a client; stopped after."""
+    from runtime.controller import Controller
+
+    pkg = dala()
+    controller = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, str(DALA_CODELS))
+    with serving(controller) as (server, client):
+        yield controller, server, client
     assert controller.error is None
 
 
@@ -136,17 +145,10 @@ def import_generated(directory: Path, name: str):
 def serving_package(pkg, codels: str, **controller):
     """A generated package's controller with ``codels``, running, and a client of its server; stopped after."""
     from runtime.controller import Controller
-    from runtime.services.client import Client
-    from runtime.services.server import ServiceServer
 
     running = Controller(pkg.package(), pkg.ROOT, pkg.INTERFACE, codels, **controller)
-    running.start()
-    server = ServiceServer(running).start()
-    try:
-        yield running, Client(server.url, timeout=30)
-    finally:
-        server.stop()
-        running.stop(timeout=30)
+    with serving(running, client_timeout=30, stop_timeout=30) as (_, client):
+        yield running, client
 
 
 def dala():

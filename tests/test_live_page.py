@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from browserkit import SAFETY_MS, launch, needs_chromium, open_page
-from runkit import navigation_ready, ndd_settings, serving_dala
+from runkit import navigation_ready, ndd_settings, serving, serving_dala
 from runtime.services.client import Client
 
 pytestmark = needs_chromium
@@ -174,8 +174,6 @@ def test_an_observer_violation_appears_with_the_events_that_led_to_it(browser, w
 def watched_server(tmp_path: Path):
     """The monitored ``watched`` component of tests/test_monitor.py, in real time, with its server."""
     from runtime.controller import Controller
-    from runtime.services.client import Client
-    from runtime.services.server import ServiceServer
     from test_monitor import WATCHED, codels
 
     from genom2bip.back.interface import interface_data
@@ -188,13 +186,8 @@ def watched_server(tmp_path: Path):
     description = parse_paths([path])
     package, root, _ = model_of(description, "watched", None, TimeOptions(ticks=False))
     controller = Controller(package, root, interface_data(description, "watched", str(path)), codels([]))
-    controller.start()
-    server = ServiceServer(controller).start()
-    try:
-        yield server, Client(server.url, timeout=10)
-    finally:
-        server.stop()
-        controller.stop()
+    with serving(controller) as served:
+        yield served
 
 
 @pytest.fixture
