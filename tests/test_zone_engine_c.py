@@ -162,6 +162,37 @@ def test_a_long_search_goes_on_with_the_step_built_at_o2_and_stores_the_same_nod
     assert again.compiled.optimised  # from the cache, without a second compile
 
 
+def test_an_o2_build_that_fails_leaves_the_search_on_the_quick_step(tmp_path, monkeypatch):
+    # gcc failing on the -O2 build beside the search: nothing is told, the -O0 build goes on, the nodes are the same
+    import runtime.native.compiled as compiled
+    from runtime.native import build
+    from runtime.native.build import BuildError
+
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv("GENOM2BIP_OPT", raising=False)
+    name, gen, defines, platform, mission = next(c for c in CASES if c[0] == "shared-slow")
+    model = model_of(tmp_path, gen, defines, platform, mission)
+    plain, rp = _explore(model, "c")
+    z = ZoneExplorer(model.package, model.root, engine="c")
+    quick = z.compiled.lib
+
+    def failing(*args, **kw):
+        raise BuildError("gcc failed on the generated step")
+
+    monkeypatch.setattr(compiled, "build", failing)
+    before = sorted((tmp_path / "cache").iterdir())
+    told = []
+    monkeypatch.setattr(build, "notice", told.append)
+    z.compiled.optimise_later()
+    z.compiled._later[1].join()
+    assert z.compiled.adopt() is False and z.compiled._later is None  # the failure was told back, not lost
+    r = z.explore()
+    assert not z.compiled.optimised and z.compiled.lib is quick and told == []
+    assert [_node(n) for n in z.nodes] == [_node(n) for n in plain.nodes]
+    assert sorted((tmp_path / "cache").iterdir()) == before  # no library written
+    assert (r.states, r.maxima) == (rp.states, rp.maxima)
+
+
 def test_states_c_cannot_write_go_back_to_python(tmp_path, monkeypatch):
     # An expression the C code cannot say exactly (here: every one) sends its states to ZoneExplorer.program().
     from runtime.zones import ctables
