@@ -124,6 +124,29 @@ def test_merging_zones_changes_no_maximum_and_no_verdict(tmp_path):
     assert merged, "no case merged a zone: the comparison says nothing"
 
 
+def test_keeping_only_upper_bounds_of_watched_clocks_changes_no_maximum_and_no_verdict(tmp_path):
+    # The observers' and response times' clocks, which no guard reads, keep their upper bounds only
+    # (model.py's grow_only): the maxima and the observers in error must be those of the search that keeps
+    # their lower bounds, and some case must store fewer zones for it.
+    from runtime.zones.search import ZoneExplorer
+
+    fewer = 0
+    for name, gen, defines, platform, mission in CASES:
+        model = model_of(tmp_path, gen, defines, platform, mission)
+        exact = ZoneExplorer(model.package, model.root, grow_only=False).explore()
+        z = ZoneExplorer(model.package, model.root)
+        grown = z.explore()
+        assert exact.complete and grown.complete, name
+        assert {c: v for c, (v, _) in grown.maxima.items()} == {c: v for c, (v, _) in exact.maxima.items()}, name
+        assert set(grown.violations) == set(exact.violations), name
+        assert grown.discrete == exact.discrete, name
+        watched = {c for _, c, _ in z.model.observers.values()} | {c for _, c in z.model.measures.values()}
+        assert z.grow_only and set(z.grow_only) <= watched, name
+        assert grown.states <= exact.states, name
+        fewer += grown.states < exact.states
+    assert fewer, "no case stored fewer zones: the comparison says nothing"
+
+
 def test_response_times_by_ticks_are_printed_or_refused(tmp_path, capsys):
     # --time-search ticks with --response-times must not drop the response times without a word.
     path = platform_file(tmp_path, "cores: 1\npolicy: edf\nbest: wcet\n")

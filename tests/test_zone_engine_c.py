@@ -119,7 +119,7 @@ def test_progress_tells_the_breadth_first_depth_alike_in_c_and_python(tmp_path):
     model = model_of(tmp_path, gen, defines, platform, mission)
     told = {}
     for engine in ("python", "c"):
-        z = ZoneExplorer(model.package, model.root, engine=engine)
+        z = ZoneExplorer(model.package, model.root, engine=engine, grow_only=False)  # over 2,048 nodes so
         told[engine] = _Depths()
         z.explore(progress=told[engine])
     assert len(told["c"].seen) >= 2, "the fixture is meant to need several progress lines"
@@ -352,6 +352,45 @@ def test_extra_lu_plus_is_the_same_in_c_and_in_numpy():
         assert (ours >= zone).all()  # an abstraction holds at least the zone
         changed += not np.array_equal(ours, zone)
     assert changed > 50
+
+
+def test_forgetting_lower_bounds_is_the_same_in_c_and_in_numpy():
+    # The C search keeps only the upper bounds of the clocks read for how large they grow with z_forget_below, the
+    # Python search with dbm.forget_below: on random zones both give the same matrix, still canonical, holding the
+    # zone, with the other clocks' values and each forgotten clock's upper bounds as they were, and 0 allowed.
+    import ctypes
+    import random
+
+    from runtime.zones import dbm
+
+    lib = library()
+    fn = lib.z_forget_below
+    fn.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.c_int, ctypes.POINTER(ctypes.c_int), ctypes.c_int]
+    rng = random.Random(11)
+    changed = 0
+    for _ in range(400):
+        n = rng.randint(1, 4)
+        zone = dbm.free_all(n)
+        for _ in range(rng.randint(0, 6)):
+            i, j = rng.sample(range(n + 1), 2)
+            got = dbm.constrain(zone, i, j, rng.randint(-12, 12))
+            zone = got if got is not None else zone
+        zone = dbm.up(zone) if rng.random() < 0.5 else zone
+        clocks = sorted(rng.sample(range(1, n + 1), rng.randint(1, n)))
+        ours = dbm.forget_below(zone, clocks)
+        theirs = np.ascontiguousarray(zone.copy())
+        fn(theirs.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n + 1, (ctypes.c_int * len(clocks))(*clocks),
+           len(clocks))
+        assert np.array_equal(ours, theirs)
+        assert np.array_equal(dbm.close(ours), ours)  # canonical: inclusion between matrices stays exact
+        assert (ours >= zone).all()
+        rest = [k for k in range(n + 1) if k not in clocks]
+        assert np.array_equal(ours[np.ix_(rest, rest)], zone[np.ix_(rest, rest)])
+        assert np.array_equal(ours[np.ix_(clocks, rest)], zone[np.ix_(clocks, rest)])  # upper bounds, the largest
+        # value among them, kept
+        assert (ours[0, clocks] == 0).all()
+        changed += not np.array_equal(ours, zone)
+    assert changed > 100
 
 
 def test_extra_lu_plus_gives_a_zone_one_matrix_whatever_the_path():

@@ -53,6 +53,7 @@ def library():
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_por", None, [p, AMPLE]), ("zs_set_invariants", None, [p, i32]),
+            ("zs_set_grow_only", i32, [p, ctypes.POINTER(i32), i32]),
             ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
             ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
             ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)])):
@@ -87,6 +88,9 @@ class CSearch:
         if not self.ctx:
             raise MemoryError("zone search: no memory for its context")
         lib.zs_set_invariants(self.ctx, int(z.invariants))
+        grow = z.grow_only
+        if lib.zs_set_grow_only(self.ctx, (ctypes.c_int * max(len(grow), 1))(*grow), len(grow)):
+            raise MemoryError("zone search: no memory for its context")
         self.error: BaseException | None = None
         self._program = PROGRAM(self._ask)
         self._inter = PROGRAM(self._ask_interaction)

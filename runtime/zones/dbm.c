@@ -146,6 +146,16 @@ void z_free(double *m, const double *src, int d, const int *idx, int count)
             m[(long)idx[c] * d + idx[e]] = c == e ? 0 : INFINITY;
 }
 
+/* Each clock of idx keeps its upper bounds only: its column set to column 0 (dbm.py's forget_below). */
+void z_forget_below(double *m, int d, const int *idx, int count)
+{
+    for (int c = 0; c < count; c++) {
+        int i = idx[c];
+        for (int a = 0; a < d; a++)
+            m[(long)a * d + i] = a == i ? 0 : m[(long)a * d];
+    }
+}
+
 /* The hull of a and b (the least zone holding both) into h; 1 when it holds nothing else (their union is
  * that zone), as dbm.py's union_np: h minus a cut into pieces, each inside b. */
 int z_union(double *h, const double *a, const double *b, int d)

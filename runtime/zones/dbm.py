@@ -179,6 +179,17 @@ def free_many_np(m: np.ndarray, clocks: list[int]) -> np.ndarray:
     return out
 
 
+def forget_below(m: np.ndarray, clocks: list[int]) -> np.ndarray:
+    """Each of ``clocks`` keeps its upper bounds only: any value from 0 up to what it could reach with the other
+    clocks' values (a column of the closed matrix set to the clocks' own upper bounds; still closed)."""
+    if not clocks:
+        return m
+    out = m.copy()
+    out[:, clocks] = m[:, [0]]
+    out[clocks, clocks] = 0
+    return out
+
+
 def includes_np(big: np.ndarray, small: np.ndarray) -> bool:
     return bool((big >= small).all())
 

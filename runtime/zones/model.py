@@ -106,6 +106,9 @@ class TimedModel:
     observers: dict[int, tuple[str, int, Expr]]  # observer atom -> (watching place, clock, bound): ERROR past it
     ceilings: list[int]  # per zone index (0 first): the largest constant each clock is compared with
     measures: dict[int, tuple[str, int]] = field(default_factory=dict)  # response observer -> (watching place, clock)
+    #: Clocks read only for how large they grow (an observer's ``c > bound``, a response time): a zone keeps their
+    #: upper bounds only (:func:`runtime.zones.dbm.forget_below`).
+    grow_only: list[int] = field(default_factory=list)
 
     def discrete_reads(self) -> set[tuple[str, str]]:
         """``(atom, variable)`` the clock side reads (bounds such as ``hi``): the erased model must keep them."""
@@ -348,6 +351,7 @@ def analyse(package: Package, root: str) -> TimedModel:
     _read_by_priorities(flat, model)
     _activity(flat, places, steps, per_atom)
     _local_ceilings(flat, model, per_atom, consts, dynamic)
+    model.grow_only = _grow_only(model, dynamic)
     return model
 
 
@@ -401,6 +405,23 @@ def _local_ceilings(flat, model: TimedModel, per_atom, consts, dynamic: set[int]
             low, up = local[(1 << k, "L")], local[(1 << k, "U")]
             place.ceilings = {c: (low.get(c, NO_BOUND), up.get(c, NO_BOUND))
                               for c in (set(low) | set(up)) & place.active}
+
+
+def _grow_only(model: TimedModel, dynamic: set[int]) -> list[int]:
+    """The observers' and response times' clocks that no guard, invariant or priority reads.  From a valuation
+    with a larger such clock, every run of one with a smaller value is a run too, on which that clock is larger:
+    an observer's ``c > bound`` and the largest value are the same whatever lower bounds it had, so zones need
+    not tell them apart (an LU abstraction with no upper-bound constant for that clock)."""
+    read = set(dynamic)
+    for step in model.steps.values():
+        read |= {a.clock for a in step.atoms}
+    for place in model.places.values():
+        read |= {a.clock for a in place.atoms}
+    for rule in model.rules:
+        if isinstance(rule.guard, list):
+            read |= {k for d in rule.guard for k in (d.i, d.j) if k}
+    watched = {clock for _, clock, _ in model.observers.values()} | {clock for _, clock in model.measures.values()}
+    return sorted(watched - read)
 
 
 def _read_by_priorities(flat: FlatSystem, model: TimedModel) -> None:

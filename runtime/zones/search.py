@@ -65,7 +65,7 @@ class ZoneExplorer:
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
                  merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False,
-                 program_bytes: int = PROGRAM_BYTES, invariants: bool = False) -> None:
+                 program_bytes: int = PROGRAM_BYTES, invariants: bool = False, grow_only: bool = True) -> None:
         self.model: TimedModel = analyse(package, root)
         self.externs = externs  # the tick model's replay compiles its step with them (runtime/zones/tickstep.py)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
@@ -108,6 +108,9 @@ class ZoneExplorer:
         #: place's invariant (kept by extrapolation, which forgets bounds no guard ahead reads) are left out, as
         #: tck-reach intersects every successor with the invariant; off, they stay as a piece where time cannot pass.
         self.invariants = invariants
+        #: The clocks read only for how large they grow keep their upper bounds only (model.py's grow_only): zones
+        #: that differ only in how small such a clock can be are one.
+        self.grow_only = list(self.model.grow_only) if grow_only else []
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
@@ -379,12 +382,12 @@ class ZoneExplorer:
         whose ceilings are their place's)."""
         over = self.ceilings(state)
         if not over:
-            return dbm.extrapolate(zone, self.ceiling)
+            return dbm.forget_below(dbm.extrapolate(zone, self.ceiling), self.grow_only)
         lower, upper = self.ceiling.copy(), self.ceiling.copy()
         plus = np.zeros(len(lower), dtype=bool)
         for k, low, up in over:
             lower[k], upper[k], plus[k] = low, up, True
-        return dbm.extrapolate_lu_plus(zone, lower, upper, plus)
+        return dbm.forget_below(dbm.extrapolate_lu_plus(zone, lower, upper, plus), self.grow_only)
 
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""

@@ -44,6 +44,7 @@ typedef struct { char *a; int32_t *refs; int64_t n, size; VEC(int64_t) free; } P
 typedef struct {
     int d, nobs, merge;
     double *ceiling;
+    int *grow_only, ngrow;  /* clocks whose zones keep their upper bounds only (model.py's grow_only) */
     Pool shorts, floats;    /* zone slots (see slot_new) */
     int64_t *zkey, zcap, zused;  /* the zones stored once each: open addressing on slot + 1, 0 empty, -1 gone */
     VEC(Node) nodes;
@@ -141,6 +142,19 @@ void zs_program_counts(void *p, int64_t *out)
     out[0] = x->let_go, out[1] = x->rewritten;
 }
 
+/* The clocks read only for how large they grow (model.py's grow_only). */
+int zs_set_grow_only(void *p, const int *clocks, int n)
+{
+    Ctx *x = p;
+    free(x->grow_only);
+    x->grow_only = malloc((n ? n : 1) * sizeof(int));
+    if (!x->grow_only)
+        return -9;
+    memcpy(x->grow_only, clocks, n * sizeof(int));
+    x->ngrow = n;
+    return 0;
+}
+
 void *zs_new(int d, const double *ceiling, int nobs, int merge)
 {
     Ctx *x = calloc(1, sizeof(Ctx));
@@ -178,7 +192,7 @@ void zs_free(void *p)
     free(x->amp.a);
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
-    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling);
+    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->under.a);
     free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
@@ -925,6 +939,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         z_extrapolate_lu_plus(zone, d, lower, upper, plus);
     else
         z_extrapolate(zone, d, x->ceiling);
+    z_forget_below(zone, d, x->grow_only, x->ngrow);
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
