@@ -260,10 +260,19 @@ def extrapolate_lu_plus(m: np.ndarray, lower: np.ndarray, upper: np.ndarray, plu
 
 
 def union_np(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
-    """The zone ``a`` or ``b`` when their union is one (exact on integer points: the hull minus ``a`` lies in
-    ``b``), else None.  Zones that differ only in the order of independent zero-time steps merge so."""
+    """The zone ``a`` or ``b`` when their union is one (exact on integer points), else None.  Zones that differ
+    only in the order of independent zero-time steps merge so.
+
+    A point of the hull in neither is past a bound ``(i, j)`` of ``a`` that ``b`` goes beyond and past a bound
+    ``(k, l)`` of ``b`` that ``a`` goes beyond; the hull (closed) has one iff ``h[i, l] + h[k, j] >= a[i, j] +
+    b[k, l] + 2``, the only cycle through both negated bounds."""
     hull = np.maximum(a, b)
-    return hull if all(includes(b, piece) for piece in subtract(hull, a)) else None
+    ai, aj = np.nonzero(b > a)
+    bk, bl = np.nonzero(a > b)
+    if not len(ai) or not len(bk):
+        return hull
+    reach = hull[ai[:, None], bl[None, :]] + hull[bk[None, :], aj[:, None]]
+    return None if (reach >= a[ai, aj][:, None] + b[bk, bl][None, :] + 2).any() else hull
 
 
 def subtract(m: np.ndarray, other: np.ndarray) -> list[np.ndarray]:

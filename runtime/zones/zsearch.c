@@ -956,6 +956,17 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         ready = small ? mine : NULL;
         x->under.n = 0;
         for (int32_t i = 0; i < kept->n; i++) {
+            /* the state's zones lie anywhere in the pools: ask for the next ones' first bytes while this one is
+             * compared (most comparisons end there) */
+            if (i + 8 < kept->n)
+                __builtin_prefetch(&x->nodes.a[kept->a[i + 8]]);
+            if (i + 4 < kept->n) {
+                int64_t ahead = x->nodes.a[kept->a[i + 4]].zone;
+                if (!(ahead & 1)) {
+                    const char *at = x->shorts.a + (ahead >> 1) * len * 2;
+                    __builtin_prefetch(at), __builtin_prefetch(at + 64);
+                }
+            }
             int64_t slot = x->nodes.a[kept->a[i]].zone;
             int ge, le;
             if (small && !(slot & 1)) {
