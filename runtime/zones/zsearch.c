@@ -91,6 +91,7 @@ typedef struct {
     int64_t level_end, depth;  /* breadth-first levels: the waiting list's end when the current one began */
     int invariants;         /* points past an invariant are no state (search.py's ZoneExplorer.invariants) */
     int16_t *z16;           /* scratch: a zone being stored, in 16 bits */
+    int32_t *past;          /* scratch: d * d numbers (union16) */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
 } Ctx;
 
@@ -177,6 +178,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
     x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
+    x->past = malloc((int64_t)d * d * sizeof(int32_t));
     return x;
 }
 
@@ -193,7 +195,7 @@ void zs_free(void *p)
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
-    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->under.a);
+    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->past), free(x->under.a);
     free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
@@ -903,6 +905,34 @@ static void kept_prune(Ctx *x, Kept *kept)
     kept->n = w;
 }
 
+/* dbm.c's z_union on two zones' 16-bit forms (SHORT_INF: no bound), without the hull: 1 when their union is
+ * one zone.  past: room for d * d numbers. */
+static int union16(const int16_t *a, const int16_t *b, int d, int32_t *past)
+{
+    int64_t len = (int64_t)d * d;
+    int n = 0;
+    for (int64_t k = 0; k < len; k++)
+        if (a[k] > b[k])
+            past[n++] = (int32_t)k;
+    if (!n)
+        return 1;
+    for (int i = 0; i < d; i++)
+        for (int j = 0; j < d; j++) {
+            int32_t c = a[(int64_t)i * d + j];
+            if (b[(int64_t)i * d + j] <= c)
+                continue;
+            const int16_t *ai = a + (int64_t)i * d, *bi = b + (int64_t)i * d;
+            for (int q = 0; q < n; q++) {
+                int k = past[q] / d, l = past[q] % d;
+                int32_t il = ai[l] > bi[l] ? ai[l] : bi[l];
+                int32_t kj = a[(int64_t)k * d + j] > b[(int64_t)k * d + j] ? a[(int64_t)k * d + j] : b[(int64_t)k * d + j];
+                if (il == SHORT_INF || kj == SHORT_INF || il + kj >= c + b[past[q]] + 2)
+                    return 0;
+            }
+        }
+    return 1;
+}
+
 static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
 {
     int d = x->d;
@@ -912,9 +942,13 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
     int grew = 1, count = 0;
     while (grew) {
         grew = 0;
+        int small = to_short(zone, len, x->z16);  /* most pairs are told apart on their 16-bit forms */
         for (int32_t i = 0; i < kept->n; i++) {
             Node *o = &x->nodes.a[kept->a[i]];
             if (o->expanded)
+                continue;
+            if (small && !(o->zone & 1)
+                && !union16(x->z16, (const int16_t *)x->shorts.a + (o->zone >> 1) * len, d, x->past))
                 continue;
             slot_load(x, o->zone, other);
             if (z_union(hull, zone, other, d)) {
