@@ -145,7 +145,11 @@ def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape
 
 
 def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
-    import networkx as nx
+    """Cycles of the graph where a covered node stands for the node covering it, among nodes that watch: its
+    strongly connected components (scipy's, on the edges as arrays), then in each, for up to 20 edges in which
+    time passes, the shortest way back (breadth first, inside the component)."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
 
     if not len(g.frm):
         return
@@ -160,24 +164,53 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
     key = ru[keep] * n + rt[keep]
     _, first = np.unique(key, return_index=True)
     first = np.sort(first)  # edges in the order they were first met
-    label = {}  # (a, t) -> the edge whose step stands for it: the last one in which time passes, else the first
-    for i in first.tolist():
-        label[(int(ru[keep[i]]), int(rt[keep[i]]))] = int(keep[i])
-    for e in keep[stepg[keep]].tolist():
-        label[(int(ru[e]), int(rt[e]))] = e
-    graph = nx.DiGraph()
-    graph.add_edges_from((int(ru[keep[i]]), int(rt[keep[i]])) for i in first.tolist())
+    src, dst = ru[keep[first]], rt[keep[first]]
+    names, local = np.unique(np.concatenate([src, dst]), return_inverse=True)
+    a, b = local[:len(src)], local[len(src):]
+    m = len(names)
+    adj = csr_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(m, m))
+    _, comp = connected_components(adj, directed=True, connection="strong")
+    inside = np.flatnonzero(comp[a] == comp[b])  # an edge inside a component is on a cycle (a self-loop alone)
+    if not len(inside):
+        return
+    # the step standing for each edge inside: the last one met in which time passes, else the first
+    label = keep[first[inside]]
+    ikey = key[first[inside]]
+    order = np.argsort(ikey)
+    sorted_keys = ikey[order]
+    timed = keep[stepg[keep]]
+    tkey = ru[timed] * n + rt[timed]
+    at = np.searchsorted(sorted_keys, tkey)
+    hit = (at < len(sorted_keys)) & (sorted_keys[np.minimum(at, len(sorted_keys) - 1)] == tkey)
+    label[order[at[hit]]] = timed[hit]  # in order met: the last one met stays
 
     def step(e: int):
         r = int(ref[e])
         return g.node(r) if r >= 0 else g.step(-r - 1)
 
-    for component in nx.strongly_connected_components(graph):
-        if len(component) == 1:
-            (v,) = component
-            if not graph.has_edge(v, v):
-                continue
-        sub = graph.subgraph(component)
-        for a, b in [(a, b) for a, b in sub.edges() if stepg[label[(a, b)]]][:20]:
-            back = nx.shortest_path(sub, b, a) if a != b else [a]
-            yield a, [step(label[(a, b)])] + [step(label[(x, y)]) for x, y in zip(back, back[1:])]
+    def edge_label(x: int, y: int) -> int:
+        i = int(np.searchsorted(sorted_keys, x * n + y))
+        return int(label[order[i]])
+
+    chosen: dict[int, list[int]] = {}  # component -> up to 20 edges inside it in which time passes, in order met
+    for i in np.flatnonzero(stepg[label]).tolist():
+        got = chosen.setdefault(int(comp[a[inside[i]]]), [])
+        if len(got) < 20:
+            got.append(i)
+    for c, edges in chosen.items():
+        members = np.flatnonzero(comp == c)
+        sub = adj[members][:, members].tocsr()
+        where = {int(v): k for k, v in enumerate(members.tolist())}
+        for i in edges:
+            u, v = int(a[inside[i]]), int(b[inside[i]])
+            x, y = int(names[u]), int(names[v])
+            if u == v:
+                back = [x]
+            else:
+                _, pred = breadth_first_order(sub, where[v], directed=True, return_predecessors=True)
+                path, k = [], where[u]
+                while k >= 0:
+                    path.append(int(names[members[k]]))
+                    k = int(pred[k]) if k != where[v] else -1
+                back = path[::-1]
+            yield x, [step(edge_label(x, y))] + [step(edge_label(p, q)) for p, q in zip(back, back[1:])]
