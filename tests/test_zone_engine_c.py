@@ -318,6 +318,19 @@ def test_a_goal_is_found_at_the_same_node_by_both_searches(tmp_path, stop):
     assert found[0][2] is not stop
 
 
+def _random_zone(rng) -> tuple[int, np.ndarray]:
+    """A zone over 1 to 4 clocks: a few random bounds, then time passing or not."""
+    from runtime.zones import dbm
+
+    n = rng.randint(1, 4)
+    zone = dbm.free_all(n)
+    for _ in range(rng.randint(0, 6)):
+        i, j = rng.sample(range(n + 1), 2)
+        got = dbm.constrain(zone, i, j, rng.randint(-12, 12))
+        zone = got if got is not None else zone
+    return n, dbm.up(zone) if rng.random() < 0.5 else zone
+
+
 def test_extra_lu_plus_is_the_same_in_c_and_in_numpy():
     # The C search extrapolates with z_extrapolate_lu_plus, the Python search with dbm.extrapolate_lu_plus: on
     # random zones, bounds and marked clocks, both give the same canonical zone, which holds the one given.
@@ -333,13 +346,7 @@ def test_extra_lu_plus_is_the_same_in_c_and_in_numpy():
     rng = random.Random(7)
     changed = 0
     for _ in range(400):
-        n = rng.randint(1, 4)
-        zone = dbm.free_all(n)
-        for _ in range(rng.randint(0, 6)):
-            i, j = rng.sample(range(n + 1), 2)
-            got = dbm.constrain(zone, i, j, rng.randint(-12, 12))
-            zone = got if got is not None else zone
-        zone = dbm.up(zone) if rng.random() < 0.5 else zone
+        n, zone = _random_zone(rng)
         lower = np.array([0.0] + [rng.randint(0, 8) for _ in range(n)])
         upper = np.array([0.0] + [rng.randint(0, 8) for _ in range(n)])
         plus = np.array([False] + [rng.random() < 0.6 for _ in range(n)])
@@ -369,13 +376,7 @@ def test_forgetting_lower_bounds_is_the_same_in_c_and_in_numpy():
     rng = random.Random(11)
     changed = 0
     for _ in range(400):
-        n = rng.randint(1, 4)
-        zone = dbm.free_all(n)
-        for _ in range(rng.randint(0, 6)):
-            i, j = rng.sample(range(n + 1), 2)
-            got = dbm.constrain(zone, i, j, rng.randint(-12, 12))
-            zone = got if got is not None else zone
-        zone = dbm.up(zone) if rng.random() < 0.5 else zone
+        n, zone = _random_zone(rng)
         clocks = sorted(rng.sample(range(1, n + 1), rng.randint(1, n)))
         ours = dbm.forget_below(zone, clocks)
         theirs = np.ascontiguousarray(zone.copy())
