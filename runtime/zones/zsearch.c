@@ -91,6 +91,7 @@ typedef struct {
     int64_t level_end, depth;  /* breadth-first levels: the waiting list's end when the current one began */
     int invariants;         /* points past an invariant are no state (search.py's ZoneExplorer.invariants) */
     int16_t *z16;           /* scratch: a zone being stored, in 16 bits */
+    int16_t *z16own;        /* scratch: slot_new's own 16-bit form of a zone (z16 may hold its caller's) */
     int32_t *past;          /* scratch: d * d numbers (union16) */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
 } Ctx;
@@ -178,6 +179,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
     x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
+    x->z16own = malloc((int64_t)d * d * sizeof(int16_t));
     x->past = malloc((int64_t)d * d * sizeof(int32_t));
     return x;
 }
@@ -195,7 +197,7 @@ void zs_free(void *p)
     free(x->prog.a), free(x->kept.a), free(x->shorts.a), free(x->shorts.free.a), free(x->floats.a),
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
-    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->past), free(x->under.a);
+    free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->z16own), free(x->past), free(x->under.a);
     free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
@@ -430,14 +432,6 @@ static int64_t pool_take(Pool *p)
     return p->n++;
 }
 
-static int fits_short(const double *z, int64_t len)
-{
-    for (int64_t k = 0; k < len; k++)
-        if (z[k] != INFINITY && (z[k] > SHORT_INF - 1 || z[k] < -(SHORT_INF - 1)))
-            return 0;
-    return 1;
-}
-
 /* -- zones stored once each ------------------------------------------------------------------------
  * Most symbolic states share their zone with others (whole DALA on two cores: 76,423 stored zones, 1,847
  * different), so a zone slot is shared and counted: slot_new finds an equal zone through a hash table and
@@ -494,15 +488,12 @@ static int64_t slot_new(Ctx *x, const double *z, const int16_t *z16)
 {
     int64_t len = (int64_t)x->d * x->d;
     int64_t s;
-    if (z16 || fits_short(z, len)) {
+    if (!z16 && to_short(z, len, x->z16own))
+        z16 = x->z16own;
+    if (z16) {
         if ((s = pool_take(&x->shorts)) < 0)
             return -1;
-        int16_t *dst = (int16_t *)x->shorts.a + s * len;
-        if (z16)
-            memcpy(dst, z16, len * sizeof(int16_t));
-        else
-            for (int64_t k = 0; k < len; k++)
-                dst[k] = z[k] == INFINITY ? SHORT_INF : (int16_t)z[k];
+        memcpy((int16_t *)x->shorts.a + s * len, z16, len * sizeof(int16_t));
         s = 2 * s;
     } else {
         if ((s = pool_take(&x->floats)) < 0)
