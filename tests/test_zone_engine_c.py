@@ -445,3 +445,25 @@ def test_extra_lu_plus_gives_a_zone_one_matrix_whatever_the_path():
         ours = dbm.extrapolate_lu_plus(zone, lower, upper, plus)
         assert np.array_equal(ours, c_extrapolate(zone, lower, upper, plus))
     assert unbounded > 40
+
+
+def test_zones_past_16_bits_are_stored_in_single_precision_alike_in_c_and_python(tmp_path):
+    # A bound past 32,766 does not fit the store's 16-bit form: such zones go to the single-precision pool, and
+    # the search stores what the Python search stores, bounds included.
+    from randomtimed import Edge, Location, Network
+    from runtime.tchecker.reach import load
+
+    far = 40_000
+    net = Network([[Location(invariant=("<=", far)), Location(), Location()], [Location(), Location()]],
+                  [Edge(0, 0, 1, "a", guard=(">=", far - 5)), Edge(0, 1, 2, "b", guard=("<=", far + 9), reset=0),
+                   Edge(1, 0, 1, "c", guard=(">=", 3))])
+    path = tmp_path / "far.tck"
+    path.write_text(net.text())
+    _, tr = load(path, 1)
+    zp = ZoneExplorer(tr.package, tr.root, engine="python")
+    zc = ZoneExplorer(tr.package, tr.root, engine="c")
+    rp, rc = zp.explore(), zc.explore()
+    assert (rc.states, rc.discrete, rc.complete) == (rp.states, rp.discrete, rp.complete)
+    assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes]
+    assert any(np.isfinite(n.stored).any() and np.abs(n.stored[np.isfinite(n.stored)]).max() > 32_766
+               for n in zc.nodes if n.stored is not None)
