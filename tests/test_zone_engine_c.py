@@ -467,3 +467,22 @@ def test_zones_past_16_bits_are_stored_in_single_precision_alike_in_c_and_python
     assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes]
     assert any(np.isfinite(n.stored).any() and np.abs(n.stored[np.isfinite(n.stored)]).max() > 32_766
                for n in zc.nodes if n.stored is not None)
+
+
+@pytest.mark.parametrize("chunk", range(2))
+def test_c_search_stores_what_the_python_search_stores_on_random_networks(tmp_path, chunk):
+    # Merging zones (9 of the 200 merge some), covering and extrapolation on networks no fixture was written for.
+    import random
+
+    from randomtimed import network
+    from runtime.tchecker.reach import load
+
+    for seed in range(chunk, 200, 2):
+        net = network(random.Random(seed))
+        path = tmp_path / "random.tck"
+        path.write_text(net.text())
+        _, tr = load(path, 2 if net.strict else 1)
+        zp, zc = (ZoneExplorer(tr.package, tr.root, engine=e) for e in ("python", "c"))
+        rp, rc = zp.explore(), zc.explore()
+        assert (rc.states, rc.merged) == (rp.states, rp.merged), f"seed {seed}"
+        assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes], f"seed {seed}"

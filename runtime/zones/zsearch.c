@@ -924,16 +924,16 @@ static int union16(const int16_t *a, const int16_t *b, int d, int32_t *past)
     return 1;
 }
 
-static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
+/* ``small``: whether x->z16 holds zone's 16-bit form (the caller's comparisons wrote it). */
+static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small)
 {
     int d = x->d;
     int64_t len = (int64_t)d * d;
     int32_t index = (int32_t)x->nodes.n;
     double *other = T(x, 6), *hull = T(x, 7);
     int grew = 1, count = 0;
-    while (grew) {
+    while (grew) {  /* most pairs are told apart on their 16-bit forms (x->z16 kept the zone's as it grows) */
         grew = 0;
-        int small = to_short(zone, len, x->z16);  /* most pairs are told apart on their 16-bit forms */
         for (int32_t i = 0; i < kept->n; i++) {
             Node *o = &x->nodes.a[kept->a[i]];
             if (o->expanded)
@@ -944,6 +944,7 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept)
             slot_load(x, o->zone, other);
             if (z_union(hull, zone, other, d)) {
                 memcpy(zone, hull, len * sizeof(double));
+                small = to_short(zone, len, x->z16);
                 if (add_member(x, step, kept->a[i]))
                     return -9;
                 o->covered = 1, o->by = index;
@@ -1028,7 +1029,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     if (x->merge && kept->n) {
         double *own = T(x, 3);
         memcpy(own, zone, (int64_t)d * d * sizeof(double));
-        int got = merge_into(x, &step, zone, kept);
+        int got = merge_into(x, &step, zone, kept, ready != NULL);
         if (got < 0)
             return got;
         if (got)
