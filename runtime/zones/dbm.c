@@ -153,7 +153,8 @@ int z_includes(const double *big, const double *small, int len)
     return 1;
 }
 
-/* The clocks idx[0..count) forgotten: any value >= 0, as dbm.py's free_many. */
+/* The clocks idx[0..count) forgotten: any value >= 0, as dbm.py's free_many.  src may be m itself: only its
+ * column 0 is read, and what is read there from the rows of forgotten clocks is written over at the end. */
 void z_free(double *m, const double *src, int d, const int *idx, int count)
 {
     for (int c = 0; c < count; c++) {

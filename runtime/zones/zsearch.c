@@ -1085,12 +1085,10 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
         return -1;
     Parts q = parts(pr);
     if (q.nidle) {
-        double *src = T(x, 2);
-        memcpy(src, z, (int64_t)x->d * x->d * sizeof(double));
         int idx[256];
         for (int64_t k = 0; k < q.nidle; k++)
             idx[k] = (int)q.idle[k];
-        z_free(z, src, x->d, idx, (int)q.nidle);
+        z_free(z, z, x->d, idx, (int)q.nidle);  /* in place: see z_free */
     }
     const double *lower = x->ceiling, *upper = x->ceiling;
     const unsigned char *plus = NULL;
