@@ -55,3 +55,18 @@ def test_a_service_the_model_does_not_have_is_an_error_where_it_is_named():
                         "runs.mcl", flatten(pkg, root))
     assert [(str(d.span), d.message) for d in info.value.diagnostics] == [
         ("runs.mcl:2:6", 'only while "NDD.Fly" runs: the model has no service NDD.Fly (write it MODULE.SERVICE)')]
+
+
+def test_the_shorthand_is_told_in_words_not_as_its_expansion():
+    # Its formula repeats every event of the service several times: "means:" says what B is instead.
+    from runtime.props.check import describe
+    from runtime.props.formulas import show
+
+    pkg, root = ndd_model()
+    (item,), _ = read_properties(RUNS, "runs.mcl", flatten(pkg, root))
+    text = describe(item)
+    name, means = text.split("\n")
+    assert name == 'plans: "NDD.GoTo:exec_plan" only while "NDD.GoTo" runs'
+    assert means.startswith('  means: [B . "NDD.GoTo:exec_plan"] false, B a path after which "NDD.GoTo" does not run')
+    assert "to its finish, fail or interrupted, or to " in means and "NDD.Stop:start" in means
+    assert len(means) < len(show(item.property.formula))

@@ -318,7 +318,7 @@ def describe(item: Checkable) -> str:
     p = item.property
     text = p.text or show(p.formula)
     if p.pattern:
-        return f"{p.name}: {text}\n  means: {show(p.formula)}"
+        return f"{p.name}: {text}\n  means: {p.meaning or show(p.formula)}"
     return f"{p.name}: {text}"
 
 

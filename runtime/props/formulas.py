@@ -240,6 +240,7 @@ class Property:
     span: Span
     pattern: str = ""  # "never", "precedes", "leads to", "invariant", "deadlock free", or "" for a formula
     text: str = ""  # the property as written in its file
+    meaning: str = ""  # what a shorthand means, where its formula is too long to read (``only while``)
 
 
 def show_action(a: Action) -> str:

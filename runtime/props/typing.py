@@ -46,6 +46,7 @@ from runtime.props.formulas import (
     SPred,
     State,
     SVar,
+    show_action,
 )
 from runtime.props.syntax import Raw, RawProperty
 
@@ -295,7 +296,12 @@ def property_of(raw: RawProperty, cancels: Cancels | None = None) -> Property:
         if labels is None:
             raise TypeProblem(sp, f'only while "{service}" runs: the model has no service {service} '
                                   "(write it MODULE.SERVICE)")
-        return Property(raw.name, only_while(action(a[0]), service, labels, sp), raw.span, "only while")
+        guarded = action(a[0])
+        cancelled = f", or to {' or '.join(labels)} before it starts" if labels else ""
+        meaning = (f'[B . {show_action(guarded)}] false, B a path after which "{service}" does not run (a request runs '
+                   f"from {service}:trigger to its finish, fail or interrupted{cancelled}; a trigger while one runs "
+                   "renews it)")
+        return Property(raw.name, only_while(guarded, service, labels, sp), raw.span, "only while", meaning=meaning)
     if op == "invariant":
         return Property(raw.name, invariant(pred(a[0]), sp), raw.span, "invariant")
     if op == "deadlock_free":
