@@ -58,3 +58,9 @@ def test_no_cycle_without_time_passing_or_outside_the_watched_nodes():
     assert len(list(_graph_lassos(g, np.ones(3, bool), rep))) == 1
     g, rep = _graph([-1, 0, 0], {}, [(0, 1, True), (0, 2, True), (1, 2, True)])
     assert list(_graph_lassos(g, np.ones(3, bool), rep)) == []  # no way back
+
+
+def test_of_several_steps_between_the_same_two_nodes_the_last_one_where_time_passes_stands_for_them():
+    # Three steps from 1 into zones 1 covers: the first and the third let time pass, the second does not.
+    g, rep = _graph([-1, 0, 1, 1, 1], {2: 1, 3: 1, 4: 1}, [(0, 1, True), (1, 2, True), (1, 3, False), (1, 4, True)])
+    assert list(_graph_lassos(g, np.ones(5, bool), rep)) == [(1, [("step", 3)])]

@@ -182,7 +182,9 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
     tkey = ru[timed] * n + rt[timed]
     at = np.searchsorted(sorted_keys, tkey)
     hit = (at < len(sorted_keys)) & (sorted_keys[np.minimum(at, len(sorted_keys) - 1)] == tkey)
-    label[order[at[hit]]] = timed[hit]  # in order met: the last one met stays
+    where, steps = order[at[hit]], timed[hit]  # in the order met
+    last = len(where) - 1 - np.unique(where[::-1], return_index=True)[1]  # each edge's last one
+    label[where[last]] = steps[last]
 
     def step(e: int):
         r = int(ref[e])
