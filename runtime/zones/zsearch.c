@@ -939,7 +939,7 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small)
             if (o->expanded)
                 continue;
             if (small && !(o->zone & 1)
-                && !union16(x->z16, (const int16_t *)x->shorts.a + (o->zone >> 1) * len, d, x->past))
+                && !union16(x->z16, (const int16_t *)slot_bytes(x, o->zone), d, x->past))
                 continue;
             slot_load(x, o->zone, other);
             if (z_union(hull, zone, other, d)) {
@@ -987,11 +987,8 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
             if (i + 8 < kept->n)
                 __builtin_prefetch(&x->nodes.a[kept->a[i + 8]]);
             if (i + 4 < kept->n) {
-                int64_t ahead = x->nodes.a[kept->a[i + 4]].zone;
-                if (!(ahead & 1)) {
-                    const char *at = x->shorts.a + (ahead >> 1) * len * 2;
-                    __builtin_prefetch(at), __builtin_prefetch(at + 64);
-                }
+                const char *at = slot_bytes(x, x->nodes.a[kept->a[i + 4]].zone);
+                __builtin_prefetch(at), __builtin_prefetch(at + 64);
             }
             int64_t slot = x->nodes.a[kept->a[i]].zone;
             int ge, le;
