@@ -5,6 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The zone library's loops over whole matrices (to_short, the inclusion tests) are worth vectorising even where
+ * that needs a scalar tail, which -O2's cheap cost model refuses.  Other compilers ignore the pragma. */
+#pragma GCC optimize("vect-cost-model=dynamic")
+
 /* Floyd-Warshall: tightest bounds; an empty zone ends with a negative diagonal. */
 void z_close(double *m, int d)
 {
@@ -71,7 +75,22 @@ static void z_close_raised(double *m, int d, const int *idx, int n)
 int z_extrapolate_lu(double *m, int d, const double *lower, const double *upper)
 {
     int raised[4096], n = 0, all = d * d > 4096;  /* past 64 clocks, the whole matrix is closed again */
-    for (int i = 0; i < d; i++)
+    double floor_[256];
+    for (int j = 0; j < d; j++)
+        floor_[j] = -upper[j] - 1;
+    for (int i = 0; i < d; i++) {
+        /* most rows keep every bound: tell them first, without branches (in blocks of 4 the compiler vectorises);
+         * the diagonal may count here, the loop below skips it */
+        const double *r = m + (long)i * d;
+        double li = lower[i];
+        int hit = 0, j = 0;
+        for (; j + 4 <= d; j += 4)
+            for (int q = 0; q < 4; q++)
+                hit |= ((r[j + q] > li) & (r[j + q] != INFINITY)) | (r[j + q] < floor_[j + q]);
+        for (; j < d; j++)
+            hit |= ((r[j] > li) & (r[j] != INFINITY)) | (r[j] < floor_[j]);
+        if (!hit)
+            continue;
         for (int j = 0; j < d; j++) {
             if (i == j)
                 continue;
@@ -83,13 +102,14 @@ int z_extrapolate_lu(double *m, int d, const double *lower, const double *upper)
                         raised[n] = i * d + j;
                     n++;
                 }
-            } else if (*v < -upper[j] - 1) {
-                *v = -upper[j] - 1;
+            } else if (*v < floor_[j]) {
+                *v = floor_[j];
                 if (!all)
                     raised[n] = i * d + j;
                 n++;
             }
         }
+    }
     if (n && all)
         z_close(m, d);
     else if (n)
@@ -154,19 +174,23 @@ int z_includes(const double *big, const double *small, int len)
 }
 
 /* The clocks idx[0..count) forgotten: any value >= 0, as dbm.py's free_many.  src may be m itself: only its
- * column 0 is read, and what is read there from the rows of forgotten clocks is written over at the end. */
+ * column 0 is read, row by row before that row is written, and the rows of forgotten clocks are written over at
+ * the end.  Row by row, so that the columns' writes stay within the row being read. */
 void z_free(double *m, const double *src, int d, const int *idx, int count)
 {
-    for (int c = 0; c < count; c++) {
-        int i = idx[c];
-        for (int a = 0; a < d; a++) {
-            m[(long)i * d + a] = INFINITY;
-            m[(long)a * d + i] = src[(long)a * d];
-        }
+    for (int a = 0; a < d; a++) {
+        double *ra = m + (long)a * d, first = src[(long)a * d];
+        if (ra != src + (long)a * d)
+            memcpy(ra, src + (long)a * d, d * sizeof(double));
+        for (int c = 0; c < count; c++)
+            ra[idx[c]] = first;
     }
-    for (int c = 0; c < count; c++)
-        for (int e = 0; e < count; e++)
-            m[(long)idx[c] * d + idx[e]] = c == e ? 0 : INFINITY;
+    for (int c = 0; c < count; c++) {
+        double *ri = m + (long)idx[c] * d;
+        for (int b = 0; b < d; b++)
+            ri[b] = INFINITY;
+        ri[idx[c]] = 0;
+    }
 }
 
 /* Each clock of idx keeps its upper bounds only: its column set to column 0 (dbm.py's forget_below). */

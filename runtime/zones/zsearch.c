@@ -36,6 +36,26 @@ typedef struct {
     uint8_t grown, covered, expanded;
 } Node;
 
+typedef VEC(double) Doubles;
+typedef VEC(int64_t) Longs;
+
+/* n numbers appended to v at once; -9: no memory. */
+static int append(Doubles *v, const double *src, int64_t n)
+{
+    if (v->n + n > v->cap) {
+        int64_t cap = v->cap ? v->cap : 64;
+        while (cap < v->n + n)
+            cap *= 2;
+        double *a = realloc(v->a, cap * sizeof(double));
+        if (!a)
+            return -9;
+        v->a = a, v->cap = cap;
+    }
+    memcpy(v->a + v->n, src, n * sizeof(double));
+    v->n += n;
+    return 0;
+}
+
 typedef struct { int32_t from, target, ref; } Edge;  /* ref >= 0: a node; ref < 0: step -ref-1 */
 typedef struct { int32_t member, next; } Member;
 typedef struct { int32_t *a; int32_t n, cap; uint8_t seen; } Kept;
@@ -94,6 +114,8 @@ typedef struct {
     int16_t *z16own;        /* scratch: slot_new's own 16-bit form of a zone (z16 may hold its caller's) */
     int32_t *past;          /* scratch: d * d numbers (union16) */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
+    Doubles out;            /* scratch: arrive's pieces after time passes, kept from call to call */
+    Longs grown;            /* scratch: each piece's grown flag */
 } Ctx;
 
 
@@ -198,6 +220,7 @@ void zs_free(void *p)
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->z16own), free(x->past), free(x->under.a);
+    free(x->out.a), free(x->grown.a);
     free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
@@ -469,17 +492,19 @@ static int zkey_grow(Ctx *x)
     return 0;
 }
 
-/* z's 16-bit form into out (infinity as SHORT_INF); 1 when every entry fits, else out is not z. */
-static int to_short(const double *z, int64_t len, int16_t *out)
+/* z's 16-bit form into out (infinity as SHORT_INF); 1 when every entry fits, else out is not z.  Without
+ * branches, so that the compiler vectorises it (dbm.c's pragma). */
+static int to_short(const double *restrict z, int64_t len, int16_t *restrict out)
 {
-    int fits = 1;
+    int bad = 0;
     for (int64_t k = 0; k < len; k++) {
         double v = z[k];
-        int ok = v <= SHORT_INF - 1 && v >= -(SHORT_INF - 1);
-        fits &= ok | (v == INFINITY);
-        out[k] = v == INFINITY ? SHORT_INF : ok ? (int16_t)v : 0;
+        bad |= (v < -(SHORT_INF - 1)) | ((v > SHORT_INF - 1) & (v != INFINITY));
+        double c = v > SHORT_INF ? SHORT_INF : v;
+        c = c < -SHORT_INF ? -SHORT_INF : c;
+        out[k] = (int16_t)(int32_t)c;
     }
-    return fits;
+    return !bad;
 }
 
 /* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory.  ``z16``: z's
@@ -649,9 +674,6 @@ static void z_reset(double *m, int d, int i, double v)
 
 /* Pieces of m minus other (integer complements), as dbm.py's subtract_bounds: each piece appended to *out
  * (d*d doubles each), with the cut bounds that made it appended to *cuts and their count to *ncut. */
-typedef VEC(double) Doubles;
-typedef VEC(int64_t) Longs;
-
 static int subtract(const double *m, const double *other, int d, double *rest, double *piece,
                     Doubles *out, Longs *cuts, Longs *ncut)
 {
@@ -665,8 +687,8 @@ static int subtract(const double *m, const double *other, int d, double *rest, d
                 continue;
             memcpy(piece, rest, len * sizeof(double));
             if (z_constrain(piece, d, j, i, -c - 1)) {
-                for (int64_t k = 0; k < len; k++)
-                    PUSH(*out, piece[k]);
+                if (append(out, piece, len))
+                    return -9;
                 for (int64_t k = 0; k < kept.n; k++)
                     PUSH(*cuts, kept.a[k]);
                 PUSH(*cuts, j); PUSH(*cuts, i); PUSH(*cuts, (int64_t)(-c - 1));
@@ -787,25 +809,18 @@ static Parts parts(const int64_t *p)
 }
 
 /* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
-/* The pieces of z after time passes at the state of program pr, appended to out with their grown flags;
- * returns the number of pieces, or -2 for a wait that is not one lower bound (err_arg: the rule). */
-static int64_t elapse(Ctx *x, const int64_t *pr, double *z, Doubles *out, Longs *grown)
+/* The pieces of z after time passes at the state of program pr (one where it can), appended to out with their
+ * grown flags; returns the number of pieces, -2 for a wait that is not one lower bound (err_arg: the rule), or -9
+ * without memory. */
+static int64_t elapse(Ctx *x, const int64_t *pass, double *z, Doubles *out, Longs *grown)
 {
     int d = x->d;
     int64_t len = (int64_t)d * d;
-    Parts q = parts(pr);
-    const int64_t *p = q.pass;
-    if (!*p++) {
-        for (int64_t k = 0; k < len; k++)
-            PUSH(*out, z[k]);
-        PUSH(*grown, 0);
-        return 1;
-    }
-    const int64_t *before = p, *after = skip_bounds(before), *w = skip_bounds(after);
+    const int64_t *before = pass + 1, *after = skip_bounds(before), *w = skip_bounds(after);
     if (x->invariants && !constrain_all(z, d, after + 1, after[0]))
         return 0;  /* z (the caller's scratch) is past an invariant everywhere: no state */
     int64_t nw = *w++;
-    Longs extra_before = {0}, extra_after = {0};
+    Longs extra = {0};  /* a wait's lower bound: time passes up to it */
     if (nw) {
         double *reach = T(x, 4), *probe = T(x, 5);
         memcpy(reach, z, len * sizeof(double));
@@ -823,29 +838,24 @@ static int64_t elapse(Ctx *x, const int64_t *pr, double *z, Doubles *out, Longs 
                 continue;
             if (!kind) {
                 x->err_arg = rule;
-                free(extra_before.a), free(extra_after.a);
+                free(extra.a);
                 return -2;
             }
-            PUSH(extra_before, clock); PUSH(extra_before, 0); PUSH(extra_before, -c - 1);
-            PUSH(extra_after, clock); PUSH(extra_after, 0); PUSH(extra_after, -c);
+            PUSH(extra, clock); PUSH(extra, 0); PUSH(extra, -c);
         }
     }
     double *start = T(x, 4), *piece = T(x, 5);
     memcpy(start, z, len * sizeof(double));
-    int ok = constrain_all(start, d, after + 1, after[0]) &&
-             constrain_all(start, d, extra_after.a, extra_after.n / 3);
-    int64_t count;
+    int ok = constrain_all(start, d, after + 1, after[0]) && constrain_all(start, d, extra.a, extra.n / 3);
+    int64_t count = 1, status = 0;
     if (!ok) {
-        for (int64_t k = 0; k < len; k++)
-            PUSH(*out, z[k]);
+        status = append(out, z, len);
         PUSH(*grown, 0);
-        count = 1;
     } else {
         z_up(start, d);
         constrain_all(start, d, after + 1, after[0]);
-        constrain_all(start, d, extra_after.a, extra_after.n / 3);
-        for (int64_t k = 0; k < len; k++)
-            PUSH(*out, start[k]);
+        constrain_all(start, d, extra.a, extra.n / 3);
+        status = append(out, start, len);
         PUSH(*grown, 1);
         Longs cuts = {0}, ncut = {0};
         int64_t before_n = out->n;
@@ -855,8 +865,8 @@ static int64_t elapse(Ctx *x, const int64_t *pr, double *z, Doubles *out, Longs 
             PUSH(*grown, 0);
         free(cuts.a), free(ncut.a);
     }
-    free(extra_before.a), free(extra_after.a);
-    return count;
+    free(extra.a);
+    return status ? status : count;
 }
 
 /* -- the store (search.py's add and merge_into) ----------------------------------------------------- */
@@ -1102,13 +1112,14 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
         }
         lower = lo, upper = up, plus = marked;
     }
-    Doubles out = {0};
-    Longs grown = {0};
-    int64_t n = elapse(x, pr, z, &out, &grown);
+    if (!*q.pass)  /* time cannot pass here: z is the state's one piece */
+        return add(x, state, z, parent, via, guard, nguard, 0, lower, upper, plus);
+    x->out.n = x->grown.n = 0;
+    int64_t n = elapse(x, q.pass, z, &x->out, &x->grown);
     int status = n < 0 ? (int)n : 0;
     for (int64_t k = 0; k < n && !status; k++)
-        status = add(x, state, out.a + k * x->d * x->d, parent, via, guard, nguard, (int)grown.a[k], lower, upper, plus);
-    free(out.a), free(grown.a);
+        status = add(x, state, x->out.a + k * x->d * x->d, parent, via, guard, nguard, (int)x->grown.a[k], lower,
+                     upper, plus);
     return status;
 }
 
@@ -1166,8 +1177,8 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
     Ctx *x = p;
     int d = x->d;
     int64_t len = (int64_t)d * d;
-    Doubles pieces = {0};
-    Longs cuts = {0}, ncut = {0}, need = {0};
+    Doubles pieces = {0}, next = {0};  /* the allowed pieces of a step's zone, and the next block's */
+    Longs cuts = {0}, ncut = {0}, need = {0}, ncuts = {0}, nn = {0}, pc = {0}, pn = {0};
     int status = 0;
     int64_t count = 0;
     while (x->head < x->waiting.n) {
@@ -1232,8 +1243,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                     continue;
                 /* allowed: the pieces of met outside every block, each with its cut bounds */
                 pieces.n = cuts.n = ncut.n = 0;
-                for (int64_t i = 0; i < len; i++)
-                    PUSH(pieces, met[i]);
+                if (append(&pieces, met, len)) {
+                    status = -9;
+                    break;
+                }
                 PUSH(ncut, 0);
                 const int64_t *b = blocks;
                 for (int64_t bi = 0; bi < nblocks && pieces.n; bi++) {
@@ -1242,11 +1255,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                     b = skip_bounds(b);
                     if (!live)
                         continue;
-                    Doubles next = {0};
-                    Longs ncuts = {0}, nn = {0};
+                    next.n = ncuts.n = nn.n = 0;
                     int64_t off = 0;
                     for (int64_t pi = 0; pi * len < pieces.n; pi++) {
-                        Longs pc = {0}, pn = {0};
+                        pc.n = pn.n = 0;
                         subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn);
                         int64_t o2 = 0;
                         for (int64_t q = 0; q < pn.n; q++) {
@@ -1258,10 +1270,11 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                             PUSH(nn, ncut.a[pi] + pn.a[q]);
                         }
                         off += 3 * ncut.a[pi];
-                        free(pc.a), free(pn.a);
                     }
-                    free(pieces.a), free(cuts.a), free(ncut.a);
+                    Doubles dt = pieces;  /* the pieces left become the ones to cut by the next block */
+                    Longs ct = cuts, nt = ncut;
                     pieces = next, cuts = ncuts, ncut = nn;
+                    next = dt, ncuts = ct, nn = nt;
                 }
                 int64_t off = 0;
                 for (int64_t pi = 0; pi * len < pieces.n && !status; pi++) {
@@ -1302,7 +1315,8 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             break;
         }
     }
-    free(pieces.a), free(cuts.a), free(ncut.a), free(need.a);
+    free(pieces.a), free(cuts.a), free(ncut.a), free(need.a), free(next.a), free(ncuts.a), free(nn.a), free(pc.a),
+         free(pn.a);
     return status;
 }
 
