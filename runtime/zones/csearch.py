@@ -365,10 +365,10 @@ class CSearch:
         rows = self.z.nodes.rows
         if self.compiled is None:
             return np.array([self.z.states[s][offset] for s in rows[:, 0].tolist()], dtype=np.int64)
-        ids = np.ascontiguousarray(rows[:, 0], dtype=np.int64)
+        ids = np.arange(self.lib.zs_nstates(self.ctx), dtype=np.int64)  # once per discrete state, then per node
         out = np.zeros(len(ids), dtype=np.int64)
         self.lib.zs_node_words(self.ctx, _longs(ids), len(ids), offset, _longs(out))
-        return out
+        return out[rows[:, 0]]
 
     def zone(self, slot: int) -> np.ndarray:
         """A stored zone (single precision, as the search keeps it)."""

@@ -79,35 +79,20 @@ int z_extrapolate_lu(double *m, int d, const double *lower, const double *upper)
     for (int j = 0; j < d; j++)
         floor_[j] = -upper[j] - 1;
     for (int i = 0; i < d; i++) {
-        /* most rows keep every bound: tell them first, without branches (in blocks of 4 the compiler vectorises);
-         * the diagonal may count here, the loop below skips it */
-        const double *r = m + (long)i * d;
-        double li = lower[i];
-        int hit = 0, j = 0;
-        for (; j + 4 <= d; j += 4)
-            for (int q = 0; q < 4; q++)
-                hit |= ((r[j + q] > li) & (r[j + q] != INFINITY)) | (r[j + q] < floor_[j + q]);
-        for (; j < d; j++)
-            hit |= ((r[j] > li) & (r[j] != INFINITY)) | (r[j] < floor_[j]);
+        /* most rows keep every bound: tell them first, in a loop the compiler vectorises (the diagonal may count
+         * here; the loop below leaves it) */
+        double *w = m + (long)i * d, li = lower[i];
+        int hit = 0;
+        for (int j = 0; j < d; j++)
+            hit |= ((w[j] > li) & (w[j] != INFINITY)) | (w[j] < floor_[j]);
         if (!hit)
             continue;
-        for (int j = 0; j < d; j++) {
-            if (i == j)
-                continue;
-            double *v = m + (long)i * d + j;
-            if (*v > lower[i]) {
-                if (*v != INFINITY) {
-                    *v = INFINITY;
-                    if (!all)
-                        raised[n] = i * d + j;
-                    n++;
-                }
-            } else if (*v < floor_[j]) {
-                *v = floor_[j];
-                if (!all)
-                    raised[n] = i * d + j;
-                n++;
-            }
+        for (int j = 0; j < d; j++) {  /* without branches: each raised entry's place written, counted if raised */
+            double v = w[j], to = v > li ? INFINITY : v < floor_[j] ? floor_[j] : v;
+            to = i == j ? v : to;
+            raised[all ? 0 : n] = i * d + j;
+            n += to != v;
+            w[j] = to;
         }
     }
     if (n && all)

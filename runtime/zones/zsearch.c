@@ -934,8 +934,9 @@ static int union16(const int16_t *a, const int16_t *b, int d, int32_t *past)
     return 1;
 }
 
-/* ``small``: whether x->z16 holds zone's 16-bit form (the caller's comparisons wrote it). */
-static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small)
+/* ``small``: whether x->z16 holds zone's 16-bit form (the caller's comparisons wrote it); ``own``: where the zone
+ * as it came is copied before its first merge. */
+static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small, double *own)
 {
     int d = x->d;
     int64_t len = (int64_t)d * d;
@@ -953,6 +954,8 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small)
                 continue;
             slot_load(x, o->zone, other);
             if (z_union(hull, zone, other, d)) {
+                if (!count)
+                    memcpy(own, zone, len * sizeof(double));
                 memcpy(zone, hull, len * sizeof(double));
                 small = to_short(zone, len, x->z16);
                 if (add_member(x, step, kept->a[i]))
@@ -1034,9 +1037,8 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
             kept_prune(x, kept);
     }
     if (x->merge && kept->n) {
-        double *own = T(x, 3);
-        memcpy(own, zone, (int64_t)d * d * sizeof(double));
-        int got = merge_into(x, &step, zone, kept, ready != NULL);
+        double *own = T(x, 3);  /* the zone as it came, if it merges */
+        int got = merge_into(x, &step, zone, kept, ready != NULL, own);
         if (got < 0)
             return got;
         if (got)
@@ -1241,20 +1243,25 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                 memcpy(met, here, len * sizeof(double));
                 if (!constrain_all(met, d, nb + 1, nb[0]))
                     continue;
-                /* allowed: the pieces of met outside every block, each with its cut bounds */
+                /* allowed: the pieces of met outside every block, each with its cut bounds; while no block meets
+                 * met (``whole``), met itself is the one piece, not copied */
+                int whole = 1;
                 pieces.n = cuts.n = ncut.n = 0;
-                if (append(&pieces, met, len)) {
-                    status = -9;
-                    break;
-                }
-                PUSH(ncut, 0);
                 const int64_t *b = blocks;
-                for (int64_t bi = 0; bi < nblocks && pieces.n; bi++) {
+                for (int64_t bi = 0; bi < nblocks && (whole || pieces.n); bi++) {
                     memcpy(block, met, len * sizeof(double));
                     int live = constrain_all(block, d, b + 1, b[0]);
                     b = skip_bounds(b);
                     if (!live)
                         continue;
+                    if (whole) {
+                        whole = 0;
+                        if (append(&pieces, met, len)) {
+                            status = -9;
+                            break;
+                        }
+                        PUSH(ncut, 0);
+                    }
                     next.n = ncuts.n = nn.n = 0;
                     int64_t off = 0;
                     for (int64_t pi = 0; pi * len < pieces.n; pi++) {
@@ -1276,10 +1283,13 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                     pieces = next, cuts = ncuts, ncut = nn;
                     next = dt, ncuts = ct, nn = nt;
                 }
-                int64_t off = 0;
-                for (int64_t pi = 0; pi * len < pieces.n && !status; pi++) {
-                    double *z = T(x, 1);
-                    memcpy(z, pieces.a + pi * len, len * sizeof(double));
+                if (whole)  /* met as it is, with no cut */
+                    PUSH(ncut, 0);
+                int64_t off = 0, npieces = whole ? 1 : pieces.n / len;
+                for (int64_t pi = 0; pi < npieces && !status; pi++) {
+                    double *z = T(x, 1);  /* met, where the piece is met itself */
+                    if (!whole)
+                        memcpy(z, pieces.a + pi * len, len * sizeof(double));
                     for (int64_t r = 0; r < rs[0]; r++)
                         z_reset(z, d, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
                     need.n = 0;
@@ -1404,14 +1414,13 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
     return len;
 }
 
-/* Word ``offset`` of each of the states ids[0..n) into out. */
+/* Word ``offset`` of each of the states ids[0..n) into out (each decoded only as far as that word). */
 void zs_node_words(void *p, const int64_t *ids, int64_t n, int offset, int64_t *out)
 {
     Ctx *x = p;
-    int64_t *w = malloc(x->tables->W * sizeof(int64_t));
+    int64_t w[offset + 1], len;
     for (int64_t i = 0; i < n; i++) {
-        state_words(x, ids[i], w);
+        decode(state_bytes(x, ids[i], &len), offset + 1, w);
         out[i] = w[offset];
     }
-    free(w);
 }
