@@ -1,10 +1,13 @@
 """Cycles across the search's branches (runtime/zones/lassos.py, _graph_lassos) on small graphs written by hand:
-each one found is a cycle of the graph in which time passes, among nodes that watch, and none is made up."""
+each one found is a cycle of the graph in which time passes, among nodes that watch, and none is made up.  The
+tree's shape (depths and the ancestor test, computed a level at a time) against walking up parent by parent."""
 from __future__ import annotations
+
+import random
 
 import numpy as np
 
-from runtime.zones.lassos import Graph, _graph_lassos
+from runtime.zones.lassos import Graph, _graph_lassos, _shape, _tree
 
 
 def _graph(parent: list[int], covered_by: dict[int, int], edges: list[tuple[int, int, bool]],
@@ -64,3 +67,37 @@ def test_of_several_steps_between_the_same_two_nodes_the_last_one_where_time_pas
     # Three steps from 1 into zones 1 covers: the first and the third let time pass, the second does not.
     g, rep = _graph([-1, 0, 1, 1, 1], {2: 1, 3: 1, 4: 1}, [(0, 1, True), (1, 2, True), (1, 3, False), (1, 4, True)])
     assert list(_graph_lassos(g, np.ones(5, bool), rep)) == [(1, [("step", 3)])]
+
+
+def _ancestors(parent: list[int], u: int) -> list[int]:
+    """u, its parent, and so on up to its root."""
+    up = [u]
+    while parent[up[-1]] >= 0:
+        up.append(parent[up[-1]])
+    return up
+
+
+def test_the_tree_shape_is_the_one_walking_up_gives():
+    rng = random.Random(7)
+    for _ in range(200):  # forests of up to 60 nodes, a parent stored before its children, siblings anywhere
+        n = rng.randint(1, 60)
+        parent = [-1 if u == 0 or rng.random() < 0.05 else rng.randrange(u) for u in range(n)]
+        depth, enter, leave, levels = _shape(np.array(parent))
+        up = [_ancestors(parent, u) for u in range(n)]
+        assert depth.tolist() == [len(a) - 1 for a in up]
+        for u in range(n):
+            below = [a for a in range(n) if enter[a] <= enter[u] and leave[u] <= leave[a]]
+            assert sorted(below) == sorted(up[u]), (parent, u)
+        assert sorted(np.concatenate(levels).tolist()) == list(range(n))
+        # each watching run starts at the depth of its first watching node
+        watch = np.array([rng.random() < 0.7 for _ in range(n)])
+        none = np.zeros(0, np.int64)
+        g = Graph(np.array(parent), np.zeros(n, bool), np.full(n, -1), np.zeros(n, bool), np.ones(n, bool), none, none,
+                  none, np.zeros(0, bool), None, None)
+        _, top, _, _ = _tree(g, watch, (depth, enter, leave, levels))
+        for u in range(n):
+            a = up[u]
+            k = 0
+            while k + 1 < len(a) and watch[a[k]] and watch[a[k + 1]]:
+                k += 1
+            assert top[u] == len(a) - 1 - k

@@ -65,52 +65,59 @@ def _prepared(z) -> tuple[Graph, np.ndarray, tuple]:
         return got[2:]
     g = z.graph()
     n = len(g.parent)
-    covered, by = g.covered.tolist(), g.by.tolist()
-    rl = list(range(n))
-    for k in range(n - 1, -1, -1):  # a node is covered by one stored after it
-        if covered[k] and by[k] >= 0:
-            rl[k] = rl[by[k]]
-    rep = np.array(rl, dtype=np.int64)
-    z.lasso_graph = (z.nodes, len(z.nodes), g, rep, _shape(g))
+    rep = np.where(g.covered & (g.by >= 0), g.by, np.arange(n))  # a node is covered by one stored after it
+    while True:  # to the end of each chain of covers, halving the rest of every chain each round
+        nxt = rep[rep]
+        if np.array_equal(nxt, rep):
+            break
+        rep = nxt
+    z.lasso_graph = (z.nodes, len(z.nodes), g, rep, _shape(g.parent))
     return g, rep, z.lasso_graph[4]
 
 
-def _shape(g: Graph) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:
-    """Depths in the search's tree, and entry and exit numbers of a depth-first walk (an ancestor test)."""
-    parent = g.parent.tolist()
+def _shape(parent: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    """Depths in the search's tree, entry and exit numbers of a depth-first walk (an ancestor test: ``a`` is an
+    ancestor of ``u`` or ``u`` itself iff enter[a] <= enter[u] and leave[u] <= leave[a]), and the nodes of each
+    depth.  In numpy, a level at a time: a parent is stored before its children."""
     n = len(parent)
-    depth = [0] * n
-    children: list[list[int]] = [[] for _ in range(n)]
-    for u in range(n):  # a parent is stored before its children
-        p = parent[u]
-        if p >= 0:
-            depth[u] = depth[p] + 1
-            children[p].append(u)
-    enter, leave, clock = [0] * n, [0] * n, 0
-    for root in (u for u in range(n) if parent[u] < 0):
-        stack = [(root, False)]
-        while stack:
-            u, done = stack.pop()
-            if done:
-                leave[u] = clock
-                continue
-            enter[u] = clock
-            clock += 1
-            stack.append((u, True))
-            stack.extend((c, False) for c in children[u])
-    return depth, np.array(depth), np.array(enter), np.array(leave)
+    parent = np.asarray(parent, dtype=np.int64)
+    has = parent >= 0
+    depth, up = has.astype(np.int64), np.where(has, parent, np.arange(n))
+    while True:  # pointer jumping: depth[u] counts the steps up to its root
+        far = up[up]
+        if np.array_equal(far, up):
+            break
+        depth += np.where(up != far, depth[up], 0)
+        up = far
+    order = np.argsort(depth, kind="stable")
+    cuts = np.flatnonzero(np.diff(depth[order])) + 1
+    levels = np.split(order, cuts) if n else []
+    size = np.ones(n, dtype=np.int64)
+    for level in reversed(levels[1:]):  # subtree sizes, deepest first
+        np.add.at(size, parent[level], size[level])
+    enter = np.zeros(n, dtype=np.int64)
+    for level in levels:  # children after their parent, each after the subtrees of its siblings stored before it
+        level = level[np.argsort(parent[level], kind="stable")]  # siblings side by side
+        p = parent[level]
+        group = np.where(p >= 0, p, -1)
+        before = np.cumsum(size[level]) - size[level]  # sizes of the level's nodes before each (level is sorted)
+        first = np.r_[0, np.flatnonzero(np.diff(group)) + 1]
+        start = np.repeat(before[first], np.diff(np.r_[first, len(level)]))
+        enter[level] = np.where(p >= 0, enter[np.maximum(p, 0)] + 1, 0) + before - start
+    return depth, enter, enter + size, levels
 
 
 def _tree(g: Graph, watch: np.ndarray, shape: tuple):
     """Depths in the search's tree, the depth each watching run starts at, entry and exit numbers of a depth-first
-    walk (an ancestor test), the shape computed once rather than walking up from every state."""
-    depth, depths, enter, leave = shape
-    parent, w = g.parent.tolist(), watch.tolist()
-    top = [0] * len(parent)
-    for u, p in enumerate(parent):
-        if p >= 0:
-            top[u] = top[p] if w[p] and w[u] else depth[u]
-    return depths, np.array(top), enter, leave
+    walk (the ancestor test), from the shape computed once rather than walking up from every state."""
+    depth, enter, leave, levels = shape
+    parent = g.parent
+    top = depth.copy()
+    for level in levels[1:]:  # top[u] = top[parent] while both watch, a level at a time
+        p = parent[level]
+        on = watch[level] & watch[p]
+        top[level[on]] = top[p[on]]
+    return depth, top, enter, leave
 
 
 def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape: tuple):
