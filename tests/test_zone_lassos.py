@@ -7,7 +7,7 @@ import random
 
 import numpy as np
 
-from runtime.zones.lassos import Graph, _graph_lassos, _shape, _tree
+from runtime.zones.lassos import Graph, _graph_lassos, _path_sums, _shape, _tree, _tree_lassos, edges_of
 
 
 def _graph(parent: list[int], covered_by: dict[int, int], edges: list[tuple[int, int, bool]],
@@ -101,3 +101,22 @@ def test_the_tree_shape_is_the_one_walking_up_gives():
             while k + 1 < len(a) and watch[a[k]] and watch[a[k + 1]]:
                 k += 1
             assert top[u] == len(a) - 1 - k
+
+
+def test_a_cycle_down_the_tree_needs_time_to_pass_after_its_entry():
+    # 0 -> 1 -> 2 -> 3 -> 4 in the tree, 4's zone covered by 1's: the run 1 -> 2 -> 3 -> 4 goes back into 1.
+    parent = np.array([-1, 0, 1, 2, 3])
+    rep = np.array([0, 1, 2, 3, 1])
+
+    def lassos(grown: set[int]):
+        g = Graph(parent, np.array([False] * 4 + [True]), np.array([-1] * 4 + [1]),
+                  np.array([k in grown for k in range(5)]), np.ones(5, bool), np.array([0, 1, 2, 3]),
+                  np.array([1, 2, 3, 4]), np.array([1, 2, 3, 4]), np.zeros(0, bool), lambda k: k, None)
+        shape = _shape(parent)
+        shape += (_path_sums(parent, shape[3], g.grown),)
+        return list(_tree_lassos(g, np.ones(5, bool), rep, 200, shape, edges_of(g, rep)))
+
+    assert lassos(set()) == []  # all in zero time
+    assert lassos({0, 1}) == []  # time passes before the entry only
+    for k in (2, 3, 4):  # in a step of the loop, the last one included
+        assert lassos({k}) == [(1, [2, 3, 4])]

@@ -30,6 +30,28 @@ class Graph:
     step: object  # s -> Node (a step into a covered zone)
 
 
+@dataclass
+class Edges:
+    """What every watch reads of the edges: their ends' representatives, whether time passes in each step, and
+    the edges sorted by (from, into) representatives (stably: in the order met within each pair)."""
+
+    ru: np.ndarray
+    rt: np.ndarray
+    grown: np.ndarray
+    key: np.ndarray
+    order: np.ndarray
+
+
+def edges_of(g: Graph, rep: np.ndarray) -> Edges:
+    ref = g.ref
+    real = ref >= 0
+    grown = np.where(real, g.grown[np.where(real, ref, 0)],
+                     g.step_grown[np.where(real, 0, -ref - 1)] if len(g.step_grown) else False)
+    ru, rt = rep[g.frm], rep[g.target]
+    key = ru * len(g.parent) + rt
+    return Edges(ru, rt, grown.astype(bool), key, np.argsort(key, kind="stable"))
+
+
 def python_graph(z) -> Graph:
     """The Graph of a search kept in Python (ZoneExplorer.nodes and out)."""
     nodes = z.nodes
@@ -52,14 +74,14 @@ def python_graph(z) -> Graph:
 
 def find(z, watch: np.ndarray, limit: int = 200):
     """Lassos through nodes where ``watch`` (one bool per node) holds: see runtime/zones/search.py's lassos."""
-    g, rep, shape = _prepared(z)
-    yield from _tree_lassos(g, watch, rep, limit, shape)
-    yield from _graph_lassos(g, watch, rep)
+    g, rep, shape, edges = _prepared(z)
+    yield from _tree_lassos(g, watch, rep, limit, shape, edges)
+    yield from _graph_lassos(g, watch, rep, edges)
 
 
-def _prepared(z) -> tuple[Graph, np.ndarray, tuple]:
-    """The search's graph, representatives and tree shape: the same for every watch (one per response observer),
-    kept on the explorer while its nodes stay those of the same search."""
+def _prepared(z) -> tuple[Graph, np.ndarray, tuple, Edges]:
+    """The search's graph, representatives, tree shape and edges: the same for every watch (one per response
+    observer), kept on the explorer while its nodes stay those of the same search."""
     got = z.lasso_graph
     if got is not None and got[0] is z.nodes and got[1] == len(z.nodes):
         return got[2:]
@@ -71,8 +93,18 @@ def _prepared(z) -> tuple[Graph, np.ndarray, tuple]:
         if np.array_equal(nxt, rep):
             break
         rep = nxt
-    z.lasso_graph = (z.nodes, len(z.nodes), g, rep, _shape(g.parent))
-    return g, rep, z.lasso_graph[4]
+    shape = _shape(g.parent)
+    z.lasso_graph = (z.nodes, len(z.nodes), g, rep, shape + (_path_sums(g.parent, shape[3], g.grown),),
+                     edges_of(g, rep))
+    return z.lasso_graph[2:]
+
+
+def _path_sums(parent: np.ndarray, levels: list[np.ndarray], values: np.ndarray) -> np.ndarray:
+    """Per node, the sum of ``values`` from its root down to it (itself included), a level at a time."""
+    out = values.astype(np.int64)
+    for level in levels[1:]:
+        out[level] += out[parent[level]]
+    return out
 
 
 def _shape(parent: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
@@ -110,7 +142,7 @@ def _shape(parent: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list
 def _tree(g: Graph, watch: np.ndarray, shape: tuple):
     """Depths in the search's tree, the depth each watching run starts at, entry and exit numbers of a depth-first
     walk (the ancestor test), from the shape computed once rather than walking up from every state."""
-    depth, enter, leave, levels = shape
+    depth, enter, leave, levels = shape[:4]
     parent = g.parent
     top = depth.copy()
     for level in levels[1:]:  # top[u] = top[parent] while both watch, a level at a time
@@ -120,7 +152,7 @@ def _tree(g: Graph, watch: np.ndarray, shape: tuple):
     return depth, top, enter, leave
 
 
-def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape: tuple):
+def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape: tuple, edges: Edges):
     if not len(g.frm):
         return
     depth, top, enter, leave = _tree(g, watch, shape)
@@ -129,7 +161,11 @@ def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape
     own = real & g.zoned[np.where(real, ref, 0)] & (rep[t] == t)  # into a zone of its own: the tree goes on
     a = rep[t]
     ok = watch[u] & ~own & watch[a] & (depth[a] >= top[u]) & (enter[a] <= enter[u]) & (leave[u] <= leave[a])
-    parent, grown = g.parent, g.grown
+    # time passes in the step or down the tree from the entry (the chain below): else a cycle in zero time, where
+    # no request waits for ever
+    passes = shape[4]
+    ok &= edges.grown | (passes[u] > passes[a])
+    parent = g.parent
     found, done = [], -1
     for e in np.flatnonzero(ok).tolist():
         k0 = int(u[e])
@@ -142,16 +178,14 @@ def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape
         while k != entry:
             chain.append(k)
             k = int(parent[k])
-        step_grown = bool(grown[r]) if r >= 0 else bool(g.step_grown[-r - 1])
-        if step_grown or any(grown[c] for c in chain):  # else a cycle in zero time, where no request waits for ever
-            step = g.node(r) if r >= 0 else g.step(-r - 1)
-            found.append((len(chain) + 1, entry, [g.node(c) for c in reversed(chain)] + [step]))
-            done = k0
+        step = g.node(r) if r >= 0 else g.step(-r - 1)
+        found.append((len(chain) + 1, entry, [g.node(c) for c in reversed(chain)] + [step]))
+        done = k0
     for _, entry, loop in sorted(found, key=lambda f: f[0]):
         yield entry, loop
 
 
-def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
+def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, edges: Edges | None = None):
     """Cycles of the graph where a covered node stands for the node covering it, among nodes that watch: its
     strongly connected components (scipy's, on the edges as arrays), then in each, for up to 20 edges in which
     time passes, the shortest way back (breadth first, inside the component)."""
@@ -160,18 +194,17 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
 
     if not len(g.frm):
         return
-    ru, rt = rep[g.frm], rep[g.target]
-    keep = np.flatnonzero(watch[g.frm] & watch[rt])
-    if not len(keep):
+    if edges is None:
+        edges = edges_of(g, rep)
+    ru, rt, stepg, key, ref = edges.ru, edges.rt, edges.grown, edges.key, g.ref
+    on = watch[g.frm] & watch[rt]
+    if not on.any():
         return
-    ref = g.ref
-    stepg = np.where(ref >= 0, g.grown[np.where(ref >= 0, ref, 0)],
-                     g.step_grown[np.where(ref < 0, -ref - 1, 0)] if len(g.step_grown) else False)
     n = len(g.parent)
-    key = ru[keep] * n + rt[keep]
-    _, first = np.unique(key, return_index=True)
-    first = np.sort(first)  # edges in the order they were first met
-    src, dst = ru[keep[first]], rt[keep[first]]
+    kept = edges.order[on[edges.order]]  # the watching edges by (from, into), in the order met within a pair
+    firsts = kept[np.r_[True, key[kept][1:] != key[kept][:-1]]]
+    first = np.sort(firsts)  # each pair's first edge, in the order they were first met
+    src, dst = ru[first], rt[first]
     names, local = np.unique(np.concatenate([src, dst]), return_inverse=True)
     a, b = local[:len(src)], local[len(src):]
     m = len(names)
@@ -181,12 +214,12 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
     if not len(inside):
         return
     # the step standing for each edge inside: the last one met in which time passes, else the first
-    label = keep[first[inside]]
+    label = first[inside]
     ikey = key[first[inside]]
     order = np.argsort(ikey)
     sorted_keys = ikey[order]
-    timed = keep[stepg[keep]]
-    tkey = ru[timed] * n + rt[timed]
+    timed = np.flatnonzero(on & stepg)
+    tkey = key[timed]
     at = np.searchsorted(sorted_keys, tkey)
     hit = (at < len(sorted_keys)) & (sorted_keys[np.minimum(at, len(sorted_keys) - 1)] == tkey)
     where, steps = order[at[hit]], timed[hit]  # in the order met
@@ -206,11 +239,11 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray):
         got = chosen.setdefault(int(comp[a[inside[i]]]), [])
         if len(got) < 20:
             got.append(i)
-    for c, edges in chosen.items():
+    for c, picks in chosen.items():
         members = np.flatnonzero(comp == c)
         sub = adj[members][:, members].tocsr()
         where = {int(v): k for k, v in enumerate(members.tolist())}
-        for i in edges:
+        for i in picks:
             u, v = int(a[inside[i]]), int(b[inside[i]])
             x, y = int(names[u]), int(names[v])
             if u == v:
