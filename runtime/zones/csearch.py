@@ -44,6 +44,8 @@ def library():
             ("zs_initial", i32, [p, i64, dbl, PROGRAM]),
             ("zs_run", i32, [p, i64, i32, PROGRAM, PROGRESS, i64, i32]),
             ("zs_counts", None, [p, ctypes.POINTER(i64)]), ("zs_nodes", None, [p, i32, ctypes.POINTER(i64)]),
+            ("zs_node_rows", None, [p, i32, ctypes.POINTER(i64), i64, ctypes.POINTER(i64)]),
+            ("zs_step_grown", None, [p, ctypes.POINTER(ctypes.c_uint8)]),
             ("zs_edges", None, [p, ctypes.POINTER(ctypes.c_int32)]),
             ("zs_members", None, [p, ctypes.POINTER(ctypes.c_int32)]),
             ("zs_guards", None, [p, ctypes.POINTER(i64)]), ("zs_zone", None, [p, i64, dbl]),
@@ -340,12 +342,10 @@ class CSearch:
         lib.zs_members(self.ctx, self.members.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
         rows = np.zeros((max(1, n_nodes), 10), dtype=np.int64)
         lib.zs_nodes(self.ctx, 0, _longs(rows))
-        srows = np.zeros((max(1, n_steps), 10), dtype=np.int64)
-        lib.zs_nodes(self.ctx, 1, _longs(srows))
         edges = np.zeros((max(1, n_edges), 3), dtype=np.int32)
         lib.zs_edges(self.ctx, edges.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
         self.z.nodes = Nodes(self, rows[:n_nodes])
-        self.steps = Nodes(self, srows[:n_steps])
+        self.steps = Steps(self, n_steps)
         self.z.out = Out(self, edges[:n_edges], n_nodes)
         if self.compiled is not None:
             self.z.states = States(self)
@@ -354,11 +354,11 @@ class CSearch:
         """The nodes and steps as arrays, for lassos."""
         from runtime.zones.lassos import Graph
 
-        rows, srows = self.z.nodes.rows, self.steps.rows
+        rows = self.z.nodes.rows
         e = self.z.out.edges
         return Graph(rows[:, 1].copy(), (rows[:, 9] & 2) > 0, rows[:, 3].copy(), (rows[:, 9] & 1) > 0, rows[:, 4] >= 0,
                      e[:, 0].astype(np.int64), e[:, 1].astype(np.int64), e[:, 2].astype(np.int64),
-                     (srows[:, 9] & 1) > 0, self.z.nodes.__getitem__, self.steps.__getitem__)
+                     self.steps.grown(), self.z.nodes.__getitem__, self.steps.__getitem__)
 
     def node_words(self, offset: int) -> np.ndarray:
         """Word ``offset`` of each node's state."""
@@ -415,6 +415,39 @@ class Nodes:
 
     def __iter__(self):
         return (self[k] for k in range(len(self.rows)))
+
+
+class Steps:
+    """The steps into covered zones, as :class:`Nodes` but each one's row read from C when it is asked for (a
+    search keeps several times more steps than nodes, and a trace reads a few)."""
+
+    def __init__(self, search: CSearch, n: int) -> None:
+        self.search, self.n, self.cache = search, n, {}
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, k: int):
+        if k < 0:
+            k += self.n
+        if not 0 <= k < self.n:
+            raise IndexError(k)
+        got = self.cache.get(k)
+        if got is None:
+            s = self.search
+            row = np.zeros(10, dtype=np.int64)
+            s.lib.zs_node_rows(s.ctx, 1, _longs(np.array([k], dtype=np.int64)), 1, _longs(row))
+            got = self.cache[k] = CNode(s, row.tolist())
+        return got
+
+    def __iter__(self):
+        return (self[k] for k in range(self.n))
+
+    def grown(self) -> np.ndarray:
+        """Whether time passed in each step."""
+        out = np.zeros(max(1, self.n), dtype=np.uint8)
+        self.search.lib.zs_step_grown(self.search.ctx, out.ctypes.data_as(ctypes.POINTER(ctypes.c_uint8)))
+        return out[:self.n] > 0
 
 
 class Out:

@@ -156,24 +156,23 @@ def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape
     if not len(g.frm):
         return
     depth, top, enter, leave = _tree(g, watch, shape)
-    u, t, ref = g.frm, g.target, g.ref
+    e = np.flatnonzero(watch[g.frm] & watch[edges.rt])  # the edges between watching nodes, the others left at once
+    u, t, ref, a = g.frm[e], g.target[e], g.ref[e], edges.rt[e]
     real = ref >= 0
-    own = real & g.zoned[np.where(real, ref, 0)] & (rep[t] == t)  # into a zone of its own: the tree goes on
-    a = rep[t]
-    ok = watch[u] & ~own & watch[a] & (depth[a] >= top[u]) & (enter[a] <= enter[u]) & (leave[u] <= leave[a])
+    own = real & g.zoned[np.where(real, ref, 0)] & (a == t)  # into a zone of its own: the tree goes on
+    ok = ~own & (depth[a] >= top[u]) & (enter[a] <= enter[u]) & (leave[u] <= leave[a])
     # time passes in the step or down the tree from the entry (the chain below): else a cycle in zero time, where
     # no request waits for ever
     passes = shape[4]
-    ok &= edges.grown | (passes[u] > passes[a])
+    ok &= edges.grown[e] | (passes[u] > passes[a])
     parent = g.parent
     found, done = [], -1
-    for e in np.flatnonzero(ok).tolist():
-        k0 = int(u[e])
+    for i in np.flatnonzero(ok).tolist():
+        k0, entry, r = int(u[i]), int(a[i]), int(ref[i])
         if k0 == done:
             continue
         if len(found) >= limit:
             break
-        entry, r = int(a[e]), int(ref[e])
         chain, k = [], k0
         while k != entry:
             chain.append(k)

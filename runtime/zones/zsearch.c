@@ -1343,17 +1343,38 @@ void zs_counts(void *p, int64_t *out)
 
 /* Node (steps: which=1) fields as int64 rows of 10: state parent via by zone own members guard guard_len
  * grown|covered<<1|expanded<<2. */
+static void node_row(const Node *a, int64_t *r)
+{
+    r[0] = a->state, r[1] = a->parent, r[2] = a->via, r[3] = a->by, r[4] = a->zone;
+    r[5] = a->own, r[6] = a->members, r[7] = a->guard, r[8] = a->guard_len;
+    r[9] = a->grown | a->covered << 1 | a->expanded << 2;
+}
+
+/* Every node (which 0) or step into a covered zone (1) as 10 numbers each. */
 void zs_nodes(void *p, int which, int64_t *out)
 {
     Ctx *x = p;
     Node *a = which ? x->steps.a : x->nodes.a;
     int64_t n = which ? x->steps.n : x->nodes.n;
-    for (int64_t i = 0; i < n; i++) {
-        int64_t *r = out + 10 * i;
-        r[0] = a[i].state, r[1] = a[i].parent, r[2] = a[i].via, r[3] = a[i].by, r[4] = a[i].zone;
-        r[5] = a[i].own, r[6] = a[i].members, r[7] = a[i].guard, r[8] = a[i].guard_len;
-        r[9] = a[i].grown | a[i].covered << 1 | a[i].expanded << 2;
-    }
+    for (int64_t i = 0; i < n; i++)
+        node_row(a + i, out + 10 * i);
+}
+
+/* The rows of nodes or steps ids[0..n) only (steps are many, and few are read). */
+void zs_node_rows(void *p, int which, const int64_t *ids, int64_t n, int64_t *out)
+{
+    Ctx *x = p;
+    Node *a = which ? x->steps.a : x->nodes.a;
+    for (int64_t i = 0; i < n; i++)
+        node_row(a + ids[i], out + 10 * i);
+}
+
+/* Whether time passed in each step into a covered zone, one byte each. */
+void zs_step_grown(void *p, uint8_t *out)
+{
+    Ctx *x = p;
+    for (int64_t i = 0; i < x->steps.n; i++)
+        out[i] = x->steps.a[i].grown;
 }
 
 void zs_edges(void *p, int32_t *out)
