@@ -232,6 +232,19 @@ def test_zones_come_back_as_the_search_stored_them(tmp_path):
             assert n.stored.dtype == np.float32 and n.zone.shape == (z.n + 1, z.n + 1)
 
 
+def test_every_word_of_every_node_reads_as_its_state_says(tmp_path):
+    # node_words skips the words before the one asked for, eight bytes at a time where it can: each word of each
+    # node's state, against the state decoded whole.
+    big = 0
+    for case in CASES:
+        z, _ = _explore(model_of(tmp_path, *case[1:]), "c")
+        states = [n.state for n in z.nodes]
+        for offset in range(len(states[0])):
+            assert z.node_words(offset).tolist() == [s[offset] for s in states], (case[0], offset)
+        big += sum(abs(w) > 63 for s in states for w in s)  # words of two bytes or more
+    assert big, "no word takes more than one byte: the skipping is not exercised"
+
+
 def test_lassos_of_the_c_search_are_those_of_the_python_search(tmp_path):
     # The lasso search reads the C search's tables as arrays; the loops it yields must be the Python search's.
     from runtime.zones.search import lassos

@@ -347,7 +347,7 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
     promela_alone = args.promela and not (args.aut or args.dot)
     deadlock = args.deadlock or not (properties or promela_alone or observers or responses)
     load_externs(args.externs)
-    zones = bool(observers or responses) and _zones(model, args)
+    zones = _zones(model, args, options) if observers or responses else None  # the zone explorer, if it takes it
     if responses and not zones and not _response_observers(model):  # no clock at all: no task, no service
         print(f"response times: none to measure ({model.title} has no periodic task and no service)")
         responses = False
@@ -362,7 +362,7 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
             active().line(f"model {model.title}")
         from genom2bip.cli.verify_timed import platform_line
         platform_line(model)
-        worst, stopped = check_timing_zones(model, observers, responses, options, listener)
+        worst, stopped = check_timing_zones(model, observers, responses, options, listener, zones)
         left = (["deadlock"] if deadlock else []) + [f"property {p.name}" for p in properties]
         left += [f"--{k} export" for k in ("aut", "dot", "promela") if getattr(args, k)]
         args._interrupted = stopped == "interrupted"
@@ -397,21 +397,21 @@ def _explore(model, args: argparse.Namespace, options, listener, compositional: 
     return worst
 
 
-def _zones(model, args) -> bool:
-    """Time by clock zones: asked for, or by default on a platform model the zone explorer takes."""
+def _zones(model, args, options):
+    """Time by clock zones (asked for, or by default on a platform model the zone explorer takes): the zone
+    explorer made to tell, which then searches; None for ticks."""
     choice = getattr(args, "time_search", None)
     if choice == "ticks" or (choice is None and not _platform_of(model)):
-        return False
+        return None
     from genom2bip.verify.zones import ZonesUnsupported, explorer
     try:
-        explorer(model)
+        return explorer(model, options)
     except ZonesUnsupported as exc:
         if choice == "zones":  # asked for: nothing is explored, so the message does not say it is
             error(f"--time-search zones: clock zones do not take this model ({exc}); try --time-search ticks")
             raise Failure(EXIT_USAGE) from None
         print(f"note: clock zones do not take this model ({exc}): exploring tick by tick")
-        return False
-    return True
+        return None
 
 
 def _platform_of(model) -> str | None:

@@ -216,18 +216,18 @@ def _stopped_by(limit: str) -> str:
     return STOPPED.get(limit, limit)
 
 
-def check_timing_zones(model, kinds, responses: bool, options, listener) -> tuple[int, str]:
-    """The observers of ``kinds`` and, with ``responses``, the response times, by one zone exploration; printed as
-    the tick explorer prints verdicts (a violation as soon as found, when the listener prints it), the response
-    times as a table with a trace each; the worst exit status, and why the search stopped early ("" if it did
-    not, or because every verdict was known)."""
+def check_timing_zones(model, kinds, responses: bool, options, listener, z=None) -> tuple[int, str]:
+    """The observers of ``kinds`` and, with ``responses``, the response times, by one zone exploration (``z``: the
+    zone explorer, if made already); printed as the tick explorer prints verdicts (a violation as soon as found,
+    when the listener prints it), the response times as a table with a trace each; the worst exit status, and why
+    the search stopped early ("" if it did not, or because every verdict was known)."""
     from genom2bip.verify import Verdict, tick_us
     from genom2bip.verify.zones import ResponseResult, check_timing
 
     tick = tick_us(model.package)
     if tick:
         active().line(f"time: one tick is {tick / 1000:g} ms; explored with clock zones")
-    results = check_timing(model, kinds, responses, options, listener)
+    results = check_timing(model, kinds, responses, options, listener, z)
     if results and active().captured:
         f = results[0]
         active().header.append(f"one search by clock zones for every check below ({f.method}, {f.figures.states:,} "

@@ -101,8 +101,10 @@ def _steps(timed_steps) -> tuple[list, list[int]]:
 
 
 def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = False,
-                 options: SearchOptions | None = None, listener: Listener | None = None) -> list[CheckResult]:
-    """Every observer of ``kinds`` and, with ``responses``, every response time, from one zone exploration.
+                 options: SearchOptions | None = None, listener: Listener | None = None,
+                 z=None) -> list[CheckResult]:
+    """Every observer of ``kinds`` and, with ``responses``, every response time, from one zone exploration (by
+    ``z``, a zone explorer of ``model`` that has not searched yet, if given).
 
     A violation is told to ``listener`` as soon as the search finds it (with its trace); the search ends when
     every observer asked for is violated and no response time is asked for.  Past ``options.time_limit``, or at
@@ -113,7 +115,8 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
 
     options = options or SearchOptions()
     listener = listener or Listener()
-    z = explorer(model, options)
+    if z is None or z.result is not None:
+        z = explorer(model, options)
     tick = tick_us(model.package)
     space = StateSpace(model.package, model.root, options.externs, None, True, set())
     by_path = {fa.name: fa for fa in z.flat.atoms}

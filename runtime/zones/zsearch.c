@@ -1435,13 +1435,31 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
     return len;
 }
 
-/* Word ``offset`` of each of the states ids[0..n) into out (each decoded only as far as that word). */
+/* Where the number after the first ``n`` of b[0..len) starts: eight bytes at a time while they hold no more ends
+ * than are left to skip (a byte with its high bit clear ends a number). */
+static const uint8_t *skip_words(const uint8_t *b, int64_t len, int n)
+{
+    const uint8_t *end = b + len;
+    while (n > 0 && b + 8 <= end) {
+        uint64_t v;
+        memcpy(&v, b, 8);
+        int ends = __builtin_popcountll(~v & 0x8080808080808080ull);
+        if (ends > n)
+            break;
+        b += 8, n -= ends;
+    }
+    for (; n > 0; b++)
+        n -= !(*b & 0x80);
+    return b;
+}
+
+/* Word ``offset`` of each of the states ids[0..n) into out (the words before it skipped, not decoded). */
 void zs_node_words(void *p, const int64_t *ids, int64_t n, int offset, int64_t *out)
 {
     Ctx *x = p;
-    int64_t w[offset + 1], len;
+    int64_t len;
     for (int64_t i = 0; i < n; i++) {
-        decode(state_bytes(x, ids[i], &len), offset + 1, w);
-        out[i] = w[offset];
+        const uint8_t *b = state_bytes(x, ids[i], &len);
+        decode(skip_words(b, len, offset), 1, out + i);
     }
 }
