@@ -482,6 +482,32 @@ def test_zones_past_16_bits_are_stored_in_single_precision_alike_in_c_and_python
                for n in zc.nodes if n.stored is not None)
 
 
+@pytest.mark.parametrize("merge", [True, False], ids=["merged", "apart"])
+def test_states_with_many_zones_compare_signatures_first_and_store_the_same(tmp_path, merge):
+    # Four processes reset their clocks in any order, round and round: one location vector gets dozens of zones, past
+    # the number from which the C store keeps each zone's row 0 and column 0 beside it and compares those first,
+    # and later ones that include or are included in them.
+    import collections
+
+    from randomtimed import Edge, Location, Network
+    from runtime.tchecker.reach import load
+
+    k = 4
+    net = Network([[Location(invariant=("<=", 3)), Location(), Location()] for _ in range(k)],
+                  [e for p in range(k) for e in (Edge(p, 0, 1, "a", reset=0), Edge(p, 1, 2, "b", guard=("<=", 5)),
+                                                 Edge(p, 2, 0, "c", reset=0))])
+    path = tmp_path / "orders.tck"
+    path.write_text(net.text())
+    _, tr = load(path, 1)
+    zp, zc = (ZoneExplorer(tr.package, tr.root, engine=e, merge=merge) for e in ("python", "c"))
+    rp, rc = zp.explore(), zc.explore()
+    assert (rc.states, rc.merged, rc.discrete) == (rp.states, rp.merged, rp.discrete)
+    assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes]
+    kept = collections.Counter(n.state for n in zc.nodes if not n.covered)
+    assert max(kept.values()) >= 16, "no state keeps enough zones for signatures (zsearch.c's SIG_FROM)"
+    assert any(n.covered for n in zc.nodes), "no zone was found included: the comparisons all failed"
+
+
 @pytest.mark.parametrize("chunk", range(2))
 def test_c_search_stores_what_the_python_search_stores_on_random_networks(tmp_path, chunk):
     # Merging zones (9 of the 200 merge some), covering and extrapolation on networks no fixture was written for.
