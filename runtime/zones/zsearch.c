@@ -115,6 +115,8 @@ typedef struct {
     int16_t *z16own;        /* scratch: slot_new's own 16-bit form of a zone (z16 may hold its caller's) */
     int32_t *past;          /* scratch: d * d numbers (union16) */
     int16_t *sig;           /* scratch: the signature of a zone being stored */
+    int sigk;               /* numbers in a signature (see sig_of) */
+    int64_t current;        /* the node being expanded (-1 before the first): those before it are expanded */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
     Doubles out;            /* scratch: arrive's pieces after time passes, kept from call to call */
     Longs grown;            /* scratch: each piece's grown flag */
@@ -205,7 +207,9 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
     x->z16own = malloc((int64_t)d * d * sizeof(int16_t));
     x->past = malloc((int64_t)d * d * sizeof(int32_t));
-    x->sig = malloc(2 * (int64_t)d * sizeof(int16_t));
+    x->sigk = (2 * (d - 1) + 15) / 16 * 16;  /* a whole number of 16-number blocks: no scalar tail */
+    x->sig = malloc((x->sigk + 1) * sizeof(int16_t));
+    x->current = -1;
     return x;
 }
 
@@ -898,9 +902,9 @@ static int add_member(Ctx *x, Node *step, int32_t k)
 #define SIG_FROM 16
 #define SIG_NONE INT16_MIN
 
-static int sig_len(const Ctx *x) { return 2 * (x->d - 1); }
+static int sig_len(const Ctx *x) { return x->sigk; }
 
-/* The signature of a zone from its 16-bit form (NULL: it has none, SIG_NONE). */
+/* The signature of a zone from its 16-bit form (NULL: it has none, SIG_NONE): row 0, column 0, zeros after. */
 static void sig_of(const Ctx *x, const int16_t *z16, int16_t *out)
 {
     int d = x->d;
@@ -912,6 +916,8 @@ static void sig_of(const Ctx *x, const int16_t *z16, int16_t *out)
         out[j - 1] = z16[j];
     for (int i = 1; i < d; i++)
         out[d - 2 + i] = z16[(int64_t)i * d];
+    for (int k = 2 * (d - 1); k < x->sigk; k++)
+        out[k] = 0;
 }
 
 static void sig_of_slot(const Ctx *x, int64_t slot, int16_t *out)
@@ -949,17 +955,36 @@ static int kept_push(Ctx *x, Kept *k, int32_t v, int64_t slot)
     return 0;
 }
 
-static void kept_prune(Ctx *x, Kept *kept)
+/* The entries at positions pos[0..n) (ascending) leave the state's list, which keeps its order. */
+static void kept_remove(Ctx *x, Kept *kept, const int32_t *pos, int64_t n)
 {
-    int32_t w = 0;
-    int K = sig_len(x);
-    for (int32_t i = 0; i < kept->n; i++)
-        if (!x->nodes.a[kept->a[i]].covered) {
-            if (kept->sig && w != i)
-                memcpy(kept->sig + (int64_t)w * K, kept->sig + (int64_t)i * K, K * sizeof(int16_t));
-            kept->a[w++] = kept->a[i];
+    int K = x->sigk;
+    int32_t w = pos[0];
+    for (int32_t i = pos[0], q = 0; i < kept->n; i++) {
+        if (q < n && pos[q] == i) {
+            q++;
+            continue;
         }
+        if (kept->sig)
+            memcpy(kept->sig + (int64_t)w * K, kept->sig + (int64_t)i * K, K * sizeof(int16_t));
+        kept->a[w++] = kept->a[i];
+    }
     kept->n = w;
+}
+
+/* The first position of the state's list whose node was not expanded yet: nodes are expanded in the order they
+ * are stored, and a list holds its nodes in that order, so those after the node being expanded. */
+static int32_t first_open(const Ctx *x, const Kept *kept)
+{
+    int32_t lo = 0, hi = kept->n;
+    while (lo < hi) {
+        int32_t mid = (lo + hi) / 2;
+        if (kept->a[mid] <= x->current)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
 }
 
 /* Whether two signatures leave room for an inclusion either way (*ge: a's bounds all at least b's; *le: at most). */
@@ -968,10 +993,11 @@ static int sig_may(const int16_t *a, const int16_t *b, int K)
     if (a[0] == SIG_NONE)
         return 1;
     int g = 1, l = 1;
-    for (int k = 0; k < K; k++) {
-        g &= a[k] >= b[k];
-        l &= a[k] <= b[k];
-    }
+    for (int k = 0; k < K; k += 16)  /* K is a whole number of blocks of 16 */
+        for (int j = 0; j < 16; j++) {
+            g &= a[k + j] >= b[k + j];
+            l &= a[k + j] <= b[k + j];
+        }
     return g | l;
 }
 
@@ -1031,10 +1057,9 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small, d
     int grew = 1, count = 0;
     while (grew) {  /* most pairs are told apart on their 16-bit forms (x->z16 kept the zone's as it grows) */
         grew = 0;
-        for (int32_t i = 0; i < kept->n; i++) {
+        x->under.n = 0;  /* the positions merged in this pass */
+        for (int32_t i = first_open(x, kept); i < kept->n; i++) {
             Node *o = &x->nodes.a[kept->a[i]];
-            if (o->expanded)
-                continue;
             if (small && !(o->zone & 1)
                 && !union16(x->z16, (const int16_t *)slot_bytes(x, o->zone), d, x->past))
                 continue;
@@ -1048,9 +1073,11 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small, d
                     return -9;
                 o->covered = 1, o->by = index;
                 grew = 1, count++;
+                PUSH(x->under, i);
             }
         }
-        kept_prune(x, kept);
+        if (x->under.n)
+            kept_remove(x, kept, x->under.a, x->under.n);
     }
     return count;
 }
@@ -1129,7 +1156,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
             }
         }
         if (x->under.n)
-            kept_prune(x, kept);
+            kept_remove(x, kept, x->under.a, x->under.n);
     }
     if (x->merge && kept->n) {
         double *own = T(x, 3);  /* the zone as it came, if it merges */
@@ -1289,6 +1316,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         if (x->nodes.a[k].covered)
             continue;
         x->nodes.a[k].expanded = 1;
+        x->current = k;
         x->pinned = x->nodes.a[k].state;
         const int64_t *pr = program(x, x->nodes.a[k].state, ask);
         if (!pr) {
