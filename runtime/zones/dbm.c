@@ -59,11 +59,13 @@ int z_constrain(double *m, int d, int i, int j, double c)
  * d * n steps instead of d^3. */
 static void z_close_raised(double *m, int d, const int *idx, int n)
 {
+    int row[4096], col[4096];  /* each entry's row start and column, divided out once (n <= 4096) */
+    for (int e = 0; e < n; e++)
+        row[e] = idx[e] / d * d, col[e] = idx[e] % d;
     for (int k = 0; k < d; k++) {
         const double *rk = m + (long)k * d;
         for (int e = 0; e < n; e++) {
-            int i = idx[e] / d, j = idx[e] % d;
-            double v = m[(long)i * d + k] + rk[j];
+            double v = m[row[e] + k] + rk[col[e]];
             if (v < m[idx[e]])
                 m[idx[e]] = v;
         }
