@@ -207,7 +207,7 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
     x->z16own = malloc((int64_t)d * d * sizeof(int16_t));
     x->past = malloc((int64_t)d * d * sizeof(int32_t));
-    x->sigk = (2 * (d - 1) + 15) / 16 * 16;  /* a whole number of 16-number blocks: no scalar tail */
+    x->sigk = (2 * (d - 1) + 15) / 16 * 16;
     x->sig = malloc((x->sigk + 1) * sizeof(int16_t));
     x->current = -1;
     return x;
@@ -895,14 +895,13 @@ static int add_member(Ctx *x, Node *step, int32_t k)
 /* -- signatures -------------------------------------------------------------------------------------
  * A state with many zones compares each new zone with every one of them, most in vain, and each comparison loads
  * a zone from anywhere in the pools.  Past SIG_FROM zones, the state keeps beside each one its row 0 and column 0
- * (every clock's lower and upper bound: 2(d - 1) numbers), side by side: a zone that neither includes nor is
+ * (every clock's lower and upper bound: 2(d - 1) numbers, padded with zeros to x->sigk, a whole number of blocks of
+ * 16 that vectorise without a scalar tail), side by side: a zone that neither includes nor is
  * included in the new one there is passed over without being loaded (on RobNav at three cores, 94 % of the pairs
  * of a state's zones).  The full comparison decides the others, so the search stores the same nodes.  A zone
  * whose bounds do not fit in 16 bits has SIG_NONE as its first number: it is always compared in full. */
 #define SIG_FROM 16
 #define SIG_NONE INT16_MIN
-
-static int sig_len(const Ctx *x) { return x->sigk; }
 
 /* The signature of a zone from its 16-bit form (NULL: it has none, SIG_NONE): row 0, column 0, zeros after. */
 static void sig_of(const Ctx *x, const int16_t *z16, int16_t *out)
@@ -928,7 +927,7 @@ static void sig_of_slot(const Ctx *x, int64_t slot, int16_t *out)
 /* Node v (its zone in ``slot``) joins the state's list. */
 static int kept_push(Ctx *x, Kept *k, int32_t v, int64_t slot)
 {
-    int K = sig_len(x);
+    int K = x->sigk;
     if (k->n == k->cap) {
         k->cap = k->cap ? 2 * k->cap : 4;
         int32_t *a = realloc(k->a, k->cap * sizeof(int32_t));
@@ -987,7 +986,7 @@ static int32_t first_open(const Ctx *x, const Kept *kept)
     return lo;
 }
 
-/* Whether two signatures leave room for an inclusion either way (*ge: a's bounds all at least b's; *le: at most). */
+/* Whether two signatures leave room for an inclusion either way: a's bounds all at least b's, or all at most. */
 static int sig_may(const int16_t *a, const int16_t *b, int K)
 {
     if (a[0] == SIG_NONE)
@@ -1107,7 +1106,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         int small = to_short(zone, len, mine);
         ready = small ? mine : NULL;
         x->under.n = 0;
-        int K = sig_len(x);
+        int K = x->sigk;
         int16_t *sig = kept->sig && small ? x->sig : NULL;  /* signatures first, where the state keeps them */
         if (sig)
             sig_of(x, mine, sig);
