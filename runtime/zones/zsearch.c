@@ -115,6 +115,11 @@ typedef struct {
     int16_t *z16own;        /* scratch: slot_new's own 16-bit form of a zone (z16 may hold its caller's) */
     int32_t *past;          /* scratch: d * d numbers (union16) */
     int16_t *sig;           /* scratch: the signature of a zone being stored */
+    /* what a stored zone keeps: columns x->cols[0..w) of each row (see zs_set_grow_only), rlen numbers in all */
+    int w, *cols, *at;      /* at[j]: column j's place in a stored row, -1 where it is column 0's */
+    int *from;              /* from[j]: the place column j is read from (at[j], or 0) */
+    int64_t rlen;
+    int16_t *z16r;          /* scratch: a zone's stored 16-bit form */
     int sigk;               /* numbers in a signature (see sig_of) */
     int64_t current;        /* the node being expanded (-1 before the first): those before it are expanded */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
@@ -170,18 +175,50 @@ void zs_program_counts(void *p, int64_t *out)
     out[0] = x->let_go, out[1] = x->rewritten;
 }
 
-/* The clocks read only for how large they grow (model.py's grow_only). */
+/* What a stored zone keeps: every column but those of the clocks read only for how large they grow, which are
+ * column 0 (forget_below makes them so before a zone is stored, and a merge's hull keeps it) with 0 on the diagonal.
+ * Comparisons, signatures and the hash read the stored form; a zone is spread back whole when it is loaded. */
+static int set_layout(Ctx *x)
+{
+    int d = x->d, w = 0;
+    free(x->cols), free(x->at), free(x->from), free(x->z16r), free(x->sig);
+    x->cols = malloc(d * sizeof(int)), x->at = malloc(d * sizeof(int)), x->from = malloc(d * sizeof(int));
+    if (!x->cols || !x->at || !x->from)
+        return -9;
+    for (int j = 0; j < d; j++) {
+        int grows = 0;
+        for (int c = 0; c < x->ngrow; c++)
+            grows |= x->grow_only[c] == j;
+        x->at[j] = grows ? -1 : w;
+        x->from[j] = grows ? 0 : w;
+        if (!grows)
+            x->cols[w++] = j;
+    }
+    x->w = w, x->rlen = (int64_t)d * w;
+    x->shorts.size = x->rlen * sizeof(int16_t);
+    x->floats.size = x->rlen * sizeof(float);
+    x->sigk = (w - 1 + d - 1 + 15) / 16 * 16;
+    x->z16r = malloc(x->rlen * sizeof(int16_t));
+    x->sig = malloc((x->sigk + 1) * sizeof(int16_t));
+    return x->z16r && x->sig ? 0 : -9;
+}
+
+/* The clocks read only for how large they grow (model.py's grow_only); before the search stores a zone. */
 int zs_set_grow_only(void *p, const int *clocks, int n)
 {
     Ctx *x = p;
+    if (x->shorts.n || x->floats.n)
+        return -2;
     free(x->grow_only);
     x->grow_only = malloc((n ? n : 1) * sizeof(int));
     if (!x->grow_only)
         return -9;
     memcpy(x->grow_only, clocks, n * sizeof(int));
     x->ngrow = n;
-    return 0;
+    return set_layout(x);
 }
+
+void zs_free(void *p);
 
 void *zs_new(int d, const double *ceiling, int nobs, int merge)
 {
@@ -201,15 +238,15 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     x->ntmp = 9;
     x->pinned = -1;
     x->depth = -1;
-    x->shorts.size = (int64_t)d * d * sizeof(int16_t);
-    x->floats.size = (int64_t)d * d * sizeof(float);
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
     x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
     x->z16own = malloc((int64_t)d * d * sizeof(int16_t));
     x->past = malloc((int64_t)d * d * sizeof(int32_t));
-    x->sigk = (2 * (d - 1) + 15) / 16 * 16;
-    x->sig = malloc((x->sigk + 1) * sizeof(int16_t));
     x->current = -1;
+    if (set_layout(x)) {  /* every column kept until zs_set_grow_only */
+        zs_free(x);
+        return NULL;
+    }
     return x;
 }
 
@@ -227,6 +264,7 @@ void zs_free(void *p)
     free(x->floats.free.a), free(x->shorts.refs), free(x->floats.refs), free(x->zkey), free(x->nodes.a), free(x->steps.a);
     free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16), free(x->z16own), free(x->past), free(x->sig), free(x->under.a);
+    free(x->cols), free(x->at), free(x->from), free(x->z16r);
     free(x->out.a), free(x->grown.a);
     free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
     tables_free(x->tables);
@@ -514,25 +552,40 @@ static int to_short(const double *restrict z, int64_t len, int16_t *restrict out
     return !bad;
 }
 
+/* A full 16-bit matrix's stored form: its columns x->cols, row by row. */
+static void gather16(const Ctx *x, const int16_t *full, int16_t *out)
+{
+    int d = x->d, w = x->w;
+    if (w == d) {  /* every column kept */
+        memcpy(out, full, (int64_t)d * d * sizeof(int16_t));
+        return;
+    }
+    for (int a = 0; a < d; a++)
+        for (int q = 0; q < w; q++)
+            out[(int64_t)a * w + q] = full[(int64_t)a * d + x->cols[q]];
+}
+
+
 /* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory.  ``z16``: z's
  * 16-bit form if the caller has it (to_short said it fits), else NULL. */
 static int64_t slot_new(Ctx *x, const double *z, const int16_t *z16)
 {
-    int64_t len = (int64_t)x->d * x->d;
+    int64_t len = (int64_t)x->d * x->d, rlen = x->rlen;
     int64_t s;
     if (!z16 && to_short(z, len, x->z16own))
         z16 = x->z16own;
     if (z16) {
         if ((s = pool_take(&x->shorts)) < 0)
             return -1;
-        memcpy((int16_t *)x->shorts.a + s * len, z16, len * sizeof(int16_t));
+        gather16(x, z16, (int16_t *)x->shorts.a + s * rlen);
         s = 2 * s;
     } else {
         if ((s = pool_take(&x->floats)) < 0)
             return -1;
-        float *dst = (float *)x->floats.a + s * len;
-        for (int64_t k = 0; k < len; k++)
-            dst[k] = (float)z[k];
+        float *dst = (float *)x->floats.a + s * rlen;
+        for (int a = 0; a < x->d; a++)
+            for (int q = 0; q < x->w; q++)
+                dst[(int64_t)a * x->w + q] = (float)z[(int64_t)a * x->d + x->cols[q]];
         s = 2 * s + 1;
     }
     if (2 * (x->zused + 1) > x->zcap && zkey_grow(x))
@@ -560,57 +613,63 @@ static int64_t slot_new(Ctx *x, const double *z, const int16_t *z16)
     return s;
 }
 
+/* Stored number q of slot s (an index into its stored form). */
+static double stored(const Ctx *x, int64_t s, int64_t q)
+{
+    if (s & 1)
+        return ((const float *)x->floats.a)[(s >> 1) * x->rlen + q];
+    int16_t v = ((const int16_t *)x->shorts.a)[(s >> 1) * x->rlen + q];
+    return v == SHORT_INF ? INFINITY : v;
+}
+
+/* Entry k of slot s's full matrix. */
 static double entry(const Ctx *x, int64_t s, int64_t k)
 {
-    int64_t len = (int64_t)x->d * x->d;
-    if (s & 1)
-        return ((const float *)x->floats.a)[(s >> 1) * len + k];
-    int16_t v = ((const int16_t *)x->shorts.a)[(s >> 1) * len + k];
-    return v == SHORT_INF ? INFINITY : v;
+    int a = (int)(k / x->d), j = (int)(k % x->d);
+    if (x->at[j] < 0 && a == j)
+        return 0;
+    return stored(x, s, (int64_t)a * x->w + (x->at[j] >= 0 ? x->at[j] : 0));
 }
 
 static void slot_load(Ctx *x, int64_t s, double *z)
 {
     int64_t len = (int64_t)x->d * x->d;
     if (s & 1) {
-        const float *src = (const float *)x->floats.a + (s >> 1) * len;
         for (int64_t k = 0; k < len; k++)
-            z[k] = src[k];
-    } else {
-        const int16_t *src = (const int16_t *)x->shorts.a + (s >> 1) * len;
-        for (int64_t k = 0; k < len; k++)
-            z[k] = src[k] == SHORT_INF ? INFINITY : src[k];
+            z[k] = entry(x, s, k);
+    } else {  /* row by row: a column left out is column 0, with 0 on the diagonal */
+        const int16_t *r = (const int16_t *)slot_bytes(x, s);
+        for (int a = 0; a < x->d; a++) {
+            const int16_t *ra = r + (int64_t)a * x->w;
+            double *za = z + (int64_t)a * x->d;
+            for (int j = 0; j < x->d; j++) {
+                int16_t v = ra[x->from[j]];
+                za[j] = v == SHORT_INF ? INFINITY : v;
+            }
+        }
+        for (int c = 0; c < x->ngrow; c++)
+            z[(int64_t)x->grow_only[c] * (x->d + 1)] = 0;
     }
+}
+
+/* z's entries at the stored places (a zone that went through forget_below: those left out are column 0's). */
+static double at_stored(const Ctx *x, const double *z, int64_t q)
+{
+    return z[q / x->w * x->d + x->cols[q % x->w]];
 }
 
 static int slot_geq(Ctx *x, int64_t s, const double *z)  /* the stored zone includes z */
 {
-    int64_t len = (int64_t)x->d * x->d;
-    if (!(s & 1)) {
-        const int16_t *a = (const int16_t *)x->shorts.a + (s >> 1) * len;
-        for (int64_t k = 0; k < len; k++)
-            if (a[k] != SHORT_INF && (z[k] == INFINITY || a[k] < z[k]))
-                return 0;
-        return 1;
-    }
-    for (int64_t k = 0; k < len; k++)
-        if (entry(x, s, k) < z[k])
+    for (int64_t q = 0; q < x->rlen; q++)
+        if (stored(x, s, q) < at_stored(x, z, q))
             return 0;
     return 1;
 }
 
 static int slot_leq(Ctx *x, int64_t s, const double *z)  /* z includes the stored zone */
 {
-    int64_t len = (int64_t)x->d * x->d;
-    if (!(s & 1)) {
-        const int16_t *a = (const int16_t *)x->shorts.a + (s >> 1) * len;
-        for (int64_t k = 0; k < len; k++)
-            if (z[k] != INFINITY && (a[k] == SHORT_INF || a[k] > z[k]))
-                return 0;
-        return 1;
-    }
-    for (int64_t k = 0; k < len; k++)
-        if (entry(x, s, k) > z[k])
+    for (int64_t q = 0; q < x->rlen; q++)
+        if (stored(x, s, q) > at_stored(x, z, q))
             return 0;
     return 1;
 }
@@ -650,7 +709,7 @@ static int slot_drop(Ctx *x, int64_t s)
 
 static int64_t zone_bytes(const Ctx *x)
 {
-    int64_t len = (int64_t)x->d * x->d;
+    int64_t len = x->rlen;
     return (x->shorts.n - x->shorts.free.n) * len * 2 + (x->floats.n - x->floats.free.n) * len * 4
            + x->zcap * 8 + (x->shorts.n + x->floats.n) * 4;
 }
@@ -903,20 +962,21 @@ static int add_member(Ctx *x, Node *step, int32_t k)
 #define SIG_FROM 16
 #define SIG_NONE INT16_MIN
 
-/* The signature of a zone from its 16-bit form (NULL: it has none, SIG_NONE): row 0, column 0, zeros after. */
+/* The signature of a zone from its stored 16-bit form (NULL: it has none, SIG_NONE): row 0, column 0, zeros
+ * after. */
 static void sig_of(const Ctx *x, const int16_t *z16, int16_t *out)
 {
-    int d = x->d;
+    int d = x->d, w = x->w, k = 0;
     if (!z16) {
         out[0] = SIG_NONE;
         return;
     }
-    for (int j = 1; j < d; j++)
-        out[j - 1] = z16[j];
-    for (int i = 1; i < d; i++)
-        out[d - 2 + i] = z16[(int64_t)i * d];
-    for (int k = 2 * (d - 1); k < x->sigk; k++)
-        out[k] = 0;
+    for (int q = 1; q < w; q++)  /* row 0 (its columns left out are 0, the same for every zone) */
+        out[k++] = z16[q];
+    for (int a = 1; a < d; a++)  /* column 0 */
+        out[k++] = z16[(int64_t)a * w];
+    while (k < x->sigk)
+        out[k++] = 0;
 }
 
 static void sig_of_slot(const Ctx *x, int64_t slot, int16_t *out)
@@ -1000,53 +1060,60 @@ static int sig_may(const int16_t *a, const int16_t *b, int K)
     return g | l;
 }
 
-/* Whether bound (i, j) of a, beyond which b goes (a[i][j] = c), and bound k = (k, l) of b, beyond which a goes,
- * leave a point of the hull in neither (z_union's test; SHORT_INF: no bound). */
-static int apart16(const int16_t *a, const int16_t *b, int d, int i, int j, int32_t c, int64_t k)
+/* Entry (i, j) of a zone's full matrix from its stored 16-bit form. */
+static int32_t full16(const Ctx *x, const int16_t *r, int i, int j)
 {
-    int kk = (int)(k / d), l = (int)(k % d);
-    int32_t il = a[(int64_t)i * d + l] > b[(int64_t)i * d + l] ? a[(int64_t)i * d + l] : b[(int64_t)i * d + l];
-    int32_t kj = a[(int64_t)kk * d + j] > b[(int64_t)kk * d + j] ? a[(int64_t)kk * d + j] : b[(int64_t)kk * d + j];
-    return il == SHORT_INF || kj == SHORT_INF || il + kj >= c + b[k] + 2;
+    int q = x->at[j];
+    return q >= 0 ? r[(int64_t)i * x->w + q] : i == j ? 0 : r[(int64_t)i * x->w];
 }
 
-/* dbm.c's z_union on two zones' 16-bit forms, without the hull: 1 when their union is one zone.  The first bound
- * of a that b goes beyond is tested against each bound of b that a goes beyond as the scan meets it, which tells
- * most pairs apart before the scan ends; the others are tested pair by pair after.  past: room for d * d numbers. */
-static int union16(const int16_t *a, const int16_t *b, int d, int32_t *past)
+/* Whether bound (i, j) of a, beyond which b goes (a[i][j] = c), and bound (k, l) of b, beyond which a goes, leave
+ * a point of the hull in neither (z_union's test, on stored forms; SHORT_INF: no bound). */
+static int apart16(const Ctx *x, const int16_t *a, const int16_t *b, int i, int j, int32_t c, int k, int l)
 {
-    int64_t len = (int64_t)d * d;
-    int n = 0, i0 = -1, j0 = -1;
+    int32_t ail = full16(x, a, i, l), bil = full16(x, b, i, l), akj = full16(x, a, k, j), bkj = full16(x, b, k, j);
+    int32_t il = ail > bil ? ail : bil, kj = akj > bkj ? akj : bkj;
+    return il == SHORT_INF || kj == SHORT_INF || il + kj >= c + full16(x, b, k, l) + 2;
+}
+
+/* dbm.c's z_union on two zones' stored 16-bit forms, without the hull, as a first test: 0 when a pair of their
+ * bounds shows a point of the hull in neither (exact for that pair), 1 when none of the pairs of stored bounds
+ * does (z_union then decides on the whole matrices).  The first bound of a that b goes beyond is tested against
+ * each bound of b that a goes beyond as the scan meets it, which tells most pairs apart before the scan ends; the
+ * others are tested pair by pair after.  past: room for d * d numbers. */
+static int union16(const Ctx *x, const int16_t *a, const int16_t *b, int32_t *past)
+{
+    int64_t len = x->rlen;
+    int w = x->w, n = 0, i0 = -1, j0 = -1;
     int32_t c0 = 0;
-    for (int64_t k = 0; k < len; k++) {
-        if (i0 < 0 && b[k] > a[k]) {
-            i0 = (int)(k / d), j0 = (int)(k % d), c0 = a[k];
-            for (int q = 0; q < n; q++)
-                if (apart16(a, b, d, i0, j0, c0, past[q]))
+    for (int64_t q = 0; q < len; q++) {
+        if (i0 < 0 && b[q] > a[q]) {
+            i0 = (int)(q / w), j0 = x->cols[q % w], c0 = a[q];
+            for (int p = 0; p < n; p++)
+                if (apart16(x, a, b, i0, j0, c0, past[p] / w, x->cols[past[p] % w]))
                     return 0;
         }
-        if (a[k] > b[k]) {
-            if (i0 >= 0 && apart16(a, b, d, i0, j0, c0, k))
+        if (a[q] > b[q]) {
+            if (i0 >= 0 && apart16(x, a, b, i0, j0, c0, (int)(q / w), x->cols[q % w]))
                 return 0;
-            past[n++] = (int32_t)k;
+            past[n++] = (int32_t)q;
         }
     }
     if (!n || i0 < 0)
         return 1;
-    for (int i = 0; i < d; i++)
-        for (int j = 0; j < d; j++) {
-            int32_t c = a[(int64_t)i * d + j];
-            if (b[(int64_t)i * d + j] <= c)
-                continue;
-            for (int q = 0; q < n; q++)
-                if (apart16(a, b, d, i, j, c, past[q]))
-                    return 0;
-        }
+    for (int64_t q = 0; q < len; q++) {
+        if (b[q] <= a[q])
+            continue;
+        int i = (int)(q / w), j = x->cols[q % w];
+        for (int p = 0; p < n; p++)
+            if (apart16(x, a, b, i, j, a[q], past[p] / w, x->cols[past[p] % w]))
+                return 0;
+    }
     return 1;
 }
 
-/* ``small``: whether x->z16 holds zone's 16-bit form (the caller's comparisons wrote it); ``own``: where the zone
- * as it came is copied before its first merge. */
+/* ``small``: whether x->z16 and x->z16r hold zone's 16-bit form and its stored form (the caller's comparisons wrote
+ * them); ``own``: where the zone as it came is copied before its first merge. */
 static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small, double *own)
 {
     int d = x->d;
@@ -1059,15 +1126,15 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small, d
         x->under.n = 0;  /* the positions merged in this pass */
         for (int32_t i = first_open(x, kept); i < kept->n; i++) {
             Node *o = &x->nodes.a[kept->a[i]];
-            if (small && !(o->zone & 1)
-                && !union16(x->z16, (const int16_t *)slot_bytes(x, o->zone), d, x->past))
+            if (small && !(o->zone & 1) && !union16(x, x->z16r, (const int16_t *)slot_bytes(x, o->zone), x->past))
                 continue;
             slot_load(x, o->zone, other);
             if (z_union(hull, zone, other, d)) {
                 if (!count)
                     memcpy(own, zone, len * sizeof(double));
                 memcpy(zone, hull, len * sizeof(double));
-                small = to_short(zone, len, x->z16);
+                if ((small = to_short(zone, len, x->z16)))
+                    gather16(x, x->z16, x->z16r);
                 if (add_member(x, step, kept->a[i]))
                     return -9;
                 o->covered = 1, o->by = index;
@@ -1102,9 +1169,11 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         /* one pass over the state's zones: the first that includes the new one covers it; those it includes are
          * covered by it once no zone covers it (the order of search.py's two passes, which give the same) */
         int64_t len = (int64_t)d * d;
-        int16_t *mine = x->z16;
-        int small = to_short(zone, len, mine);
-        ready = small ? mine : NULL;
+        int16_t *mine = x->z16r;  /* its stored form, as the state's zones are */
+        int small = to_short(zone, len, x->z16);
+        ready = small ? x->z16 : NULL;
+        if (small)
+            gather16(x, x->z16, mine);
         x->under.n = 0;
         int K = x->sigk;
         int16_t *sig = kept->sig && small ? x->sig : NULL;  /* signatures first, where the state keeps them */
@@ -1127,7 +1196,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
             int64_t slot = x->nodes.a[kept->a[i]].zone;
             int ge, le;
             if (small && !(slot & 1)) {
-                compare16((const int16_t *)x->shorts.a + (slot >> 1) * len, mine, len, &ge, &le);
+                compare16((const int16_t *)x->shorts.a + (slot >> 1) * x->rlen, mine, x->rlen, &ge, &le);
             } else {
                 ge = slot_geq(x, slot, zone);
                 le = !ge && slot_leq(x, slot, zone);
