@@ -326,3 +326,24 @@ def test_with_the_planner_the_u_trap_goal_is_reached_where_nd_alone_ends_in_e_bl
     assert any(s.x > 5.0 and 3.6 < s.y < 6.4 for s in run.world.trajectory)
     assert any(6.0 < s.x < 8.5 and not 3.0 < s.y < 7.0 for s in run.world.trajectory)
     assert _report(run, "NDD.GoTo", 1)["status"] == "ok"
+
+
+def test_a_closed_world_removes_its_logging_sinks_at_once(monkeypatch):
+    # ir-sim gives each environment loguru sinks, removed when the environment is garbage collected unless it was
+    # closed.  Collected while loguru's ``add`` runs for the next world, the removal takes the lock ``add`` holds and
+    # the process hangs (a test run stopped so): closing a session removes them then and there.
+    from loguru import logger
+
+    from runtime.controller.codels import load_codels
+
+    package = dala()
+    source = load_codels(CODELS, list(package.INTERFACE["components"]))
+    world = __import__(f"{next(iter(source.modules.values())).__package__}.world", fromlist=["load"])
+    session = world.load(MISSIONS.parent / "worlds" / "corridor.yaml")
+    removed = []
+    monkeypatch.setattr(logger, "remove", lambda sink=None: removed.append(sink))
+    session.close()
+    assert removed and None not in removed  # this session's sinks, by their numbers, not every sink
+    monkeypatch.undo()
+    again = world.load(MISSIONS.parent / "worlds" / "corridor.yaml")
+    assert again.pose() and session.pose()  # both stay readable (a run's pictures read the closed one)

@@ -119,8 +119,12 @@ class Session:
         return float(w.x_range[0]), float(w.y_range[0]), float(w.x_range[1]), float(w.y_range[1])
 
     def close(self) -> None:
+        """The simulator's window after a last look (live), and its logging sinks removed now: left to the garbage
+        collector, their removal may run inside loguru's ``add`` for the next world, under the lock it holds."""
         if self.display:
-            self.env.end(1.0)  # a last look at the window (0 would wait for ever)
+            self.env.end(1.0)  # a last look at the window (0 would wait for ever); it closes the logger too
+        else:
+            self.env.logger.close()  # end() would also clear the world, which the run's pictures still read
 
 
 _current: dict[str, Session] = {}
@@ -139,10 +143,10 @@ def load(path: str | os.PathLike | None = None, display: bool = False) -> Sessio
         warnings.simplefilter("ignore")
         import irsim  # on import it tries the interactive backends and prints those it cannot use
 
+        old = _current.get("session")
+        if old is not None:  # before the next world's sinks are added
+            old.close()
         env = irsim.make(str(path), headless=not display, display=display, log_level="ERROR")
-    old = _current.get("session")
-    if old is not None:
-        old.close()
     session = Session(path, env, display)
     robot = session.robot
     if robot.lidar is None:
