@@ -43,8 +43,8 @@ def library():
             ("zs_set_program", i32, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_initial", i32, [p, i64, dbl, PROGRAM]),
             ("zs_run", i32, [p, i64, i32, PROGRAM, PROGRESS, i64, i32]),
-            ("zs_counts", None, [p, ctypes.POINTER(i64)]), ("zs_nodes", None, [p, i32, ctypes.POINTER(i64)]),
-            ("zs_node_rows", None, [p, i32, ctypes.POINTER(i64), i64, ctypes.POINTER(i64)]),
+            ("zs_counts", None, [p, ctypes.POINTER(i64)]), ("zs_nodes", None, [p, ctypes.POINTER(i64)]),
+            ("zs_step_row", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_step_grown", None, [p, ctypes.POINTER(ctypes.c_uint8)]),
             ("zs_edges", None, [p, ctypes.POINTER(ctypes.c_int32)]),
             ("zs_members", None, [p, ctypes.POINTER(ctypes.c_int32)]),
@@ -341,7 +341,7 @@ class CSearch:
         self.members = np.zeros((max(1, n_members), 2), dtype=np.int32)
         lib.zs_members(self.ctx, self.members.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
         rows = np.zeros((max(1, n_nodes), 10), dtype=np.int64)
-        lib.zs_nodes(self.ctx, 0, _longs(rows))
+        lib.zs_nodes(self.ctx, _longs(rows))
         edges = np.zeros((max(1, n_edges), 3), dtype=np.int32)
         lib.zs_edges(self.ctx, edges.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
         self.z.nodes = Nodes(self, rows[:n_nodes])
@@ -397,51 +397,46 @@ class States:
 
 
 class Nodes:
-    """Nodes (or steps into covered zones) of the C search as :class:`CNode`, made when asked for."""
+    """Nodes of the C search as :class:`CNode`, made when asked for."""
 
-    def __init__(self, search: CSearch, rows: np.ndarray) -> None:
+    def __init__(self, search: CSearch, rows: np.ndarray | None) -> None:
         self.search, self.rows, self.cache = search, rows, {}
 
     def __len__(self) -> int:
         return len(self.rows)
 
+    def _row(self, k: int) -> list[int]:
+        return self.rows[k].tolist()
+
     def __getitem__(self, k: int):
         if k < 0:
-            k += len(self.rows)
+            k += len(self)
         got = self.cache.get(k)
         if got is None:
-            got = self.cache[k] = CNode(self.search, self.rows[k].tolist())
+            got = self.cache[k] = CNode(self.search, self._row(k))
         return got
 
     def __iter__(self):
-        return (self[k] for k in range(len(self.rows)))
+        return (self[k] for k in range(len(self)))
 
 
-class Steps:
+class Steps(Nodes):
     """The steps into covered zones, as :class:`Nodes` but each one's row read from C when it is asked for (a
-    search keeps several times more steps than nodes, and a trace reads a few)."""
+    search keeps several times more steps than nodes, and a trace reads a few): no ``rows``."""
 
     def __init__(self, search: CSearch, n: int) -> None:
-        self.search, self.n, self.cache = search, n, {}
+        super().__init__(search, None)
+        self.n = n
 
     def __len__(self) -> int:
         return self.n
 
-    def __getitem__(self, k: int):
-        if k < 0:
-            k += self.n
+    def _row(self, k: int) -> list[int]:
         if not 0 <= k < self.n:
             raise IndexError(k)
-        got = self.cache.get(k)
-        if got is None:
-            s = self.search
-            row = np.zeros(10, dtype=np.int64)
-            s.lib.zs_node_rows(s.ctx, 1, _longs(np.array([k], dtype=np.int64)), 1, _longs(row))
-            got = self.cache[k] = CNode(s, row.tolist())
-        return got
-
-    def __iter__(self):
-        return (self[k] for k in range(self.n))
+        row = np.zeros(10, dtype=np.int64)
+        self.search.lib.zs_step_row(self.search.ctx, k, _longs(row))
+        return row.tolist()
 
     def grown(self) -> np.ndarray:
         """Whether time passed in each step."""

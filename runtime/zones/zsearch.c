@@ -566,18 +566,20 @@ static void gather16(const Ctx *x, const int16_t *full, int16_t *out)
 }
 
 
-/* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory.  ``z16``: z's
- * 16-bit form if the caller has it (to_short said it fits), else NULL. */
-static int64_t slot_new(Ctx *x, const double *z, const int16_t *z16)
+/* The slot of zone z: an equal stored zone's (one more user), or a new one; -1 without memory.  ``r16``: z's
+ * stored 16-bit form if the caller has it (to_short said it fits), else NULL. */
+static int64_t slot_new(Ctx *x, const double *z, const int16_t *r16)
 {
     int64_t len = (int64_t)x->d * x->d, rlen = x->rlen;
     int64_t s;
-    if (!z16 && to_short(z, len, x->z16own))
-        z16 = x->z16own;
-    if (z16) {
+    if (!r16 && to_short(z, len, x->z16own)) {
+        gather16(x, x->z16own, x->z16r);
+        r16 = x->z16r;
+    }
+    if (r16) {
         if ((s = pool_take(&x->shorts)) < 0)
             return -1;
-        gather16(x, z16, (int16_t *)x->shorts.a + s * rlen);
+        memcpy((int16_t *)x->shorts.a + s * rlen, r16, rlen * sizeof(int16_t));
         s = 2 * s;
     } else {
         if ((s = pool_take(&x->floats)) < 0)
@@ -622,13 +624,17 @@ static double stored(const Ctx *x, int64_t s, int64_t q)
     return v == SHORT_INF ? INFINITY : v;
 }
 
+/* Where entry (i, j) of a full matrix is in the stored form; -1 for the diagonal of a column left out (0). */
+static int64_t place(const Ctx *x, int i, int j)
+{
+    return x->at[j] < 0 && i == j ? -1 : (int64_t)i * x->w + x->from[j];
+}
+
 /* Entry k of slot s's full matrix. */
 static double entry(const Ctx *x, int64_t s, int64_t k)
 {
-    int a = (int)(k / x->d), j = (int)(k % x->d);
-    if (x->at[j] < 0 && a == j)
-        return 0;
-    return stored(x, s, (int64_t)a * x->w + (x->at[j] >= 0 ? x->at[j] : 0));
+    int64_t q = place(x, (int)(k / x->d), (int)(k % x->d));
+    return q < 0 ? 0 : stored(x, s, q);
 }
 
 static void slot_load(Ctx *x, int64_t s, double *z)
@@ -875,9 +881,9 @@ static Parts parts(const int64_t *p)
 }
 
 /* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
-/* The pieces of z after time passes at the state of program pr (one where it can), appended to out with their
- * grown flags; returns the number of pieces, -2 for a wait that is not one lower bound (err_arg: the rule), or -9
- * without memory. */
+/* The pieces of z after time passes at a state where it can (``pass``: that part of the state's program), appended
+ * to out with their grown flags; returns the number of pieces, -2 for a wait that is not one lower bound (err_arg:
+ * the rule), or -9 without memory. */
 static int64_t elapse(Ctx *x, const int64_t *pass, double *z, Doubles *out, Longs *grown)
 {
     int d = x->d;
@@ -1063,8 +1069,8 @@ static int sig_may(const int16_t *a, const int16_t *b, int K)
 /* Entry (i, j) of a zone's full matrix from its stored 16-bit form. */
 static int32_t full16(const Ctx *x, const int16_t *r, int i, int j)
 {
-    int q = x->at[j];
-    return q >= 0 ? r[(int64_t)i * x->w + q] : i == j ? 0 : r[(int64_t)i * x->w];
+    int64_t q = place(x, i, j);
+    return q < 0 ? 0 : r[q];
 }
 
 /* Whether bound (i, j) of a, beyond which b goes (a[i][j] = c), and bound (k, l) of b, beyond which a goes, leave
@@ -1162,7 +1168,7 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
     Node step = {(int32_t)state, parent, via, -1, -1, -1, -1, x->guards.n, (int32_t)nguard, (uint8_t)grown, 0, 0};
-    const int16_t *ready = NULL;  /* the zone's 16-bit form, once computed and while it is the zone's */
+    const int16_t *ready = NULL;  /* the zone's stored 16-bit form, once computed and while it is the zone's */
     for (int64_t k = 0; k < 3 * nguard; k++)
         PUSH(x->guards, guard[k]);
     if (kept->n) {
@@ -1171,9 +1177,9 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
         int64_t len = (int64_t)d * d;
         int16_t *mine = x->z16r;  /* its stored form, as the state's zones are */
         int small = to_short(zone, len, x->z16);
-        ready = small ? x->z16 : NULL;
         if (small)
             gather16(x, x->z16, mine);
+        ready = small ? mine : NULL;
         x->under.n = 0;
         int K = x->sigk;
         int16_t *sig = kept->sig && small ? x->sig : NULL;  /* signatures first, where the state keeps them */
@@ -1532,7 +1538,7 @@ void zs_counts(void *p, int64_t *out)
     out[15] = x->reduced;
 }
 
-/* Node (steps: which=1) fields as int64 rows of 10: state parent via by zone own members guard guard_len
+/* A node's (or a step's) fields as an int64 row of 10: state parent via by zone own members guard guard_len
  * grown|covered<<1|expanded<<2. */
 static void node_row(const Node *a, int64_t *r)
 {
@@ -1541,23 +1547,18 @@ static void node_row(const Node *a, int64_t *r)
     r[9] = a->grown | a->covered << 1 | a->expanded << 2;
 }
 
-/* Every node (which 0) or step into a covered zone (1) as 10 numbers each. */
-void zs_nodes(void *p, int which, int64_t *out)
+/* Every node's row. */
+void zs_nodes(void *p, int64_t *out)
 {
     Ctx *x = p;
-    Node *a = which ? x->steps.a : x->nodes.a;
-    int64_t n = which ? x->steps.n : x->nodes.n;
-    for (int64_t i = 0; i < n; i++)
-        node_row(a + i, out + 10 * i);
+    for (int64_t i = 0; i < x->nodes.n; i++)
+        node_row(x->nodes.a + i, out + 10 * i);
 }
 
-/* The rows of nodes or steps ids[0..n) only (steps are many, and few are read). */
-void zs_node_rows(void *p, int which, const int64_t *ids, int64_t n, int64_t *out)
+/* The row of step k into a covered zone (steps are many, and a trace reads a few). */
+void zs_step_row(void *p, int64_t k, int64_t *out)
 {
-    Ctx *x = p;
-    Node *a = which ? x->steps.a : x->nodes.a;
-    for (int64_t i = 0; i < n; i++)
-        node_row(a + ids[i], out + 10 * i);
+    node_row(((Ctx *)p)->steps.a + k, out);
 }
 
 /* Whether time passed in each step into a covered zone, one byte each. */
