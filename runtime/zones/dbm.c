@@ -160,9 +160,9 @@ int z_includes(const double *big, const double *small, int len)
     return 1;
 }
 
-/* The clocks idx[0..count) forgotten: any value >= 0, as dbm.py's free_many.  src may be m itself: only its
- * column 0 is read, row by row before that row is written, and the rows of forgotten clocks are written over at
- * the end.  Row by row, so that the columns' writes stay within the row being read. */
+/* src's zone with the clocks idx[0..count) forgotten (any value >= 0, as dbm.py's free_many), into m.  src may be
+ * m itself: each row is read before it is written, and the rows of forgotten clocks are written over at the end.
+ * Row by row, so that the columns' writes stay within the row being read. */
 void z_free(double *m, const double *src, int d, const int *idx, int count)
 {
     for (int a = 0; a < d; a++) {

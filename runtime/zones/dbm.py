@@ -68,7 +68,7 @@ def use_c(on: bool) -> None:
         return bool(lib.z_includes(big.ctypes.data, small.ctypes.data, big.size))
 
     def free_many_c(m: np.ndarray, clocks: list[int]) -> np.ndarray:
-        out = m.copy()
+        out = np.empty_like(m, order="C")  # z_free copies m's rows
         idx = (ctypes.c_int * len(clocks))(*clocks)
         lib.z_free(out.ctypes.data, m.ctypes.data, out.shape[0], idx, len(clocks))
         return out
