@@ -114,7 +114,7 @@ def test_a_cycle_down_the_tree_needs_time_to_pass_after_its_entry():
                   np.array([1, 2, 3, 4]), np.array([1, 2, 3, 4]), np.zeros(0, bool), lambda k: k, None)
         shape = _shape(parent)
         shape += (_path_sums(parent, shape[3], g.grown),)
-        return list(_tree_lassos(g, np.ones(5, bool), rep, 200, shape, edges_of(g, rep)))
+        return list(_tree_lassos(g, np.ones(5, bool), 200, shape, edges_of(g, rep)))
 
     assert lassos(set()) == []  # all in zero time
     assert lassos({0, 1}) == []  # time passes before the entry only

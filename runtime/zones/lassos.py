@@ -43,6 +43,7 @@ class Edges:
 
 
 def edges_of(g: Graph, rep: np.ndarray) -> Edges:
+    """The graph's :class:`Edges`, covered nodes standing for their representatives ``rep``."""
     ref = g.ref
     real = ref >= 0
     grown = np.where(real, g.grown[np.where(real, ref, 0)],
@@ -75,7 +76,7 @@ def python_graph(z) -> Graph:
 def find(z, watch: np.ndarray, limit: int = 200):
     """Lassos through nodes where ``watch`` (one bool per node) holds: see runtime/zones/search.py's lassos."""
     g, rep, shape, edges = _prepared(z)
-    yield from _tree_lassos(g, watch, rep, limit, shape, edges)
+    yield from _tree_lassos(g, watch, limit, shape, edges)
     yield from _graph_lassos(g, watch, rep, edges)
 
 
@@ -152,7 +153,7 @@ def _tree(g: Graph, watch: np.ndarray, shape: tuple):
     return depth, top, enter, leave
 
 
-def _tree_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, limit: int, shape: tuple, edges: Edges):
+def _tree_lassos(g: Graph, watch: np.ndarray, limit: int, shape: tuple, edges: Edges):
     if not len(g.frm):
         return
     depth, top, enter, leave = _tree(g, watch, shape)
