@@ -24,6 +24,18 @@ def _explore(model, engine: str, **kw):
     return z, z.explore(**kw)
 
 
+def _both_on(tmp_path, net, **kw):
+    """The Python and the C search of a network of tests/randomtimed.py, read in TChecker's format: each explorer
+    with its result, ``(zp, rp, zc, rc)``."""
+    from runtime.tchecker.reach import load
+
+    path = tmp_path / "network.tck"
+    path.write_text(net.text())
+    _, tr = load(path, 2 if net.strict else 1)
+    zp, zc = (ZoneExplorer(tr.package, tr.root, engine=e, **kw) for e in ("python", "c"))
+    return zp, zp.explore(), zc, zc.explore()
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
 @pytest.mark.parametrize("merge,local", [(True, False), (False, False), (True, True)], ids=["merged", "apart", "lu"])
 def test_c_search_stores_what_the_python_search_stores(tmp_path, case, merge, local):
@@ -464,18 +476,12 @@ def test_zones_past_16_bits_are_stored_in_single_precision_alike_in_c_and_python
     # A bound past 32,766 does not fit the store's 16-bit form: such zones go to the single-precision pool, and
     # the search stores what the Python search stores, bounds included.
     from randomtimed import Edge, Location, Network
-    from runtime.tchecker.reach import load
 
     far = 40_000
     net = Network([[Location(invariant=("<=", far)), Location(), Location()], [Location(), Location()]],
                   [Edge(0, 0, 1, "a", guard=(">=", far - 5)), Edge(0, 1, 2, "b", guard=("<=", far + 9), reset=0),
                    Edge(1, 0, 1, "c", guard=(">=", 3))])
-    path = tmp_path / "far.tck"
-    path.write_text(net.text())
-    _, tr = load(path, 1)
-    zp = ZoneExplorer(tr.package, tr.root, engine="python")
-    zc = ZoneExplorer(tr.package, tr.root, engine="c")
-    rp, rc = zp.explore(), zc.explore()
+    zp, rp, zc, rc = _both_on(tmp_path, net)
     assert (rc.states, rc.discrete, rc.complete) == (rp.states, rp.discrete, rp.complete)
     assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes]
     assert any(np.isfinite(n.stored).any() and np.abs(n.stored[np.isfinite(n.stored)]).max() > 32_766
@@ -490,17 +496,12 @@ def test_states_with_many_zones_compare_signatures_first_and_store_the_same(tmp_
     import collections
 
     from randomtimed import Edge, Location, Network
-    from runtime.tchecker.reach import load
 
     k = 4
     net = Network([[Location(invariant=("<=", 3)), Location(), Location()] for _ in range(k)],
                   [e for p in range(k) for e in (Edge(p, 0, 1, "a", reset=0), Edge(p, 1, 2, "b", guard=("<=", 5)),
                                                  Edge(p, 2, 0, "c", reset=0))])
-    path = tmp_path / "orders.tck"
-    path.write_text(net.text())
-    _, tr = load(path, 1)
-    zp, zc = (ZoneExplorer(tr.package, tr.root, engine=e, merge=merge) for e in ("python", "c"))
-    rp, rc = zp.explore(), zc.explore()
+    zp, rp, zc, rc = _both_on(tmp_path, net, merge=merge)
     assert (rc.states, rc.merged, rc.discrete) == (rp.states, rp.merged, rp.discrete)
     assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes]
     kept = collections.Counter(n.state for n in zc.nodes if not n.covered)
@@ -514,14 +515,8 @@ def test_c_search_stores_what_the_python_search_stores_on_random_networks(tmp_pa
     import random
 
     from randomtimed import network
-    from runtime.tchecker.reach import load
 
     for seed in range(chunk, 200, 2):
-        net = network(random.Random(seed))
-        path = tmp_path / "random.tck"
-        path.write_text(net.text())
-        _, tr = load(path, 2 if net.strict else 1)
-        zp, zc = (ZoneExplorer(tr.package, tr.root, engine=e) for e in ("python", "c"))
-        rp, rc = zp.explore(), zc.explore()
+        zp, rp, zc, rc = _both_on(tmp_path, network(random.Random(seed)))
         assert (rc.states, rc.merged) == (rp.states, rp.merged), f"seed {seed}"
         assert [_node(n) for n in zc.nodes] == [_node(n) for n in zp.nodes], f"seed {seed}"
