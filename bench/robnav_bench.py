@@ -176,7 +176,7 @@ def request_inputs(description, requests: list[str]) -> dict[str, dict]:
     return out
 
 
-def run(paths, include, platform, client, exceptions, max_states, shown, queue) -> None:
+def run(paths, include, platform, client, exceptions, limits, shown, queue) -> None:
     """One ``nc``: the timing checks and response times, in a process of its own (its peak memory is the run's)."""
     from genom2bip.loading import TimeSettings
     from genom2bip.verify.model import build_model
@@ -191,7 +191,7 @@ def run(paths, include, platform, client, exceptions, max_states, shown, queue) 
     settings = TimeSettings(platform=platform, client=client, responses=True, exceptions=exceptions)
     model = build_model(paths, include_dirs=[include], no_rules=True, time=settings)
     start = time.perf_counter()
-    results = check_timing(model, kinds=("overrun",), responses=True, options=SearchOptions(max_states=max_states),
+    results = check_timing(model, kinds=("overrun",), responses=True, options=SearchOptions(**limits),
                            listener=Shown())
     seconds = time.perf_counter() - start
     out = {"seconds": seconds, "mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "verdicts": {},
@@ -203,6 +203,7 @@ def run(paths, include, platform, client, exceptions, max_states, shown, queue) 
                 out["responses"][r.owner] = "inf" if r.unbounded else r.value_ms
                 if r.verdict.value == "inconclusive":  # the search stopped first: the largest seen so far
                     out["so_far"].add(r.owner)
+                    out["limit"] = r.limit
         else:
             out["verdicts"][r.observer.rsplit(".", 1)[0]] = r.verdict.value
     queue.put(out)
@@ -215,6 +216,8 @@ def main() -> None:
     ap.add_argument("--cores", default="1-5", help="a range (1-5) or a list (3,4)")
     ap.add_argument("--exceptions", action="store_true", help="codels may also end in their service's exceptions")
     ap.add_argument("--max-states", type=int, default=5_000_000)
+    ap.add_argument("--max-memory", type=int, metavar="MB",
+                    help="stop a row's search past MB megabytes (default: half the machine's memory)")
     ap.add_argument("--jobs", type=int, default=1, help="rows run at once, each in its own process (default 1)")
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when it is not a terminal")
     ap.add_argument("--keep", type=Path, help="write the platform files and the client mission there")
@@ -283,7 +286,7 @@ def one_run(ctx, args, paths: list[str], platform: Path, out: Path) -> dict:
     """The checks of one platform file, in a process of their own (:func:`run`)."""
     queue = ctx.Queue()
     proc = ctx.Process(target=run, args=(paths, str(args.artefact), str(platform), str(out / "client.yaml"),
-                                         args.exceptions, args.max_states, args.progress, queue))
+                                         args.exceptions, _limits(args), args.progress, queue))
     proc.start()
     got = queue.get()
     proc.join()
@@ -316,9 +319,14 @@ def runs(args, paths: list[str], platforms: list[Path], out: Path):
 
     with ProcessPoolExecutor(args.jobs, mp_context=ctx, max_tasks_per_child=1) as pool:
         futures = [pool.submit(_row, paths, str(args.artefact), str(platform), str(out / "client.yaml"),
-                               args.exceptions, args.max_states, args.progress) for platform in platforms]
+                               args.exceptions, _limits(args), args.progress) for platform in platforms]
         for future in futures:
             yield future.result()
+
+
+def _limits(args) -> dict:
+    """The search's budgets (SearchOptions' fields) from the command line."""
+    return {"max_states": args.max_states, "max_memory_mb": args.max_memory}
 
 
 def _numbers(text: str) -> list[int]:
@@ -367,7 +375,10 @@ def _track_ok(got: dict) -> bool:
 
 def show(nc: int, got: dict) -> None:
     track = next((v for o, v in got["verdicts"].items() if o == "robloco.track"), "?")
-    stopped = " (stopped at --max-states: response times so far)" if got.get("so_far") else ""
+    from genom2bip.cli.verify_timed import STOPPED
+
+    limit = got.get("limit") or "max-states"
+    stopped = f" (stopped {STOPPED.get(limit, limit)}: response times so far)" if got.get("so_far") else ""
     print(f"\nnc = {nc}: track keeps its period: {track}; {got.get('states', 0):,} symbolic states{stopped}, "
           f"{got['seconds']:.1f} s, {got['mb']:.0f} MB")
     print(f"  {'task':16} {'genom2bip':>10} {'published (nc=4)':>17}")

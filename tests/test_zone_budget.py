@@ -9,14 +9,16 @@ from __future__ import annotations
 import os
 import re
 import signal
+import subprocess
+import sys
 
 import genom2bip.verify.zones as zones
 from genom2bip.loading import TimeSettings
 from genom2bip.verify import build_model
 from genom2bip.verify.results import Verdict
-from genom2bip.verify.options import Listener
+from genom2bip.verify.options import Listener, SearchOptions
 from genom2bip.verify.zones import check_timing
-from platformkit import FIXTURES, platform_file
+from platformkit import FIXTURES, ROOT, platform_file
 from runtime.explore import Progress
 
 ANOMALY = FIXTURES / "Anomaly.gen"
@@ -65,3 +67,63 @@ def test_a_search_stopped_on_the_way_counts_without_reading_its_nodes(tmp_path, 
     assert results[0].figures.states == counts[0] == len(z.nodes) >= 4096
     # the traces of the maxima and violations found read a few nodes, not every one
     assert len(z.nodes.cache) < len(z.nodes) // 4, (len(z.nodes.cache), len(z.nodes))
+
+
+def test_a_search_past_its_memory_budget_stops_with_what_it_found(tmp_path, monkeypatch):
+    """--max-memory bounds what the zone search holds: past it the search stops as at --time-limit (the verdicts
+    found, the response times reached as lower bounds) instead of growing until the system kills it."""
+    made = []
+    real = zones.explorer
+
+    def kept(model, options=None):
+        made.append(real(model, options))
+        return made[-1]
+
+    said = []
+
+    class Unbounded(Listener):
+        def unbounded(self, max_bytes, bounds="--max-states or --max-depth"):
+            said.append((max_bytes, bounds))
+
+    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
+                                                          responses=True))
+    monkeypatch.setattr(zones, "explorer", kept)
+    results = check_timing(model, ("overrun",), responses=True, options=SearchOptions(max_memory_mb=4),
+                           listener=Unbounded())
+    z = made[-1]
+    assert said == [(4 * 2**20, "--max-states or --time-limit")]
+    assert z.memory() >= 4 * 2**20, z.memory()
+    stopped = [r for r in results if r.verdict is Verdict.INCONCLUSIVE]
+    assert stopped and all(r.limit == "max-memory" for r in stopped), [(r.subject, r.limit) for r in stopped]
+    # the overruns found before the budget are kept with their traces
+    violated = [r for r in results if r.verdict is Verdict.VIOLATED]
+    assert violated and all(r.trace for r in violated)
+
+
+def test_a_bounded_search_is_not_told_as_unbounded(tmp_path):
+    said = []
+
+    class Unbounded(Listener):
+        def unbounded(self, max_bytes, bounds="--max-states or --max-depth"):
+            said.append(bounds)
+
+    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
+                                                          responses=True))
+    results = check_timing(model, ("overrun",), responses=True, options=SearchOptions(max_states=3000),
+                           listener=Unbounded())
+    assert said == []
+    assert {r.limit for r in results if r.verdict is Verdict.INCONCLUSIVE} == {"max-states"}
+
+
+def test_the_command_says_its_memory_budget_and_stops_there(tmp_path):
+    platform = platform_file(tmp_path, LONG)
+    proc = subprocess.run([sys.executable, "-m", "genom2bip", "verify", str(ANOMALY), "--timed", "--platform",
+                           str(platform), "--response-times", "--max-memory", "4", "--progress"],
+                          capture_output=True, text=True, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert "searching with no --max-states or --time-limit: until complete or 4 MB (--max-memory)" in proc.stderr
+    assert re.search(r"search stopped \(at --max-memory\) after [\d,]+ symbolic states", proc.stdout), proc.stdout
+    for task in ("high", "mid", "low"):
+        row = next(x for x in proc.stdout.splitlines() if x.startswith(f"  Anomaly.{task} "))
+        assert "so far (at --max-memory)" in row, row
+    assert proc.returncode == 4, proc.stdout + proc.stderr  # the overruns found are the answer
+    assert "Traceback" not in proc.stderr

@@ -67,10 +67,11 @@ class Printer(Listener):
     def note(self, text: str) -> None:
         print(f"note: {text}")
 
-    def unbounded(self, max_bytes: int) -> None:
+    def unbounded(self, max_bytes: int, bounds: str = "--max-states or --max-depth") -> None:
         """On a terminal, a search given no bound says which one it has and how to stop it."""
         if self._shown():
-            print(f"searching with no --max-states or --max-depth: until complete or {max_bytes / 2**30:.1f} GB "
+            size = f"{max_bytes / 2**30:.1f} GB" if max_bytes >= 2**30 else f"{max_bytes / 2**20:.0f} MB"
+            print(f"searching with no {bounds}: until complete or {size} "
                   "(--max-memory); Ctrl-C stops and reports what was explored", file=sys.stderr)
 
     def _shown(self) -> bool:

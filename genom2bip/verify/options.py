@@ -84,8 +84,8 @@ class Listener:
     def so_far(self, text: str) -> None:
         """What a running search has found so far (the largest response times reached: lower bounds)."""
 
-    def unbounded(self, max_bytes: int) -> None:
-        """A search starts with no bound on states or depth: it runs until complete or ``max_bytes``."""
+    def unbounded(self, max_bytes: int, bounds: str = "--max-states or --max-depth") -> None:
+        """A search starts with none of ``bounds`` (its options): it runs until complete or ``max_bytes``."""
 
     def phase(self, line: str) -> None:
         """A phase of the compositional analysis ended."""

@@ -107,9 +107,10 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     ``z``, a zone explorer of ``model`` that has not searched yet, if given).
 
     A violation is told to ``listener`` as soon as the search finds it (with its trace); the search ends when
-    every observer asked for is violated and no response time is asked for.  Past ``options.time_limit``, or at
-    the first Ctrl-C (the second stops at once), it stops: the verdicts found are kept, the others are
-    inconclusive, and each response time reached so far is kept as a lower bound (``limit`` says why).
+    every observer asked for is violated and no response time is asked for.  Past ``options.time_limit``, past
+    ``options.max_bytes`` held by the search, or at the first Ctrl-C (the second stops at once), it stops: the
+    verdicts found are kept, the others are inconclusive, and each response time reached so far is kept as a
+    lower bound (``limit`` says why).
     """
     from runtime.explore import StateSpace
 
@@ -123,6 +124,8 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     atoms = observers(model, kinds)
     progress = listener.progress()
     watch = _Watch(z, model, atoms, responses, options, listener, progress, (space, tick, by_path))
+    if options.max_states is None and options.time_limit is None and watch.max_bytes is not None:
+        listener.unbounded(watch.max_bytes, "--max-states or --time-limit")
     start = time.perf_counter()
     with watch.interrupts():
         try:
@@ -157,6 +160,7 @@ class _Watch:
         self.listener, self.progress, self.where = listener, progress, where
         self.by_index = {where[2][a.path].index: a for a in atoms}
         self.deadline = time.monotonic() + options.time_limit if options.time_limit else None
+        self.max_bytes = options.max_bytes  # what the search may hold (zones, states, programs, nodes)
         self.start = time.perf_counter()
         self.next_line = time.monotonic() + SO_FAR_PERIOD
         self.result = None
@@ -185,6 +189,8 @@ class _Watch:
         now = time.monotonic()
         if self.deadline is not None and now >= self.deadline:
             raise _Stop("time-limit")
+        if self.max_bytes is not None and self.z.memory() >= self.max_bytes:
+            raise _Stop("max-memory")
         if now >= self.next_line and self.progress.on:
             self.next_line = now + SO_FAR_PERIOD
             line = self.so_far(result)
