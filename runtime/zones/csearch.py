@@ -58,7 +58,8 @@ def library():
             ("zs_set_grow_only", i32, [p, ctypes.POINTER(i32), i32]),
             ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
             ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
-            ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)])):
+            ("zs_set_budget", None, [p, i64]), ("zs_program_counts", None, [p, ctypes.POINTER(i64)]),
+            ("zs_fail_allocation", None, [i64]), ("zs_allocations", i64, [])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -148,7 +149,7 @@ class CSearch:
             if self.compiled is not None and self.compiled.lib is not self._lib_of_step:  # a field was widened
                 self._lib_of_step = self.compiled.lib
                 self.lib.zs_set_step(self.ctx, self._step_pointer())
-            return self.lib.zs_set_program(self.ctx, state_id, _longs(words), len(words))
+            return self._set(self.lib.zs_set_program(self.ctx, state_id, _longs(words), len(words)))
         except BaseException as e:  # noqa: BLE001 - re-raised by run()
             self.error = e
             return 1
@@ -160,9 +161,9 @@ class CSearch:
             state = self.state(state_id)
             keep = z.ample(state, self.zone(slot).astype(np.float64), forget=True)
             if keep is None:
-                return self.lib.zs_set_ample(self.ctx, None, -1)
+                return self._set(self.lib.zs_set_ample(self.ctx, None, -1))
             words = np.asarray(sorted(keep), dtype=np.int64)
-            return self.lib.zs_set_ample(self.ctx, _longs(words), len(words))
+            return self._set(self.lib.zs_set_ample(self.ctx, _longs(words), len(words)))
         except BaseException as e:  # noqa: BLE001 - re-raised by run()
             self.error = e
             return 1
@@ -174,10 +175,18 @@ class CSearch:
         try:
             row = np.asarray(interaction_row(self.z, number, self.compiled.interaction_index(number),
                                              self.step_ids), dtype=np.int64)
-            return self.lib.zs_set_interaction(self.ctx, number, _longs(row), len(row))
+            return self._set(self.lib.zs_set_interaction(self.ctx, number, _longs(row), len(row)))
         except BaseException as e:  # noqa: BLE001 - re-raised by run()
             self.error = e
             return 1
+
+    def _set(self, status: int) -> int:
+        """What a callback returns to C once it has handed C its answer: a setter without memory (-9) fails the
+        callback with the MemoryError the search raises when it returns."""
+        if status == -9:
+            self.error = MemoryError("zone search: out of memory")
+            return 1
+        return status
 
     def run(self, result, max_states: int | None, progress, stop_at_violation: bool):
         """The search to its end (or its bound), ``result`` filled; the explorer's ``watcher``, if any, is given the
@@ -282,6 +291,8 @@ class CSearch:
     def program(self, state_id: int) -> list[int] | None:
         """The program the search used for a state (None if it needed none)."""
         n = self.lib.zs_program(self.ctx, state_id, None, 0)
+        if n == -9:
+            raise MemoryError("zone search: out of memory")
         if n < 0:
             return None
         out = (ctypes.c_int64 * n)()

@@ -2,8 +2,31 @@
  * (n+1) x (n+1) matrices of doubles (INFINITY absorbs sums), in place.  dbm.py keeps the numpy
  * versions as the reference and uses these when a compiler is there. */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Every allocation of the zone library and its search goes through these, so that tests can make the n-th one from
+ * now fail (zs_fail_allocation) and reach each out-of-memory path: the search must then say so, never go on with
+ * less than it was given. */
+static int64_t alloc_left = -1, alloc_count = 0;
+
+static int alloc_fails(void)
+{
+    alloc_count++;
+    return alloc_left >= 0 && alloc_left-- == 0;
+}
+
+static void *z_malloc(size_t n) { return alloc_fails() ? NULL : malloc(n); }
+static void *z_calloc(size_t n, size_t size) { return alloc_fails() ? NULL : calloc(n, size); }
+static void *z_realloc(void *p, size_t n) { return alloc_fails() ? NULL : realloc(p, n); }
+#define malloc z_malloc
+#define calloc z_calloc
+#define realloc z_realloc
+
+/* The n-th allocation from now fails (n >= 0; -1: none); allocations made since the library was loaded. */
+void zs_fail_allocation(int64_t n) { alloc_left = n; }
+int64_t zs_allocations(void) { return alloc_count; }
 
 /* The zone library's loops over whole matrices (to_short, the inclusion tests) are worth vectorising even where
  * that needs a scalar tail, which -O2's cheap cost model refuses.  Other compilers ignore the pragma. */
@@ -194,15 +217,12 @@ void z_forget_below(double *m, int d, const int *idx, int count)
  * that zone), as dbm.py's union_np.  A point of the hull in neither is past a bound (i, j) of a that b goes
  * beyond and past a bound (k, l) of b that a goes beyond; on integer points the hull (closed) has one iff
  * h[i][l] + h[k][j] >= a[i][j] + b[k][l] + 2 (the only cycle through both negated bounds). */
-int z_union(double *h, const double *a, const double *b, int d)
+int z_union(double *h, const double *a, const double *b, int d, int *past)
 {
     long len = (long)d * d;
     for (long k = 0; k < len; k++)
         h[k] = a[k] > b[k] ? a[k] : b[k];
-    int *past = malloc(len * sizeof(int));  /* the bounds of b that a goes beyond */
-    if (!past)
-        return 0;
-    int n = 0;
+    int n = 0;  /* past[0..n): the bounds of b that a goes beyond (d * d numbers of scratch) */
     for (long k = 0; k < len; k++)
         if (a[k] > b[k])
             past[n++] = (int)k;
@@ -220,6 +240,5 @@ int z_union(double *h, const double *a, const double *b, int d)
                 }
             }
         }
-    free(past);
     return ok;
 }

@@ -34,7 +34,7 @@ def _c():
     ptr, i32, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     for name, res, args in (("z_close", None, [ptr, i32]), ("z_constrain", i32, [ptr, i32, i32, i32, dbl]),
                             ("z_extrapolate", i32, [ptr, i32, ptr]), ("z_includes", i32, [ptr, ptr, i32]),
-                            ("z_free", None, [ptr, ptr, i32, ptr, i32]), ("z_union", i32, [ptr, ptr, ptr, i32])):
+                            ("z_free", None, [ptr, ptr, i32, ptr, i32]), ("z_union", i32, [ptr, ptr, ptr, i32, ptr])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
     return lib
@@ -75,8 +75,9 @@ def use_c(on: bool) -> None:
 
     def union_c(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
         out = np.empty_like(a)
+        past = np.empty(a.size, dtype=np.intc)  # z_union's scratch
         return out if lib.z_union(out.ctypes.data, _doubles(a).ctypes.data, _doubles(b).ctypes.data,
-                                  a.shape[0]) else None
+                                  a.shape[0], past.ctypes.data) else None
 
     close, constrain, extrapolate, includes, free_many, union = close_c, constrain_c, extrapolate_c, includes_c, \
         free_many_c, union_c

@@ -61,6 +61,8 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     if (!t)
         return NULL;
     t->blob = malloc(len * sizeof(int64_t));
+    if (!t->blob)
+        goto nomem;
     memcpy(t->blob, words, len * sizeof(int64_t));
     const int64_t *p = t->blob;
     t->W = (int)*p++, t->n = (int)*p++, t->natoms = (int)*p++, t->ntimed = (int)*p++, t->nrules = (int)*p++;
@@ -73,10 +75,14 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     t->atom_nplaces = p;
     p += t->natoms;
     t->place_base = malloc((t->natoms + 1) * sizeof(int64_t));
+    if (!t->place_base)
+        goto nomem;
     int64_t total = 0;
     for (int a = 0; a < t->natoms; a++)
         t->place_base[a] = total, total += t->atom_nplaces[a];
     t->place = malloc((total + 1) * sizeof(int64_t *));
+    if (!t->place)
+        goto nomem;
     for (int64_t k = 0; k < total; k++) {
         t->place[k] = p;
         p += 2;  /* ticks, discrete */
@@ -89,6 +95,8 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     t->timed = p;
     p += t->ntimed;
     t->step = malloc((t->nsteps + 1) * sizeof(int64_t *));
+    if (!t->step)
+        goto nomem;
     for (int k = 0; k < t->nsteps; k++) {
         t->step[k] = p;
         p = skip_atoms(p);
@@ -97,6 +105,8 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     t->rule = malloc((t->nrules + 1) * sizeof(int64_t *));
     t->top_gen = calloc(t->nrules + 1, sizeof(int64_t));
     t->top_idx = calloc(t->nrules + 1, sizeof(int64_t));
+    if (!t->rule || !t->top_gen || !t->top_idx)
+        goto nomem;
     for (int r = 0; r < t->nrules; r++) {
         t->rule[r] = p;
         int64_t kind = *p++;
@@ -114,6 +124,9 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     p += 3 * t->nmeas;
     t->goal = p;
     return t;
+nomem:
+    tables_free(t);
+    return NULL;
 }
 
 int zs_set_interaction(void *p, int64_t number, const int64_t *words, int64_t n);
@@ -170,14 +183,20 @@ static int ev(const Tables *t, int64_t at, const int64_t *s, int64_t *out)
 /* -- small growable lists of int64 ---------------------------------------------------------------- */
 typedef struct { int64_t *a; int64_t n, cap; } L;
 
+/* A push found no memory since write_program began: what it writes is then incomplete, and it says -9 (region
+ * stops at once, before it reads a list that may lack its tail).  A list keeps what it held. */
+static _Thread_local int list_failed;
+
 static int lpush(L *l, int64_t v)
 {
     if (l->n == l->cap) {
-        l->cap = l->cap ? 2 * l->cap : 32;
-        int64_t *a = realloc(l->a, l->cap * sizeof(int64_t));
-        if (!a)
+        int64_t cap = l->cap ? 2 * l->cap : 32;
+        int64_t *a = realloc(l->a, cap * sizeof(int64_t));
+        if (!a) {
+            list_failed = 1;
             return -9;
-        l->a = a;
+        }
+        l->a = a, l->cap = cap;
     }
     l->a[l->n++] = v;
     return 0;
@@ -401,6 +420,8 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
 {
     const Tables *t = g->t;
     *everywhere = 0;
+    if (list_failed)  /* the memo may hold an entry without its tail */
+        return -9;
     int hit = memo_find(g, r, acc0, nacc0);
     if (hit >= 0) {
         const int64_t *v = g->pool.a + g->memo_off.a[hit];
@@ -413,7 +434,7 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
             lcat(out, v + at, 1 + 3 * v[at]);
             at += 1 + 3 * v[at];
         }
-        return 0;
+        return list_failed ? -9 : 0;
     }
     const int64_t *rule = t->rule[r];
     L acc = {0}, mine = {0};
@@ -501,6 +522,10 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
     }
     path->n--;
 store:
+    if (list_failed) {  /* mine may lack its tail */
+        status = -9;
+        goto done;
+    }
     {
         /* keep the feasible ones, then remember */
         L kept = {0};
@@ -525,7 +550,7 @@ store:
     }
 done:
     free(acc.a), free(mine.a);
-    return status;
+    return list_failed && !status ? -9 : status;
 }
 
 static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
@@ -569,10 +594,11 @@ static int64_t *inter_row(void *ctx, Tables *t, int64_t number);
 static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *scratch, L *prog)
 {
     int n = step_successors(t, s, &t->wbuf);
-    int64_t *buf = t->wbuf.words, *via = t->wbuf.via;
+    int64_t *via = t->wbuf.via;
     if (n == -9)
         return -9;
     int status = 0;
+    list_failed = 0;
     Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, ++t->gen, NULL, NULL};
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
@@ -584,6 +610,10 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     srow = malloc((n + 1) * sizeof(int64_t *));
     g.index = malloc((n + 1) * sizeof(int64_t));
     g.row = malloc((n + 1) * sizeof(int64_t *));
+    if (!sidx || !srow || !g.index || !g.row) {
+        status = -9;
+        goto out;
+    }
     for (int i = 0; i < n; i++) {
         srow[i] = inter_row(ctx, t, via[i]);
         if (!srow[i]) {
@@ -818,9 +848,12 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
             }
             free(regions.a), free(need.a), free(resets.a);
         }
-        prog->a[count_at] = count;
+        if (!list_failed)
+            prog->a[count_at] = count;
     }
 out:
+    if (list_failed && !status)
+        status = -9;  /* the program lacks what a push could not add */
     free(sidx), free(srow), free(g.index), free(g.row);
     free(g.memo_key.a), free(g.memo_off.a), free(g.pool.a), free(g.high_off), free(g.high_en);
     return status;

@@ -26,8 +26,22 @@ typedef int (*progress_fn)(int64_t nodes, int64_t transitions, int64_t waiting, 
 
 /* A growable array of a plain type. */
 #define VEC(T) struct { T *a; int64_t n, cap; }
-#define PUSH(v, x) do { if ((v).n == (v).cap) { (v).cap = (v).cap ? 2 * (v).cap : 64; \
-    (v).a = realloc((v).a, (v).cap * sizeof(*(v).a)); if (!(v).a) return -9; } (v).a[(v).n++] = (x); } while (0)
+
+/* *a (cap items of size bytes) grown to twice as many; -9 without memory, *a and *cap as they were. */
+static int grow_vec(void **a, int64_t *cap, size_t size)
+{
+    int64_t more = *cap ? 2 * *cap : 64;
+    void *b = realloc(*a, more * size);
+    if (!b)
+        return -9;
+    *a = b, *cap = more;
+    return 0;
+}
+
+/* x appended to v; without memory, v is kept and ``fail`` runs (a return, or a jump to where locals are freed). */
+#define PUSH_OR(v, x, fail) do { if ((v).n == (v).cap && grow_vec((void **)&(v).a, &(v).cap, sizeof(*(v).a))) fail; \
+    (v).a[(v).n++] = (x); } while (0)
+#define PUSH(v, x) PUSH_OR(v, x, return -9)
 
 typedef struct {
     int32_t state, parent, via, by, zone, own, members;  /* zone, own: slots; members: first of a chain, -1 */
@@ -83,6 +97,7 @@ typedef struct {
     double *max_value;
     int32_t *max_node;      /* per clock: node of the largest value, -1 */
     int64_t err_arg;
+    int failed;             /* why program() last gave NULL: -9 no memory, -1 the callback's error */
     double *tmp;            /* scratch zones */
     int ntmp;
     /* with the compiled step: programs written in C (zprogram.c), states kept as its words */
@@ -182,6 +197,7 @@ static int set_layout(Ctx *x)
 {
     int d = x->d, w = 0;
     free(x->cols), free(x->at), free(x->from), free(x->z16r), free(x->sig);
+    x->z16r = NULL, x->sig = NULL;
     x->cols = malloc(d * sizeof(int)), x->at = malloc(d * sizeof(int)), x->from = malloc(d * sizeof(int));
     if (!x->cols || !x->at || !x->from)
         return -9;
@@ -226,27 +242,28 @@ void *zs_new(int d, const double *ceiling, int nobs, int merge)
     if (!x)
         return NULL;
     x->d = d, x->nobs = nobs, x->merge = merge;
-    x->ceiling = malloc(d * sizeof(double));
-    memcpy(x->ceiling, ceiling, d * sizeof(double));
-    x->violation = malloc((nobs + 1) * sizeof(int32_t));
-    for (int i = 0; i <= nobs; i++)
-        x->violation[i] = -1;
-    x->max_value = calloc(d, sizeof(double));
-    x->max_node = malloc(d * sizeof(int32_t));
-    for (int i = 0; i < d; i++)
-        x->max_node[i] = -1;
     x->ntmp = 9;
     x->pinned = -1;
     x->depth = -1;
+    x->current = -1;
+    x->ceiling = malloc(d * sizeof(double));
+    x->violation = malloc((nobs + 1) * sizeof(int32_t));
+    x->max_value = calloc(d, sizeof(double));
+    x->max_node = malloc(d * sizeof(int32_t));
     x->tmp = malloc((int64_t)x->ntmp * d * d * sizeof(double));
     x->z16 = malloc((int64_t)d * d * sizeof(int16_t));
     x->z16own = malloc((int64_t)d * d * sizeof(int16_t));
     x->past = malloc((int64_t)d * d * sizeof(int32_t));
-    x->current = -1;
-    if (set_layout(x)) {  /* every column kept until zs_set_grow_only */
+    if (!x->ceiling || !x->violation || !x->max_value || !x->max_node || !x->tmp || !x->z16 || !x->z16own || !x->past
+        || set_layout(x)) {  /* every column kept until zs_set_grow_only */
         zs_free(x);
         return NULL;
     }
+    memcpy(x->ceiling, ceiling, d * sizeof(double));
+    for (int i = 0; i <= nobs; i++)
+        x->violation[i] = -1;
+    for (int i = 0; i < d; i++)
+        x->max_node[i] = -1;
     return x;
 }
 
@@ -336,17 +353,17 @@ static int grow_states(Ctx *x, int64_t n)
 {
     while (x->prog.n < n) {
         if (x->prog.n == x->prog.cap) {
-            x->prog.cap = x->prog.cap ? 2 * x->prog.cap : 1024;
-            int64_t **a = realloc(x->prog.a, x->prog.cap * sizeof(int64_t *));
-            Kept *k = realloc(x->kept.a, x->prog.cap * sizeof(Kept));
-            int32_t *pe = realloc(x->pending, x->prog.cap * sizeof(int32_t));
-            int32_t *pl = realloc(x->plen, x->prog.cap * sizeof(int32_t));
-            uint8_t *c = realloc(x->in_c, x->prog.cap);
+            int64_t cap = x->prog.cap ? 2 * x->prog.cap : 1024;
+            int64_t **a = realloc(x->prog.a, cap * sizeof(int64_t *));
+            Kept *k = realloc(x->kept.a, cap * sizeof(Kept));
+            int32_t *pe = realloc(x->pending, cap * sizeof(int32_t));
+            int32_t *pl = realloc(x->plen, cap * sizeof(int32_t));
+            uint8_t *c = realloc(x->in_c, cap);
             x->prog.a = a ? a : x->prog.a, x->kept.a = k ? k : x->kept.a;  /* what moved is kept, to be freed */
             x->pending = pe ? pe : x->pending, x->plen = pl ? pl : x->plen, x->in_c = c ? c : x->in_c;
             if (!a || !k || !pe || !pl || !c)
-                return -9;
-            x->kept.cap = x->prog.cap;
+                return -9;  /* the capacity stays what every array has */
+            x->prog.cap = x->kept.cap = cap;
         }
         Kept none = {0};
         x->pending[x->prog.n] = 0, x->plen[x->prog.n] = 0, x->in_c[x->prog.n] = 0;
@@ -448,8 +465,10 @@ int zs_set_interaction(void *p, int64_t number, const int64_t *words, int64_t n)
         int64_t cap = x->icap ? 2 * x->icap : 256;
         int64_t *k = calloc(cap, sizeof(int64_t));
         int64_t **v = calloc(cap, sizeof(int64_t *));
-        if (!k || !v)
+        if (!k || !v) {
+            free(k), free(v);
             return -9;
+        }
         for (int64_t j = 0; j < x->icap; j++)
             if (x->inter_val[j]) {
                 uint64_t i = ((uint64_t)x->inter_key[j] * 11400714819323198485ull) & (cap - 1);
@@ -492,10 +511,13 @@ static int64_t pool_take(Pool *p)
         return p->free.a[--p->free.n];
     if (p->n % 1024 == 0) {
         char *a = realloc(p->a, (p->n + 1024) * p->size);
-        int32_t *r = a ? realloc(p->refs, (p->n + 1024) * sizeof(int32_t)) : NULL;
-        if (!a || !r)
+        if (!a)
             return -1;
-        p->a = a, p->refs = r;
+        p->a = a;  /* at once: realloc may have moved it */
+        int32_t *r = realloc(p->refs, (p->n + 1024) * sizeof(int32_t));
+        if (!r)
+            return -1;
+        p->refs = r;
     }
     return p->n++;
 }
@@ -745,7 +767,7 @@ static void z_reset(double *m, int d, int i, double v)
 }
 
 /* Pieces of m minus other (integer complements), as dbm.py's subtract_bounds: each piece appended to *out
- * (d*d doubles each), with the cut bounds that made it appended to *cuts and their count to *ncut. */
+ * (d*d doubles each), with the cut bounds that made it appended to *cuts and their count to *ncut; -9: no memory. */
 static int subtract(const double *m, const double *other, int d, double *rest, double *piece,
                     Doubles *out, Longs *cuts, Longs *ncut)
 {
@@ -760,24 +782,31 @@ static int subtract(const double *m, const double *other, int d, double *rest, d
             memcpy(piece, rest, len * sizeof(double));
             if (z_constrain(piece, d, j, i, -c - 1)) {
                 if (append(out, piece, len))
-                    return -9;
+                    goto nomem;
                 for (int64_t k = 0; k < kept.n; k++)
-                    PUSH(*cuts, kept.a[k]);
-                PUSH(*cuts, j); PUSH(*cuts, i); PUSH(*cuts, (int64_t)(-c - 1));
-                PUSH(*ncut, kept.n / 3 + 1);
+                    PUSH_OR(*cuts, kept.a[k], goto nomem);
+                PUSH_OR(*cuts, j, goto nomem); PUSH_OR(*cuts, i, goto nomem);
+                PUSH_OR(*cuts, (int64_t)(-c - 1), goto nomem);
+                PUSH_OR(*ncut, kept.n / 3 + 1, goto nomem);
             }
             if (!z_constrain(rest, d, i, j, c))
                 goto done;
-            PUSH(kept, i); PUSH(kept, j); PUSH(kept, (int64_t)c);
+            PUSH_OR(kept, i, goto nomem); PUSH_OR(kept, j, goto nomem); PUSH_OR(kept, (int64_t)c, goto nomem);
         }
 done:
     free(kept.a);
     return 0;
+nomem:
+    free(kept.a);
+    return -9;
 }
 
 /* -- programs --------------------------------------------------------------------------------------- */
+/* The program of a state, written now if the search has none; NULL with x->failed -9 (no memory) or -1 (the
+ * callback's error, kept by csearch.py). */
 static int64_t *program(Ctx *x, int64_t state, program_fn ask)
 {
+    x->failed = -9;
     if (grow_states(x, state + 1))
         return NULL;
     if (x->prog.a[state])
@@ -800,9 +829,12 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
             return x->prog.a[state];
         }
         free(prog.a);
-        if (status != BACK)
+        if (status != BACK) {
+            x->failed = status == -9 ? -9 : -1;
             return NULL;
+        }
     }
+    x->failed = -1;
     if (!ask || ask(state) != 0)
         return NULL;
     return x->prog.a[state];
@@ -913,32 +945,39 @@ static int64_t elapse(Ctx *x, const int64_t *pass, double *z, Doubles *out, Long
                 free(extra.a);
                 return -2;
             }
-            PUSH(extra, clock); PUSH(extra, 0); PUSH(extra, -c);
+            PUSH_OR(extra, clock, goto nomem); PUSH_OR(extra, 0, goto nomem); PUSH_OR(extra, -c, goto nomem);
         }
     }
     double *start = T(x, 4), *piece = T(x, 5);
     memcpy(start, z, len * sizeof(double));
     int ok = constrain_all(start, d, after + 1, after[0]) && constrain_all(start, d, extra.a, extra.n / 3);
-    int64_t count = 1, status = 0;
+    int64_t count = 1;
     if (!ok) {
-        status = append(out, z, len);
-        PUSH(*grown, 0);
+        if (append(out, z, len))
+            goto nomem;
+        PUSH_OR(*grown, 0, goto nomem);
     } else {
         z_up(start, d);
         constrain_all(start, d, after + 1, after[0]);
         constrain_all(start, d, extra.a, extra.n / 3);
-        status = append(out, start, len);
-        PUSH(*grown, 1);
+        if (append(out, start, len))
+            goto nomem;
+        PUSH_OR(*grown, 1, goto nomem);
         Longs cuts = {0}, ncut = {0};
         int64_t before_n = out->n;
-        subtract(z, start, d, T(x, 6), piece, out, &cuts, &ncut);
+        int cut = subtract(z, start, d, T(x, 6), piece, out, &cuts, &ncut);
+        free(cuts.a), free(ncut.a);
+        if (cut)
+            goto nomem;
         count = 1 + (out->n - before_n) / len;
         for (int64_t k = 1; k < count; k++)
-            PUSH(*grown, 0);
-        free(cuts.a), free(ncut.a);
+            PUSH_OR(*grown, 0, goto nomem);
     }
     free(extra.a);
-    return status ? status : count;
+    return count;
+nomem:
+    free(extra.a);
+    return -9;
 }
 
 /* -- the store (search.py's add and merge_into) ----------------------------------------------------- */
@@ -995,17 +1034,18 @@ static int kept_push(Ctx *x, Kept *k, int32_t v, int64_t slot)
 {
     int K = x->sigk;
     if (k->n == k->cap) {
-        k->cap = k->cap ? 2 * k->cap : 4;
-        int32_t *a = realloc(k->a, k->cap * sizeof(int32_t));
+        int32_t cap = k->cap ? 2 * k->cap : 4;
+        int32_t *a = realloc(k->a, cap * sizeof(int32_t));
         if (!a)
             return -9;
         k->a = a;
         if (k->sig) {
-            int16_t *g = realloc(k->sig, (int64_t)k->cap * K * sizeof(int16_t));
+            int16_t *g = realloc(k->sig, (int64_t)cap * K * sizeof(int16_t));
             if (!g)
                 return -9;
             k->sig = g;
         }
+        k->cap = cap;
     }
     k->a[k->n++] = v;
     if (k->sig) {
@@ -1135,7 +1175,7 @@ static int merge_into(Ctx *x, Node *step, double *zone, Kept *kept, int small, d
             if (small && !(o->zone & 1) && !union16(x, x->z16r, (const int16_t *)slot_bytes(x, o->zone), x->past))
                 continue;
             slot_load(x, o->zone, other);
-            if (z_union(hull, zone, other, d)) {
+            if (z_union(hull, zone, other, d, (int *)x->past)) {  /* union16 is done with x->past */
                 if (!count)
                     memcpy(own, zone, len * sizeof(double));
                 memcpy(zone, hull, len * sizeof(double));
@@ -1287,7 +1327,7 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
 {
     const int64_t *pr = program(x, state, ask);
     if (!pr)
-        return -1;
+        return x->failed;
     Parts q = parts(pr);
     if (q.nidle) {
         int idx[256];
@@ -1343,8 +1383,10 @@ static int64_t resolve(Ctx *x, int64_t state, int64_t *id)
         if (!w)
             return -9;
         state_words(x, state, w);
-        step_successors(t, w, b);
+        int n = step_successors(t, w, b);
         free(w);
+        if (n == -9)
+            return -9;  /* no memory for the successors (b->state stays -1: none held) */
         b->state = state;
     }
     int64_t k = -*id - 1;
@@ -1394,7 +1436,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         x->pinned = x->nodes.a[k].state;
         const int64_t *pr = program(x, x->nodes.a[k].state, ask);
         if (!pr) {
-            status = -1;
+            status = x->failed;
             break;
         }
         check(x, k, pr);
@@ -1453,25 +1495,24 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                         continue;
                     if (whole) {
                         whole = 0;
-                        if (append(&pieces, met, len)) {
-                            status = -9;
-                            break;
-                        }
-                        PUSH(ncut, 0);
+                        if (append(&pieces, met, len))
+                            goto nomem;
+                        PUSH_OR(ncut, 0, goto nomem);
                     }
                     next.n = ncuts.n = nn.n = 0;
                     int64_t off = 0;
                     for (int64_t pi = 0; pi * len < pieces.n; pi++) {
                         pc.n = pn.n = 0;
-                        subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn);
+                        if (subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn))
+                            goto nomem;
                         int64_t o2 = 0;
                         for (int64_t q = 0; q < pn.n; q++) {
                             for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
-                                PUSH(ncuts, cuts.a[off + w]);
+                                PUSH_OR(ncuts, cuts.a[off + w], goto nomem);
                             for (int64_t w = 0; w < 3 * pn.a[q]; w++)
-                                PUSH(ncuts, pc.a[o2 + w]);
+                                PUSH_OR(ncuts, pc.a[o2 + w], goto nomem);
                             o2 += 3 * pn.a[q];
-                            PUSH(nn, ncut.a[pi] + pn.a[q]);
+                            PUSH_OR(nn, ncut.a[pi] + pn.a[q], goto nomem);
                         }
                         off += 3 * ncut.a[pi];
                     }
@@ -1481,7 +1522,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                     next = dt, ncuts = ct, nn = nt;
                 }
                 if (whole)  /* met as it is, with no cut */
-                    PUSH(ncut, 0);
+                    PUSH_OR(ncut, 0, goto nomem);
                 int64_t off = 0, npieces = whole ? 1 : pieces.n / len;
                 for (int64_t pi = 0; pi < npieces && !status; pi++) {
                     double *z = T(x, 1);  /* met, where the piece is met itself */
@@ -1491,9 +1532,9 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                         z_reset(z, d, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
                     need.n = 0;
                     for (int64_t w = 0; w < 3 * nb[0]; w++)
-                        PUSH(need, nb[1 + w]);
+                        PUSH_OR(need, nb[1 + w], goto nomem);
                     for (int64_t w = 0; w < 3 * ncut.a[pi]; w++)
-                        PUSH(need, cuts.a[off + w]);
+                        PUSH_OR(need, cuts.a[off + w], goto nomem);
                     off += 3 * ncut.a[pi];
                     x->transitions++;
                     if (nxt < 0 && (nxt = resolve(x, x->nodes.a[k].state, (int64_t *)entry)) < 0) {
@@ -1522,6 +1563,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             break;
         }
     }
+    goto done;
+nomem:
+    status = -9;
+done:
     free(pieces.a), free(cuts.a), free(ncut.a), free(need.a), free(next.a), free(ncuts.a), free(nn.a), free(pc.a),
          free(pn.a);
     return status;
@@ -1600,14 +1645,17 @@ void zs_results(void *p, int32_t *violation, double *max_value, int32_t *max_nod
     memcpy(max_node, x->max_node, x->d * sizeof(int32_t));
 }
 
-/* The program of a state as the search used it (its length; copied when it fits in cap), -1 if none. */
+/* The program of a state as the search used it (its length; copied when it fits in cap), -1 if none, -9 without
+ * memory to write it again. */
 int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
 {
     Ctx *x = p;
     if (state >= x->prog.n)
         return -1;
-    if (!x->prog.a[state] && (!x->in_c[state] || !program(x, state, NULL)))
-        return -1;  /* none, or let go and written again here (C writes it alike) */
+    if (!x->prog.a[state] && !x->in_c[state])
+        return -1;  /* none */
+    if (!x->prog.a[state] && !program(x, state, NULL))  /* let go: written again here (C writes it alike) */
+        return x->failed;
     const int64_t *pr = x->prog.a[state];
     Parts q = parts(pr);
     const int64_t *s = q.succ;
