@@ -21,7 +21,7 @@ from typing import Sequence
 from genom2bip.cli import call, campaign, check, generate, graph, mission, verify
 from genom2bip.cli.pipes import ClosedAware
 from genom2bip.cli.verbs import (
-    DEFAULT_VERB, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_USAGE, Verb, error, exit_status, version,
+    DEFAULT_VERB, EXIT_INCONCLUSIVE, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_USAGE, Verb, error, exit_status, version,
 )
 from runtime.errors import Genom2bipError
 from runtime.exits import epilog
@@ -89,6 +89,10 @@ def _run(argv: list[str], show_traceback: bool) -> int:
     except KeyboardInterrupt:
         print("genom2bip: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except MemoryError as exc:  # the system refused memory (a ulimit, a container): a limit, not a bug
+        print(f"genom2bip: out of memory ({exc or 'the system refused more'}); --max-memory MB stops a search "
+              "earlier and reports what it found", file=sys.stderr)
+        return EXIT_INCONCLUSIVE
     except Exception as exc:  # noqa: BLE001 - the last resort: one line, the traceback only when asked for
         if show_traceback:
             traceback.print_exc()
