@@ -183,8 +183,8 @@ static int ev(const Tables *t, int64_t at, const int64_t *s, int64_t *out)
 /* -- small growable lists of int64 ---------------------------------------------------------------- */
 typedef struct { int64_t *a; int64_t n, cap; } L;
 
-/* A push found no memory since write_program began: what it writes is then incomplete, and it says -9 (region
- * stops at once, before it reads a list that may lack its tail).  A list keeps what it held. */
+/* A push found no memory since write_program began: the program it writes is then incomplete, and it says -9.
+ * A list keeps what it held.  region checks each push itself (it reads back what it pushed). */
 static _Thread_local int list_failed;
 
 static int lpush(L *l, int64_t v)
@@ -420,8 +420,6 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
 {
     const Tables *t = g->t;
     *everywhere = 0;
-    if (list_failed)  /* the memo may hold an entry without its tail */
-        return -9;
     int hit = memo_find(g, r, acc0, nacc0);
     if (hit >= 0) {
         const int64_t *v = g->pool.a + g->memo_off.a[hit];
@@ -431,19 +429,22 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
         }
         int64_t at = 1;
         for (int64_t k = 0; k < v[0]; k++) {
-            lcat(out, v + at, 1 + 3 * v[at]);
+            if (lcat(out, v + at, 1 + 3 * v[at]))
+                return -9;
             at += 1 + 3 * v[at];
         }
-        return list_failed ? -9 : 0;
+        return 0;
     }
     const int64_t *rule = t->rule[r];
     L acc = {0}, mine = {0};
     int status = 0, all = 0;
-    lcat(&acc, acc0, 3 * nacc0);
     int64_t kind = rule[0];
     const int64_t *edges;
+    if (lcat(&acc, acc0, 3 * nacc0) || (kind == 1 && lcat(&acc, rule + 2, 3 * rule[1]))) {
+        status = -9;
+        goto done;
+    }
     if (kind == 1) {
-        lcat(&acc, rule + 2, 3 * rule[1]);
         qsort(acc.a, acc.n / 3, 3 * sizeof(int64_t), cmp3);
         int64_t w = 0;
         for (int64_t k = 0; k < acc.n / 3; k++)
@@ -482,7 +483,11 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
     for (int64_t h = g->high_off[r]; h < g->high_off[r + 1]; h++) {
         int64_t e = g->high_en[h];
         L need = {0};
-        lcat(&need, acc.a, acc.n);
+        if (lcat(&need, acc.a, acc.n)) {
+            free(need.a);
+            status = -9;
+            goto done;
+        }
         if (need_of(g, g->row[e], &need, NULL)) {
             free(need.a);
             status = BACK;
@@ -493,11 +498,17 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
             all = 1;
             goto store;
         }
-        lpush(&mine, need.n / 3);
-        lcat(&mine, need.a, need.n);
+        int grew = lpush(&mine, need.n / 3) || lcat(&mine, need.a, need.n);
         free(need.a);
+        if (grew) {
+            status = -9;
+            goto done;
+        }
     }
-    lpush(path, r);
+    if (lpush(path, r)) {
+        status = -9;
+        goto done;
+    }
     for (int64_t k = 0; k < edges[0] && !all; k++) {
         L sub = {0};
         int every;
@@ -515,42 +526,46 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
                     all = 1;
                     break;
                 }
-                lcat(&mine, sub.a + at, 1 + 3 * sub.a[at]);
+                if (lcat(&mine, sub.a + at, 1 + 3 * sub.a[at])) {
+                    free(sub.a);
+                    path->n--;
+                    status = -9;
+                    goto done;
+                }
             }
         }
         free(sub.a);
     }
     path->n--;
 store:
-    if (list_failed) {  /* mine may lack its tail */
-        status = -9;
-        goto done;
-    }
     {
-        /* keep the feasible ones, then remember */
+        /* keep the feasible ones, then remember: the memo's three lists grow together or not at all (memo_find
+         * walks the keys from the first) */
         L kept = {0};
-        int64_t count = 0;
+        int64_t count = 0, key_n = g->memo_key.n, pool_n = g->pool.n;
         if (!all)
-            for (int64_t at = 0; at < mine.n; at += 1 + 3 * mine.a[at])
+            for (int64_t at = 0; at < mine.n && !status; at += 1 + 3 * mine.a[at])
                 if (feasible(g, mine.a + at + 1, mine.a[at])) {
-                    lcat(&kept, mine.a + at, 1 + 3 * mine.a[at]);
+                    status = lcat(&kept, mine.a + at, 1 + 3 * mine.a[at]);
                     count++;
                 }
-        if (!nacc0)
-            t->top_gen[r] = g->gen, t->top_idx[r] = g->memo_off.n;
-        lpush(&g->memo_key, r), lpush(&g->memo_key, nacc0), lcat(&g->memo_key, acc0, 3 * nacc0);
-        lpush(&g->memo_off, g->pool.n);
-        lpush(&g->pool, all ? -1 : count);
-        lcat(&g->pool, kept.a, kept.n);
-        if (all)
-            *everywhere = 1;
-        else
-            lcat(out, kept.a, kept.n);
+        if (status || lpush(&g->memo_key, r) || lpush(&g->memo_key, nacc0) || lcat(&g->memo_key, acc0, 3 * nacc0)
+            || lpush(&g->pool, all ? -1 : count) || lcat(&g->pool, kept.a, kept.n) || lpush(&g->memo_off, pool_n)) {
+            g->memo_key.n = key_n, g->pool.n = pool_n;
+            status = -9;
+        } else {
+            if (!nacc0)
+                t->top_gen[r] = g->gen, t->top_idx[r] = g->memo_off.n - 1;
+            if (all)
+                *everywhere = 1;
+            else if (lcat(out, kept.a, kept.n))
+                status = -9;
+        }
         free(kept.a);
     }
 done:
     free(acc.a), free(mine.a);
-    return list_failed && !status ? -9 : status;
+    return status;
 }
 
 static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
