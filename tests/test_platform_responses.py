@@ -27,6 +27,8 @@ CASES = [
     ("shared-slow", SHARED, {"SLOW": "1"}, "cores: 2\npolicy: edf\n", None),
     ("anomaly", ANOMALY, {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n"
                              "execution:\n  Anomaly.mid.mid_step: [1 ms, 4 ms]\n", None),
+    # the case whose zones merge (runtime/zones/search.py merge_into): merging is compared on it
+    ("anomaly-edf", ANOMALY, {}, "cores: 1\npolicy: edf\nexecution:\n  Anomaly.mid.mid_step: [1 ms, 4 ms]\n", None),
     ("zeno-services", ZENO, {"PERIOD": "10"}, "cores: 1\n", None),
     ("zeno-client", ZENO, {"PERIOD": "10"}, "cores: 1\n", FIXTURES / "a_then_b.yaml"),
     ("endless", FIXTURES / "Endless.gen", {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n", None),

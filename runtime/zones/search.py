@@ -379,15 +379,17 @@ class ZoneExplorer:
 
     def extrapolate(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """``zone`` forgetting what no guard ahead of ``state`` tells apart (Extra_M; Extra_LU+ between the clocks
-        whose ceilings are their place's)."""
+        whose ceilings are their place's), its idle clocks free again (time passing since they were freed related
+        them to the others; no guard reads them before their next reset, and every zone of the state is then the same
+        function of its active clocks, which the C search stores alone)."""
         over = self.ceilings(state)
         if not over:
-            return dbm.forget_below(dbm.extrapolate(zone, self.ceiling), self.grow_only)
+            return self.forget(dbm.forget_below(dbm.extrapolate(zone, self.ceiling), self.grow_only), state)
         lower, upper = self.ceiling.copy(), self.ceiling.copy()
         plus = np.zeros(len(lower), dtype=bool)
         for k, low, up in over:
             lower[k], upper[k], plus[k] = low, up, True
-        return dbm.forget_below(dbm.extrapolate_lu_plus(zone, lower, upper, plus), self.grow_only)
+        return self.forget(dbm.forget_below(dbm.extrapolate_lu_plus(zone, lower, upper, plus), self.grow_only), state)
 
     def forget(self, zone: np.ndarray, state: tuple) -> np.ndarray:
         """Clocks no guard reads before their next reset become free (so that zones that differ only there merge)."""
