@@ -168,7 +168,7 @@ def test_the_python_search_stops_at_its_memory_bound_and_reports_what_it_explore
     model = big_dining(tmp_path, 12)
     code, out, err = run(capsys, "verify", model, "--engine", "python", "--max-memory", "2", "--progress")
     assert code == 5, (out, err)
-    assert "until complete or 0.0 GB (--max-memory); Ctrl-C stops and reports what was explored" in err
+    assert "until complete or 2 MB (--max-memory); Ctrl-C stops and reports what was explored" in err
     summary = next(line for line in out if line.startswith("explored: "))
     assert "stopped at max-memory" in summary
     assert "note: the Python search stopped past 2 MB (--max-memory MB sets the bound)" in out

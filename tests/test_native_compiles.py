@@ -22,6 +22,7 @@ def test_a_variable_that_outgrows_its_field_is_widened_in_every_instance_at_once
         return real(source, *args, **kwargs)
 
     monkeypatch.setattr(compiled, "build", counted)
+    monkeypatch.setenv("GENOM2BIP_CACHE", str(tmp_path / "cache"))  # an -O2 build cached by another run is not built
     model = build_model([str(PAIR)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG_CODELS)),
                                                        responses=True))
     results = check_timing(model, ("overrun",), responses=True)
