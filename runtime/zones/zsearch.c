@@ -159,6 +159,7 @@ typedef struct {
     int32_t *lkey;          /* open addressing on a layout's key: its number + 1, 0 empty */
     int64_t lcap;
     int32_t *lay_of;        /* per state: its layout, -1 before its first zone (grown with prog) */
+    int64_t kept_bytes;     /* the states' lists of zones kept, with their signatures */
     int64_t current;        /* the node being expanded (-1 before the first): those before it are expanded */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
     Doubles out;            /* scratch: arrive's pieces after time passes, kept from call to call */
@@ -1183,6 +1184,7 @@ static int kept_push(Ctx *x, const Layout *L, Kept *k, int32_t v, int64_t slot)
                 return -9;
             k->sig = g;
         }
+        x->kept_bytes += (int64_t)(cap - k->cap) * ((int64_t)sizeof(int32_t) + (k->sig ? K * 2 : 0));
         k->cap = cap;
     }
     k->a[k->n++] = v;
@@ -1191,6 +1193,7 @@ static int kept_push(Ctx *x, const Layout *L, Kept *k, int32_t v, int64_t slot)
     } else if (k->n >= SIG_FROM && K > 0) {  /* from now on: the signatures of those kept so far */
         if (!(k->sig = malloc((int64_t)k->cap * K * sizeof(int16_t))))
             return -9;
+        x->kept_bytes += (int64_t)k->cap * K * 2;
         for (int32_t i = 0; i < k->n - 1; i++)
             sig_of_slot(x, L, x->nodes.a[k->a[i]].zone, k->sig + (int64_t)i * K);
         sig_of_slot(x, L, slot, k->sig + (int64_t)(k->n - 1) * K);
@@ -1543,11 +1546,14 @@ static int64_t resolve(Ctx *x, int64_t state, int64_t *id)
     return got;
 }
 
-/* Bytes the search holds: zones, states' words, programs' words are counted as they are kept. */
+/* Bytes the search holds: zones, states (words, tables, lists of zones kept with their signatures), programs, nodes,
+ * steps, edges, the waiting list; counted as they grow (the budget of --max-memory reads it). */
 int64_t zs_memory(Ctx *x)
 {
     return zone_bytes(x) + x->bytes.n + x->ends.n * 16 + x->prog_words * 8 + x->nodes.n * (int64_t)sizeof(Node)
-           + x->steps.n * (int64_t)sizeof(Node) + x->edges.n * (int64_t)sizeof(Edge) + x->guards.n * 8;
+           + x->steps.n * (int64_t)sizeof(Node) + x->edges.n * (int64_t)sizeof(Edge) + x->guards.n * 8
+           + x->kept_bytes + x->waiting.n * 4 + x->members.n * (int64_t)sizeof(Member)
+           + x->prog.cap * (int64_t)(sizeof(int64_t *) + sizeof(Kept) + 13) + x->hcap * 8;
 }
 
 /* The search, resumable: it goes on from where a previous call stopped.  Returns 0 complete, 1 max-states,
