@@ -162,7 +162,7 @@ def test_141_an_output_closed_by_its_reader_ends_quietly(argv):
     assert "Traceback" not in done.stderr and "BrokenPipeError" not in done.stderr, done.stderr
 
 
-def test_genom2bip_5_out_of_memory_is_a_limit_not_a_bug(tmp_path, capsys):
+def test_genom2bip_5_out_of_memory_is_a_limit_not_a_bug(tmp_path, capsys, monkeypatch):
     """The system refusing memory to the zone search (its first allocation made to fail, as under a ulimit): the
     command says so in one line with the way to stop earlier, and exits as at any other limit."""
     from runtime.zones.csearch import library
@@ -173,6 +173,7 @@ def test_genom2bip_5_out_of_memory_is_a_limit_not_a_bug(tmp_path, capsys):
     platform = tmp_path / "one.yaml"
     platform.write_text("cores: 1\n")
     anomaly = ROOT / "tests" / "fixtures" / "platform" / "Anomaly.gen"
+    monkeypatch.chdir(tmp_path)  # where a verify writes its traces
     lib.zs_fail_allocation(0)
     try:
         code = genom2bip(["verify", str(anomaly), "--timed", "--platform", str(platform), "--response-times"])
@@ -183,3 +184,4 @@ def test_genom2bip_5_out_of_memory_is_a_limit_not_a_bug(tmp_path, capsys):
     assert "genom2bip: out of memory (zone search: no memory for its context); --max-memory MB stops a search " \
            "earlier and reports what it found" in err
     assert "internal error" not in err and "Traceback" not in err
+    assert [p.name for p in tmp_path.iterdir()] == ["one.yaml"]  # nothing written: no verdict was reached
