@@ -398,6 +398,17 @@ static uint64_t hash_bytes(const uint8_t *b, int64_t n)
 {
     uint64_t h = 0x9e3779b97f4a7c15ull ^ (uint64_t)n;
     int64_t i = 0;
+    if (n >= 64) {  /* four lanes at a time: one lane's multiplications wait on each other (a state's words, a zone) */
+        uint64_t lane[4] = {h, 0xc2b2ae3d27d4eb4full, 0x165667b19e3779f9ull, 0x27d4eb2f165667c5ull};
+        for (; i + 32 <= n; i += 32)
+            for (int l = 0; l < 4; l++) {
+                uint64_t v;
+                memcpy(&v, b + i + 8 * l, 8);
+                lane[l] = (lane[l] ^ v) * 0xff51afd7ed558ccdull;
+                lane[l] ^= lane[l] >> 32;
+            }
+        h = lane[0] ^ (lane[1] << 17 | lane[1] >> 47) ^ (lane[2] << 31 | lane[2] >> 33) ^ (lane[3] << 47 | lane[3] >> 17);
+    }
     for (; i + 8 <= n; i += 8) {
         uint64_t v;
         memcpy(&v, b + i, 8);
