@@ -266,38 +266,29 @@ static int32_t layout_for(Ctx *x, const int64_t *idle, int64_t n)
     }
     int d = x->d;
     Layout L = {0};
-    unsigned char *idle_here = calloc(d, 1);
-    if (!idle_here)
-        return -9;
+    unsigned char row_kept[256], col_kept[256];  /* per clock (d <= 256, as arrive's bounds) */
+    memset(row_kept, 1, d), memset(col_kept, 1, d);
     for (int64_t k = 0; k < n; k++)
-        idle_here[idle[k]] = 1;
-    for (int j = 0; j < d; j++) {
-        int grows = 0;
-        for (int c = 0; c < x->ngrow; c++)
-            grows |= x->grow_only[c] == j;
-        L.nr += !idle_here[j];
-        L.nc += !idle_here[j] && !grows;
-    }
+        row_kept[idle[k]] = col_kept[idle[k]] = 0;
+    for (int g = 0; g < x->ngrow; g++)
+        col_kept[x->grow_only[g]] = 0;
+    for (int j = 0; j < d; j++)
+        L.nr += row_kept[j], L.nc += col_kept[j];
     L.rlen = (int64_t)L.nr * L.nc;
     L.sigk = (L.nc - 1 + L.nr - 1 + 15) / 16 * 16;
     L.nidle = (int)n, L.key = key;
     int *block = malloc((L.nr + L.nc + 2 * d + L.rlen + n + 1) * sizeof(int));
-    if (!block) {
-        free(idle_here);
+    if (!block)
         return -9;
-    }
     L.rows = block, L.cols = L.rows + L.nr, L.rat = L.cols + L.nc, L.from = L.rat + d, L.zat = L.from + d;
     L.idle = L.zat + L.rlen;
     int r = 0, c = 0;
     for (int j = 0; j < d; j++) {
-        int grows = 0;
-        for (int g = 0; g < x->ngrow; g++)
-            grows |= x->grow_only[g] == j;
-        L.rat[j] = idle_here[j] ? -1 : r;
-        L.from[j] = !idle_here[j] && !grows ? c : 0;
-        if (!idle_here[j])
+        L.rat[j] = row_kept[j] ? r : -1;
+        L.from[j] = col_kept[j] ? c : 0;
+        if (row_kept[j])
             L.rows[r++] = j;
-        if (!idle_here[j] && !grows)
+        if (col_kept[j])
             L.cols[c++] = j;
     }
     for (int a = 0; a < L.nr; a++)
@@ -305,7 +296,6 @@ static int32_t layout_for(Ctx *x, const int64_t *idle, int64_t n)
             L.zat[(int64_t)a * L.nc + q] = L.rows[a] * d + L.cols[q];
     for (int64_t k = 0; k < n; k++)
         L.idle[k] = (int)idle[k];
-    free(idle_here);
     PUSH_OR(x->lays, L, { free(block); return -9; });
     int64_t h = (int64_t)(key & (uint64_t)(x->lcap - 1));
     while (x->lkey[h])
@@ -1486,12 +1476,9 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
     Parts q = parts(pr);
     if (x->lay_of[state] < 0 && (x->lay_of[state] = layout_for(x, q.idle, q.nidle)) < 0)
         return -9;
-    if (q.nidle) {
-        int idx[256];
-        for (int64_t k = 0; k < q.nidle; k++)
-            idx[k] = (int)q.idle[k];
-        z_free(z, z, x->d, idx, (int)q.nidle);  /* in place: see z_free */
-    }
+    const Layout *L = &x->lays.a[x->lay_of[state]];  /* its idle clocks are the program's, as ints */
+    if (L->nidle)
+        z_free(z, z, x->d, L->idle, L->nidle);  /* in place: see z_free */
     const double *lower = x->ceiling, *upper = x->ceiling;
     const unsigned char *plus = NULL;
     double lo[256], up[256];
