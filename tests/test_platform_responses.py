@@ -11,7 +11,7 @@ from genom2bip.loading import TimeSettings
 from genom2bip.verify import build_model
 from genom2bip.verify.zones import ResponseResult, check_response_times, check_timing
 from platformkit import (
-    FIXTURES, FINALS, observed_response, platform_file, printed_trace, response_ms, response_table, verify,
+    FIXTURES, FINALS, ROOT, observed_response, platform_file, printed_trace, response_ms, response_table, verify,
 )
 from runtime.explore import StateSpace
 
@@ -333,6 +333,22 @@ def test_a_starved_task_has_no_bound_on_one_core_and_a_small_one_on_two(tmp_path
     two = platform_file(tmp_path, "cores: 2\npolicy: fixed-priority\nbest: wcet\n", "two.yaml")
     code, out, _ = verify(capsys, STARVED, "--timed", "--platform", two, "--response-times")
     assert response_ms(out) == {"Starved.busy": 10, "Starved.idle": 1}
+    assert code == 0
+
+
+def test_a_lasso_no_clock_value_can_go_round_is_passed_over_for_one_that_can(capsys):
+    """Whole DALA on one core: the first 20 cycles the search finds where a GoTo request never ends close through
+    covering zones, and no clock value takes one round of them; later ones can be taken, and run GoTo's codels
+    every period.  GoTo keeps working (nddPlan may pause for ever), shown by its lasso, rather than "a request can
+    wait for ever" with no trace, which is what the first 20 alone gave."""
+    dala = ROOT / "descriptions/dala"
+    code, out, _ = verify(capsys, dala, "--timed", "--platform", dala / "platforms/one-core.yaml",
+                          "--client", dala / "missions/corridor.yaml", "--response-times", "--no-exceptions")
+    assert response_table(out)["NDD.GoTo"] == KEEPS_RUNNING, out
+    assert "no concrete trace" not in out
+    steps, lines, loop = lasso_of(out, "NDD.GoTo", KEEPS_RUNNING)
+    assert any(line.split("] ", 1)[-1].startswith("NDD.GoTo:exec_plan") for line in after_step(lines, loop)), lines
+    assert any("time passes" in line for line in after_step(lines, loop)), lines
     assert code == 0
 
 

@@ -358,17 +358,27 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         message = ("every request ends, after more than the cap" if atom.kind == "response" else
                    "every request ends (not measured: its codels can cycle)")
         return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message=message, **common)
-    ways = ((head + loop, len(head) - 1) for entry, loop in itertools.islice(itertools.chain([first], cycles), 20)
-            for need in [loop_needs(z, loop)] if need is not None
-            for head in itertools.islice(paths_to(z, entry, need=need), 8))
-    trace, message = _trace(z, ways, [], space, tick)
     # the builder read the service's codels: none reached from its start yields ether or throws
     stopped = owner in _timed(model, "until_stopped")
-    running = not stopped and common["kind"] == "service" and _runs_in_loop(trace, owner)
+    # a cycle of zones whose round no clock value can take (it closes through a covering zone) is passed over:
+    # the first 20 that can be taken, among the first 200 found
+    cycles = itertools.chain([first], cycles)
+    rounds = itertools.islice(((entry, loop, need) for entry, loop in itertools.islice(cycles, 200)
+                               for need in [loop_needs(z, loop)] if need is not None), 20)
+    ways = ((head + loop, len(head) - 1) for entry, loop, need in rounds
+            for head in itertools.islice(paths_to(z, entry, need=need), 8))
+    trace, message = _trace(z, ways, [], space, tick)
+    running = not stopped and common["kind"] == "service" and (
+        _runs_in_loop(trace, owner) if trace is not None else _loop_runs(z, first[1], owner))
+    word = UNTIL_STOPPED if stopped else KEEPS_RUNNING if running else "a request can wait for ever"
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
                           until_stopped=stopped, keeps_running=running,
-                          message=message or (UNTIL_STOPPED if stopped else KEEPS_RUNNING if running else
-                                              "a request can wait for ever"), **common)
+                          message=f"{word} ({message})" if message else word, **common)
+
+
+def _loop_runs(z, loop, owner: str) -> bool:
+    """A lasso's loop, as the search found it, fires ``owner``'s codels (:func:`_runs_in_loop` before a trace)."""
+    return any(z.interaction(m.via)[2].startswith(f"{owner}:exec") for m in loop)
 
 
 def _runs_in_loop(trace: Trace | None, owner: str) -> bool:
