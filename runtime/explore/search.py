@@ -75,18 +75,19 @@ def resident_bytes() -> int | None:
 class MemoryBound:
     """The memory a search may take: the growth of the resident set since it began, or the visited set's size.
 
-    The visited set's size counts where the resident set does not grow (memory
-    freed earlier by the process, reused) or the system does not say.
+    The visited set's size (``space.memory()``: a state space, a zone explorer) counts where the resident set
+    does not grow (memory freed earlier by the process, reused) or the system does not say.
     """
 
-    def __init__(self, space: StateSpace, limit: int) -> None:
+    def __init__(self, space, limit: int) -> None:
         self.space, self.limit = space, limit
         self.base = resident_bytes()
 
-    def exceeded(self) -> bool:
+    def exceeded(self, reserve: int = 0) -> bool:
+        """Past the limit, with ``reserve`` bytes kept for what comes after the search."""
         now = resident_bytes()
         grown = now - self.base if now is not None and self.base is not None else 0
-        return max(grown, self.space.memory()) > self.limit
+        return max(grown, self.space.memory()) + reserve > self.limit
 
 
 def explore(space: StateSpace, max_depth: int | None = None, dfs: bool = False,
