@@ -307,6 +307,23 @@ def test_a_service_that_can_end_by_itself_but_keeps_running_is_until_stopped_in_
     assert polling.message == "run until stopped: Polling.Poll, Polling.Track"
 
 
+def test_a_service_whose_codels_can_cycle_and_that_the_mission_never_sends_is_never_requested(tmp_path, capsys):
+    """Track's observer only waits for a report (its codels may go round for ever, so there is no cap to measure
+    against); with a mission that sends Poll alone, no state watches a Track request: "never requested", as for a
+    measured service, not "every request ends"."""
+    mission = tmp_path / "poll_only.yaml"
+    mission.write_text("mission: poll-only\nsteps:\n  - send: Polling.Poll\n    until: started\n")
+    code, out, _ = verify(capsys, POLLING, "--timed", "--platform", platform_file(tmp_path, FP1), "--client", mission,
+                          "--response-times")
+    table = response_table(out)
+    assert table["Polling.Track"] == "never requested", out
+    assert table["Polling.Poll"] == KEEPS_RUNNING, out
+    times = check_response_times(model_of(tmp_path, POLLING, {}, FP1, mission))
+    track = next(r for r in times.responses if r.owner == "Polling.Track")
+    assert times.values()["Polling.Track"] == "never requested" and track.verdict.value == "holds"
+    assert code == 0
+
+
 def test_a_request_that_never_gets_its_core_has_no_bound_worded_as_a_wait(tmp_path, capsys):
     """Ping would end in one codel, but idle never gets the core: its lasso never runs Ping, a real wait."""
     code, out, _ = verify(capsys, WAITING, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times")

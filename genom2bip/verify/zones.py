@@ -357,6 +357,8 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         if node < 0:
             return ResponseResult(subject_text, inconclusive or Verdict.HOLDS, value_ticks=None,
                                   message="never requested", **common)
+    elif not inconclusive and not (z.node_words(offset) == watch).any():  # no state watches a request of it
+        return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message="never requested", **common)
     if inconclusive:
         above = atom.kind == "response" and node >= 0
         return ResponseResult(subject_text, inconclusive, value_ticks=None, message=ABOVE_CAP if above else "",
