@@ -150,6 +150,29 @@ def test_the_memory_budget_counts_what_the_process_grows_by_beyond_what_the_sear
     assert z.memory() < 1000 * 2**20 and z.search.counts()[0] < 200_000
 
 
+def test_the_progress_line_shows_the_memory_the_budget_bounds(tmp_path, monkeypatch):
+    """The line's ``memory`` is the figure compared with --max-memory (what reading the search back will take
+    included), so that a search stopped there stops at the figure the user saw grow."""
+    seen = []
+
+    class Seeing(Listener):
+        def progress(self):
+            class Line(Progress):
+                def tick(self, states, transitions, frontier, memory, depth=None):
+                    seen.append((states, memory()))
+
+            return Line(enabled=False)
+
+    monkeypatch.setattr(zones, "READ_BACK", (2**20, 0))  # a megabyte a node: the reserve outweighs the rest
+    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
+                                                          responses=True))
+    results = check_timing(model, ("overrun",), responses=True, options=SearchOptions(max_memory_mb=100_000,
+                                                                                      max_states=3000),
+                           listener=Seeing())
+    assert seen and all(memory >= states * 2**20 for states, memory in seen), seen[:3]
+    assert {r.limit for r in results if r.verdict is Verdict.INCONCLUSIVE} == {"max-states"}
+
+
 def test_a_bounded_search_is_not_told_as_unbounded(tmp_path):
     said = []
 

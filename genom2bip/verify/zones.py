@@ -130,7 +130,8 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     start = time.perf_counter()
     with watch.interrupts():
         try:
-            result = z.explore(max_states=options.max_states, progress=progress)
+            result = z.explore(max_states=options.max_states,
+                               progress=_Budgeted(progress, watch) if watch.memory else progress)
         except _Stop as stop:
             progress.done()
             result = watch.stopped(stop.reason, time.perf_counter() - start)
@@ -143,6 +144,19 @@ SO_FAR_PERIOD = 5.0
 #: nodes and edges back from C as arrays (and the words its checks ask for) to make the traces.  Measured on whole
 #: DALA at two cores: 0.73 GB for 4.0 million nodes and 12.7 million transitions.
 READ_BACK = (120, 20)
+
+
+class _Budgeted:
+    """The listener's progress line, its memory the figure --max-memory bounds (:meth:`_Watch.taken`)."""
+
+    def __init__(self, progress, watch: "_Watch") -> None:
+        self.progress, self.watch = progress, watch
+
+    def tick(self, states, transitions, frontier, memory, depth=None) -> None:
+        self.progress.tick(states, transitions, frontier, lambda: self.watch.taken(states, transitions), depth)
+
+    def done(self) -> None:
+        self.progress.done()
 
 
 class _Stop(Exception):
@@ -197,8 +211,7 @@ class _Watch:
         now = time.monotonic()
         if self.deadline is not None and now >= self.deadline:
             raise _Stop("time-limit")
-        if self.memory is not None and self.memory.exceeded(READ_BACK[0] * result.states +
-                                                            READ_BACK[1] * result.transitions):
+        if self.memory is not None and self.taken(result.states, result.transitions) > self.max_bytes:
             raise _Stop("max-memory")
         if now >= self.next_line and self.progress.on:
             self.next_line = now + SO_FAR_PERIOD
@@ -207,6 +220,11 @@ class _Watch:
                 self.shown = line
                 self.progress.done()
                 self.listener.so_far(line)
+
+    def taken(self, nodes: int, transitions: int) -> int:
+        """What --max-memory bounds: the search's bytes or the process's growth since it began, whichever is
+        larger, and what reading the search back will take."""
+        return self.memory.taken(READ_BACK[0] * nodes + READ_BACK[1] * transitions)
 
     def violation(self, atom, node: int, states: int) -> ObserverResult:
         """The verdict of an observer whose ERROR the search reached at ``node``, with its trace."""

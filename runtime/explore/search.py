@@ -83,11 +83,14 @@ class MemoryBound:
         self.space, self.limit = space, limit
         self.base = resident_bytes()
 
-    def exceeded(self, reserve: int = 0) -> bool:
-        """Past the limit, with ``reserve`` bytes kept for what comes after the search."""
+    def taken(self, reserve: int = 0) -> int:
+        """The bytes the limit bounds, with ``reserve`` bytes kept for what comes after the search."""
         now = resident_bytes()
         grown = now - self.base if now is not None and self.base is not None else 0
-        return max(grown, self.space.memory()) + reserve > self.limit
+        return max(grown, self.space.memory()) + reserve
+
+    def exceeded(self, reserve: int = 0) -> bool:
+        return self.taken(reserve) > self.limit
 
 
 def explore(space: StateSpace, max_depth: int | None = None, dfs: bool = False,
