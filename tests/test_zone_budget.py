@@ -44,7 +44,8 @@ class StopAt(Listener):
         return Pressing(enabled=False)
 
 
-def test_a_search_stopped_on_the_way_counts_without_reading_its_nodes(tmp_path, monkeypatch):
+def searched(tmp_path, monkeypatch, options: SearchOptions | None = None, listener: Listener | None = None):
+    """The Anomaly search's results (its response times too, far past any budget here), and its explorer."""
     made = []
     real = zones.explorer
 
@@ -55,9 +56,18 @@ def test_a_search_stopped_on_the_way_counts_without_reading_its_nodes(tmp_path, 
     monkeypatch.setattr(zones, "explorer", kept)
     model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
                                                           responses=True))
+    results = check_timing(model, ("overrun",), responses=True, options=options, listener=listener)
+    return results, made[-1]
+
+
+def _budgeted(tmp_path, monkeypatch, mb: int, max_states: int | None = None):
+    """The Anomaly search's results under ``--max-memory mb``, and its explorer."""
+    return searched(tmp_path, monkeypatch, SearchOptions(max_memory_mb=mb, max_states=max_states))
+
+
+def test_a_search_stopped_on_the_way_counts_without_reading_its_nodes(tmp_path, monkeypatch):
     listener = StopAt(4096)
-    results = check_timing(model, ("overrun",), responses=True, listener=listener)
-    z = made[-1]
+    results, z = searched(tmp_path, monkeypatch, listener=listener)
     assert listener.pressed and z.engine == "c" and hasattr(z.nodes, "rows"), "the C search stopped on the way"
     stopped = [r for r in results if r.verdict is Verdict.INCONCLUSIVE]
     assert stopped and all(r.limit == "interrupted" for r in stopped), [(r.subject, r.limit) for r in stopped]
@@ -72,50 +82,19 @@ def test_a_search_stopped_on_the_way_counts_without_reading_its_nodes(tmp_path, 
 def test_a_search_past_its_memory_budget_stops_with_what_it_found(tmp_path, monkeypatch):
     """--max-memory bounds what the zone search holds: past it the search stops as at --time-limit (the verdicts
     found, the response times reached as lower bounds) instead of growing until the system kills it."""
-    made = []
-    real = zones.explorer
-
-    def kept(model, options=None):
-        made.append(real(model, options))
-        return made[-1]
-
     said = []
 
     class Unbounded(Listener):
         def unbounded(self, max_bytes, bounds="--max-states or --max-depth"):
             said.append((max_bytes, bounds))
 
-    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
-                                                          responses=True))
-    monkeypatch.setattr(zones, "explorer", kept)
-    results = check_timing(model, ("overrun",), responses=True, options=SearchOptions(max_memory_mb=4),
-                           listener=Unbounded())
-    z = made[-1]
+    results, z = searched(tmp_path, monkeypatch, SearchOptions(max_memory_mb=4), Unbounded())
     assert said == [(4 * 2**20, "--max-states or --time-limit")]
-    counts = z.search.counts()  # what it holds, with what reading it back takes, reached the budget
-    assert z.memory() + zones.READ_BACK[0] * counts[0] + zones.READ_BACK[1] * counts[2] >= 4 * 2**20
     stopped = [r for r in results if r.verdict is Verdict.INCONCLUSIVE]
     assert stopped and all(r.limit == "max-memory" for r in stopped), [(r.subject, r.limit) for r in stopped]
     # the overruns found before the budget are kept with their traces
     violated = [r for r in results if r.verdict is Verdict.VIOLATED]
     assert violated and all(r.trace for r in violated)
-
-
-def _budgeted(tmp_path, monkeypatch, mb: int, max_states: int | None = None):
-    """The Anomaly search's results under ``--max-memory mb``, and its explorer."""
-    made = []
-    real = zones.explorer
-
-    def kept(model, options=None):
-        made.append(real(model, options))
-        return made[-1]
-
-    monkeypatch.setattr(zones, "explorer", kept)
-    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
-                                                          responses=True))
-    results = check_timing(model, ("overrun",), responses=True,
-                           options=SearchOptions(max_memory_mb=mb, max_states=max_states))
-    return results, made[-1]
 
 
 def _limits(results) -> set[str]:
@@ -164,11 +143,7 @@ def test_the_progress_line_shows_the_memory_the_budget_bounds(tmp_path, monkeypa
             return Line(enabled=False)
 
     monkeypatch.setattr(zones, "READ_BACK", (2**20, 0))  # a megabyte a node: the reserve outweighs the rest
-    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
-                                                          responses=True))
-    results = check_timing(model, ("overrun",), responses=True, options=SearchOptions(max_memory_mb=100_000,
-                                                                                      max_states=3000),
-                           listener=Seeing())
+    results, _ = searched(tmp_path, monkeypatch, SearchOptions(max_memory_mb=100_000, max_states=3000), Seeing())
     assert seen and all(memory >= states * 2**20 for states, memory in seen), seen[:3]
     assert {r.limit for r in results if r.verdict is Verdict.INCONCLUSIVE} == {"max-states"}
 
