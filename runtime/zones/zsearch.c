@@ -1234,18 +1234,25 @@ static int32_t first_open(const Ctx *x, const Kept *kept)
     return lo;
 }
 
-/* Whether two signatures leave room for an inclusion either way: a's bounds all at least b's, or all at most. */
+/* Whether two signatures leave room for an inclusion either way: a's bounds all at least b's, or all at most.
+ * Each of the 16 lanes keeps its own verdicts over the blocks, told apart once at the end (a verdict folded into
+ * one number after every block cost more than the comparisons: a state with many zones runs this for each). */
 static int sig_may(const int16_t *a, const int16_t *b, int K)
 {
     if (a[0] == SIG_NONE)
         return 1;
-    int g = 1, l = 1;
+    int16_t g[16], l[16];
+    for (int j = 0; j < 16; j++)
+        g[j] = l[j] = -1;
     for (int k = 0; k < K; k += 16)  /* K is a whole number of blocks of 16 */
         for (int j = 0; j < 16; j++) {
-            g &= a[k + j] >= b[k + j];
-            l &= a[k + j] <= b[k + j];
+            g[j] &= (int16_t)-(a[k + j] >= b[k + j]);
+            l[j] &= (int16_t)-(a[k + j] <= b[k + j]);
         }
-    return g | l;
+    int16_t all_g = -1, all_l = -1;
+    for (int j = 0; j < 16; j++)
+        all_g &= g[j], all_l &= l[j];
+    return (all_g | all_l) != 0;
 }
 
 /* Entry (i, j) of a zone's full matrix from its stored 16-bit form. */
