@@ -38,6 +38,21 @@ def test_independent_urgent_steps_fire_in_one_order(engine):
     assert _timed_states(z1) == _timed_states(z0) != set()
 
 
+@pytest.mark.skipif("c" not in ENGINES, reason="the C zone search needs a C compiler (apt-get install gcc)")
+@pytest.mark.parametrize("reduce", [False, True], ids=["full", "reduced"])
+def test_a_search_set_up_before_it_starts_stores_what_one_set_up_by_explore_stores(reduce):
+    """prepare() builds the C search ahead (a benchmark times the search alone): the reduction's sets and the goal
+    go with it, so the same nodes are stored and the same verdict comes out."""
+    _, tr = load(TCK / "independent.tck")
+    z0, r0 = _search(tr.package, tr.root, "c", reduce)
+    z1 = ZoneExplorer(tr.package, tr.root, engine="c", reduce=reduce)
+    z1.prepare()
+    r1 = z1.explore()
+    assert (r1.states, r1.transitions, r1.complete) == (r0.states, r0.transitions, r0.complete)
+    assert r1.states == (9 if reduce else 81)
+    assert [(n.state, n.parent, n.via) for n in z1.nodes] == [(n.state, n.parent, n.via) for n in z0.nodes]
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_steps_writing_a_shared_integer_keep_every_order_between_them(engine):
     _, tr = load(TCK / "shared.tck")

@@ -117,8 +117,7 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     z = explorer(tr)
     if goal_set:
         z.goal = _Goal(z, tr, labels).need
-    if z.engine == "c":
-        from runtime.zones import csearch, ctables  # noqa: F401 - code loaded before the search, not during it
+    z.prepare()  # the C search set up before it starts, as tck-reach's model is built before its clock starts
     built = time.perf_counter()
     try:
         result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)

@@ -125,6 +125,7 @@ class ZoneExplorer:
         #: Told the live ZoneResult as the search goes (after each expanded state in Python; every 1,024 and at
         #: each violation found in C, the nodes so far readable); it may raise to stop the search.
         self.watcher = None
+        self._ready = None  # the C search prepare() set up
         #: Partial-order reduction where time cannot pass (runtime/zones/reduction.py), built when a search starts.
         self.reduce = reduce
         self.por = None
@@ -405,24 +406,33 @@ class ZoneExplorer:
         return idle
 
     # -- the search -------------------------------------------------------------------------------
+    def _c_search(self):
+        """A C search of this model, set up (its context, the model's tables, the reduction's sets), or None: no
+        compiler, or too many clocks (the C operations keep a row or column of a zone on the stack)."""
+        if self.reduce and self.por is None:
+            from runtime.zones.reduction import PartialOrder
+
+            self.por = PartialOrder(self)
+        if self.engine != "c" or self.n >= 256:
+            return None
+        from runtime.zones.csearch import CSearch, library
+
+        lib = library()
+        return CSearch(self, lib) if lib is not None else None
+
+    def prepare(self) -> None:
+        """Set the C search up now, once the goal and the options are set, so that :meth:`explore` times the search
+        alone (a benchmark's)."""
+        self._ready = self._c_search()
+
     def explore(self, max_states: int | None = None, progress: Progress | None = None,
                 stop_at_violation: bool = False) -> ZoneResult:
         """Breadth-first over symbolic states; observers checked and watched clocks maximised on the way."""
         progress = progress or null_progress()
         start = time.perf_counter()
-        if self.reduce and self.por is None:
-            from runtime.zones.reduction import PartialOrder
-
-            self.por = PartialOrder(self)
-        lib = None
-        if self.engine == "c" and self.n < 256:  # the C operations keep a row or column of a zone on the stack
-            from runtime.zones.csearch import library
-
-            lib = library()
-        if lib is not None:
-            from runtime.zones.csearch import CSearch
-
-            self.search = CSearch(self, lib)
+        search, self._ready = self._ready or self._c_search(), None
+        if search is not None:
+            self.search = search
             self.result = ZoneResult(0, 0, 0, 0.0, True)
             result = self.search.run(self.result, max_states, progress, stop_at_violation)
             progress.done()
