@@ -10,7 +10,8 @@ of their own (time, peak memory); verdicts must agree, and where both searches f
 configurations without clocks (locations and integers, ``tck-reach -a reach -C graph``) are compared too.
 States: tck-reach's STORED_STATES (the nodes of its final graph, covered ones removed), ours not covered at the
 end (every one stored in brackets); times: the searches' own (tck-reach's RUNNING_TIME_SECONDS; ours without
-Python's start, reading the file and building the zone model), and our whole process beside it; a run stopped at
+Python's start, reading the file, building the zone model and setting the C search up), and our whole process
+beside it; a run stopped at
 the time limit is "unknown (time limit ...)" with how far it got; memory: each process's peak resident size
 (ours includes Python and numpy, about 43 MiB).
 Prints a table (markdown) and exits 1 when a verdict or a configuration set differs.
