@@ -407,8 +407,9 @@ class ZoneExplorer:
 
     # -- the search -------------------------------------------------------------------------------
     def _c_search(self):
-        """A C search of this model, set up (its context, the model's tables, the reduction's sets), or None: no
-        compiler, or too many clocks (the C operations keep a row or column of a zone on the stack)."""
+        """The reduction's sets, which both searches use, then a C search of this model set up (its context and
+        the model's tables), or None: no compiler, or too many clocks (the C operations keep a row or column of a
+        zone on the stack)."""
         if self.reduce and self.por is None:
             from runtime.zones.reduction import PartialOrder
 
