@@ -54,9 +54,11 @@ class Missing:
     events: int
     console: int
     duplicated: int
+    lost_ids: tuple[int, ...] = ()  # the lost requests, to look up in the controller's output
 
     def line(self) -> str:
-        return (f"{self.accepted} accepted; lost {self.lost}; final reports missing: answers {self.answers}, "
+        lost = f" ({', '.join(map(str, self.lost_ids[:10]))})" if self.lost_ids else ""
+        return (f"{self.accepted} accepted; lost {self.lost}{lost}; final reports missing: answers {self.answers}, "
                 f"long polls {self.polls}, /events {self.events}, console {self.console}; "
                 f"duplicated {self.duplicated}")
 
@@ -260,4 +262,5 @@ class Flood:
         dup = sum(n - 1 for n in s.finals.values() if n > 1) + sum(n - 1 for n in console.values() if n > 1)
         return Missing(accepted=total, lost=len(accepted - anywhere) + max(0, total - len(accepted)),
                        answers=answers_missing, polls=sum(1 for f in s.polls.values() if not f),
-                       events=len(accepted - finals), console=len(accepted - set(console)), duplicated=dup)
+                       events=len(accepted - finals), console=len(accepted - set(console)), duplicated=dup,
+                       lost_ids=tuple(sorted(accepted - anywhere)))

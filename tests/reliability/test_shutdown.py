@@ -35,8 +35,10 @@ def test_every_accepted_request_ends_on_every_channel_when_a_signal_stops_a_floo
             s.close()
     missing = flood.missing(end.out)
     assert missing.accepted >= 600
+    # the controller's own words go with a loss (an engine abandoned after its grace, say), which one run in
+    # hundreds under a loaded CI showed without them
     assert (missing.lost, missing.answers, missing.polls, missing.events, missing.console, missing.duplicated) == \
-        (0, 0, 0, 0, 0, 0), missing.line()
+        (0, 0, 0, 0, 0, 0), f"{missing.line()}\ncontroller's stderr, last lines:\n{end.err[-3000:]}"
     assert flood.seen.stream_ended and flood.seen.controller_event["status"] == "stopped", flood.seen.controller_event
     assert end.status == 0, end.err[-3000:]
     assert "Traceback" not in end.err and "ERROR" not in end.err, end.err[-3000:]
