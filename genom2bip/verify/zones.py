@@ -125,8 +125,8 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     atoms = observers(model, kinds)
     progress = listener.progress()
     watch = _Watch(z, model, atoms, responses, options, listener, progress, (space, tick, by_path))
-    if options.max_states is None and options.time_limit is None and watch.max_bytes is not None:
-        listener.unbounded(watch.max_bytes, "--max-states or --time-limit")
+    if options.max_states is None and options.time_limit is None and watch.memory is not None:
+        listener.unbounded(watch.memory.limit, "--max-states or --time-limit")
     start = time.perf_counter()
     with watch.interrupts():
         try:
@@ -146,14 +146,22 @@ SO_FAR_PERIOD = 5.0
 READ_BACK = (120, 20)
 
 
+def read_back(nodes: int, transitions: int) -> int:
+    """The bytes a search of ``nodes`` nodes and ``transitions`` transitions needs to be read back (:data:`READ_BACK`),
+    kept free under --max-memory."""
+    return READ_BACK[0] * nodes + READ_BACK[1] * transitions
+
+
 class _Budgeted:
-    """The listener's progress line, its memory the figure --max-memory bounds (:meth:`_Watch.taken`)."""
+    """The listener's progress line, its memory the figure --max-memory bounds (what reading back will take
+    included)."""
 
     def __init__(self, progress, watch: "_Watch") -> None:
         self.progress, self.watch = progress, watch
 
     def tick(self, states, transitions, frontier, memory, depth=None) -> None:
-        self.progress.tick(states, transitions, frontier, lambda: self.watch.taken(states, transitions), depth)
+        bound = self.watch.memory
+        self.progress.tick(states, transitions, frontier, lambda: bound.taken(read_back(states, transitions)), depth)
 
     def done(self) -> None:
         self.progress.done()
@@ -181,7 +189,7 @@ class _Watch:
         self.listener, self.progress, self.where = listener, progress, where
         self.by_index = {where[2][a.path].index: a for a in atoms}
         self.deadline = time.monotonic() + options.time_limit if options.time_limit else None
-        self.max_bytes = options.max_bytes  # what the search may take, read back included
+        #: --max-memory: what the search holds or the process's growth, and what reading it back will take
         self.memory = MemoryBound(z, options.max_bytes) if options.max_bytes is not None else None
         self.start = time.perf_counter()
         self.next_line = time.monotonic() + SO_FAR_PERIOD
@@ -211,7 +219,7 @@ class _Watch:
         now = time.monotonic()
         if self.deadline is not None and now >= self.deadline:
             raise _Stop("time-limit")
-        if self.memory is not None and self.taken(result.states, result.transitions) > self.max_bytes:
+        if self.memory is not None and self.memory.exceeded(read_back(result.states, result.transitions)):
             raise _Stop("max-memory")
         if now >= self.next_line and self.progress.on:
             self.next_line = now + SO_FAR_PERIOD
@@ -220,11 +228,6 @@ class _Watch:
                 self.shown = line
                 self.progress.done()
                 self.listener.so_far(line)
-
-    def taken(self, nodes: int, transitions: int) -> int:
-        """What --max-memory bounds: the search's bytes or the process's growth since it began, whichever is
-        larger, and what reading the search back will take."""
-        return self.memory.taken(READ_BACK[0] * nodes + READ_BACK[1] * transitions)
 
     def violation(self, atom, node: int, states: int) -> ObserverResult:
         """The verdict of an observer whose ERROR the search reached at ``node``, with its trace."""
