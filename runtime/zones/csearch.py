@@ -8,7 +8,7 @@ search ends, its nodes and steps become the explorer's ``nodes`` and ``out`` for
 from __future__ import annotations
 
 import ctypes
-from functools import cache
+from functools import cache, cached_property
 from pathlib import Path
 
 import numpy as np
@@ -112,9 +112,25 @@ class CSearch:
                 raise MemoryError("zone search: no memory for the model's tables")
             lib.zs_set_budget(self.ctx, z.program_bytes)
             z._intern = self._intern
+            self._single_interactions()
         self._ample = AMPLE(self._ask_ample)
         if z.por is not None:
             lib.zs_set_por(self.ctx, self._ample)
+        zone = z.initial_zone()  # the initial states, numbered, and their zone: part of the model, made before it runs
+        self.initial = [(self._intern(state) if self.compiled else z.state_id(state), zone)
+                        for state in map(z.space.state, z.space.initial_ids)]
+        self.violation = (ctypes.c_int32 * (len(self.observers) + 1))()  # what zs_results fills
+        self.top, self.top_node = np.zeros(self.d), (ctypes.c_int32 * self.d)()
+
+    def _single_interactions(self) -> None:
+        """The rows of the interactions that are their source's only one (rendezvous, lone ports), given to C
+        before the search, as a model's edges are built before it runs; those of connectors with triggers, one
+        per mask and most never enabled, are asked for when the search first meets them."""
+        numbering = self.compiled.model.numbering
+        for src, offset in enumerate(numbering.offsets):
+            if numbering.single[src] and self._ask_interaction(offset):
+                error, self.error = self.error, None
+                raise error
 
     def __del__(self) -> None:
         if getattr(self, "ctx", None):
@@ -211,12 +227,8 @@ class CSearch:
             return 0
 
         callback = PROGRESS(tick)
-        for sid in z.space.initial_ids:
-            state = z.space.state(sid)
-            zone = z.initial_zone()
-            status = lib.zs_initial(self.ctx, self._intern(state) if self.compiled else z.state_id(state), _dbl(zone),
-                                    self._program)
-            self._raise(status, Unsupported)
+        for number, zone in self.initial:
+            self._raise(lib.zs_initial(self.ctx, number, _dbl(zone), self._program), Unsupported)
         while True:
             status = lib.zs_run(self.ctx, -1 if max_states is None else max_states, int(stop_at_violation),
                                 self._program, callback, 1024, int(watcher is not None))
@@ -257,8 +269,7 @@ class CSearch:
         counts = self.counts()
         result.states, result.discrete, result.transitions, result.merged = counts[0], counts[1], counts[2], counts[3]
         self.z.dropped = counts[4]
-        violation = (ctypes.c_int32 * (len(self.observers) + 1))()
-        top, node = np.zeros(self.d), (ctypes.c_int32 * self.d)()
+        violation, top, node = self.violation, self.top, self.top_node
         lib.zs_results(self.ctx, violation, _dbl(top), node)
         for atom, slot in self.observers.items():
             if violation[slot] >= 0:
@@ -344,20 +355,12 @@ class CSearch:
 
     def _nodes(self, counts) -> None:
         """The C search's nodes, steps into covered zones and edges as the explorer's ``nodes`` and ``out``, read
-        from C as they are asked for (a lasso search walks them all; a trace a few)."""
-        lib = self.lib
-        n_nodes, n_steps, n_edges, n_members, n_guards = counts[0], counts[5], counts[6], counts[7], counts[8]
-        self.guards = np.zeros(max(1, n_guards), dtype=np.int64)
-        lib.zs_guards(self.ctx, _longs(self.guards))
-        self.members = np.zeros((max(1, n_members), 2), dtype=np.int32)
-        lib.zs_members(self.ctx, self.members.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
-        rows = np.zeros((max(1, n_nodes), 10), dtype=np.int64)
-        lib.zs_nodes(self.ctx, _longs(rows))
-        edges = np.zeros((max(1, n_edges), 3), dtype=np.int32)
-        lib.zs_edges(self.ctx, edges.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)))
-        self.z.nodes = Nodes(self, rows[:n_nodes])
-        self.steps = Steps(self, n_steps)
-        self.z.out = Out(self, edges[:n_edges], n_nodes)
+        from C as they are asked for (a lasso search walks them all; a trace a few; a search that only counts
+        none)."""
+        self.back = ReadBack(self, counts)
+        self.z.nodes = Nodes(self, counts[0])
+        self.steps = Steps(self, counts[5])
+        self.z.out = Out(self, counts[0])
         if self.compiled is not None:
             self.z.states = States(self)
 
@@ -407,14 +410,49 @@ class States:
         return (self[k] for k in range(len(self)))
 
 
+class ReadBack:
+    """The search's graph as it stood at one refresh, each array read from C the first time it is asked for."""
+
+    def __init__(self, search: CSearch, counts: list[int]) -> None:
+        self.search, self.counts = search, counts
+
+    def _read(self, fn: str, count: int, shape: tuple, dtype, head: bool) -> np.ndarray:
+        """The array zsearch.c's ``fn`` fills, as large as the search's count ``count`` (of :meth:`CSearch.counts`)
+        is now: the search may have gone on since the refresh; ``head``: the refresh's rows only."""
+        s = self.search
+        out = np.zeros((max(1, s.counts()[count], self.counts[count]), *shape), dtype=dtype)
+        getattr(s.lib, fn)(s.ctx, out.ctypes.data_as(ctypes.POINTER(np.ctypeslib.as_ctypes_type(dtype))))
+        return out[:self.counts[count]] if head else out
+
+    @cached_property
+    def rows(self) -> np.ndarray:
+        return self._read("zs_nodes", 0, (10,), np.int64, head=True)
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        return self._read("zs_edges", 6, (3,), np.int32, head=True)
+
+    @cached_property
+    def guards(self) -> np.ndarray:
+        return self._read("zs_guards", 8, (), np.int64, head=False)
+
+    @cached_property
+    def members(self) -> np.ndarray:
+        return self._read("zs_members", 7, (2,), np.int32, head=False)
+
+
 class Nodes:
     """Nodes of the C search as :class:`CNode`, made when asked for."""
 
-    def __init__(self, search: CSearch, rows: np.ndarray | None) -> None:
-        self.search, self.rows, self.cache = search, rows, {}
+    def __init__(self, search: CSearch, n: int) -> None:
+        self.search, self.n, self.cache = search, n, {}
+
+    @property
+    def rows(self) -> np.ndarray:
+        return self.search.back.rows
 
     def __len__(self) -> int:
-        return len(self.rows)
+        return self.n
 
     def _row(self, k: int) -> list[int]:
         return self.rows[k].tolist()
@@ -435,13 +473,6 @@ class Steps(Nodes):
     """The steps into covered zones, as :class:`Nodes` but each one's row read from C when it is asked for (a
     search keeps several times more steps than nodes, and a trace reads a few): no ``rows``."""
 
-    def __init__(self, search: CSearch, n: int) -> None:
-        super().__init__(search, None)
-        self.n = n
-
-    def __len__(self) -> int:
-        return self.n
-
     def _row(self, k: int) -> list[int]:
         if not 0 <= k < self.n:
             raise IndexError(k)
@@ -459,19 +490,30 @@ class Steps(Nodes):
 class Out:
     """Per node, ``(node holding the successor, the step into it)``, as ZoneExplorer.out."""
 
-    def __init__(self, search: CSearch, edges: np.ndarray, n: int) -> None:
-        self.search, self.edges, self.n = search, edges, n
-        order = np.argsort(edges[:, 0], kind="stable") if len(edges) else np.zeros(0, dtype=np.int64)
-        self.sorted = edges[order]
-        self.starts = np.searchsorted(self.sorted[:, 0], np.arange(n + 1)) if len(edges) else np.zeros(n + 1, int)
+    def __init__(self, search: CSearch, n: int) -> None:
+        self.search, self.n = search, n
+
+    @property
+    def edges(self) -> np.ndarray:
+        return self.search.back.edges
+
+    @cached_property
+    def _sorted(self) -> tuple[np.ndarray, np.ndarray]:
+        """The edges by source, and where each node's start."""
+        edges, n = self.edges, self.n
+        if not len(edges):
+            return edges, np.zeros(n + 1, int)
+        order = edges[np.argsort(edges[:, 0], kind="stable")]
+        return order, np.searchsorted(order[:, 0], np.arange(n + 1))
 
     def __len__(self) -> int:
         return self.n
 
     def __getitem__(self, k: int) -> list:
         s = self.search
+        ordered, starts = self._sorted
         out = []
-        for _, target, ref in self.sorted[self.starts[k]:self.starts[k + 1]].tolist():
+        for _, target, ref in ordered[starts[k]:starts[k + 1]].tolist():
             out.append((target, s.z.nodes[ref] if ref >= 0 else s.steps[-ref - 1]))
         return out
 
@@ -486,13 +528,14 @@ class CNode(Node):
 
     def __init__(self, search: CSearch, row: list) -> None:
         state, parent, via, by, slot, own, first, goff, glen, flags = row
-        g = search.guards[goff:goff + 3 * glen].tolist()
+        g = search.back.guards[goff:goff + 3 * glen].tolist()
         super().__init__(None, None, parent, via, list(zip(g[0::3], g[1::3], g[2::3])), bool(flags & 1))
         self._search, self._sid, self._slot, self._own_slot = search, state, slot, own
         self.covered, self.expanded, self.by = bool(flags & 2), bool(flags & 4), by
         while first >= 0:
-            self.members.append(int(search.members[first, 0]))
-            first = int(search.members[first, 1])
+            members = search.back.members
+            self.members.append(int(members[first, 0]))
+            first = int(members[first, 1])
 
     @property
     def state(self) -> tuple:
