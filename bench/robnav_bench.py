@@ -1,6 +1,6 @@
 """RobNav's schedulability study run by genom2bip, beside the published UPPAAL results.
 
-Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--jobs 2] [--exceptions] [--keep DIR] [--smc RUNS]``.
+Run ``python bench/robnav_bench.py ARTEFACT_DIR [--cores 1-5] [--jobs N] [--exceptions] [--keep DIR] [--smc RUNS]``.
 
 ARTEFACT_DIR is a clone of the public schedulability artefact of the RobNav
 functional level (four components robloco, robmotion, robmap, roblaser, each
@@ -21,9 +21,10 @@ is granted) and a client mission (the first request sent once every
 component takes requests, each next one once the previous one is queued;
 ``--requests-at-start`` sends them at 0 ms instead), then runs
 ``verify --timed --platform P --client C --response-times`` through the
-verification API, one process per ``nc`` (for its peak memory); ``--jobs 2``
-runs two of them at once, which is how a second core pays
-(docs/verification/scale.md).
+verification API, one process per ``nc`` (for its peak memory), as many at
+once as this process has cores (``--jobs N`` to choose), which is how a
+second core pays (docs/verification/scale.md); rows run at once share the
+default memory budget.
 Printed per ``nc``: whether task ``track`` keeps its period, the largest
 response time of each task beside the published one, states, seconds, MB.
 
@@ -43,6 +44,7 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
+import os
 import re
 import resource
 import sys
@@ -52,6 +54,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from genom2bip.verify.options import default_memory  # noqa: E402
 
 COMPONENTS = ("robloco", "robmotion", "robmap", "roblaser")
 #: The artefact's README and res.csv (row sd = 0): largest response time per task at nc = 4, in ms.
@@ -218,7 +222,8 @@ def main() -> None:
     ap.add_argument("--max-states", type=int, default=5_000_000)
     ap.add_argument("--max-memory", type=int, metavar="MB",
                     help="stop a row's search past MB megabytes (default: half the machine's memory)")
-    ap.add_argument("--jobs", type=int, default=1, help="rows run at once, each in its own process (default 1)")
+    ap.add_argument("--jobs", type=int, default=None,
+                    help="rows run at once, each in its own process (default: one per core this process may use)")
     ap.add_argument("--progress", action="store_true", help="progress lines on stderr even when it is not a terminal")
     ap.add_argument("--keep", type=Path, help="write the platform files and the client mission there")
     ap.add_argument("--requests-at-start", action="store_true",
@@ -236,6 +241,8 @@ def main() -> None:
                          "time each task reaches beside the exhaustive one (bench/smc_bench.py --robnav)")
     args = ap.parse_args()
     cores = _numbers(args.cores)
+    if args.jobs is None:
+        args.jobs = len(os.sched_getaffinity(0))
     if args.smc is not None:
         import smc_bench
 
@@ -325,8 +332,12 @@ def runs(args, paths: list[str], platforms: list[Path], out: Path):
 
 
 def _limits(args) -> dict:
-    """The search's budgets (SearchOptions' fields) from the command line."""
-    return {"max_states": args.max_states, "max_memory_mb": args.max_memory}
+    """The search's budgets (SearchOptions' fields) from the command line; without ``--max-memory``, rows run at
+    once share the default budget (half the machine's memory) instead of each taking all of it."""
+    memory = args.max_memory
+    if memory is None and args.jobs > 1 and default_memory():
+        memory = max(1, default_memory() // args.jobs // 2**20)
+    return {"max_states": args.max_states, "max_memory_mb": memory}
 
 
 def _numbers(text: str) -> list[int]:
