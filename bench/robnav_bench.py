@@ -241,8 +241,9 @@ def main() -> None:
                          "time each task reaches beside the exhaustive one (bench/smc_bench.py --robnav)")
     args = ap.parse_args()
     cores = _numbers(args.cores)
-    if args.jobs is None:
-        args.jobs = len(os.sched_getaffinity(0))
+    if args.jobs is None:  # one row per core, never more processes than rows
+        rows = len(cores) * (len(_numbers(args.suspension)) if args.suspension is not None else 1)
+        args.jobs = max(1, min(len(os.sched_getaffinity(0)), rows))
     if args.smc is not None:
         import smc_bench
 
