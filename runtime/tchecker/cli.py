@@ -70,7 +70,7 @@ def reach_command(args, out, err) -> int:
     print(f"verdict: {verdict}", file=out)
     print(f"stored states: {r.states:,} ({r.kept:,} not covered at the end, {r.discrete:,} discrete)", file=out)
     print(f"visited transitions: {r.transitions:,}", file=out)
-    print(f"time: {r.seconds:.4f} s searching ({r.build_seconds:.3f} s building the zone model first)", file=out)
+    print(f"time: {r.seconds:.6f} s searching ({r.build_seconds:.3f} s building the zone model first)", file=out)
     print(f"memory: {r.peak_rss / 2**20:.1f} MiB peak (the search holds {r.zone_bytes / 2**20:.2f} MiB)", file=out)
     if r.verdict == "reachable" and not args.no_trace:
         if r.trace_note:

@@ -118,9 +118,10 @@ def reach(path: str | Path, labels: list[str], grid: int | None = None, max_stat
     if goal_set:
         z.goal = _Goal(z, tr, labels).need
     z.prepare()  # the C search set up before it starts, as tck-reach's model is built before its clock starts
+    watch = _deadline(time_limit, progress)
     built = time.perf_counter()
     try:
-        result = z.explore(max_states=max_states, progress=_deadline(time_limit, progress), stop_at_violation=True)
+        result = z.explore(max_states=max_states, progress=watch, stop_at_violation=True)
     except _OutOfTime as stop:
         (progress or _deadline(None, None)).done()
         result = z.result
