@@ -173,9 +173,14 @@ def cell(v, fmt: str) -> str:
     return "—" if v is None else format(v, fmt)
 
 
+def seconds_cell(v: float | None) -> str:
+    """A time in seconds: to the millisecond, to the microsecond below one (as tck-reach prints it, five digits)."""
+    return cell(v, ".3f" if v is None or v >= 0.001 else ".6f")
+
+
 def seconds(r: Run) -> str:
     """tck-reach's time, or the limit it ran past."""
-    return f">{r.seconds:.0f} (limit)" if r.verdict == "unknown" else cell(r.seconds, ".3f")
+    return f">{r.seconds:.0f} (limit)" if r.verdict == "unknown" else seconds_cell(r.seconds)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -223,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"| {cell(cov.states, ',')} | {cell(mine.states, ',')}{more} ({cell(mine.stored, ',')}) "
                   f"| {'>' if more else ''}{ratio(mine.states, cov.states)} | {seconds(reach)} "
                   f"| {seconds(cov)} "
-                  f"| {cell(mine.seconds, '.3f')}{more} | {time_bound(mine, cov)}{ratio(mine.seconds, cov.seconds)} "
+                  f"| {seconds_cell(mine.seconds)}{more} | {time_bound(mine, cov)}{ratio(mine.seconds, cov.seconds)} "
                   f"| {cell(mine.wall, '.2f')} | {cell(cov.rss_mib, '.1f')} "
                   f"| {cell(mine.rss_mib, '.1f')} | {agree or '—'} |", flush=True)
             if mine.verdict == "error":
