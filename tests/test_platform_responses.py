@@ -19,6 +19,7 @@ ZENO = FIXTURES / "Zeno.gen"
 PAIR = FIXTURES / "Pair.gen"
 SHARED = FIXTURES / "Shared.gen"
 ANOMALY = FIXTURES / "Anomaly.gen"
+AFTER = FIXTURES / "After.gen"
 
 #: (name, description, defines, platform file, mission): small models with every kind of response.
 CASES = [
@@ -34,6 +35,8 @@ CASES = [
     ("endless", FIXTURES / "Endless.gen", {}, "cores: 1\npolicy: fixed-priority\nbest: wcet\n", None),
     ("catchup", FIXTURES / "Catchup.gen", {}, "cores: 1\ntasks:\n  Catchup.main:\n    delay: [0 ms, 2 ms]\n",
      FIXTURES / "run_once.yaml"),
+    # a done flag that dies once the client has sent its last request reading it (runtime/explore/layout.py)
+    ("after-client", AFTER, {}, "cores: 1\n", FIXTURES / "set_then_go.yaml"),
 ]
 #: The cases whose tick model is small enough to explore state by state in a test (zeno-services is not).
 SMALL = [c for c in CASES if c[0] != "zeno-services"]

@@ -54,6 +54,20 @@ def test_same_on_the_ndd_module():
 
 
 @needs_spin
+def test_same_when_a_variable_dies_with_a_mission_s_last_request(tmp_path):
+    """A done flag reset once the client cannot send a request that reads it (tests/test_client_liveness.py): the
+    Promela model resets it after the client's steps too, and SPIN stores the states the explorer does."""
+    from test_platform_responses import AFTER, FIXTURES as PLATFORMS, model_of
+
+    model = model_of(tmp_path, AFTER, {}, "cores: 1\n", PLATFORMS / "set_then_go.yaml")
+    ours, theirs = both(model.package, model.root)
+    flag = next(s for s in StateSpace(model.package, model.root).slots if s.title == "After.Setup.control.done")
+    assert flag.alive  # the case this test is for
+    assert ours.states == theirs.report.states == 401
+    assert theirs.report.errors == len(ours.deadlocks) and theirs.report.complete
+
+
+@needs_spin
 def test_same_with_a_request_budget():
     pkg, root = ndd_model()
     ours, theirs = both(pkg, root, requests=1)

@@ -96,7 +96,9 @@ def test_platform_maxima_and_violations_do_not_change(tmp_path, case):
     model = model_of(tmp_path, gen, defines, platform, mission)
     z0, full = _search(model.package, model.root, ENGINES[-1], False)
     z1, reduced = _search(model.package, model.root, ENGINES[-1], True)
-    assert reduced.states <= full.states
+    # the zones kept at the end: those stored on the way depend on the order zones arrive in, which the reduction
+    # changes (after-client: 109 stored with it, 100 without, the same 87 kept)
+    assert (~z1.graph().covered).sum() <= (~z0.graph().covered).sum()
     assert {c: v for c, (v, _) in reduced.maxima.items()} == {c: v for c, (v, _) in full.maxima.items()}
     assert set(reduced.violations) == set(full.violations)
     assert _timed_states(z1) == _timed_states(z0)

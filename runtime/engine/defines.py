@@ -52,6 +52,16 @@ def ports(node: Node) -> int:
     return out
 
 
+def required(node: Node) -> int:
+    """The bits that take part in every interaction of the tree."""
+    if node[0] == "p":
+        return node[1]
+    triggers = [sub for sub, t in node[1] if t]
+    if not triggers:
+        return _or(required(sub) for sub, _ in node[1])
+    return required(triggers[0]) if len(triggers) == 1 else 0
+
+
 def has_trigger(node: Node) -> bool:
     return node[0] == "g" and any(t or has_trigger(sub) for sub, t in node[1])
 

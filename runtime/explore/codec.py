@@ -78,7 +78,7 @@ class Codec:
         widths: dict[int, int] = {}
         tables: dict[int, InternTable] = {}
         for s in slots:
-            if s.live == 0:
+            if s.never_live:
                 continue  # never live: always the default, no bits
             if s.kind == "marking":
                 widths[s.index] = max(s.places, 1)
@@ -152,7 +152,7 @@ class Codec:
         """The code of slot ``s`` shifted to its place in its chunk."""
         x = f"x{s.index}"
         if s.live is not None:
-            x = f"({x} if x{s.marking} & {s.live} else {s.default!r})"
+            x = f"({x} if {s.live_test('x{}', ' or ')} else {s.default!r})"
         if s.kind in ("marking", "bool"):
             term = x
         elif s.domain is not None:

@@ -7,8 +7,9 @@ dead variables have the same future (same interactions, same labels), so
 merging them is exact for deadlocks, properties and traces, and it removes
 the copies of a codel's last ``outcome`` or a validate's ``verdict`` that
 otherwise multiply the state space.  The analysis is per atom, over places
-(docs/verification/explorer.md, *Dead-variable reduction*); anything a connector, a priority, an
-atom invariant or a property can observe is always live.
+(docs/verification/explorer.md, *Dead-variable reduction*); anything a priority, an atom invariant or
+a property can observe is always live, and what a connector reads is live while that connector may still
+fire (an atom it needs in a place from which it can still take its port).
 """
 from __future__ import annotations
 
@@ -43,6 +44,17 @@ class Slot:
     default: Any = None
     domain: tuple[int, int] | None = None
     marking: int | None = None  # slot of the atom's marking, for variables
+    alive: tuple[tuple[int, int], ...] = ()  # also live while the marking in one of these slots meets its mask
+
+    @property
+    def never_live(self) -> bool:
+        """Always the default: no bits in a packed state."""
+        return self.live == 0 and not self.alive
+
+    def live_test(self, marking: str, sep: str = " || ") -> str:
+        """The condition under which the variable is live, in C or Python: ``marking`` formats a marking slot's
+        value (``"L[{}]"``), ``sep`` joins the alternatives."""
+        return sep.join(f"({marking.format(m)} & {mask})" for m, mask in ((self.marking, self.live), *self.alive))
 
     @property
     def title(self) -> str:
@@ -104,7 +116,12 @@ def _port_data(node, acc: set[tuple[str, str]]) -> None:
 
 def observed_by_connectors(flat: FlatSystem) -> set[tuple[int, str]]:
     """``(atom index, variable)`` pairs some connector reads through a port (guard, up, or a down's values)."""
-    out: set[tuple[int, str]] = set()
+    return set(readers_by_connectors(flat))
+
+
+def readers_by_connectors(flat: FlatSystem) -> dict[tuple[int, str], list[int]]:
+    """For each ``(atom index, variable)`` some connector reads through a port, the ids of those connectors."""
+    out: dict[tuple[int, str], list[int]] = {}
     for fc in flat.connectors:
         acc: set[tuple[str, str]] = set()
         for spec in fc.type.interactions:
@@ -118,9 +135,67 @@ def observed_by_connectors(flat: FlatSystem) -> set[tuple[int, str]]:
                 if isinstance(alt, Leaf):
                     fp = flat.ports[alt.port]
                     for field_name, var in zip(fp.fields, fp.decl.data):
-                        if (param.name, field_name) in acc:
-                            out.add((fp.atom, var))
+                        if (param.name, field_name) in acc and fc.id not in out.setdefault((fp.atom, var), []):
+                            out[(fp.atom, var)].append(fc.id)
     return out
+
+
+def reaching(fa: FlatAtom, port: str) -> int:
+    """The mask of the atom's places from which some path of its transitions (guards aside) takes ``port``."""
+    bit = {p: 1 << i for i, p in enumerate(fa.places)}
+    mask = 0
+    for tr in fa.type.transitions:
+        if tr.port == port:
+            mask |= _or_places(bit, tr.sources)
+    grew = True
+    while grew:
+        grew = False
+        for tr in fa.type.transitions:
+            if _or_places(bit, tr.targets) & mask and _or_places(bit, tr.sources) & ~mask:
+                mask |= _or_places(bit, tr.sources)
+                grew = True
+    return mask
+
+
+def _or_places(bit: dict[str, int], places) -> int:
+    out = 0
+    for p in places:
+        out |= bit.get(p, 0)
+    return out
+
+
+def connector_alive(flat: FlatSystem, fc, owner: int) -> tuple[tuple[int, int], ...] | None:
+    """A necessary condition for connector ``fc`` to fire again, as ``(marking slot, mask)`` pairs one of which
+    holds while it may: an atom other than ``owner`` whose port takes part in every interaction of ``fc`` in one
+    of the places from which it can still take that port (the fewest such places, where several atoms qualify);
+    for a connector that fires only within others (it exports a port), that of each of them.  None when the
+    places say nothing (it may always fire again)."""
+    from runtime.engine.defines import compile_define, required
+
+    index = {p.name: i for i, p in enumerate(fc.type.params)}
+    need = required(compile_define(fc.type.define, index, fc.path))
+    best = None
+    for i, alts in enumerate(fc.params):
+        if not need >> i & 1 or len(alts) != 1 or not isinstance(alts[0], Leaf):
+            continue
+        fp = flat.ports[alts[0].port]
+        fa = flat.atoms[fp.atom]
+        if fa.index == owner:
+            continue
+        mask = reaching(fa, fp.name)
+        if mask != (1 << len(fa.places)) - 1 and (best is None or bin(mask).count("1") < bin(best[1]).count("1")):
+            best = (fa.offset, mask)
+    if best is not None:
+        return (best,)
+    if fc.top or not fc.parents:
+        return None
+    out: list[tuple[int, int]] = []
+    for parent in fc.parents:
+        got = connector_alive(flat, flat.connectors[parent], owner)
+        if got is None:
+            return None
+        out += got
+    return tuple(out)
 
 
 def observed_by_priorities(flat: FlatSystem) -> set[int]:
@@ -171,23 +246,33 @@ def layout(flat: FlatSystem, reduce: bool = True, observed: Iterable[tuple[str, 
     live.  With ``reduce=False`` every variable is always live (no reset).
     """
     observed = set(observed)
-    by_connectors = observed_by_connectors(flat)
+    by_connectors = readers_by_connectors(flat)
     by_priorities = observed_by_priorities(flat)
     slots: list[Slot] = []
     for fa in flat.atoms:
         slots.append(Slot(fa.offset, "marking", fa.name, "marking", places=len(fa.places)))
-        always = {d.name for d in fa.variables if d.exported or (fa.index, d.name) in by_connectors
-                  or fa.slot(d.name) in by_priorities or (fa.name, d.name) in observed}
+        always = {d.name for d in fa.variables if d.exported or fa.slot(d.name) in by_priorities
+                  or (fa.name, d.name) in observed}
         for pr in fa.type.priorities:
             always |= _reads(pr.guard)
         for inv in fa.type.invariants:  # checked in every state where it is in force
             always |= _reads(inv.guard)
+        alive = {}  # variables connectors read: live while one of them may still fire, or while the atom reads them
+        for d in fa.variables:
+            readers = by_connectors.get((fa.index, d.name))
+            if readers and d.name not in always:
+                conditions = [connector_alive(flat, flat.connectors[c], fa.index) for c in readers]
+                if not reduce or None in conditions:
+                    always.add(d.name)
+                else:
+                    alive[d.name] = tuple(sorted({pair for c in conditions for pair in c}))
         masks = live_places(fa, always) if reduce else {}
         for d in fa.variables:
             kind = d.type if d.type in ("bool", "int") else "value"
             domain = declared_domain(d, fa.name)
             slots.append(Slot(fa.slot(d.name), kind, fa.name, d.name, live=masks.get(d.name),
-                              default=default_value(d.type), domain=domain, marking=fa.offset))
+                              default=default_value(d.type), domain=domain, marking=fa.offset,
+                              alive=alive.get(d.name, ())))
     for k in range(requests):
         slots.append(Slot(flat.state_size + k, "requests", None, f"requests[{k}]", default=0))
     return slots

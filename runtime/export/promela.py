@@ -155,7 +155,7 @@ class PromelaWriter(AtomWriter, ConnectorWriter):
         for s in self.slots:
             name = self.names[s.index]
             ty = self.types[s.index]
-            hidden = "hidden " if s.live == 0 and self.hidden else ""
+            hidden = "hidden " if s.never_live and self.hidden else ""
             if hidden and ty in ("bool", "bit"):
                 ty = "byte"  # SPIN cannot hide a bit
             value = "" if init is None else f" = {literal(init[s.index])}"

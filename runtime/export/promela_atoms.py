@@ -104,16 +104,18 @@ class AtomWriter(ExprWriter):
 
     def resets(self, atoms: set[int], temps: list[str], ind: str) -> list[str]:
         out = []
+        by_slot = {a.offset: a.index for a in self.flat.atoms}  # marking slot -> atom
         for s in self.slots:
-            if s.live is None or s.atom is None or (s.live == 0 and self.hidden):
+            if s.live is None or s.atom is None or (s.never_live and self.hidden):
                 continue
             fa = next(a for a in self.flat.atoms if a.name == s.atom)
-            if fa.index in atoms:
+            if fa.index in atoms or any(by_slot[m] in atoms for m, _ in s.alive):
                 name = self.names[s.index]
-                if s.live == 0:
+                if s.never_live:
                     out.append(f"{ind}{name} = {literal(s.default)};")
                 else:
-                    out.append(f"{ind}{name} = ((m{fa.index} & {s.live}) != 0 -> {name} : {literal(s.default)});")
+                    test = " || ".join(f"(m{by_slot[m]} & {mask}) != 0" for m, mask in ((s.marking, s.live), *s.alive))
+                    out.append(f"{ind}{name} = ({test} -> {name} : {literal(s.default)});")
         if not self.hidden:
             out.extend(f"{ind}{t} = 0;" for t in temps)
         return out

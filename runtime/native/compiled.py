@@ -169,7 +169,7 @@ class CompiledSpace:
         name = slots[slot].name if slot < len(slots) else None
         for k, s in enumerate(slots):
             if k != slot and name is not None and s.kind == "int" and s.name == name and s.domain is None \
-                    and s.live != 0 and self.lib.c_width(k) < wider:
+                    and not s.never_live and self.lib.c_width(k) < wider:
                 self.widths[k] = wider
         self.widths[slot] = wider
         self.build()
