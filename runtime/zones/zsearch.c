@@ -1344,8 +1344,9 @@ static int merge_into(Ctx *x, const Layout *L, Node *step, double *zone, Kept *k
     return count;
 }
 
-/* Store (state, zone) reached from node parent by interaction via; zone is changed (extrapolated, its idle clocks
- * freed: the stored form leaves their rows and columns out, see layout_for). */
+/* Store (state, zone) reached from node parent by interaction via; zone is changed (extrapolated; its idle clocks
+ * freed only where whole matrices meet, in merging: the stored form and every comparison leave their rows and
+ * columns out, see layout_for). */
 static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via, const int64_t *guard,
                int64_t nguard, int grown, const double *lower, const double *upper, const unsigned char *plus)
 {
@@ -1357,8 +1358,6 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
     else
         z_extrapolate(zone, d, x->ceiling);
     z_forget_below(zone, d, x->grow_only, x->ngrow);
-    if (L->nidle)
-        z_free(zone, zone, d, L->idle, L->nidle);  /* in place: see z_free */
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
@@ -1426,6 +1425,8 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
             kept_remove(L, kept, x->under.a, x->under.n);
     }
     if (x->merge && kept->n) {
+        if (L->nidle)  /* merging takes hulls of whole matrices: the idle clocks' rows and columns as stored ones' */
+            z_free(zone, zone, d, L->idle, L->nidle);  /* in place: see z_free */
         double *own = T(x, 3);  /* the zone as it came, if it merges */
         int got = merge_into(x, L, &step, zone, kept, ready != NULL, own);
         if (got < 0)
