@@ -114,13 +114,9 @@ def _port_data(node, acc: set[tuple[str, str]]) -> None:
             _port_data(getattr(node, f.name), acc)
 
 
-def observed_by_connectors(flat: FlatSystem) -> set[tuple[int, str]]:
-    """``(atom index, variable)`` pairs some connector reads through a port (guard, up, or a down's values)."""
-    return set(readers_by_connectors(flat))
-
-
 def readers_by_connectors(flat: FlatSystem) -> dict[tuple[int, str], list[int]]:
-    """For each ``(atom index, variable)`` some connector reads through a port, the ids of those connectors."""
+    """For each ``(atom index, variable)`` some connector reads through a port (guard, up, or a down's values),
+    the ids of those connectors."""
     out: dict[tuple[int, str], list[int]] = {}
     for fc in flat.connectors:
         acc: set[tuple[str, str]] = set()
