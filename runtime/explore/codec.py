@@ -152,7 +152,7 @@ class Codec:
         """The code of slot ``s`` shifted to its place in its chunk."""
         x = f"x{s.index}"
         if s.live is not None:
-            x = f"({x} if {s.live_test('x{}', ' or ')} else {s.default!r})"
+            x = f"({x} if {s.live_test(lambda m: f'x{m}', ' or ')} else {s.default!r})"
         if s.kind in ("marking", "bool"):
             term = x
         elif s.domain is not None:

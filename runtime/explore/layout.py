@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, fields, is_dataclass
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 from runtime.engine.cexpr import default_value
 from runtime.engine.flatten import FlatAtom, FlatSystem, Leaf
@@ -51,10 +51,10 @@ class Slot:
         """Always the default: no bits in a packed state."""
         return self.live == 0 and not self.alive
 
-    def live_test(self, marking: str, sep: str = " || ") -> str:
-        """The condition under which the variable is live, in C or Python: ``marking`` formats a marking slot's
-        value (``"L[{}]"``), ``sep`` joins the alternatives."""
-        return sep.join(f"({marking.format(m)} & {mask})" for m, mask in ((self.marking, self.live), *self.alive))
+    def live_test(self, marking: Callable[[int], str], sep: str = " || ") -> str:
+        """The condition under which the variable is live, in C, Python or Promela: ``marking`` names a marking
+        slot's value (``lambda m: f"L[{m}]"``), ``sep`` joins the alternatives."""
+        return sep.join(f"({marking(m)} & {mask})" for m, mask in ((self.marking, self.live), *self.alive))
 
     @property
     def title(self) -> str:

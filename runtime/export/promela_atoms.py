@@ -108,14 +108,13 @@ class AtomWriter(ExprWriter):
         for s in self.slots:
             if s.live is None or s.atom is None or (s.never_live and self.hidden):
                 continue
-            fa = next(a for a in self.flat.atoms if a.name == s.atom)
-            if fa.index in atoms or any(by_slot[m] in atoms for m, _ in s.alive):
+            if by_slot[s.marking] in atoms or any(by_slot[m] in atoms for m, _ in s.alive):
                 name = self.names[s.index]
                 if s.never_live:
                     out.append(f"{ind}{name} = {literal(s.default)};")
                 else:
-                    test = " || ".join(f"(m{by_slot[m]} & {mask}) != 0" for m, mask in ((s.marking, s.live), *s.alive))
-                    out.append(f"{ind}{name} = ({test} -> {name} : {literal(s.default)});")
+                    test = s.live_test(lambda m: f"m{by_slot[m]}")
+                    out.append(f"{ind}{name} = (({test}) != 0 -> {name} : {literal(s.default)});")
         if not self.hidden:
             out.extend(f"{ind}{t} = 0;" for t in temps)
         return out

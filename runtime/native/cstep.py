@@ -414,7 +414,7 @@ class CGen(StepEmitter):
         if s.domain is not None:
             w.if_then(f"x < {s.domain[0]} || x > {s.domain[1]}", f"fail({E_DOMAIN}, {k})")
         if s.live is not None:
-            w.if_then(f"!({s.live_test('L[{}]')})", f"x = {self.default(s)}")
+            w.if_then(f"!({s.live_test(lambda m: f'L[{m}]')})", f"x = {self.default(s)}")
         if s.domain is not None:
             w(f"u = (uint64_t)(x - ({s.domain[0]}));")
         elif s.kind in ("marking", "bool"):
