@@ -335,9 +335,9 @@ def runs(args, paths: list[str], platforms: list[Path], out: Path):
 def _limits(args) -> dict:
     """The search's budgets (SearchOptions' fields) from the command line; without ``--max-memory``, rows run at
     once share the default budget (half the machine's memory) instead of each taking all of it."""
-    memory = args.max_memory
-    if memory is None and args.jobs > 1 and default_memory():
-        memory = max(1, default_memory() // args.jobs // 2**20)
+    memory, half = args.max_memory, default_memory()
+    if memory is None and args.jobs > 1 and half:
+        memory = max(1, half // args.jobs // 2**20)
     return {"max_states": args.max_states, "max_memory_mb": memory}
 
 
