@@ -198,6 +198,7 @@ class Priorities:
         self.names = [r[0] for r in rules]
         self.guards = [(i, g) for i, (_, _, _, g) in enumerate(rules) if g is not None]
         self.edges = rule_edges([(low, high) for _, low, high, _ in rules], tops)
+        self.sides = RuleSides([(low, high) for _, low, high, _ in rules])
         self.memo: dict[tuple[bool, ...], int] = {}
         self.lmask: dict[int, int] = {}
         self.hmask: dict[int, int] = {}
@@ -232,12 +233,8 @@ class Priorities:
     def _masks(self, inter) -> tuple[int, int]:
         lm = self.lmask.get(inter.index)
         if lm is None:
-            lm = hm = 0
-            for i, (_, low, high, _) in enumerate(self.rules):
-                if matches_low(inter.parts, low):
-                    lm |= 1 << i
-                if _matches(inter.parts, high):
-                    hm |= 1 << i
+            low, high = self.sides.of(inter.parts)
+            lm, hm = sum(1 << r for r in low), sum(1 << r for r in high)
             self.lmask[inter.index], self.hmask[inter.index] = lm, hm
         return lm, self.hmask[inter.index]
 
@@ -257,6 +254,25 @@ class Priorities:
         if not blocked:
             return out
         return [i for i in out if not (self._masks(i)[0] & blocked)]
+
+
+class RuleSides:
+    """Which compound priorities an interaction is low in and which it is high in.  Only the rules that name one of
+    its connectors can match it, so each rule is listed under the connectors its sides name (DALA has 155 rules, an
+    interaction meets a handful)."""
+
+    def __init__(self, sides: Sequence[tuple[Sequence, Sequence]]) -> None:
+        self.sides = list(sides)
+        self.naming: dict[int, set[int]] = {}
+        for r, (low, high) in enumerate(self.sides):
+            for cid, _ in (*low, *high):
+                self.naming.setdefault(cid, set()).add(r)
+
+    def of(self, parts) -> tuple[list[int], list[int]]:
+        """The rules ``parts`` (an interaction's (connector, port mask) pairs) is low in, and those it is high in."""
+        named = sorted({r for c, _ in parts for r in self.naming.get(c, ())})
+        return ([r for r in named if matches_low(parts, self.sides[r][0])],
+                [r for r in named if _matches(parts, self.sides[r][1])])
 
 
 def _matches(parts, entries) -> bool:

@@ -49,20 +49,12 @@ def node_masks(node: TreeNode) -> list[int]:
     return sorted(out)
 
 
-def _matches(parts_, entries) -> bool:
-    for cid, pm in entries:
-        for c, m in parts_:
-            if c == cid and m & pm == pm:
-                return True
-    return False
-
-
 def all_interactions(engine) -> list[Static]:
     """The interactions of every source of the engine's plan, in source order then mask order."""
     out: list[Static] = []
     nsrc = len(engine.sources)
     make = engine.step.interaction
-    rules = engine.flat.priorities
+    sides = support.RuleSides([(pr.low.entries, pr.high.entries) for pr in engine.flat.priorities])
     for src in engine.sources:
         masks = [1] if src.kind == "port" else node_masks(src.tree)
         first = len(out)
@@ -70,11 +62,8 @@ def all_interactions(engine) -> list[Static]:
             inter = make(src.index, mask)
             ps = tuple(parts(src.tree, mask)) if src.tree is not None else ()
             st = Static(src, mask, inter.label, mask * nsrc + src.index, ps)
-            for r, pr in enumerate(rules):
-                if support.matches_low(ps, pr.low.entries):
-                    st.low |= 1 << r
-                if _matches(ps, pr.high.entries):
-                    st.high |= 1 << r
+            low, high = sides.of(ps)
+            st.low, st.high = sum(1 << r for r in low), sum(1 << r for r in high)
             out.append(st)
         group = out[first:]
         for st in group:

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from runtime.engine.errors import ModelError
-from runtime.engine.support import _matches, matches_low, rule_edges, top_connectors
+from runtime.engine.support import RuleSides, rule_edges, top_connectors
 from runtime.explore.progress import Progress, null_progress
 from runtime.explore.space import StateSpace
 from runtime.zones import dbm
@@ -98,6 +98,7 @@ class ZoneExplorer:
         tops[tick] = {-1}
         self._feasible: dict[tuple, bool] = {}
         self.edges = self.useful_edges(rule_edges([(r.low, r.high) for r in self.model.rules], tops))
+        self.sides = RuleSides([(r.low, r.high) for r in self.model.rules])
         self.tick_rules = [r for r, rule in enumerate(self.model.rules) if any(c == tick for c, _ in rule.low)]
         self.merge = merge
         # Extra_LU with each place's bounds (model.py's _local_ceilings), off by default: measured, it changes nothing
@@ -254,10 +255,7 @@ class ZoneExplorer:
         """The compound priorities an interaction is low in, and those it is high in."""
         got = self._rules.get(index)
         if got is None:
-            parts = self.interaction(index)[0]
-            got = self._rules[index] = (
-                [r for r, rule in enumerate(self.model.rules) if matches_low(parts, rule.low)],
-                [r for r, rule in enumerate(self.model.rules) if _matches(parts, rule.high)])
+            got = self._rules[index] = self.sides.of(self.interaction(index)[0])
         return got
 
     def blocking(self, state: tuple, enabled: list[int]) -> "Blocking":
