@@ -203,14 +203,17 @@ void z_free(double *m, const double *src, int d, const int *idx, int count)
     }
 }
 
-/* Each clock of idx keeps its upper bounds only: its column set to column 0 (dbm.py's forget_below). */
+/* Each clock of idx keeps its upper bounds only: its column set to column 0 (dbm.py's forget_below).  Row by row
+ * (column 0 is never one of idx), so each row is read from memory once. */
 void z_forget_below(double *m, int d, const int *idx, int count)
 {
-    for (int c = 0; c < count; c++) {
-        int i = idx[c];
-        for (int a = 0; a < d; a++)
-            m[(long)a * d + i] = a == i ? 0 : m[(long)a * d];
+    for (int a = 0; a < d; a++) {
+        double *ra = m + (long)a * d, first = ra[0];
+        for (int c = 0; c < count; c++)
+            ra[idx[c]] = first;
     }
+    for (int c = 0; c < count; c++)
+        m[(long)idx[c] * d + idx[c]] = 0;
 }
 
 /* The hull of a and b (the least zone holding both) into h; 1 when it holds nothing else (their union is

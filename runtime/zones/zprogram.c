@@ -40,6 +40,7 @@ typedef struct {
     SuccBuf rbuf;            /* those of the state whose successor was last interned (zsearch.c's resolve) */
     int64_t *top_gen, *top_idx, gen;  /* per rule: its region at the state being written (memo entry), if top_gen
                                        * is that program's generation: the memo's common case found at once */
+    int64_t *chain_gen, *chain_head;  /* per rule: its last memo entry in program chain_gen's memo (memo_prev on) */
     inter_fn ask_inter;
 } Tables;
 
@@ -50,6 +51,7 @@ static void tables_free(Tables *t)
         return;
     free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob);
     free(t->wbuf.words), free(t->wbuf.via), free(t->rbuf.words), free(t->rbuf.via), free(t->top_gen), free(t->top_idx);
+    free(t->chain_gen), free(t->chain_head);
     free(t);
 }
 
@@ -105,7 +107,9 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     t->rule = malloc((t->nrules + 1) * sizeof(int64_t *));
     t->top_gen = calloc(t->nrules + 1, sizeof(int64_t));
     t->top_idx = calloc(t->nrules + 1, sizeof(int64_t));
-    if (!t->rule || !t->top_gen || !t->top_idx)
+    t->chain_gen = calloc(t->nrules + 1, sizeof(int64_t));
+    t->chain_head = calloc(t->nrules + 1, sizeof(int64_t));
+    if (!t->rule || !t->top_gen || !t->top_idx || !t->chain_gen || !t->chain_head)
         goto nomem;
     for (int r = 0; r < t->nrules; r++) {
         t->rule[r] = p;
@@ -251,6 +255,8 @@ typedef struct {
     /* memo of regions: rule, acc, result (each result: a list of [n, triples...]) */
     L memo_key;            /* per memo entry: r, nacc, acc... */
     L memo_off;            /* per memo entry: where its result starts in pool */
+    L memo_at;             /* per memo entry: where its key starts in memo_key */
+    L memo_prev;           /* per memo entry: the entry of the same rule before it, -1 for none */
     L pool;                /* results: count (-1: everywhere), then per region: n, triples... */
     int64_t gen;           /* this program's number (Tables' top_gen) */
     /* per rule, the enabled interactions on its high side, in engine order (built at the first region) */
@@ -371,11 +377,12 @@ static int memo_find(Prog *g, int64_t r, const int64_t *acc, int64_t nacc)
         const Tables *t = g->t;
         return t->top_gen[r] == g->gen ? (int)t->top_idx[r] : -1;
     }
-    for (int64_t k = 0, at = 0; k < g->memo_off.n; k++) {
-        const int64_t *key = g->memo_key.a + at;
-        if (key[0] == r && key[1] == nacc && !memcmp(key + 2, acc, 3 * nacc * sizeof(int64_t)))
+    if (g->t->chain_gen[r] != g->gen)
+        return -1;
+    for (int64_t k = g->t->chain_head[r]; k >= 0; k = g->memo_prev.a[k]) {  /* the rule's entries alone */
+        const int64_t *key = g->memo_key.a + g->memo_at.a[k];
+        if (key[1] == nacc && !memcmp(key + 2, acc, 3 * nacc * sizeof(int64_t)))
             return (int)k;
-        at += 2 + 3 * key[1];
     }
     return -1;
 }
@@ -542,7 +549,8 @@ store:
         /* keep the feasible ones, then remember: the memo's three lists grow together or not at all (memo_find
          * walks the keys from the first) */
         L kept = {0};
-        int64_t count = 0, key_n = g->memo_key.n, pool_n = g->pool.n;
+        int64_t count = 0, key_n = g->memo_key.n, pool_n = g->pool.n, entries = g->memo_at.n;
+        int64_t prev = t->chain_gen[r] == g->gen ? t->chain_head[r] : -1;
         if (!all)
             for (int64_t at = 0; at < mine.n && !status; at += 1 + 3 * mine.a[at])
                 if (feasible(g, mine.a + at + 1, mine.a[at])) {
@@ -550,10 +558,12 @@ store:
                     count++;
                 }
         if (status || lpush(&g->memo_key, r) || lpush(&g->memo_key, nacc0) || lcat(&g->memo_key, acc0, 3 * nacc0)
-            || lpush(&g->pool, all ? -1 : count) || lcat(&g->pool, kept.a, kept.n) || lpush(&g->memo_off, pool_n)) {
-            g->memo_key.n = key_n, g->pool.n = pool_n;
+            || lpush(&g->pool, all ? -1 : count) || lcat(&g->pool, kept.a, kept.n) || lpush(&g->memo_at, key_n)
+            || lpush(&g->memo_prev, prev) || lpush(&g->memo_off, pool_n)) {
+            g->memo_key.n = key_n, g->pool.n = pool_n, g->memo_at.n = g->memo_prev.n = entries;
             status = -9;
         } else {
+            t->chain_gen[r] = g->gen, t->chain_head[r] = entries;
             if (!nacc0)
                 t->top_gen[r] = g->gen, t->top_idx[r] = g->memo_off.n - 1;
             if (all)
@@ -614,7 +624,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
         return -9;
     int status = 0;
     list_failed = 0;
-    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, ++t->gen, NULL, NULL};
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, {0}, {0}, ++t->gen, NULL, NULL};
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
     if (n < 0) {
@@ -870,6 +880,7 @@ out:
     if (list_failed && !status)
         status = -9;  /* the program lacks what a push could not add */
     free(sidx), free(srow), free(g.index), free(g.row);
-    free(g.memo_key.a), free(g.memo_off.a), free(g.pool.a), free(g.high_off), free(g.high_en);
+    free(g.memo_key.a), free(g.memo_off.a), free(g.memo_at.a), free(g.memo_prev.a), free(g.pool.a), free(g.high_off),
+        free(g.high_en);
     return status;
 }
