@@ -127,9 +127,10 @@ typedef struct {
     int ntmp;
     /* with the compiled step: programs written in C (zprogram.c), states kept as its words */
     Tables *tables;
-    VEC(uint8_t) bytes;     /* states' words, zigzag varints (most slots are small) */
+    VEC(uint8_t) bytes;     /* states' words, each as it differs from the first state's (see encode) */
     VEC(int64_t) ends;      /* per state: where its bytes end */
     uint8_t *enc;           /* scratch: one state encoded */
+    int64_t *ref;           /* the first state's words, which the others are written against (NULL before it) */
     int64_t *hash;          /* open addressing: state + 1, 0 empty */
     int64_t hcap;
     int64_t *inter_key, **inter_val, icap, icount;
@@ -380,10 +381,10 @@ void zs_free(void *p)
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
-    free(x->inter_key), free(x->inter_val), free(x->bytes.a), free(x->ends.a), free(x->enc), free(x->hash), free(x);
+    free(x->inter_key), free(x->inter_val), free(x->bytes.a), free(x->ends.a), free(x->enc), free(x->ref), free(x->hash), free(x);
 }
 
-/* -- states as the compiled step's words, kept as zigzag varints ------------------------------------- */
+/* -- states as the compiled step's words, kept as they differ from the first state ---------------------- */
 static uint64_t hash_bytes(const uint8_t *b, int64_t n)
 {
     uint64_t h = 0x9e3779b97f4a7c15ull ^ (uint64_t)n;
@@ -412,10 +413,18 @@ static uint64_t hash_bytes(const uint8_t *b, int64_t n)
     return h ^ (h >> 32);
 }
 
-static int64_t encode(const int64_t *w, int n, uint8_t *out)
+/* A state's words as stored: a bitmap of the words that differ from ref (the first state's), ceil(n / 8) bytes,
+ * then those words' values as zigzag varints, in order.  A state of whole DALA has 324 words of which about 26
+ * differ from the first one's: 70 bytes instead of 327 as varints alone.  One encoding per state, so equal words
+ * are equal bytes (intern compares and hashes the bytes). */
+static int64_t encode(const int64_t *w, int n, const int64_t *ref, uint8_t *out)
 {
-    int64_t k = 0;
+    int64_t nb = (n + 7) / 8, k = nb;
+    memset(out, 0, nb);
     for (int i = 0; i < n; i++) {
+        if (w[i] == ref[i])
+            continue;
+        out[i >> 3] |= (uint8_t)(1 << (i & 7));
         uint64_t v = ((uint64_t)w[i] << 1) ^ (uint64_t)(w[i] >> 63);
         while (v >= 0x80) {
             out[k++] = (uint8_t)(v | 0x80);
@@ -426,18 +435,26 @@ static int64_t encode(const int64_t *w, int n, uint8_t *out)
     return k;
 }
 
-static void decode(const uint8_t *b, int n, int64_t *w)
+static const uint8_t *varint(const uint8_t *b, int64_t *w)
 {
-    for (int i = 0; i < n; i++) {
-        uint64_t v = 0;
-        int shift = 0;
-        while (*b & 0x80) {
-            v |= (uint64_t)(*b++ & 0x7f) << shift;
-            shift += 7;
-        }
-        v |= (uint64_t)*b++ << shift;
-        w[i] = (int64_t)(v >> 1) ^ -(int64_t)(v & 1);
+    uint64_t v = 0;
+    int shift = 0;
+    while (*b & 0x80) {
+        v |= (uint64_t)(*b++ & 0x7f) << shift;
+        shift += 7;
     }
+    v |= (uint64_t)*b++ << shift;
+    *w = (int64_t)(v >> 1) ^ -(int64_t)(v & 1);
+    return b;
+}
+
+static void decode(const uint8_t *b, int n, const int64_t *ref, int64_t *w)
+{
+    const uint8_t *v = b + (n + 7) / 8;
+    memcpy(w, ref, n * sizeof(int64_t));
+    for (int byte = 0; byte < (n + 7) / 8; byte++)
+        for (unsigned bits = b[byte]; bits; bits &= bits - 1)
+            v = varint(v, w + 8 * byte + __builtin_ctz(bits));
 }
 
 static const uint8_t *state_bytes(const Ctx *x, int64_t s, int64_t *len)
@@ -450,7 +467,7 @@ static const uint8_t *state_bytes(const Ctx *x, int64_t s, int64_t *len)
 static void state_words(const Ctx *x, int64_t s, int64_t *w)
 {
     int64_t len;
-    decode(state_bytes(x, s, &len), x->tables->W, w);
+    decode(state_bytes(x, s, &len), x->tables->W, x->ref, w);
 }
 
 static int grow_states(Ctx *x, int64_t n)
@@ -485,8 +502,13 @@ static int64_t intern(void *p, const int64_t *w)
     Ctx *x = p;
     int W = x->tables->W;
     int64_t n = x->ends.n, len;
-    if (!x->enc && !(x->enc = malloc(10 * (size_t)W + 1)))
+    if (!x->enc && !(x->enc = malloc(11 * (size_t)W + 1)))
         return -9;
+    if (!x->ref) {  /* the first state: the others are written as they differ from it */
+        if (!(x->ref = malloc(W * sizeof(int64_t))))
+            return -9;
+        memcpy(x->ref, w, W * sizeof(int64_t));
+    }
     if (2 * (n + 1) > x->hcap) {
         int64_t cap = x->hcap ? 2 * x->hcap : 4096;
         int64_t *h = calloc(cap, sizeof(int64_t));
@@ -502,7 +524,7 @@ static int64_t intern(void *p, const int64_t *w)
         free(x->hash);
         x->hash = h, x->hcap = cap;
     }
-    int64_t k = encode(w, W, x->enc);
+    int64_t k = encode(w, W, x->ref, x->enc);
     uint64_t i = hash_bytes(x->enc, k) & (x->hcap - 1);
     while (x->hash[i]) {
         int64_t s = x->hash[i] - 1;
@@ -511,8 +533,17 @@ static int64_t intern(void *p, const int64_t *w)
             return s;
         i = (i + 1) & (x->hcap - 1);
     }
-    for (int64_t j = 0; j < k; j++)
-        PUSH(x->bytes, x->enc[j]);
+    if (x->bytes.n + k > x->bytes.cap) {
+        int64_t cap = x->bytes.cap ? x->bytes.cap : 4096;
+        while (cap < x->bytes.n + k)
+            cap *= 2;
+        uint8_t *a = realloc(x->bytes.a, cap);
+        if (!a)
+            return -9;
+        x->bytes.a = a, x->bytes.cap = cap;
+    }
+    memcpy(x->bytes.a + x->bytes.n, x->enc, k);
+    x->bytes.n += k;
     PUSH(x->ends, x->bytes.n);
     x->hash[i] = n + 1;
     if (grow_states(x, n + 1))
@@ -1830,22 +1861,21 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
     return len;
 }
 
-/* Where the number after the first ``n`` of b[0..len) starts: eight bytes at a time while they hold no more ends
- * than are left to skip (a byte with its high bit clear ends a number). */
-static const uint8_t *skip_words(const uint8_t *b, int64_t len, int n)
+/* Word ``offset`` of a state stored as b: ref's, or the value after those of the differing words before it. */
+static int64_t word_at(const uint8_t *b, int n, const int64_t *ref, int offset)
 {
-    const uint8_t *end = b + len;
-    while (n > 0 && b + 8 <= end) {
-        uint64_t v;
-        memcpy(&v, b, 8);
-        int ends = __builtin_popcountll(~v & 0x8080808080808080ull);
-        if (ends > n)
-            break;
-        b += 8, n -= ends;
-    }
-    for (; n > 0; b++)
-        n -= !(*b & 0x80);
-    return b;
+    if (!(b[offset >> 3] >> (offset & 7) & 1))
+        return ref[offset];
+    int before = 0;
+    for (int byte = 0; byte < offset >> 3; byte++)
+        before += __builtin_popcount(b[byte]);
+    before += __builtin_popcount(b[offset >> 3] & ((1u << (offset & 7)) - 1));
+    const uint8_t *v = b + (n + 7) / 8;
+    for (; before > 0; v++)
+        before -= !(*v & 0x80);
+    int64_t w;
+    varint(v, &w);
+    return w;
 }
 
 /* Word ``offset`` of each of the states ids[0..n) into out (the words before it skipped, not decoded). */
@@ -1853,8 +1883,6 @@ void zs_node_words(void *p, const int64_t *ids, int64_t n, int offset, int64_t *
 {
     Ctx *x = p;
     int64_t len;
-    for (int64_t i = 0; i < n; i++) {
-        const uint8_t *b = state_bytes(x, ids[i], &len);
-        decode(skip_words(b, len, offset), 1, out + i);
-    }
+    for (int64_t i = 0; i < n; i++)
+        out[i] = word_at(state_bytes(x, ids[i], &len), x->tables->W, x->ref, offset);
 }
