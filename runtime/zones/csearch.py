@@ -291,9 +291,16 @@ class CSearch:
 
     def programs_let_go(self) -> tuple[int, int]:
         """Programs let go past the budget, and programs written again for a state whose one was let go."""
-        out = (ctypes.c_int64 * 2)()
+        return self._program_counts()[:2]
+
+    def programs_held(self) -> int:
+        """Programs written in C that the search holds now (those Python wrote are never let go)."""
+        return self._program_counts()[2]
+
+    def _program_counts(self) -> tuple[int, int, int]:
+        out = (ctypes.c_int64 * 3)()
         self.lib.zs_program_counts(self.ctx, out)
-        return out[0], out[1]
+        return out[0], out[1], out[2]
 
     def memory(self) -> int:
         """Bytes the search holds (zsearch.c's zs_memory)."""

@@ -209,10 +209,13 @@ void zs_set_budget(void *p, int64_t bytes)
     ((Ctx *)p)->budget = bytes;
 }
 
+/* Programs let go, programs written again after being let go, and programs written in C held now. */
 void zs_program_counts(void *p, int64_t *out)
 {
     Ctx *x = p;
-    out[0] = x->let_go, out[1] = x->rewritten;
+    out[0] = x->let_go, out[1] = x->rewritten, out[2] = 0;
+    for (int64_t s = 0; s < x->prog.n; s++)
+        out[2] += x->prog.a[s] && x->in_c[s];
 }
 
 /* -- what a stored zone keeps -------------------------------------------------------------------------
@@ -997,6 +1000,11 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
             x->in_c[state] = 1, x->plen[state] = (int32_t)prog.n;
             x->prog_words += prog.n;
             x->prog.a[state] = prog.a ? prog.a : calloc(1, sizeof(int64_t));
+            /* a state with no node waiting may be let go again once its zone has arrived: one let go before and
+             * written again for a zone that something covers would otherwise be held to the end (a state that
+             * gets a node waiting is skipped by let_go, and queued again when its last node leaves) */
+            if (x->budget > 0 && !x->pending[state])
+                PUSH_OR(x->finished, state, return NULL);
             return x->prog.a[state];
         }
         free(prog.a);
@@ -1735,6 +1743,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         }
         if (status)
             break;
+        /* the state's program may go once it is expanded: node_done queued it, but let_go passes over the pinned
+         * state, which it may have met while its successors arrived */
+        if (x->budget > 0 && !x->pending[x->pinned])
+            PUSH_OR(x->finished, x->pinned, goto nomem);
         if (max_states >= 0 && x->nodes.n >= max_states) {
             status = 1;
             break;
