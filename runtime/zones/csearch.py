@@ -376,9 +376,9 @@ class CSearch:
         from runtime.zones.lassos import Graph
 
         rows = self.z.nodes.rows
-        e = self.z.out.edges
-        return Graph(rows[:, 1].copy(), (rows[:, 9] & 2) > 0, rows[:, 3].copy(), (rows[:, 9] & 1) > 0, rows[:, 4] >= 0,
-                     e[:, 0].astype(np.int64), e[:, 1].astype(np.int64), e[:, 2].astype(np.int64),
+        e = self.z.out.edges  # as C keeps them, 32-bit: a search of 16 million nodes has 64 million edges
+        return Graph(rows[:, 1].astype(np.int32), (rows[:, 9] & 2) > 0, rows[:, 3].astype(np.int32),
+                     (rows[:, 9] & 1) > 0, rows[:, 4] >= 0, e[:, 0].copy(), e[:, 1].copy(), e[:, 2].copy(),
                      self.steps.grown(), self.z.nodes.__getitem__, self.steps.__getitem__)
 
     def node_words(self, offset: int) -> np.ndarray:

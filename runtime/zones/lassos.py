@@ -49,8 +49,13 @@ def edges_of(g: Graph, rep: np.ndarray) -> Edges:
     grown = np.where(real, g.grown[np.where(real, ref, 0)],
                      g.step_grown[np.where(real, 0, -ref - 1)] if len(g.step_grown) else False)
     ru, rt = rep[g.frm], rep[g.target]
-    key = ru * len(g.parent) + rt
-    return Edges(ru, rt, grown.astype(bool), key, np.argsort(key, kind="stable"))
+    key = ru.astype(np.int64) * len(g.parent) + rt
+    return Edges(ru, rt, grown.astype(bool), key, np.argsort(key, kind="stable").astype(_index(len(key))))
+
+
+def _index(n: int):
+    """The narrowest integer type that numbers ``n`` things: the arrays of a search's edges are its largest."""
+    return np.int32 if n < 2 ** 31 else np.int64
 
 
 def python_graph(z) -> Graph:
@@ -88,7 +93,7 @@ def _prepared(z) -> tuple[Graph, np.ndarray, tuple, Edges]:
         return got[2:]
     g = z.graph()
     n = len(g.parent)
-    rep = np.where(g.covered & (g.by >= 0), g.by, np.arange(n))  # a node is covered by one stored after it
+    rep = np.where(g.covered & (g.by >= 0), g.by, np.arange(n, dtype=_index(n)))  # covered by one stored after it
     while True:  # to the end of each chain of covers, halving the rest of every chain each round
         nxt = rep[rep]
         if np.array_equal(nxt, rep):
