@@ -43,7 +43,8 @@ def library():
             ("zs_set_program", i32, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_initial", i32, [p, i64, dbl, PROGRAM]),
             ("zs_run", i32, [p, i64, i32, PROGRAM, PROGRESS, i64, i32]),
-            ("zs_counts", None, [p, ctypes.POINTER(i64)]), ("zs_nodes", None, [p, ctypes.POINTER(i64)]),
+            ("zs_counts", None, [p, ctypes.POINTER(i64)]), ("zs_node_column", None, [p, i32, ctypes.POINTER(i64)]),
+            ("zs_node_row", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_step_row", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_step_grown", None, [p, ctypes.POINTER(ctypes.c_uint8)]),
             ("zs_edges", None, [p, ctypes.POINTER(ctypes.c_int32)]),
@@ -375,21 +376,20 @@ class CSearch:
         """The nodes and steps as arrays, for lassos."""
         from runtime.zones.lassos import Graph
 
-        rows = self.z.nodes.rows
-        e = self.z.out.edges  # as C keeps them, 32-bit: a search of 16 million nodes has 64 million edges
-        return Graph(rows[:, 1].astype(np.int32), (rows[:, 9] & 2) > 0, rows[:, 3].astype(np.int32),
-                     (rows[:, 9] & 1) > 0, rows[:, 4] >= 0, e[:, 0].copy(), e[:, 1].copy(), e[:, 2].copy(),
-                     self.steps.grown(), self.z.nodes.__getitem__, self.steps.__getitem__)
+        column, e = self.back.column, self.z.out.edges  # edges as C keeps them, 32-bit, and not copied
+        flags = column(9)
+        return Graph(column(1, np.int32), (flags & 2) > 0, column(3, np.int32), (flags & 1) > 0, column(4) >= 0,
+                     e[:, 0], e[:, 1], e[:, 2], self.steps.grown(), self.z.nodes.__getitem__, self.steps.__getitem__)
 
     def node_words(self, offset: int) -> np.ndarray:
         """Word ``offset`` of each node's state."""
-        rows = self.z.nodes.rows
+        states = self.back.column(0)
         if self.compiled is None:
-            return np.array([self.z.states[s][offset] for s in rows[:, 0].tolist()], dtype=np.int64)
+            return np.array([self.z.states[s][offset] for s in states.tolist()], dtype=np.int64)
         ids = np.arange(self.lib.zs_nstates(self.ctx), dtype=np.int64)  # once per discrete state, then per node
         out = np.zeros(len(ids), dtype=np.int64)
         self.lib.zs_node_words(self.ctx, _longs(ids), len(ids), offset, _longs(out))
-        return out[rows[:, 0]]
+        return out[states]
 
     def zone(self, slot: int) -> np.ndarray:
         """A stored zone (single precision, as the search keeps it)."""
@@ -431,9 +431,13 @@ class ReadBack:
         getattr(s.lib, fn)(s.ctx, out.ctypes.data_as(ctypes.POINTER(np.ctypeslib.as_ctypes_type(dtype))))
         return out[:self.counts[count]] if head else out
 
-    @cached_property
-    def rows(self) -> np.ndarray:
-        return self._read("zs_nodes", 0, (10,), np.int64, head=True)
+    def column(self, col: int, dtype=np.int64) -> np.ndarray:
+        """Column ``col`` of the nodes' rows (zsearch.c's node_row: state, parent, via, by, zone, ...), as ``dtype``:
+        the nodes are read a column at a time, a search's millions of them as few numbers as its arrays need."""
+        s = self.search
+        out = np.zeros(max(1, s.counts()[0], self.counts[0]), dtype=np.int64)
+        s.lib.zs_node_column(s.ctx, col, _longs(out))
+        return out[:self.counts[0]].astype(dtype, copy=False)
 
     @cached_property
     def edges(self) -> np.ndarray:
@@ -449,20 +453,22 @@ class ReadBack:
 
 
 class Nodes:
-    """Nodes of the C search as :class:`CNode`, made when asked for."""
+    """Nodes of the C search as :class:`CNode`, each one's row read from C when it is first asked for."""
+
+    ROW = "zs_node_row"
 
     def __init__(self, search: CSearch, n: int) -> None:
         self.search, self.n, self.cache = search, n, {}
-
-    @property
-    def rows(self) -> np.ndarray:
-        return self.search.back.rows
 
     def __len__(self) -> int:
         return self.n
 
     def _row(self, k: int) -> list[int]:
-        return self.rows[k].tolist()
+        if not 0 <= k < self.n:
+            raise IndexError(k)
+        row = np.zeros(10, dtype=np.int64)
+        getattr(self.search.lib, self.ROW)(self.search.ctx, k, _longs(row))
+        return row.tolist()
 
     def __getitem__(self, k: int):
         if k < 0:
@@ -477,15 +483,9 @@ class Nodes:
 
 
 class Steps(Nodes):
-    """The steps into covered zones, as :class:`Nodes` but each one's row read from C when it is asked for (a
-    search keeps several times more steps than nodes, and a trace reads a few): no ``rows``."""
+    """The steps into covered zones, as :class:`Nodes` (a search keeps several times more steps than nodes)."""
 
-    def _row(self, k: int) -> list[int]:
-        if not 0 <= k < self.n:
-            raise IndexError(k)
-        row = np.zeros(10, dtype=np.int64)
-        self.search.lib.zs_step_row(self.search.ctx, k, _longs(row))
-        return row.tolist()
+    ROW = "zs_step_row"
 
     def grown(self) -> np.ndarray:
         """Whether time passed in each step."""

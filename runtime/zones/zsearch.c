@@ -1791,11 +1791,20 @@ static void node_row(const Node *a, int64_t *r)
 }
 
 /* Every node's row. */
-void zs_nodes(void *p, int64_t *out)
+/* Column ``col`` of every node's row (node_row): a search of millions of nodes is read back a column at a time. */
+void zs_node_column(void *p, int col, int64_t *out)
 {
     Ctx *x = p;
-    for (int64_t i = 0; i < x->nodes.n; i++)
-        node_row(x->nodes.a + i, out + 10 * i);
+    int64_t r[10];
+    for (int64_t i = 0; i < x->nodes.n; i++) {
+        node_row(x->nodes.a + i, r);
+        out[i] = r[col];
+    }
+}
+
+void zs_node_row(void *p, int64_t k, int64_t *out)
+{
+    node_row(((Ctx *)p)->nodes.a + k, out);
 }
 
 /* The row of step k into a covered zone (steps are many, and a trace reads a few). */
