@@ -162,11 +162,14 @@ def _tree_lassos(g: Graph, watch: np.ndarray, limit: int, shape: tuple, edges: E
     if not len(g.frm):
         return
     depth, top, enter, leave = _tree(g, watch, shape)
-    e = np.flatnonzero(watch[g.frm] & watch[edges.rt])  # the edges between watching nodes, the others left at once
+    # the edges between watching nodes, the others left at once (each test in place: these are most of the edges)
+    e = np.flatnonzero(watch[g.frm] & watch[edges.rt]).astype(_index(len(g.frm)))
     u, t, ref, a = g.frm[e], g.target[e], g.ref[e], edges.rt[e]
     real = ref >= 0
-    own = real & g.zoned[np.where(real, ref, 0)] & (a == t)  # into a zone of its own: the tree goes on
-    ok = ~own & (depth[a] >= top[u]) & (enter[a] <= enter[u]) & (leave[u] <= leave[a])
+    ok = ~(real & g.zoned[np.where(real, ref, 0)] & (a == t))  # not into a zone of its own: the tree goes on there
+    ok &= depth[a] >= top[u]
+    ok &= enter[a] <= enter[u]
+    ok &= leave[u] <= leave[a]
     # time passes in the step or down the tree from the entry (the chain below): else a cycle in zero time, where
     # no request waits for ever
     passes = shape[4]
@@ -190,6 +193,18 @@ def _tree_lassos(g: Graph, watch: np.ndarray, limit: int, shape: tuple, edges: E
         yield entry, loop
 
 
+def _numbered(n: int, *ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes (of ``n``) among ``ends``, in order, and per node its number among them: ``np.unique`` with its
+    inverse, by marking rather than sorting (the ends are tens of millions of edges' on a large search)."""
+    mark = np.zeros(n, dtype=bool)
+    for e in ends:
+        mark[e] = True
+    names = np.flatnonzero(mark)
+    local = np.zeros(n, dtype=_index(n))
+    local[names] = np.arange(len(names))
+    return names, local
+
+
 def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, edges: Edges | None = None):
     """Cycles of the graph where a covered node stands for the node covering it, among nodes that watch: its
     strongly connected components (scipy's, on the edges as arrays), then in each, for up to 20 edges in which
@@ -207,13 +222,18 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, edges: Edges | N
         return
     n = len(g.parent)
     kept = edges.order[on[edges.order]]  # the watching edges by (from, into), in the order met within a pair
-    firsts = kept[np.r_[True, key[kept][1:] != key[kept][:-1]]]
+    firsts = kept[np.r_[True, key[kept][1:] != key[kept][:-1]]]  # each pair's first edge, by (from, into)
+    names, local = _numbered(n, ru[firsts], rt[firsts])
+    m = len(names)
+    # the pairs come by (from, into): the adjacency's rows as they are, without sorting (nor scipy's conversion)
+    rows, cols = local[ru[firsts]], local[rt[firsts]]
+    indptr = np.zeros(m + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=m), out=indptr[1:])
+    adj = csr_matrix((np.ones(len(cols), dtype=np.int8), cols, indptr), shape=(m, m))
+    del rows, cols
     first = np.sort(firsts)  # each pair's first edge, in the order they were first met
     src, dst = ru[first], rt[first]
-    names, local = np.unique(np.concatenate([src, dst]), return_inverse=True)
-    a, b = local[:len(src)], local[len(src):]
-    m = len(names)
-    adj = csr_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(m, m))
+    a, b = local[src], local[dst]
     _, comp = connected_components(adj, directed=True, connection="strong")
     inside = np.flatnonzero(comp[a] == comp[b])  # an edge inside a component is on a cycle (a self-loop alone)
     if not len(inside):
