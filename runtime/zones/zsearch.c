@@ -152,7 +152,8 @@ typedef struct {
     int old_hit;            /* a step reached a zone already stored (add), since zs_run last cleared it */
     int64_t reduced;        /* expansions that left steps out */
     /* programs let go (see let_go): per state, its nodes waiting and whether C wrote its program */
-    int32_t *pending, *plen;  /* grown with prog (grow_states) */
+    int32_t *pending, *plen;  /* grown with prog (grow_states); plen: words held, successors included */
+    int32_t *body;          /* per state: where the successors kept after a program written in C begin (program) */
     uint8_t *in_c;
     VEC(int64_t) finished;  /* states whose nodes were all expanded, oldest first, from finished_head on */
     int64_t finished_head;
@@ -389,7 +390,7 @@ void zs_free(void *p)
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16own), free(x->past), free(x->sig);
     free(x->under.a), free(x->z16r);
     free(x->out.a), free(x->grown.a);
-    free(x->pending), free(x->plen), free(x->in_c), free(x->finished.a);
+    free(x->pending), free(x->plen), free(x->in_c), free(x->body), free(x->finished.a);
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
@@ -493,34 +494,27 @@ static int grow_states(Ctx *x, int64_t n)
             int32_t *pl = realloc(x->plen, cap * sizeof(int32_t));
             uint8_t *c = realloc(x->in_c, cap);
             int32_t *lo = realloc(x->lay_of, cap * sizeof(int32_t));
+            int32_t *bo = realloc(x->body, cap * sizeof(int32_t));
             x->prog.a = a ? a : x->prog.a, x->kept.a = k ? k : x->kept.a;  /* what moved is kept, to be freed */
             x->pending = pe ? pe : x->pending, x->plen = pl ? pl : x->plen, x->in_c = c ? c : x->in_c;
-            x->lay_of = lo ? lo : x->lay_of;
-            if (!a || !k || !pe || !pl || !c || !lo)
+            x->lay_of = lo ? lo : x->lay_of, x->body = bo ? bo : x->body;
+            if (!a || !k || !pe || !pl || !c || !lo || !bo)
                 return -9;  /* the capacity stays what every array has */
             x->prog.cap = x->kept.cap = cap;
         }
         Kept none = {0};
         x->pending[x->prog.n] = 0, x->plen[x->prog.n] = 0, x->in_c[x->prog.n] = 0, x->lay_of[x->prog.n] = -1;
+        x->body[x->prog.n] = 0;
         x->prog.a[x->prog.n++] = NULL;
         x->kept.a[x->kept.n++] = none;
     }
     return 0;
 }
 
-/* The number of the state with these words, given on first sight. */
-static int64_t intern(void *p, const int64_t *w)
+/* The number of the state stored as enc[0..k) (encode's form), given on first sight. */
+static int64_t intern_encoded(Ctx *x, const uint8_t *enc, int64_t k)
 {
-    Ctx *x = p;
-    int W = x->tables->W;
     int64_t n = x->ends.n, len;
-    if (!x->enc && !(x->enc = malloc(11 * (size_t)W + 1)))
-        return -9;
-    if (!x->ref) {  /* the first state: the others are written as they differ from it */
-        if (!(x->ref = malloc(W * sizeof(int64_t))))
-            return -9;
-        memcpy(x->ref, w, W * sizeof(int64_t));
-    }
     if (2 * (n + 1) > x->hcap) {
         int64_t cap = x->hcap ? 2 * x->hcap : 4096;
         int64_t *h = calloc(cap, sizeof(int64_t));
@@ -536,12 +530,11 @@ static int64_t intern(void *p, const int64_t *w)
         free(x->hash);
         x->hash = h, x->hcap = cap;
     }
-    int64_t k = encode(w, W, x->ref, x->enc);
-    uint64_t i = hash_bytes(x->enc, k) & (x->hcap - 1);
+    uint64_t i = hash_bytes(enc, k) & (x->hcap - 1);
     while (x->hash[i]) {
         int64_t s = x->hash[i] - 1;
         const uint8_t *b = state_bytes(x, s, &len);
-        if (len == k && !memcmp(b, x->enc, k))
+        if (len == k && !memcmp(b, enc, k))
             return s;
         i = (i + 1) & (x->hcap - 1);
     }
@@ -554,13 +547,28 @@ static int64_t intern(void *p, const int64_t *w)
             return -9;
         x->bytes.a = a, x->bytes.cap = cap;
     }
-    memcpy(x->bytes.a + x->bytes.n, x->enc, k);
+    memcpy(x->bytes.a + x->bytes.n, enc, k);
     x->bytes.n += k;
     PUSH(x->ends, x->bytes.n);
     x->hash[i] = n + 1;
     if (grow_states(x, n + 1))
         return -9;
     return n;
+}
+
+/* The number of the state with these words, given on first sight. */
+static int64_t intern(void *p, const int64_t *w)
+{
+    Ctx *x = p;
+    int W = x->tables->W;
+    if (!x->enc && !(x->enc = malloc(11 * (size_t)W + 1)))
+        return -9;
+    if (!x->ref) {  /* the first state: the others are written as they differ from it */
+        if (!(x->ref = malloc(W * sizeof(int64_t))))
+            return -9;
+        memcpy(x->ref, w, W * sizeof(int64_t));
+    }
+    return intern_encoded(x, x->enc, encode(w, W, x->ref, x->enc));
 }
 
 int64_t zs_intern(void *p, const int64_t *w) { return intern(p, w); }
@@ -987,6 +995,38 @@ nomem:
 /* -- programs --------------------------------------------------------------------------------------- */
 /* The program of a state, written now if the search has none; NULL with x->failed -9 (no memory) or -1 (the
  * callback's error, kept by csearch.py). */
+/* The step's successors of the state whose program was just written (b), appended to it as intern keeps states
+ * (encode's form: about 70 bytes each on whole DALA), so that its expansion interns them without stepping the state
+ * again: their count, then each one's length in bytes and its bytes, eight to a word.  0, or -9 without memory. */
+static int keep_successors(Ctx *x, const SuccBuf *b, L *prog)
+{
+    int W = x->tables->W;
+    if (lpush(prog, b->n))
+        return -9;
+    for (int64_t j = 0; j < b->n; j++) {
+        int64_t k = encode(b->words + j * W, W, x->ref, x->enc), at = prog->n + 1;
+        for (int64_t w = 0; w < 1 + (k + 7) / 8; w++)
+            if (lpush(prog, 0))
+                return -9;
+        prog->a[at - 1] = k;
+        memcpy(prog->a + at, x->enc, k);
+    }
+    return 0;
+}
+
+/* Successor k (from 0) of those keep_successors appended to a program: its bytes, and their length in *len; NULL
+ * when the step gave fewer. */
+static const uint8_t *kept_successor(const int64_t *kept, int64_t k, int64_t *len)
+{
+    if (k >= kept[0])
+        return NULL;
+    const int64_t *at = kept + 1;
+    for (int64_t j = 0; j < k; j++)
+        at += 1 + (at[0] + 7) / 8;
+    *len = at[0];
+    return (const uint8_t *)(at + 1);
+}
+
 static int64_t *program(Ctx *x, int64_t state, program_fn ask)
 {
     x->failed = -9;
@@ -1003,10 +1043,13 @@ static int64_t *program(Ctx *x, int64_t state, program_fn ask)
         L prog = {0};
         int status = write_program(x, x->tables, s, x->d, T(x, 8), &prog);
         free(s);
+        int64_t body = prog.n;
+        if (!status)
+            status = keep_successors(x, &x->tables->wbuf, &prog);
         if (!status) {
             let_go(x);  /* first: a state finished twice may still be queued, and this one must stay */
             x->rewritten += x->in_c[state];
-            x->in_c[state] = 1, x->plen[state] = (int32_t)prog.n;
+            x->in_c[state] = 1, x->plen[state] = (int32_t)prog.n, x->body[state] = (int32_t)body;
             x->prog_words += prog.n;
             x->prog.a[state] = prog.a ? prog.a : calloc(1, sizeof(int64_t));
             /* a state with no node waiting may be let go again once its zone has arrived: one let go before and
@@ -1038,6 +1081,7 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
         return -9;
     memcpy(copy, words, n * sizeof(int64_t));
     x->prog.a[state] = copy;
+    x->in_c[state] = 0, x->plen[state] = (int32_t)n;  /* no successors kept after it: resolve steps the state */
     x->prog_words += n;
     return 0;
 }
@@ -1577,6 +1621,15 @@ static int64_t resolve(Ctx *x, int64_t state, int64_t *id)
     if (*id >= 0)
         return *id;
     Tables *t = x->tables;
+    const int64_t *pr = x->prog.a[state];
+    if (pr && x->in_c[state]) {  /* the successors kept after the program */
+        int64_t len;
+        const uint8_t *bytes = kept_successor(pr + x->body[state], -*id - 1, &len);
+        int64_t got = bytes ? intern_encoded(x, bytes, len) : -1;
+        if (got >= 0)
+            *id = got;
+        return got;
+    }
     SuccBuf *b = &t->rbuf;
     if (b->state != state || !b->cap) {  /* one expansion takes several successors of the same state */
         int64_t *w = malloc(t->W * sizeof(int64_t));
