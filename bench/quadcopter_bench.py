@@ -154,9 +154,9 @@ def mission_text(steps: list[Step], inputs: dict[str, dict]) -> str:
 
 def bfs_depth(nodes) -> int:
     """The depth of the breadth-first search: the longest chain of parents among the stored nodes (a parent is
-    stored before its children).  The C search's nodes are read as rows (column 1: the parent), not as objects."""
-    rows = getattr(nodes, "rows", None)
-    parents = rows[:, 1].tolist() if rows is not None else [n.parent for n in nodes]
+    stored before its children).  The C search's nodes are read as a column (1: the parent), not as objects."""
+    search = getattr(nodes, "search", None)
+    parents = search.back.column(1).tolist() if search is not None else [n.parent for n in nodes]
     depth = [0] * len(parents)
     for k, parent in enumerate(parents):
         if parent >= 0:
