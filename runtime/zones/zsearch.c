@@ -993,8 +993,6 @@ nomem:
 }
 
 /* -- programs --------------------------------------------------------------------------------------- */
-/* The program of a state, written now if the search has none; NULL with x->failed -9 (no memory) or -1 (the
- * callback's error, kept by csearch.py). */
 /* The step's successors of the state whose program was just written (b), appended to it as intern keeps states
  * (encode's form: about 70 bytes each on whole DALA), so that its expansion interns them without stepping the state
  * again: their count, then each one's length in bytes and its bytes, eight to a word.  0, or -9 without memory. */
@@ -1027,6 +1025,8 @@ static const uint8_t *kept_successor(const int64_t *kept, int64_t k, int64_t *le
     return (const uint8_t *)(at + 1);
 }
 
+/* The program of a state, written now if the search has none; NULL with x->failed -9 (no memory) or -1 (the
+ * callback's error, kept by csearch.py). */
 static int64_t *program(Ctx *x, int64_t state, program_fn ask)
 {
     x->failed = -9;
@@ -1852,7 +1852,6 @@ static void node_row(const Node *a, int64_t *r)
     r[9] = a->grown | a->covered << 1 | a->expanded << 2;
 }
 
-/* Every node's row. */
 /* Column ``col`` of every node's row (node_row): a search of millions of nodes is read back a column at a time. */
 void zs_node_column(void *p, int col, int64_t *out)
 {
