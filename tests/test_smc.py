@@ -390,6 +390,30 @@ def test_one_ctrl_c_prints_the_estimates_of_the_runs_read(tmp_path):
     assert high == pytest.approx(min(1.0, (math.log(2 / 0.05) / (2 * runs)) ** 0.5), abs=1e-4)
 
 
+@needs_cc
+def test_ctrl_c_while_the_runs_call_back_into_python_stops_the_estimate(monkeypatch):
+    # The C runs call back into Python for each interaction they meet first.  Python's own Ctrl-C handler raised
+    # KeyboardInterrupt there, inside a ctypes callback, where it is printed and lost: the runs then ended as out
+    # of memory, or the estimate went on with every run it planned (the test above, once, under load).
+    import signal
+
+    from runtime.smc import crun
+
+    define, pressed = crun.CRuns._on_define, []
+
+    def on_define(self, *args):
+        if not pressed:
+            pressed.append(True)
+            signal.raise_signal(signal.SIGINT)
+        return define(self, *args)
+
+    monkeypatch.setattr(crun.CRuns, "_on_define", on_define)
+    model = build_model([SLACK], time=TimeSettings(platform=str(SMC / "safe.yaml")))
+    report = estimate(model, SmcSettings(horizon_us=100_000, runs=2000, batch=20))
+    assert pressed and report.runner == "this process"
+    assert report.stopped == "interrupted" and report.runs == 20, (report.stopped, report.runs)
+
+
 # --------------------------------------------------------------------------- waits drawn over their interval
 
 

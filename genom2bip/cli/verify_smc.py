@@ -138,9 +138,6 @@ def run(model, args: argparse.Namespace, smc) -> int:
         report = estimate(model, smc, runner, config, sim, _progress(args))
     finally:
         closing()
-    if report.stopped:
-        print("genom2bip: stopping: what was found so far follows (Ctrl-C again stops at once)", file=sys.stderr,
-              flush=True)
     print(f"time: one tick is {config.tick_us / 1000:g} ms; runs of {report.horizon_ms:g} ms, seed {smc.seed}")
     how = (f"Chernoff-Hoeffding, epsilon {report.results[0].epsilon:.4g}, delta {smc.delta:g}"
            if report.method == "Chernoff-Hoeffding" and report.results else report.method)

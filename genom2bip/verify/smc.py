@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
 from genom2bip.loading import InputError, UsageError
+from genom2bip.verify.interrupts import CtrlC
 from genom2bip.verify.model import Model, tick_us
 from genom2bip.verify.results import Figures, Verdict
 from genom2bip.verify.smc_results import ResponseDistribution, SmcReport, SmcResult, SmcSummary, summary
@@ -216,8 +217,8 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
 
     ``runner`` computes the batches (:class:`LocalRunner` on ``sim`` by default); the runs are read in index
     order, so the report depends on the settings alone, whatever the runner.  ``progress(runs, planned,
-    seconds)`` hears each batch read.  Ctrl-C (KeyboardInterrupt) stops the estimate with the whole batches
-    read so far: the report's ``stopped`` says so, and each interval is the one those runs give.
+    seconds)`` hears each batch read.  Ctrl-C stops the estimate with the whole batches read so far (a second one
+    at once): the report's ``stopped`` says so, and each interval is the one those runs give.
     """
     settings.check()
     config = config or sim_config(model, settings)
@@ -242,32 +243,37 @@ def estimate(model: Model, settings: SmcSettings, runner=None, config: SimConfig
     ranges = ((i, min(settings.batch, cap - i)) for i in range(0, cap, settings.batch))
     batches = runner.run(settings.seed, ranges)
     stopped = ""
-    try:
-        for batch in batches:
-            for offset, reached in enumerate(batch.reached):
-                for g, tick in enumerate(reached):
-                    if tick is not None:
-                        hits[g] += 1
-                        if first[g] is None:
-                            first[g] = (batch.first + offset, tick)
-                    if sprt:
-                        tests[g].add(tick is not None)
-            runs += batch.count
-            for counter, seen in zip(responses, batch.responses):
-                counter.update(seen)
-            ends.update(batch.ends)
-            steps += batch.steps
-            ticks += batch.ticks
-            if progress is not None:
-                progress(runs, None if sprt else cap, time.perf_counter() - start)
-            if sprt and all(t.decision is not None for t in tests):
-                break
-    except KeyboardInterrupt:
-        stopped = "interrupted"
-    finally:
-        close = getattr(batches, "close", None)
-        if close is not None:
-            close()
+    ctrl_c = CtrlC()
+    with ctrl_c.watching():
+        try:
+            for batch in batches:
+                for offset, reached in enumerate(batch.reached):
+                    for g, tick in enumerate(reached):
+                        if tick is not None:
+                            hits[g] += 1
+                            if first[g] is None:
+                                first[g] = (batch.first + offset, tick)
+                        if sprt:
+                            tests[g].add(tick is not None)
+                runs += batch.count
+                for counter, seen in zip(responses, batch.responses):
+                    counter.update(seen)
+                ends.update(batch.ends)
+                steps += batch.steps
+                ticks += batch.ticks
+                if progress is not None:
+                    progress(runs, None if sprt else cap, time.perf_counter() - start)
+                if sprt and all(t.decision is not None for t in tests):
+                    break
+                if ctrl_c.pressed:  # the first Ctrl-C: the whole batches read so far
+                    stopped = "interrupted"
+                    break
+        except KeyboardInterrupt:
+            stopped = "interrupted"
+        finally:
+            close = getattr(batches, "close", None)
+            if close is not None:
+                close()
     seconds = time.perf_counter() - start
     if stopped and not sprt and runs < cap:  # the interval of the runs read
         epsilon = hoeffding_epsilon(runs, settings.delta)

@@ -9,17 +9,14 @@ zones and not ticks for these models.
 """
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import itertools
 import math
-import signal
-import sys
-import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, ClassVar
 
+from genom2bip.verify.interrupts import CtrlC
 from genom2bip.verify.model import Model, tick_us
 from genom2bip.verify.options import Listener, SearchOptions
 from genom2bip.verify.results import CheckResult, Figures, ObserverResult, Trace, Verdict
@@ -194,7 +191,7 @@ class _Watch:
         self.start = time.perf_counter()
         self.next_line = time.monotonic() + SO_FAR_PERIOD
         self.result = None
-        self.hit = False  # Ctrl-C was pressed once
+        self.ctrl_c = CtrlC()
         self.told: dict[str, ObserverResult] = {}  # observer -> its violation, told as found
         self.shown = ""
         self.clocks = {}  # response clock -> (owner, cap)
@@ -263,25 +260,14 @@ class _Watch:
             result.discrete = len({n.state for n in self.z.nodes})
         return result
 
-    @contextlib.contextmanager
     def interrupts(self):
         """Ctrl-C: the first stops the search after what it found is reported; the second stops at once."""
-        if threading.current_thread() is not threading.main_thread():
-            yield
-            return
+        return self.ctrl_c.watching()
 
-        def handler(signum, frame) -> None:
-            if self.hit:
-                raise KeyboardInterrupt
-            self.hit = True
-            print("\ngenom2bip: stopping: what was found so far follows (Ctrl-C again stops at once)",
-                  file=sys.stderr, flush=True)
-
-        previous = signal.signal(signal.SIGINT, handler)
-        try:
-            yield
-        finally:
-            signal.signal(signal.SIGINT, previous)
+    @property
+    def hit(self) -> bool:
+        """Ctrl-C was pressed once."""
+        return self.ctrl_c.pressed
 
 
 def _results(z, model, result, atoms, responses, watch, start, where) -> list[CheckResult]:
