@@ -21,7 +21,7 @@ enum { OP_END, OP_CONST, OP_SLOT, OP_NEG, OP_ADD, OP_SUB, OP_MUL, OP_LT, OP_LE, 
 #define NO_BOUND -2  /* model.py's NO_BOUND: the L or U of a side no guard ahead bounds (minus infinity) */
 
 /* The step's successors of one state: words, interactions, room for cap; ``state``: whose, -1 none. */
-typedef struct { int64_t *words, *via; int cap, n; int64_t state; } SuccBuf;
+typedef struct { int64_t *words, *via; int cap, n; } SuccBuf;
 
 typedef struct {
     const int64_t *code;
@@ -37,7 +37,6 @@ typedef struct {
     succ_fn succ;
     int64_t budget;
     SuccBuf wbuf;            /* the step's successors of the state whose program is being written */
-    SuccBuf rbuf;            /* those of the state whose successor was last interned (zsearch.c's resolve) */
     int64_t *top_gen, *top_idx, gen;  /* per rule: its region at the state being written (memo entry), if top_gen
                                        * is that program's generation: the memo's common case found at once */
     int64_t *chain_gen, *chain_head;  /* per rule: its last memo entry in program chain_gen's memo (memo_prev on) */
@@ -50,7 +49,7 @@ static void tables_free(Tables *t)
     if (!t)
         return;
     free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob);
-    free(t->wbuf.words), free(t->wbuf.via), free(t->rbuf.words), free(t->rbuf.via), free(t->top_gen), free(t->top_idx);
+    free(t->wbuf.words), free(t->wbuf.via), free(t->top_gen), free(t->top_idx);
     free(t->chain_gen), free(t->chain_head);
     free(t);
 }
@@ -592,7 +591,6 @@ static int step_successors(Tables *t, const int64_t *s, SuccBuf *b)
 {
     int ecode;
     int64_t earg;
-    b->state = -1;
     if (!b->cap) {
         b->cap = 64;
         b->words = malloc((size_t)b->cap * t->W * sizeof(int64_t));

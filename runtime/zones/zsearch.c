@@ -1081,7 +1081,7 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
         return -9;
     memcpy(copy, words, n * sizeof(int64_t));
     x->prog.a[state] = copy;
-    x->in_c[state] = 0, x->plen[state] = (int32_t)n;  /* no successors kept after it: resolve steps the state */
+    x->in_c[state] = 0, x->plen[state] = (int32_t)n;  /* names its successors by number: none kept after it */
     x->prog_words += n;
     return 0;
 }
@@ -1615,39 +1615,15 @@ int zs_initial(void *p, int64_t state, const double *zone, program_fn ask)
 
 /* The number of successor entry ``*id`` of state ``state``'s program, interned now if it was not yet (a program
  * written in C names its successors by their index among the step's successors until a step takes them); the
- * entry is then rewritten with it.  < 0: no memory (-9), or the step no longer gives that successor. */
+ * entry is then rewritten with it.  < 0: no memory (-9), or the step gave fewer successors (-1). */
 static int64_t resolve(Ctx *x, int64_t state, int64_t *id)
 {
     if (*id >= 0)
         return *id;
-    Tables *t = x->tables;
-    const int64_t *pr = x->prog.a[state];
-    if (pr && x->in_c[state]) {  /* the successors kept after the program */
-        int64_t len;
-        const uint8_t *bytes = kept_successor(pr + x->body[state], -*id - 1, &len);
-        int64_t got = bytes ? intern_encoded(x, bytes, len) : -1;
-        if (got >= 0)
-            *id = got;
-        return got;
-    }
-    SuccBuf *b = &t->rbuf;
-    if (b->state != state || !b->cap) {  /* one expansion takes several successors of the same state */
-        int64_t *w = malloc(t->W * sizeof(int64_t));
-        if (!w)
-            return -9;
-        state_words(x, state, w);
-        int n = step_successors(t, w, b);
-        free(w);
-        if (n == -9)
-            return -9;  /* no memory for the successors (b->state stays -1: none held) */
-        b->state = state;
-    }
-    int64_t k = -*id - 1;
-    if (b->n <= k) {
-        b->state = -1;
-        return b->n == -9 ? -9 : -1;
-    }
-    int64_t got = intern(x, b->words + k * t->W);
+    /* only a program written in C names successors by their index, and it keeps them after it (keep_successors) */
+    int64_t len;
+    const uint8_t *bytes = kept_successor(x->prog.a[state] + x->body[state], -*id - 1, &len);
+    int64_t got = bytes ? intern_encoded(x, bytes, len) : -1;
     if (got >= 0)
         *id = got;
     return got;
