@@ -125,7 +125,7 @@ def check_timing(model: Model, kinds=("overrun", "latency"), responses: bool = F
     if options.max_states is None and options.time_limit is None and watch.memory is not None:
         listener.unbounded(watch.memory.limit, "--max-states or --time-limit")
     start = time.perf_counter()
-    with watch.interrupts():
+    with watch.ctrl_c.watching():  # the first Ctrl-C stops the search once what it found is reported
         try:
             result = z.explore(max_states=options.max_states,
                                progress=_Budgeted(progress, watch) if watch.memory else progress)
@@ -211,7 +211,7 @@ class _Watch:
                 self.listener.found(found)
         if self.atoms and len(self.told) == len(self.atoms) and not self.responses:
             raise _Stop("decided")
-        if self.hit:
+        if self.ctrl_c.pressed:
             raise _Stop("interrupted")
         now = time.monotonic()
         if self.deadline is not None and now >= self.deadline:
@@ -259,15 +259,6 @@ class _Watch:
         if not result.discrete:  # the C search counts them; the Python one only at its end
             result.discrete = len({n.state for n in self.z.nodes})
         return result
-
-    def interrupts(self):
-        """Ctrl-C: the first stops the search after what it found is reported; the second stops at once."""
-        return self.ctrl_c.watching()
-
-    @property
-    def hit(self) -> bool:
-        """Ctrl-C was pressed once."""
-        return self.ctrl_c.pressed
 
 
 def _results(z, model, result, atoms, responses, watch, start, where) -> list[CheckResult]:

@@ -545,8 +545,8 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
     path->n--;
 store:
     {
-        /* keep the feasible ones, then remember: the memo's three lists grow together or not at all (memo_find
-         * walks the keys from the first) */
+        /* keep the feasible ones, then remember: the memo's lists grow together or not at all (memo_find follows
+         * a rule's chain from chain_head through memo_prev, and reads each entry's key at memo_at) */
         L kept = {0};
         int64_t count = 0, key_n = g->memo_key.n, pool_n = g->pool.n, entries = g->memo_at.n;
         int64_t prev = t->chain_gen[r] == g->gen ? t->chain_head[r] : -1;

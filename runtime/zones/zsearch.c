@@ -394,7 +394,8 @@ void zs_free(void *p)
     tables_free(x->tables);
     for (int64_t i = 0; i < x->icap; i++)
         free(x->inter_val ? x->inter_val[i] : NULL);
-    free(x->inter_key), free(x->inter_val), free(x->bytes.a), free(x->ends.a), free(x->enc), free(x->ref), free(x->hash), free(x);
+    free(x->inter_key), free(x->inter_val), free(x->bytes.a), free(x->ends.a), free(x->enc), free(x->ref), free(x->hash);
+    free(x);
 }
 
 /* -- states as the compiled step's words, kept as they differ from the first state ---------------------- */
