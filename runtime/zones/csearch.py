@@ -26,7 +26,7 @@ STOPPED = {0: "", 1: "max-states", 2: "violated", 3: "interrupted"}
 
 @cache
 def library():
-    """zsearch.c (with dbm.c and zprogram.c in front) compiled and loaded, or None without a compiler.
+    """zsearch.c (with dbm.c, active.c and zprogram.c in front) compiled and loaded, or None without a compiler.
 
     The text is fixed, not generated: a compiler that refuses it is a defect here, raised as BuildError.
     """
@@ -35,7 +35,7 @@ def library():
     cc = compiler()
     if cc is None:
         return None
-    source = "\n".join((HERE / name).read_text() for name in ("dbm.c", "zprogram.c", "zsearch.c"))
+    source = "\n".join((HERE / name).read_text() for name in ("dbm.c", "active.c", "zprogram.c", "zsearch.c"))
     lib = ctypes.CDLL(str(build(source, cc, what="zone search")), mode=ctypes.RTLD_LOCAL)
     p, i32, i64, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64, ctypes.POINTER(ctypes.c_double)
     for name, res, args in (

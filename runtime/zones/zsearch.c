@@ -62,7 +62,7 @@ typedef struct {
 typedef VEC(double) Doubles;
 typedef VEC(int64_t) Longs;
 
-/* n numbers appended to v at once; -9: no memory. */
+/* n numbers appended to v at once (src NULL: left unwritten); -9: no memory. */
 static int append(Doubles *v, const double *src, int64_t n)
 {
     if (v->n + n > v->cap) {
@@ -74,7 +74,8 @@ static int append(Doubles *v, const double *src, int64_t n)
             return -9;
         v->a = a, v->cap = cap;
     }
-    memcpy(v->a + v->n, src, n * sizeof(double));
+    if (src)  /* NULL: room only (append_active writes it) */
+        memcpy(v->a + v->n, src, n * sizeof(double));
     v->n += n;
     return 0;
 }
@@ -180,6 +181,56 @@ typedef struct {
 
 
 static double *T(Ctx *x, int k) { return x->tmp + (int64_t)k * x->d * x->d; }
+
+/* -- working zones: their active clocks (active.c) ---------------------------------------------------- */
+/* The clocks a working zone keeps bounds between, ascending, 0 first; in[k]: whether clock k is one. */
+typedef struct { int n; int c[256]; uint8_t in[256]; } Act;
+
+/* The active clocks of a state's zones: its layout's rows. */
+static void act_of(Act *a, const Layout *L, int d)
+{
+    memset(a->in, 0, d);
+    a->n = L->nr;
+    for (int r = 0; r < L->nr; r++)
+        a->c[r] = L->rows[r], a->in[L->rows[r]] = 1;
+}
+
+static void act_copy(Act *to, const Act *from, int d)
+{
+    to->n = from->n;
+    memcpy(to->c, from->c, from->n * sizeof(int));
+    memcpy(to->in, from->in, d);
+}
+
+/* Clock k active, in its place; 1 when it was not (then its bounds are still to be written). */
+static int act_add(Act *a, int k)
+{
+    if (a->in[k])
+        return 0;
+    int p = a->n++;
+    for (; p > 0 && a->c[p - 1] > k; p--)
+        a->c[p] = a->c[p - 1];
+    a->c[p] = k, a->in[k] = 1;
+    return 1;
+}
+
+/* The clocks the n bounds b read made active; those that were not appended to fr[*nf..] (no clock twice). */
+static void act_reads(Act *a, const int64_t *b, int64_t n, int *fr, int *nf)
+{
+    for (int64_t k = 0; k < 3 * n; k += 3)
+        for (int e = 0; e < 2; e++)
+            if (act_add(a, (int)b[k + e]))
+                fr[(*nf)++] = (int)b[k + e];
+}
+
+/* n numbers (a d x d matrix) appended to v, of which src's active entries are written; -9: no memory. */
+static int append_active(Doubles *v, const double *src, int64_t n, int d, const Act *a)
+{
+    if (append(v, NULL, n))
+        return -9;
+    a_copy(v->a + v->n - n, src, d, a->c, a->n);
+    return 0;
+}
 
 /* -- programs let go ----------------------------------------------------------------------------------
  * A discrete state's program is read when its nodes arrive and when they are expanded.  Once every node of a
@@ -856,30 +907,52 @@ static double entry(const Ctx *x, int64_t s, int i, int j)
     return stored(x, s, (int64_t)L->rat[i] * L->nc + L->from[j]);
 }
 
-static void slot_load(Ctx *x, int64_t s, double *z)
+/* Slot s's stored rows spread into z, each at the columns cols[0..nc); 0 on the diagonal. */
+static void slot_rows(Ctx *x, int64_t s, double *z, const int *cols, int nc)
 {
     const Layout *L = slot_layout(x, s);
     int d = x->d;
     const char *b = slot_bytes(x, s);
-    for (int a = 0; a < d; a++) {  /* row by row: an idle clock's has no bound, a column left out is column 0's */
+    for (int r = 0; r < L->nr; r++) {  /* a column left out is column 0's */
+        int a = L->rows[r];
         double *za = z + (int64_t)a * d;
-        int r = L->rat[a];
-        if (r < 0) {
-            for (int j = 0; j < d; j++)
-                za[j] = INFINITY;
-        } else if (s & 1) {
+        if (s & 1) {
             const float *ra = (const float *)b + (int64_t)r * L->nc;
-            for (int j = 0; j < d; j++)
-                za[j] = ra[L->from[j]];
+            for (int q = 0; q < nc; q++)
+                za[cols[q]] = ra[L->from[cols[q]]];
         } else {
             const int16_t *ra = (const int16_t *)b + (int64_t)r * L->nc;
-            for (int j = 0; j < d; j++) {
-                int16_t v = ra[L->from[j]];
-                za[j] = v == SHORT_INF ? INFINITY : v;
+            for (int q = 0; q < nc; q++) {
+                int16_t v = ra[L->from[cols[q]]];
+                za[cols[q]] = v == SHORT_INF ? INFINITY : v;
             }
         }
         za[a] = 0;
     }
+}
+
+/* Slot s's whole matrix into z: an idle clock's row has no bound. */
+static void slot_load(Ctx *x, int64_t s, double *z)
+{
+    const Layout *L = slot_layout(x, s);
+    int d = x->d, all[256];
+    for (int j = 0; j < d; j++) {
+        all[j] = j;
+        if (L->rat[j] < 0) {
+            double *zj = z + (int64_t)j * d;
+            for (int k = 0; k < d; k++)
+                zj[k] = INFINITY;
+            zj[j] = 0;
+        }
+    }
+    slot_rows(x, s, z, all, d);
+}
+
+/* Slot s's bounds between its state's active clocks (its layout's rows) into z, the rest of z left as it was. */
+static void slot_load_active(Ctx *x, int64_t s, double *z)
+{
+    const Layout *L = slot_layout(x, s);
+    slot_rows(x, s, z, L->rows, L->nr);
 }
 
 static int slot_geq(Ctx *x, int64_t s, const double *z)  /* the stored zone includes z (of its state) */
@@ -935,45 +1008,26 @@ static int64_t zone_bytes(const Ctx *x)
 }
 
 /* -- zone operations that dbm.c does not have --------------------------------------------------------- */
-static int constrain_all(double *m, int d, const int64_t *b, int64_t n)
-{
-    for (int64_t k = 0; k < n; k++)
-        if (!z_constrain(m, d, (int)b[3 * k], (int)b[3 * k + 1], (double)b[3 * k + 2]))
-            return 0;
-    return 1;
-}
-
-static void z_up(double *m, int d)
-{
-    for (int i = 1; i < d; i++)
-        m[(int64_t)i * d] = INFINITY;
-}
-
-static void z_reset(double *m, int d, int i, double v)
-{
-    for (int a = 0; a < d; a++) {
-        m[(int64_t)i * d + a] = v + m[a];
-        m[(int64_t)a * d + i] = m[(int64_t)a * d] - v;
-    }
-    m[(int64_t)i * d + i] = 0;
-}
-
-/* Pieces of m minus other (integer complements), as dbm.py's subtract_bounds: each piece appended to *out
- * (d*d doubles each), with the cut bounds that made it appended to *cuts and their count to *ncut; -9: no memory. */
-static int subtract(const double *m, const double *other, int d, double *rest, double *piece,
+/* Pieces of m minus other (integer complements), as dbm.py's subtract_bounds, on the active clocks of A (both are
+ * zones on them): each piece appended to *out (d*d numbers each, A's entries written), with the cut bounds that made
+ * it appended to *cuts and their count to *ncut; -9: no memory. */
+static int subtract(const double *m, const double *other, int d, const Act *A, double *rest, double *piece,
                     Doubles *out, Longs *cuts, Longs *ncut)
 {
     int64_t len = (int64_t)d * d;
-    memcpy(rest, m, len * sizeof(double));
+    const int *act = A->c;
+    int na = A->n;
+    a_copy(rest, m, d, act, na);
     Longs kept = {0};  /* the bounds kept so far: each piece copies them, then its cut */
-    for (int i = 0; i < d; i++)
-        for (int j = 0; j < d; j++) {
+    for (int a = 0; a < na; a++)
+        for (int b = 0; b < na; b++) {
+            int i = act[a], j = act[b];
             double c = other[(int64_t)i * d + j];
             if (i == j || c == INFINITY || rest[(int64_t)i * d + j] <= c)
                 continue;
-            memcpy(piece, rest, len * sizeof(double));
-            if (z_constrain(piece, d, j, i, -c - 1)) {
-                if (append(out, piece, len))
+            a_copy(piece, rest, d, act, na);
+            if (a_constrain(piece, d, act, na, j, i, -c - 1)) {
+                if (append_active(out, piece, len, d, A))
                     goto nomem;
                 for (int64_t k = 0; k < kept.n; k++)
                     PUSH_OR(*cuts, kept.a[k], goto nomem);
@@ -981,7 +1035,7 @@ static int subtract(const double *m, const double *other, int d, double *rest, d
                 PUSH_OR(*cuts, (int64_t)(-c - 1), goto nomem);
                 PUSH_OR(*ncut, kept.n / 3 + 1, goto nomem);
             }
-            if (!z_constrain(rest, d, i, j, c))
+            if (!a_constrain(rest, d, act, na, i, j, c))
                 goto done;
             PUSH_OR(kept, i, goto nomem); PUSH_OR(kept, j, goto nomem); PUSH_OR(kept, (int64_t)c, goto nomem);
         }
@@ -1146,23 +1200,24 @@ static Parts parts(const int64_t *p)
 }
 
 /* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
-/* The pieces of z after time passes at a state where it can (``pass``: that part of the state's program), appended
- * to out with their grown flags; returns the number of pieces, -2 for a wait that is not one lower bound (err_arg:
- * the rule), or -9 without memory. */
-static int64_t elapse(Ctx *x, const int64_t *pass, double *z, Doubles *out, Longs *grown)
+/* The pieces of z (a zone on A's clocks) after time passes at a state where it can (``pass``: that part of the
+ * state's program), appended to out with their grown flags; returns the number of pieces, -2 for a wait that is not
+ * one lower bound (err_arg: the rule), or -9 without memory. */
+static int64_t elapse(Ctx *x, const int64_t *pass, double *z, const Act *A, Doubles *out, Longs *grown)
 {
-    int d = x->d;
+    int d = x->d, na = A->n;
+    const int *act = A->c;
     int64_t len = (int64_t)d * d;
     const int64_t *before = pass + 1, *after = skip_bounds(before), *w = skip_bounds(after);
-    if (x->invariants && !constrain_all(z, d, after + 1, after[0]))
+    if (x->invariants && !a_constrain_all(z, d, act, na, after + 1, after[0]))
         return 0;  /* z (the caller's scratch) is past an invariant everywhere: no state */
     int64_t nw = *w++;
     Longs extra = {0};  /* a wait's lower bound: time passes up to it */
     if (nw) {
         double *reach = T(x, 4), *probe = T(x, 5);
-        memcpy(reach, z, len * sizeof(double));
-        z_up(reach, d);
-        int live = constrain_all(reach, d, before + 1, before[0]);
+        a_copy(reach, z, d, act, na);
+        a_up(reach, d, act, na);
+        int live = a_constrain_all(reach, d, act, na, before + 1, before[0]);
         for (int64_t k = 0; k < nw; k++) {
             const int64_t *b = w;
             w = skip_bounds(w);
@@ -1170,8 +1225,8 @@ static int64_t elapse(Ctx *x, const int64_t *pass, double *z, Doubles *out, Long
             w += 4;
             if (!live)
                 continue;
-            memcpy(probe, reach, len * sizeof(double));
-            if (!constrain_all(probe, d, b + 1, b[0]))
+            a_copy(probe, reach, d, act, na);
+            if (!a_constrain_all(probe, d, act, na, b + 1, b[0]))
                 continue;
             if (!kind) {
                 x->err_arg = rule;
@@ -1182,23 +1237,24 @@ static int64_t elapse(Ctx *x, const int64_t *pass, double *z, Doubles *out, Long
         }
     }
     double *start = T(x, 4), *piece = T(x, 5);
-    memcpy(start, z, len * sizeof(double));
-    int ok = constrain_all(start, d, after + 1, after[0]) && constrain_all(start, d, extra.a, extra.n / 3);
+    a_copy(start, z, d, act, na);
+    int ok = a_constrain_all(start, d, act, na, after + 1, after[0])
+             && a_constrain_all(start, d, act, na, extra.a, extra.n / 3);
     int64_t count = 1;
     if (!ok) {
-        if (append(out, z, len))
+        if (append_active(out, z, len, d, A))
             goto nomem;
         PUSH_OR(*grown, 0, goto nomem);
     } else {
-        z_up(start, d);
-        constrain_all(start, d, after + 1, after[0]);
-        constrain_all(start, d, extra.a, extra.n / 3);
-        if (append(out, start, len))
+        a_up(start, d, act, na);
+        a_constrain_all(start, d, act, na, after + 1, after[0]);
+        a_constrain_all(start, d, act, na, extra.a, extra.n / 3);
+        if (append_active(out, start, len, d, A))
             goto nomem;
         PUSH_OR(*grown, 1, goto nomem);
         Longs cuts = {0}, ncut = {0};
         int64_t before_n = out->n;
-        int cut = subtract(z, start, d, T(x, 6), piece, out, &cuts, &ncut);
+        int cut = subtract(z, start, d, A, T(x, 6), piece, out, &cuts, &ncut);
         free(cuts.a), free(ncut.a);
         if (cut)
             goto nomem;
@@ -1437,20 +1493,21 @@ static int merge_into(Ctx *x, const Layout *L, Node *step, double *zone, Kept *k
     return count;
 }
 
-/* Store (state, zone) reached from node parent by interaction via; zone is changed (extrapolated; its idle clocks
- * freed only where whole matrices meet, in merging: the stored form and every comparison leave their rows and
- * columns out, see layout_for). */
-static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via, const int64_t *guard,
+/* Store (state, zone) reached from node parent by interaction via: zone's bounds are those between A's clocks (the
+ * state's active ones, and any idle one its program reads); zone is changed (extrapolated; its idle clocks freed only
+ * where whole matrices meet, in merging: the stored form and every comparison leave their rows and columns out, see
+ * layout_for). */
+static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent, int32_t via, const int64_t *guard,
                int64_t nguard, int grown, const double *lower, const double *upper, const unsigned char *plus)
 {
     int d = x->d;
     int32_t lay = x->lay_of[state];
     const Layout *L = &x->lays.a[lay];
     if (plus)
-        z_extrapolate_lu_plus(zone, d, lower, upper, plus);
+        a_extrapolate_lu_plus(zone, d, A->c, A->n, lower, upper, plus);
     else
-        z_extrapolate(zone, d, x->ceiling);
-    z_forget_below(zone, d, x->grow_only, x->ngrow);
+        a_extrapolate_lu(zone, d, A->c, A->n, x->ceiling, x->ceiling);
+    a_forget_below(zone, d, A->c, A->n, x->grow_only, x->ngrow);
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
@@ -1518,8 +1575,9 @@ static int add(Ctx *x, int64_t state, double *zone, int32_t parent, int32_t via,
             kept_remove(L, kept, x->under.a, x->under.n);
     }
     if (x->merge && kept->n) {
-        if (L->nidle)  /* merging takes hulls of whole matrices: the idle clocks' rows and columns as stored ones' */
-            z_free(zone, zone, d, L->idle, L->nidle);  /* in place: see z_free */
+        /* merging takes hulls of whole matrices: the idle clocks' rows and columns as stored ones', every other entry
+         * of zone written (the active clocks' are all the state's others) */
+        z_free(zone, zone, d, L->idle, L->nidle);  /* in place: see z_free */
         double *own = T(x, 3);  /* the zone as it came, if it merges */
         int got = merge_into(x, L, &step, zone, kept, ready != NULL, own);
         if (got < 0)
@@ -1567,8 +1625,44 @@ static void check(Ctx *x, int32_t k, const int64_t *pr)
     }
 }
 
-/* Time passing at ``state`` from zone z (already reset and forgotten), every piece stored. */
-static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via, const int64_t *guard,
+/* The clocks time passing at a state reads (``pass``, that part of its program) made active. */
+static void act_pass(Act *a, const int64_t *pass)
+{
+    if (!*pass)
+        return;
+    int fr[256], nf = 0;
+    const int64_t *w = pass + 1;
+    for (int part = 0; part < 2; part++) {  /* before, after */
+        act_reads(a, w + 1, w[0], fr, &nf);
+        w = skip_bounds(w);
+    }
+    for (int64_t k = 0, nw = *w++; k < nw; k++) {
+        act_reads(a, w + 1, w[0], fr, &nf);
+        w = skip_bounds(w) + 4;
+    }
+}
+
+/* The clocks the steps of a state read (``succ``, that part of its program: guards and priorities' blocks) made
+ * active; those that were not appended to fr, nf set to their count. */
+static void act_steps(Act *a, const int64_t *succ, int *fr, int *nf)
+{
+    *nf = 0;
+    const int64_t *s = succ + 1;
+    for (int64_t t = 0; t < succ[0]; t++) {
+        const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
+        act_reads(a, nb + 1, nb[0], fr, nf);
+        int64_t nblocks = *bl++;
+        for (int64_t b = 0; b < nblocks; b++) {
+            act_reads(a, bl + 1, bl[0], fr, nf);
+            bl = skip_bounds(bl);
+        }
+        s = bl;
+    }
+}
+
+/* Time passing at ``state`` from zone z (reset: a zone on zin's clocks), every piece stored.  The state's idle
+ * clocks are forgotten: they leave the working zone, but for those the state's program reads, which stay free. */
+static int arrive(Ctx *x, int64_t state, double *z, const Act *zin, int32_t parent, int32_t via, const int64_t *guard,
                   int64_t nguard, program_fn ask)
 {
     const int64_t *pr = program(x, state, ask);
@@ -1578,8 +1672,15 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
     if (x->lay_of[state] < 0 && (x->lay_of[state] = layout_for(x, q.idle, q.nidle)) < 0)
         return -9;
     const Layout *L = &x->lays.a[x->lay_of[state]];  /* its idle clocks are the program's, as ints */
-    if (L->nidle)
-        z_free(z, z, x->d, L->idle, L->nidle);  /* in place: see z_free */
+    Act A;
+    act_of(&A, L, x->d);
+    act_pass(&A, q.pass);
+    int fr[256], nf = 0;  /* free here: the idle clocks read, and the active ones z has no bounds of */
+    for (int a = 1; a < A.n; a++)
+        if (L->rat[A.c[a]] < 0 || !zin->in[A.c[a]])
+            fr[nf++] = A.c[a];
+    if (nf)
+        a_free(z, x->d, A.c, A.n, fr, nf);
     const double *lower = x->ceiling, *upper = x->ceiling;
     const unsigned char *plus = NULL;
     double lo[256], up[256];
@@ -1596,13 +1697,13 @@ static int arrive(Ctx *x, int64_t state, double *z, int32_t parent, int32_t via,
         lower = lo, upper = up, plus = marked;
     }
     if (!*q.pass)  /* time cannot pass here: z is the state's one piece */
-        return add(x, state, z, parent, via, guard, nguard, 0, lower, upper, plus);
+        return add(x, state, z, &A, parent, via, guard, nguard, 0, lower, upper, plus);
     x->out.n = x->grown.n = 0;
-    int64_t n = elapse(x, q.pass, z, &x->out, &x->grown);
+    int64_t n = elapse(x, q.pass, z, &A, &x->out, &x->grown);
     int status = n < 0 ? (int)n : 0;
     for (int64_t k = 0; k < n && !status; k++)
-        status = add(x, state, x->out.a + k * x->d * x->d, parent, via, guard, nguard, (int)x->grown.a[k], lower,
-                     upper, plus);
+        status = add(x, state, x->out.a + k * x->d * x->d, &A, parent, via, guard, nguard, (int)x->grown.a[k],
+                     lower, upper, plus);
     return status;
 }
 
@@ -1611,7 +1712,11 @@ int zs_initial(void *p, int64_t state, const double *zone, program_fn ask)
     Ctx *x = p;
     double *z = T(x, 1);
     memcpy(z, zone, (int64_t)x->d * x->d * sizeof(double));
-    return arrive(x, state, z, -1, -1, NULL, 0, ask);
+    Act all;  /* the zone given has bounds on every clock */
+    all.n = x->d;
+    for (int k = 0; k < x->d; k++)
+        all.c[k] = k, all.in[k] = 1;
+    return arrive(x, state, z, &all, -1, -1, NULL, 0, ask);
 }
 
 /* The number of successor entry ``*id`` of state ``state``'s program, interned now if it was not yet (a program
@@ -1654,6 +1759,8 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
     Longs cuts = {0}, ncut = {0}, need = {0}, ncuts = {0}, nn = {0}, pc = {0}, pn = {0};
     int status = 0;
     int64_t count = 0;
+    Act ha, za;  /* the clocks of the zone being expanded, and of a successor's once reset */
+    int fr[256], nf;
     while (x->head < x->waiting.n) {
         if (x->head >= x->level_end)  /* the nodes before level_end are at depth, those after at depth + 1 */
             x->depth++, x->level_end = x->waiting.n;
@@ -1683,7 +1790,12 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
         int fresh = notify && found > x->told;
         x->told = found;
         double *here = T(x, 0), *met = T(x, 1), *block = T(x, 2);
-        slot_load(x, x->nodes.a[k].zone, here);
+        /* the zone on the state's active clocks, and on the idle ones its steps read (free) */
+        slot_load_active(x, x->nodes.a[k].zone, here);
+        act_of(&ha, slot_layout(x, x->nodes.a[k].zone), d);
+        act_steps(&ha, parts(pr).succ, fr, &nf);
+        if (nf)
+            a_free(here, d, ha.c, ha.n, fr, nf);
         const int64_t *keep = NULL;  /* the reduction's set first; the rest if it reached a stored zone */
         if (x->ask_ample && !*parts(pr).pass) {
             if (x->ask_ample(x->nodes.a[k].state, x->nodes.a[k].zone) != 0) {
@@ -1712,8 +1824,8 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                 s = bl;
                 if (keep && in_list(keep, via) != (round == 0))
                     continue;
-                memcpy(met, here, len * sizeof(double));
-                if (!constrain_all(met, d, nb + 1, nb[0]))
+                a_copy(met, here, d, ha.c, ha.n);
+                if (!a_constrain_all(met, d, ha.c, ha.n, nb + 1, nb[0]))
                     continue;
                 /* allowed: the pieces of met outside every block, each with its cut bounds; while no block meets
                  * met (``whole``), met itself is the one piece, not copied */
@@ -1721,14 +1833,14 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                 pieces.n = cuts.n = ncut.n = 0;
                 const int64_t *b = blocks;
                 for (int64_t bi = 0; bi < nblocks && (whole || pieces.n); bi++) {
-                    memcpy(block, met, len * sizeof(double));
-                    int live = constrain_all(block, d, b + 1, b[0]);
+                    a_copy(block, met, d, ha.c, ha.n);
+                    int live = a_constrain_all(block, d, ha.c, ha.n, b + 1, b[0]);
                     b = skip_bounds(b);
                     if (!live)
                         continue;
                     if (whole) {
                         whole = 0;
-                        if (append(&pieces, met, len))
+                        if (append_active(&pieces, met, len, d, &ha))
                             goto nomem;
                         PUSH_OR(ncut, 0, goto nomem);
                     }
@@ -1736,7 +1848,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                     int64_t off = 0;
                     for (int64_t pi = 0; pi * len < pieces.n; pi++) {
                         pc.n = pn.n = 0;
-                        if (subtract(pieces.a + pi * len, block, d, T(x, 6), T(x, 7), &next, &pc, &pn))
+                        if (subtract(pieces.a + pi * len, block, d, &ha, T(x, 6), T(x, 7), &next, &pc, &pn))
                             goto nomem;
                         int64_t o2 = 0;
                         for (int64_t q = 0; q < pn.n; q++) {
@@ -1760,9 +1872,12 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                 for (int64_t pi = 0; pi < npieces && !status; pi++) {
                     double *z = T(x, 1);  /* met, where the piece is met itself */
                     if (!whole)
-                        memcpy(z, pieces.a + pi * len, len * sizeof(double));
-                    for (int64_t r = 0; r < rs[0]; r++)
-                        z_reset(z, d, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
+                        a_copy(z, pieces.a + pi * len, d, ha.c, ha.n);
+                    act_copy(&za, &ha, d);  /* a clock reset joins the zone's */
+                    for (int64_t r = 0; r < rs[0]; r++) {
+                        act_add(&za, (int)rs[1 + 2 * r]);
+                        a_reset(z, d, za.c, za.n, (int)rs[1 + 2 * r], (double)rs[2 + 2 * r]);
+                    }
                     need.n = 0;
                     for (int64_t w = 0; w < 3 * nb[0]; w++)
                         PUSH_OR(need, nb[1 + w], goto nomem);
@@ -1774,7 +1889,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
                         status = nxt == -9 ? -9 : -1;
                         break;
                     }
-                    status = arrive(x, nxt, z, k, (int32_t)via, need.a, need.n / 3, ask);
+                    status = arrive(x, nxt, z, &za, k, (int32_t)via, need.a, need.n / 3, ask);
                     /* arrive may move the program array: re-read nothing from it after this point */
                 }
                 /* T(x, 0) (here) is never used by arrive, so the next successor starts from the same zone */
