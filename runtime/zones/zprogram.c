@@ -23,6 +23,9 @@ enum { OP_END, OP_CONST, OP_SLOT, OP_NEG, OP_ADD, OP_SUB, OP_MUL, OP_LT, OP_LE, 
 /* The step's successors of one state: words, interactions, room for cap; ``state``: whose, -1 none. */
 typedef struct { int64_t *words, *via; int cap, n; } SuccBuf;
 
+/* A growable list of int64 (lpush, lcat below). */
+typedef struct { int64_t *a; int64_t n, cap; } L;
+
 typedef struct {
     const int64_t *code;
     int W, n, natoms, ntimed, nrules, ntick, nobs, nmeas, nsteps, local;
@@ -41,6 +44,11 @@ typedef struct {
                                        * is that program's generation: the memo's common case found at once */
     int64_t *chain_gen, *chain_head;  /* per rule: its last memo entry in program chain_gen's memo (memo_prev on) */
     inter_fn ask_inter;
+    /* what one program's writing leaves to the next, so that its lists are not grown again from nothing for each
+     * state: the memo's five lists (emptied when a program begins) and region's lists per depth (Prog's) */
+    L memo[5];
+    L **deep;
+    int64_t ndeep;
 } Tables;
 
 /* -- the table ------------------------------------------------------------------------------------ */
@@ -51,6 +59,12 @@ static void tables_free(Tables *t)
     free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob);
     free(t->wbuf.words), free(t->wbuf.via), free(t->top_gen), free(t->top_idx);
     free(t->chain_gen), free(t->chain_head);
+    for (int k = 0; k < 5; k++)
+        free(t->memo[k].a);
+    for (int64_t k = 0; k < t->ndeep; k++)
+        if (t->deep[k])
+            free(t->deep[k][0].a), free(t->deep[k][1].a), free(t->deep[k][2].a), free(t->deep[k]);
+    free(t->deep);
     free(t);
 }
 
@@ -184,32 +198,45 @@ static int ev(const Tables *t, int64_t at, const int64_t *s, int64_t *out)
 }
 
 /* -- small growable lists of int64 ---------------------------------------------------------------- */
-typedef struct { int64_t *a; int64_t n, cap; } L;
 
 /* A push found no memory since write_program began: the program it writes is then incomplete, and it says -9.
  * A list keeps what it held.  region checks each push itself (it reads back what it pushed). */
 static _Thread_local int list_failed;
 
-static int lpush(L *l, int64_t v)
+/* Room for ``more`` numbers after l's; -9 (list_failed set) without memory.  Out of line, so that the pushes below,
+ * inlined (gcc leaves them out of line otherwise: a program's millions of calls cost a tenth of whole DALA's
+ * search), stay a compare and a store. */
+static __attribute__((noinline)) int lgrow(L *l, int64_t more)
 {
-    if (l->n == l->cap) {
-        int64_t cap = l->cap ? 2 * l->cap : 32;
-        int64_t *a = realloc(l->a, cap * sizeof(int64_t));
-        if (!a) {
-            list_failed = 1;
-            return -9;
-        }
-        l->a = a, l->cap = cap;
+    int64_t cap = l->cap ? 2 * l->cap : 32;
+    while (cap < l->n + more)
+        cap *= 2;
+    int64_t *a = realloc(l->a, cap * sizeof(int64_t));
+    if (!a) {
+        list_failed = 1;
+        return -9;
     }
+    l->a = a, l->cap = cap;
+    return 0;
+}
+
+static inline __attribute__((always_inline)) int lpush(L *l, int64_t v)
+{
+    if (l->n == l->cap && lgrow(l, 1))
+        return -9;
     l->a[l->n++] = v;
     return 0;
 }
 
-static int lcat(L *l, const int64_t *v, int64_t n)
+/* n numbers appended to l (v not within l); -9 without memory, l as it was. */
+static inline __attribute__((always_inline)) int lcat(L *l, const int64_t *v, int64_t n)
 {
-    for (int64_t i = 0; i < n; i++)
-        if (lpush(l, v[i]))
-            return -9;
+    if (n <= 0)
+        return 0;
+    if (l->n + n > l->cap && lgrow(l, n))
+        return -9;
+    memcpy(l->a + l->n, v, n * sizeof(int64_t));
+    l->n += n;
     return 0;
 }
 
@@ -261,6 +288,8 @@ typedef struct {
     /* per rule, the enabled interactions on its high side, in engine order (built at the first region) */
     int64_t *high_off;     /* nrules + 1 offsets into high_en, NULL until built */
     int64_t *high_en;
+    L **deep;              /* per depth of region's recursion: its three lists (depth_lists) */
+    int64_t ndeep;
 } Prog;
 
 /* Some clock values meet every bound (i, j, c: x_i - x_j <= c, clock 0 the zero): no negative cycle among the
@@ -422,6 +451,28 @@ static int index_highs(Prog *g)
     return 0;  /* high_off[r] .. high_off[r + 1]: rule r's */
 }
 
+/* The three lists (acc, mine, kept) of region at this depth of its recursion, emptied; NULL without memory.  Each
+ * depth's are allocated once and kept from program to program (Tables' deep), at addresses that do not move. */
+static L *depth_lists(Prog *g, int64_t depth)
+{
+    if (depth >= g->ndeep) {
+        int64_t n = g->ndeep ? 2 * g->ndeep : 8;
+        while (n <= depth)
+            n *= 2;
+        L **a = realloc(g->deep, n * sizeof(L *));
+        if (!a)
+            return NULL;
+        for (int64_t k = g->ndeep; k < n; k++)
+            a[k] = NULL;
+        g->deep = a, g->ndeep = n;
+    }
+    if (!g->deep[depth] && !(g->deep[depth] = calloc(3, sizeof(L))))
+        return NULL;
+    L *l = g->deep[depth];
+    l[0].n = l[1].n = l[2].n = 0;
+    return l;
+}
+
 static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *path, L *out, int *everywhere)
 {
     const Tables *t = g->t;
@@ -442,7 +493,10 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
         return 0;
     }
     const int64_t *rule = t->rule[r];
-    L acc = {0}, mine = {0};
+    L *lists = depth_lists(g, path->n);
+    if (!lists)
+        return -9;
+    L acc = lists[0], mine = lists[1];  /* written back at the end (their arrays may grow) */
     int status = 0, all = 0;
     int64_t kind = rule[0];
     const int64_t *edges;
@@ -488,66 +542,52 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
     }
     for (int64_t h = g->high_off[r]; h < g->high_off[r + 1]; h++) {
         int64_t e = g->high_en[h];
-        L need = {0};
-        if (lcat(&need, acc.a, acc.n)) {
-            free(need.a);
+        int64_t at = mine.n;  /* the high side's need, written in place after its count */
+        if (lpush(&mine, 0) || lcat(&mine, acc.a, acc.n)) {
             status = -9;
             goto done;
         }
-        if (need_of(g, g->row[e], &need, NULL)) {
-            free(need.a);
+        if (need_of(g, g->row[e], &mine, NULL)) {
             status = BACK;
             goto done;
         }
-        if (!need.n) {
-            free(need.a);
+        if (mine.n == at + 1) {
+            mine.n = at;
             all = 1;
             goto store;
         }
-        int grew = lpush(&mine, need.n / 3) || lcat(&mine, need.a, need.n);
-        free(need.a);
-        if (grew) {
-            status = -9;
-            goto done;
-        }
+        mine.a[at] = (mine.n - at - 1) / 3;
     }
     if (lpush(path, r)) {
         status = -9;
         goto done;
     }
     for (int64_t k = 0; k < edges[0] && !all; k++) {
-        L sub = {0};
+        int64_t at = mine.n;  /* the lower rule's regions, appended in place */
         int every;
-        status = region(g, edges[1 + k], acc.a, acc.n / 3, path, &sub, &every);
+        status = region(g, edges[1 + k], acc.a, acc.n / 3, path, &mine, &every);
         if (status) {
-            free(sub.a);
             path->n--;
             goto done;
         }
         if (every) {
+            mine.n = at;
             all = 1;
         } else {
-            for (int64_t at = 0; at < sub.n; at += 1 + 3 * sub.a[at]) {
-                if (!sub.a[at]) {
+            for (int64_t q = at; q < mine.n; q += 1 + 3 * mine.a[q])
+                if (!mine.a[q]) {  /* an empty region: everywhere */
+                    mine.n = at;
                     all = 1;
                     break;
                 }
-                if (lcat(&mine, sub.a + at, 1 + 3 * sub.a[at])) {
-                    free(sub.a);
-                    path->n--;
-                    status = -9;
-                    goto done;
-                }
-            }
         }
-        free(sub.a);
     }
     path->n--;
 store:
     {
         /* keep the feasible ones, then remember: the memo's lists grow together or not at all (memo_find follows
          * a rule's chain from chain_head through memo_prev, and reads each entry's key at memo_at) */
-        L kept = {0};
+        L kept = lists[2];
         int64_t count = 0, key_n = g->memo_key.n, pool_n = g->pool.n, entries = g->memo_at.n;
         int64_t prev = t->chain_gen[r] == g->gen ? t->chain_head[r] : -1;
         if (!all)
@@ -570,10 +610,10 @@ store:
             else if (lcat(out, kept.a, kept.n))
                 status = -9;
         }
-        free(kept.a);
+        lists[2] = kept;
     }
 done:
-    free(acc.a), free(mine.a);
+    lists[0] = acc, lists[1] = mine;
     return status;
 }
 
@@ -622,7 +662,9 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
         return -9;
     int status = 0;
     list_failed = 0;
-    Prog g = {t, s, d, scratch, NULL, NULL, 0, {0}, {0}, {0}, {0}, {0}, ++t->gen, NULL, NULL};
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, t->memo[0], t->memo[1], t->memo[2], t->memo[3], t->memo[4], ++t->gen,
+              NULL, NULL, t->deep, t->ndeep};
+    g.memo_key.n = g.memo_off.n = g.memo_at.n = g.memo_prev.n = g.pool.n = 0;
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
     if (n < 0) {
@@ -832,13 +874,14 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     {
         int64_t count_at = prog->n, count = 0;
         lpush(prog, 0);
+        L regions = {0}, need = {0}, resets = {0}, reg = {0};  /* each successor's, emptied for the next */
         for (int i = 0; i < n && !status; i++) {
-            L regions = {0}, need = {0}, resets = {0};
+            regions.n = need.n = resets.n = 0;
             int64_t nreg = 0;
             int blocked = 0;
             const int64_t *lw = lows(srow[i]);
             for (int64_t k = 0; k < lw[0] && !blocked && !status; k++) {
-                L reg = {0};
+                reg.n = 0;
                 int every;
                 status = rule_region(&g, lw[1 + k], &reg, &every);
                 if (!status && every)
@@ -851,7 +894,6 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
                     lcat(&regions, reg.a + at, 1 + 3 * reg.a[at]);
                     nreg++;
                 }
-                free(reg.a);
             }
             if (!status && !blocked) {
                 if (need_of(&g, srow[i], &need, &resets)) {
@@ -869,8 +911,8 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
                     }
                 }
             }
-            free(regions.a), free(need.a), free(resets.a);
         }
+        free(regions.a), free(need.a), free(resets.a), free(reg.a);
         if (!list_failed)
             prog->a[count_at] = count;
     }
@@ -878,7 +920,8 @@ out:
     if (list_failed && !status)
         status = -9;  /* the program lacks what a push could not add */
     free(sidx), free(srow), free(g.index), free(g.row);
-    free(g.memo_key.a), free(g.memo_off.a), free(g.memo_at.a), free(g.memo_prev.a), free(g.pool.a), free(g.high_off),
-        free(g.high_en);
+    t->memo[0] = g.memo_key, t->memo[1] = g.memo_off, t->memo[2] = g.memo_at, t->memo[3] = g.memo_prev;
+    t->memo[4] = g.pool, t->deep = g.deep, t->ndeep = g.ndeep;  /* kept for the next program */
+    free(g.high_off), free(g.high_en);
     return status;
 }
