@@ -45,8 +45,8 @@ typedef struct {
     int64_t *chain_gen, *chain_head;  /* per rule: its last memo entry in program chain_gen's memo (memo_prev on) */
     inter_fn ask_inter;
     /* what one program's writing leaves to the next, so that its lists are not grown again from nothing for each
-     * state: the memo's five lists (emptied when a program begins) and region's lists per depth (Prog's) */
-    L memo[5];
+     * state: the memo's five lists (emptied when a program begins), region's path and its lists per depth (Prog's) */
+    L memo[5], path;
     L **deep;
     int64_t ndeep;
 } Tables;
@@ -61,6 +61,7 @@ static void tables_free(Tables *t)
     free(t->chain_gen), free(t->chain_head);
     for (int k = 0; k < 5; k++)
         free(t->memo[k].a);
+    free(t->path.a);
     for (int64_t k = 0; k < t->ndeep; k++)
         if (t->deep[k])
             free(t->deep[k][0].a), free(t->deep[k][1].a), free(t->deep[k][2].a), free(t->deep[k]);
@@ -290,6 +291,7 @@ typedef struct {
     int64_t *high_en;
     L **deep;              /* per depth of region's recursion: its three lists (depth_lists) */
     int64_t ndeep;
+    L path;                /* the rules region is within (rule_region empties it) */
 } Prog;
 
 /* Some clock values meet every bound (i, j, c: x_i - x_j <= c, clock 0 the zero): no negative cycle among the
@@ -619,10 +621,8 @@ done:
 
 static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
 {
-    L path = {0};
-    int status = region(g, r, NULL, 0, &path, out, everywhere);
-    free(path.a);
-    return status;
+    g->path.n = 0;
+    return region(g, r, NULL, 0, &g->path, out, everywhere);
 }
 
 /* The step's successors of state s into b, grown as needed: their number, or < 0 (-9 memory; else the step's
@@ -663,7 +663,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     int status = 0;
     list_failed = 0;
     Prog g = {t, s, d, scratch, NULL, NULL, 0, t->memo[0], t->memo[1], t->memo[2], t->memo[3], t->memo[4], ++t->gen,
-              NULL, NULL, t->deep, t->ndeep};
+              NULL, NULL, t->deep, t->ndeep, t->path};
     g.memo_key.n = g.memo_off.n = g.memo_at.n = g.memo_prev.n = g.pool.n = 0;
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
@@ -921,7 +921,7 @@ out:
         status = -9;  /* the program lacks what a push could not add */
     free(sidx), free(srow), free(g.index), free(g.row);
     t->memo[0] = g.memo_key, t->memo[1] = g.memo_off, t->memo[2] = g.memo_at, t->memo[3] = g.memo_prev;
-    t->memo[4] = g.pool, t->deep = g.deep, t->ndeep = g.ndeep;  /* kept for the next program */
+    t->memo[4] = g.pool, t->deep = g.deep, t->ndeep = g.ndeep, t->path = g.path;  /* kept for the next program */
     free(g.high_off), free(g.high_en);
     return status;
 }
