@@ -380,7 +380,8 @@ class CGen(StepEmitter):
                     raise Unsupported(f"port {fp.path}: field {f} of type {ty} binds {v} of type {types.get(v)}")
 
     def gen_slots(self) -> None:
-        """Straight-line ``pack`` and ``unpack`` (runtime.explore.codec's fields), widths fixed in the text.
+        """Straight-line ``pack`` and ``unpack`` (runtime.explore.codec's fields), widths fixed in the text, and
+        ``canon``, the words ``unpack(pack(L))`` gives, written straight from ``L``.
 
         Ints without a declared domain are zig-zag coded in a field of ``widths[k]`` bits; a value that does
         not fit stops the step with E_WIDEN and the slot's position, and the caller regenerates wider.
@@ -406,9 +407,15 @@ class CGen(StepEmitter):
             w("uint64_t u;")
             for k, s, width, off in fields:
                 self.unpack_slot(s, width, off)
+        # unpack(pack(L)) without the fields in between: what a caller that wants words, not packed states, needs
+        with w.block("static void canon(const V *L, V *o)"):
+            w("uint64_t u; V x;")
+            for k, s, width, off in fields:
+                self.canon_slot(k, s, width)
+            w("(void)u; (void)x;")
 
-    def pack_slot(self, k: int, s: Slot, width: int, off: int) -> None:
-        """Slot ``s`` (the ``k``-th) checked, reset if dead, coded and or-ed into its field at bit ``off``."""
+    def slot_value(self, k: int, s: Slot, width: int) -> None:
+        """Slot ``s`` (the ``k``-th) read into ``x``, checked and reset if dead; ``u``: its field's bits."""
         w = self.w
         w(f"x = L[{s.index}];")
         if s.domain is not None:
@@ -427,10 +434,23 @@ class CGen(StepEmitter):
             w("u = ((uint64_t)x << 1) ^ (uint64_t)(x >> 63);")
             if width < 64:
                 w.if_then(f"u >> {width}", f"fail({E_WIDEN}, {k})")
+
+    def pack_slot(self, k: int, s: Slot, width: int, off: int) -> None:
+        """Slot ``s`` (the ``k``-th) checked, reset if dead, coded and or-ed into its field at bit ``off``."""
+        w = self.w
+        self.slot_value(k, s, width)
         word, sh = divmod(off, 64)
         w(f"o[{word}] |= u << {sh};" if sh else f"o[{word}] |= u;")
         if sh and sh + width > 64:
             w(f"o[{word + 1}] |= u >> {64 - sh};")
+
+    def canon_slot(self, k: int, s: Slot, width: int) -> None:
+        """Slot ``s`` (the ``k``-th) checked and reset if dead, as ``pack`` then ``unpack`` leave it."""
+        if not width:
+            self.w(f"o[{s.index}] = {self.default(s)};")
+            return
+        self.slot_value(k, s, width)
+        self.w(f"o[{s.index}] = x;")
 
     def unpack_slot(self, s: Slot, width: int, off: int) -> None:
         """Slot ``s`` decoded from its field at bit ``off`` (its default when it has no bits)."""

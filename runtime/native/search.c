@@ -550,15 +550,16 @@ void c_state(int64_t id, V *out) {
     free(path);
 }
 
-/* successors of one explorer state, packed then unpacked (dead variables reset): the agreement tests' view */
+/* successors of one explorer state as packing then unpacking them leaves them (dead variables reset, every field
+   checked; canon writes that without the packed words): the agreement tests' view, and the zone search's step */
 int c_successors(const V *s, V *out, int64_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
     BUDGET = budget;
     ensure_succ(1);
-    int n = step_packed(s);
-    if (n < 0) { *ecode = ECODE; *earg = EARG; return -1; }
+    if (setjmp(JB)) { *ecode = ECODE; *earg = EARG; return -1; }
+    int n = expand(s, 0);
     if (n > max) { *ecode = E_FULL; return -1; }
     for (int i = 0; i < n; i++) {
-        unpack(PK + (size_t)i * NW, out + (size_t)i * W);
+        canon(SUCC + (size_t)i * W, out + (size_t)i * W);
         if (via) via[i] = (int64_t)SVIA[i];
     }
     return n;
