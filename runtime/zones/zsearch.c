@@ -485,17 +485,26 @@ static uint64_t hash_bytes(const uint8_t *b, int64_t n)
 static int64_t encode(const int64_t *w, int n, const int64_t *ref, uint8_t *out)
 {
     int64_t nb = (n + 7) / 8, k = nb;
-    memset(out, 0, nb);
-    for (int i = 0; i < n; i++) {
-        if (w[i] == ref[i])
-            continue;
-        out[i >> 3] |= (uint8_t)(1 << (i & 7));
-        uint64_t v = ((uint64_t)w[i] << 1) ^ (uint64_t)(w[i] >> 63);
-        while (v >= 0x80) {
-            out[k++] = (uint8_t)(v | 0x80);
-            v >>= 7;
+    for (int64_t byte = 0; byte < nb; byte++) {
+        /* the byte of the bitmap without a branch per word (most are equal), then its words' values */
+        int base = (int)byte * 8;
+        unsigned bits = 0;
+        if (base + 8 <= n)
+            for (int l = 0; l < 8; l++)
+                bits |= (unsigned)(w[base + l] != ref[base + l]) << l;
+        else
+            for (int l = 0; base + l < n; l++)
+                bits |= (unsigned)(w[base + l] != ref[base + l]) << l;
+        out[byte] = (uint8_t)bits;
+        for (; bits; bits &= bits - 1) {
+            int i = base + __builtin_ctz(bits);
+            uint64_t v = ((uint64_t)w[i] << 1) ^ (uint64_t)(w[i] >> 63);
+            while (v >= 0x80) {
+                out[k++] = (uint8_t)(v | 0x80);
+                v >>= 7;
+            }
+            out[k++] = (uint8_t)v;
         }
-        out[k++] = (uint8_t)v;
     }
     return k;
 }
