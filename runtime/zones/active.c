@@ -132,12 +132,22 @@ static void a_close_raised(double *m, int d, const int *act, int na, const int *
 static int a_extrapolate_lu(double *m, int d, const int *act, int na, const double *lower, const double *upper)
 {
     int raised[4096], n = 0, all = na * na > 4096;
+    double floor_[256];
+    for (int b = 0; b < na; b++)
+        floor_[b] = -upper[act[b]] - 1;
     for (int a = 0; a < na; a++) {
         int i = act[a];
         double *w = m + (int64_t)i * d, li = lower[i];
+        int hit = 0;  /* most rows keep every bound: told first, without a branch per entry (the diagonal may count) */
+        for (int b = 0; b < na; b++) {
+            double v = w[act[b]];
+            hit |= ((v > li) & (v != INFINITY)) | (v < floor_[b]);
+        }
+        if (!hit)
+            continue;
         for (int b = 0; b < na; b++) {
             int j = act[b];
-            double v = w[j], floor = -upper[j] - 1, to = v > li ? INFINITY : v < floor ? floor : v;
+            double v = w[j], to = v > li ? INFINITY : v < floor_[b] ? floor_[b] : v;
             if (i == j || to == v)
                 continue;
             raised[all ? 0 : n] = i * d + j;
