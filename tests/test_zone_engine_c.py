@@ -370,8 +370,9 @@ def _random_zone(rng) -> tuple[int, np.ndarray]:
 
 
 def test_extra_lu_plus_is_the_same_in_c_and_in_numpy():
-    # The C search extrapolates with z_extrapolate_lu_plus, the Python search with dbm.extrapolate_lu_plus: on
-    # random zones, bounds and marked clocks, both give the same canonical zone, which holds the one given.
+    # The C search extrapolates with a_extrapolate_lu_plus (z_extrapolate_lu_plus: the same on every clock), the
+    # Python search with dbm.extrapolate_lu_plus: on random zones, bounds and marked clocks, both give the same
+    # canonical zone, which holds the one given.
     import ctypes
     import random
 
@@ -400,9 +401,10 @@ def test_extra_lu_plus_is_the_same_in_c_and_in_numpy():
 
 
 def test_forgetting_lower_bounds_is_the_same_in_c_and_in_numpy():
-    # The C search keeps only the upper bounds of the clocks read for how large they grow with z_forget_below, the
-    # Python search with dbm.forget_below: on random zones both give the same matrix, still canonical, holding the
-    # zone, with the other clocks' values and each forgotten clock's upper bounds as they were, and 0 allowed.
+    # The C search keeps only the upper bounds of the clocks read for how large they grow with a_forget_below
+    # (z_forget_below: the same on every clock), the Python search with dbm.forget_below: on random zones both give
+    # the same matrix, still canonical, holding the zone, with the other clocks' values and each forgotten clock's
+    # upper bounds as they were, and 0 allowed.
     import ctypes
     import random
 

@@ -77,18 +77,46 @@ int z_constrain(double *m, int d, int i, int j, double c)
     return 1;
 }
 
-/* m was closed, then the entries at idx[0..n) were raised: closed again.  Only those entries can change (a path
- * through a raised entry is no shorter than it was), so Floyd-Warshall over them alone is the whole closure:
- * d * n steps instead of d^3. */
-static void z_close_raised(double *m, int d, const int *idx, int n)
+/* Several operations below run on a sub-matrix: the bounds between the clocks act[0..na) (0 among them, ascending)
+ * of the full row-major d x d matrix, the others neither read nor written.  The zone search works so on the active
+ * clocks of a state (active.c); dbm.py's whole matrices are the case act = every clock (every_clock). */
+static int every_clock(int d, int *act)
 {
-    int row[4096], col[4096];  /* each entry's row start and column, divided out once (n <= 4096) */
+    for (int k = 0; k < d; k++)
+        act[k] = k;
+    return d;
+}
+
+/* Floyd-Warshall over the clocks of act. */
+static void a_close(double *m, int d, const int *act, int na)
+{
+    for (int k = 0; k < na; k++) {
+        const double *rk = m + (int64_t)act[k] * d;
+        for (int i = 0; i < na; i++) {
+            double *ri = m + (int64_t)act[i] * d, ik = ri[act[k]];
+            if (ik == INFINITY)
+                continue;
+            for (int j = 0; j < na; j++) {
+                double v = ik + rk[act[j]];
+                if (v < ri[act[j]])
+                    ri[act[j]] = v;
+            }
+        }
+    }
+}
+
+/* m was closed, then the entries at idx[0..n) (places in the full matrix) were raised: closed again.  Only those
+ * entries can change (a path through a raised entry is no shorter than it was), so Floyd-Warshall over them alone is
+ * the whole closure: na * n steps instead of na^3. */
+static void a_close_raised(double *m, int d, const int *act, int na, const int *idx, int n)
+{
+    int row[4096], col[4096];
     for (int e = 0; e < n; e++)
         row[e] = idx[e] / d * d, col[e] = idx[e] % d;
-    for (int k = 0; k < d; k++) {
-        const double *rk = m + (long)k * d;
+    for (int k = 0; k < na; k++) {
+        const double *rk = m + (int64_t)act[k] * d;
         for (int e = 0; e < n; e++) {
-            double v = m[row[e] + k] + rk[col[e]];
+            double v = m[row[e] + act[k]] + rk[col[e]];
             if (v < m[idx[e]])
                 m[idx[e]] = v;
         }
@@ -97,39 +125,37 @@ static void z_close_raised(double *m, int d, const int *idx, int n)
 
 /* Extra_LU on integers: a bound of row i past lower[i] forgotten, one of column j below -upper[j] - 1 raised to it
  * (dbm.py's extrapolate_np), then closed; 1 when something changed.  Extra_M is lower = upper = the ceilings. */
-int z_extrapolate_lu(double *m, int d, const double *lower, const double *upper)
+static int a_extrapolate_lu(double *m, int d, const int *act, int na, const double *lower, const double *upper)
 {
-    int raised[4096], n = 0, all = d * d > 4096;  /* past 64 clocks, the whole matrix is closed again */
+    int raised[4096], n = 0, all = na * na > 4096;
     double floor_[256];
-    for (int j = 0; j < d; j++)
-        floor_[j] = -upper[j] - 1;
-    for (int i = 0; i < d; i++) {
-        /* most rows keep every bound: tell them first, in a loop the compiler vectorises (the diagonal may count
-         * here; the loop below leaves it) */
-        double *w = m + (long)i * d, li = lower[i];
-        int hit = 0;
-        for (int j = 0; j < d; j++)
-            hit |= ((w[j] > li) & (w[j] != INFINITY)) | (w[j] < floor_[j]);
+    for (int b = 0; b < na; b++)
+        floor_[b] = -upper[act[b]] - 1;
+    for (int a = 0; a < na; a++) {
+        int i = act[a];
+        double *w = m + (int64_t)i * d, li = lower[i];
+        int hit = 0;  /* most rows keep every bound: told first, without a branch per entry (the diagonal may count) */
+        for (int b = 0; b < na; b++) {
+            double v = w[act[b]];
+            hit |= ((v > li) & (v != INFINITY)) | (v < floor_[b]);
+        }
         if (!hit)
             continue;
-        for (int j = 0; j < d; j++) {  /* without branches: each raised entry's place written, counted if raised */
-            double v = w[j], to = v > li ? INFINITY : v < floor_[j] ? floor_[j] : v;
-            to = i == j ? v : to;
+        for (int b = 0; b < na; b++) {
+            int j = act[b];
+            double v = w[j], to = v > li ? INFINITY : v < floor_[b] ? floor_[b] : v;
+            if (i == j || to == v)
+                continue;
             raised[all ? 0 : n] = i * d + j;
-            n += to != v;
+            n++;
             w[j] = to;
         }
     }
     if (n && all)
-        z_close(m, d);
+        a_close(m, d, act, na);
     else if (n)
-        z_close_raised(m, d, raised, n);
+        a_close_raised(m, d, act, na, raised, n);
     return n > 0;
-}
-
-int z_extrapolate(double *m, int d, const double *ceiling)
-{
-    return z_extrapolate_lu(m, d, ceiling, ceiling);
 }
 
 /* Extra_LU+ (Behrmann, Bouyer, Larsen, Pelanek) where plus[k]: a clock above its lower-bound constant has no
@@ -137,18 +163,20 @@ int z_extrapolate(double *m, int d, const double *ceiling)
  * only between clocks both marked (no priority compares them), Extra_LU elsewhere (dbm.py's extrapolate_lu_plus).
  * A lower bound raised above 0 (NO_BOUND's -U - 1 = 1, or dropped) is put back to x >= 0: clocks are never negative,
  * so the zone is the same, and its matrix is the one every other path to it gives (inclusion is then exact). */
-int z_extrapolate_lu_plus(double *m, int d, const double *lower, const double *upper, const unsigned char *plus)
+static int a_extrapolate_lu_plus(double *m, int d, const int *act, int na, const double *lower, const double *upper,
+                                 const unsigned char *plus)
 {
     double first[256];
-    for (int k = 0; k < d; k++)
-        first[k] = -m[k];  /* row 0: each clock's lower bound, before anything changes */
+    for (int a = 0; a < na; a++)
+        first[a] = -m[act[a]];  /* row 0: each clock's lower bound, before anything changes */
     int changed = 0;
-    for (int i = 0; i < d; i++)
-        for (int j = 0; j < d; j++) {
+    for (int a = 0; a < na; a++)
+        for (int b = 0; b < na; b++) {
+            int i = act[a], j = act[b];
             if (i == j)
                 continue;
-            double *v = m + (long)i * d + j, to = *v;
-            int li = i && plus[i] && first[i] > lower[i] + 1, uj = j && plus[j] && first[j] > upper[j] + 1;
+            double *v = m + (int64_t)i * d + j, to = *v;
+            int li = i && plus[i] && first[a] > lower[i] + 1, uj = j && plus[j] && first[b] > upper[j] + 1;
             if (li && (j == 0 || plus[j]))
                 to = INFINITY;
             else if (uj && i && plus[i])
@@ -164,14 +192,51 @@ int z_extrapolate_lu_plus(double *m, int d, const double *lower, const double *u
                 changed = 1;
             }
         }
-    for (int j = 1; j < d; j++)  /* row 0: clocks are >= 0 */
-        if (m[j] > 0) {
-            m[j] = 0;
+    for (int b = 0; b < na; b++)  /* row 0: clocks are >= 0 */
+        if (act[b] && m[act[b]] > 0) {
+            m[act[b]] = 0;
             changed = 1;
         }
     if (changed)
-        z_close(m, d);
+        a_close(m, d, act, na);
     return changed;
+}
+
+/* Each clock of idx keeps its upper bounds only: its column set to column 0 (dbm.py's forget_below), in the rows of
+ * act (a clock of idx outside act has its entries there written, and never read).  Row by row (column 0 is never one
+ * of idx), so each row is read from memory once. */
+static void a_forget_below(double *m, int d, const int *act, int na, const int *idx, int count)
+{
+    for (int a = 0; a < na; a++) {
+        double *ra = m + (int64_t)act[a] * d, first = ra[0];
+        for (int c = 0; c < count; c++)
+            ra[idx[c]] = first;
+    }
+    for (int c = 0; c < count; c++)
+        m[(int64_t)idx[c] * d + idx[c]] = 0;
+}
+
+int z_extrapolate_lu(double *m, int d, const double *lower, const double *upper)
+{
+    int act[256];
+    return a_extrapolate_lu(m, d, act, every_clock(d, act), lower, upper);
+}
+
+int z_extrapolate(double *m, int d, const double *ceiling)
+{
+    return z_extrapolate_lu(m, d, ceiling, ceiling);
+}
+
+int z_extrapolate_lu_plus(double *m, int d, const double *lower, const double *upper, const unsigned char *plus)
+{
+    int act[256];
+    return a_extrapolate_lu_plus(m, d, act, every_clock(d, act), lower, upper, plus);
+}
+
+void z_forget_below(double *m, int d, const int *idx, int count)
+{
+    int act[256];
+    a_forget_below(m, d, act, every_clock(d, act), idx, count);
 }
 
 /* Every bound of big at least small's. */
@@ -201,19 +266,6 @@ void z_free(double *m, const double *src, int d, const int *idx, int count)
             ri[b] = INFINITY;
         ri[idx[c]] = 0;
     }
-}
-
-/* Each clock of idx keeps its upper bounds only: its column set to column 0 (dbm.py's forget_below).  Row by row
- * (column 0 is never one of idx), so each row is read from memory once. */
-void z_forget_below(double *m, int d, const int *idx, int count)
-{
-    for (int a = 0; a < d; a++) {
-        double *ra = m + (long)a * d, first = ra[0];
-        for (int c = 0; c < count; c++)
-            ra[idx[c]] = first;
-    }
-    for (int c = 0; c < count; c++)
-        m[(long)idx[c] * d + idx[c]] = 0;
 }
 
 /* The hull of a and b (the least zone holding both) into h; 1 when it holds nothing else (their union is
