@@ -43,10 +43,12 @@ typedef struct {
     int64_t *top_gen, *top_idx, gen;  /* per rule: its region at the state being written (memo entry), if top_gen
                                        * is that program's generation: the memo's common case found at once */
     int64_t *chain_gen, *chain_head;  /* per rule: its last memo entry in program chain_gen's memo (memo_prev on) */
+    int64_t *high_gen, *high_head;    /* per rule: the first of its high side's interactions in program high_gen's
+                                       * list (Prog's high) */
     inter_fn ask_inter;
     /* what one program's writing leaves to the next, so that its lists are not grown again from nothing for each
      * state: the memo's five lists (emptied when a program begins), region's path and its lists per depth (Prog's) */
-    L memo[5], path;
+    L memo[5], path, high;
     L **deep;
     int64_t ndeep;
 } Tables;
@@ -58,7 +60,7 @@ static void tables_free(Tables *t)
         return;
     free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob);
     free(t->wbuf.words), free(t->wbuf.via), free(t->top_gen), free(t->top_idx);
-    free(t->chain_gen), free(t->chain_head);
+    free(t->chain_gen), free(t->chain_head), free(t->high_gen), free(t->high_head), free(t->high.a);
     for (int k = 0; k < 5; k++)
         free(t->memo[k].a);
     free(t->path.a);
@@ -123,7 +125,9 @@ static Tables *tables_read(const int64_t *words, int64_t len)
     t->top_idx = calloc(t->nrules + 1, sizeof(int64_t));
     t->chain_gen = calloc(t->nrules + 1, sizeof(int64_t));
     t->chain_head = calloc(t->nrules + 1, sizeof(int64_t));
-    if (!t->rule || !t->top_gen || !t->top_idx || !t->chain_gen || !t->chain_head)
+    t->high_gen = calloc(t->nrules + 1, sizeof(int64_t));
+    t->high_head = calloc(t->nrules + 1, sizeof(int64_t));
+    if (!t->rule || !t->top_gen || !t->top_idx || !t->chain_gen || !t->chain_head || !t->high_gen || !t->high_head)
         goto nomem;
     for (int r = 0; r < t->nrules; r++) {
         t->rule[r] = p;
@@ -287,8 +291,8 @@ typedef struct {
     L pool;                /* results: count (-1: everywhere), then per region: n, triples... */
     int64_t gen;           /* this program's number (Tables' top_gen) */
     /* per rule, the enabled interactions on its high side, in engine order (built at the first region) */
-    int64_t *high_off;     /* nrules + 1 offsets into high_en, NULL until built */
-    int64_t *high_en;
+    int highs;             /* high (below) built for this program */
+    L high;                /* pairs (enabled interaction, next pair of the same rule or -1): index_highs */
     L **deep;              /* per depth of region's recursion: its three lists (depth_lists) */
     int64_t ndeep;
     L path;                /* the rules region is within (rule_region empties it) */
@@ -417,40 +421,30 @@ static int memo_find(Prog *g, int64_t r, const int64_t *acc, int64_t nacc)
     return -1;
 }
 
-/* g->high_off and high_en: for each rule, the enabled interactions whose high side names it (a rule's region is
- * asked for once per acc: scanning every enabled interaction each time cost a tenth of whole DALA's search).
- * 0, or -9 without memory. */
+/* For each rule, the enabled interactions whose high side names it, in engine order: a chain of g->high's pairs
+ * from Tables' high_head, valid where high_gen is this program's (a rule's region is asked for once per acc:
+ * scanning every enabled interaction each time cost a tenth of whole DALA's search; a table over every rule, cleared
+ * for each program, cost 3 % more).  0, or -9 without memory. */
 static int index_highs(Prog *g)
 {
-    int64_t nrules = g->t->nrules, total = 0;
-    g->high_off = calloc(nrules + 2, sizeof(int64_t));
-    if (!g->high_off)
-        return -9;
-    for (int pass = 0; pass < 2; pass++) {  /* count, then fill: off[r + 1] is rule r's cursor as it fills */
-        for (int64_t e = 0; e < g->nen; e++) {
-            const int64_t *hl = lows(g->row[e]);
-            hl += 1 + hl[0];
-            for (int64_t k = 0; k < hl[0]; k++) {
-                int64_t r = hl[1 + k], seen = r < 0 || r >= nrules;
-                for (int64_t j = 0; j < k && !seen; j++)
-                    seen = hl[1 + j] == r;  /* an interaction once per rule */
-                if (seen)
-                    continue;
-                if (pass)
-                    g->high_en[g->high_off[r + 1]++] = e;
-                else
-                    g->high_off[r + 2]++, total++;
-            }
+    const Tables *t = g->t;
+    g->high.n = 0;
+    for (int64_t e = g->nen - 1; e >= 0; e--) {  /* each pushed in front of its rule's chain: engine order */
+        const int64_t *hl = lows(g->row[e]);
+        hl += 1 + hl[0];
+        for (int64_t k = 0; k < hl[0]; k++) {
+            int64_t r = hl[1 + k], seen = r < 0 || r >= t->nrules;
+            for (int64_t j = 0; j < k && !seen; j++)
+                seen = hl[1 + j] == r;  /* an interaction once per rule */
+            if (seen)
+                continue;
+            if (lpush(&g->high, e) || lpush(&g->high, t->high_gen[r] == g->gen ? t->high_head[r] : -1))
+                return -9;
+            t->high_gen[r] = g->gen, t->high_head[r] = g->high.n / 2 - 1;
         }
-        if (pass)
-            break;
-        for (int64_t r = 0; r < nrules; r++)
-            g->high_off[r + 2] += g->high_off[r + 1];
-        g->high_en = malloc((total + 1) * sizeof(int64_t));
-        if (!g->high_en)
-            return -9;
     }
-    return 0;  /* high_off[r] .. high_off[r + 1]: rule r's */
+    g->highs = 1;
+    return 0;
 }
 
 /* The three lists (acc, mine, kept) of region at this depth of its recursion, emptied; NULL without memory.  Each
@@ -538,12 +532,12 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
             status = BACK;  /* a priority cycle: Python names it */
             goto done;
         }
-    if (!g->high_off && index_highs(g)) {
+    if (!g->highs && index_highs(g)) {
         status = -9;
         goto done;
     }
-    for (int64_t h = g->high_off[r]; h < g->high_off[r + 1]; h++) {
-        int64_t e = g->high_en[h];
+    for (int64_t h = t->high_gen[r] == g->gen ? t->high_head[r] : -1; h >= 0; h = g->high.a[2 * h + 1]) {
+        int64_t e = g->high.a[2 * h];
         int64_t at = mine.n;  /* the high side's need, written in place after its count */
         if (lpush(&mine, 0) || lcat(&mine, acc.a, acc.n)) {
             status = -9;
@@ -663,7 +657,7 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
     int status = 0;
     list_failed = 0;
     Prog g = {t, s, d, scratch, NULL, NULL, 0, t->memo[0], t->memo[1], t->memo[2], t->memo[3], t->memo[4], ++t->gen,
-              NULL, NULL, t->deep, t->ndeep, t->path};
+              0, t->high, t->deep, t->ndeep, t->path};
     g.memo_key.n = g.memo_off.n = g.memo_at.n = g.memo_prev.n = g.pool.n = 0;
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
@@ -922,6 +916,6 @@ out:
     free(sidx), free(srow), free(g.index), free(g.row);
     t->memo[0] = g.memo_key, t->memo[1] = g.memo_off, t->memo[2] = g.memo_at, t->memo[3] = g.memo_prev;
     t->memo[4] = g.pool, t->deep = g.deep, t->ndeep = g.ndeep, t->path = g.path;  /* kept for the next program */
-    free(g.high_off), free(g.high_en);
+    t->high = g.high;
     return status;
 }
