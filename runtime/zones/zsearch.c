@@ -19,6 +19,9 @@
  */
 #include <stdint.h>
 #include <stdio.h>
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
 
 typedef int (*program_fn)(int64_t state);
 typedef int (*ample_fn)(int64_t state, int64_t zone);  /* a node's discrete state and zone slot */
@@ -490,8 +493,20 @@ static int64_t encode(const int64_t *w, int n, const int64_t *ref, uint8_t *out)
         int base = (int)byte * 8;
         unsigned bits = 0;
         if (base + 8 <= n)
+#ifdef __AVX2__  /* eight words compared in two instructions (-march=native on x86-64 machines of the last decade) */
+        {
+            __m256i a0 = _mm256_loadu_si256((const __m256i *)(w + base));
+            __m256i a1 = _mm256_loadu_si256((const __m256i *)(w + base + 4));
+            __m256i r0 = _mm256_loadu_si256((const __m256i *)(ref + base));
+            __m256i r1 = _mm256_loadu_si256((const __m256i *)(ref + base + 4));
+            unsigned eq = (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(a0, r0)))
+                          | (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(a1, r1))) << 4;
+            bits = ~eq & 0xffu;
+        }
+#else
             for (int l = 0; l < 8; l++)
                 bits |= (unsigned)(w[base + l] != ref[base + l]) << l;
+#endif
         else
             for (int l = 0; base + l < n; l++)
                 bits |= (unsigned)(w[base + l] != ref[base + l]) << l;
@@ -1516,7 +1531,11 @@ static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent
         a_extrapolate_lu_plus(zone, d, A->c, A->n, lower, upper, plus);
     else
         a_extrapolate_lu(zone, d, A->c, A->n, x->ceiling, x->ceiling);
-    a_forget_below(zone, d, A->c, A->n, x->grow_only, x->ngrow);
+    int grow[256], ngrow = 0;  /* the grow-only clocks of A: the others' entries are never read */
+    for (int g = 0; g < x->ngrow; g++)
+        if (A->in[x->grow_only[g]])
+            grow[ngrow++] = x->grow_only[g];
+    a_forget_below(zone, d, A->c, A->n, grow, ngrow);
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
