@@ -46,10 +46,17 @@ typedef struct {
     int64_t *high_gen, *high_head;    /* per rule: the first of its high side's interactions in program high_gen's
                                        * list (Prog's high) */
     inter_fn ask_inter;
-    /* what one program's writing leaves to the next, so that its lists are not grown again from nothing for each
-     * state: the memo's five lists (emptied when a program begins), region's path and its lists per depth (Prog's) */
-    L memo[5], path, high;
-    L **deep;
+    /* The lists a program's writing works in, kept from one program to the next so that they are not grown again
+     * from nothing for each state (write_program empties the memo's).  The memo of regions: rule, acc, result (each
+     * result: a list of [n, triples...]). */
+    L memo_key;              /* per memo entry: r, nacc, acc... */
+    L memo_off;              /* per memo entry: where its result starts in pool */
+    L memo_at;               /* per memo entry: where its key starts in memo_key */
+    L memo_prev;             /* per memo entry: the entry of the same rule before it, -1 for none */
+    L pool;                  /* results: count (-1: everywhere), then per region: n, triples... */
+    L high;                  /* pairs (enabled interaction, next pair of the same rule or -1): index_highs */
+    L path;                  /* the rules region is within (rule_region empties it) */
+    L **deep;                /* per depth of region's recursion: its three lists (depth_lists) */
     int64_t ndeep;
 } Tables;
 
@@ -60,10 +67,9 @@ static void tables_free(Tables *t)
         return;
     free(t->place), free(t->place_base), free(t->step), free(t->rule), free(t->blob);
     free(t->wbuf.words), free(t->wbuf.via), free(t->top_gen), free(t->top_idx);
-    free(t->chain_gen), free(t->chain_head), free(t->high_gen), free(t->high_head), free(t->high.a);
-    for (int k = 0; k < 5; k++)
-        free(t->memo[k].a);
-    free(t->path.a);
+    free(t->chain_gen), free(t->chain_head), free(t->high_gen), free(t->high_head);
+    free(t->memo_key.a), free(t->memo_off.a), free(t->memo_at.a), free(t->memo_prev.a), free(t->pool.a);
+    free(t->high.a), free(t->path.a);
     for (int64_t k = 0; k < t->ndeep; k++)
         if (t->deep[k])
             free(t->deep[k][0].a), free(t->deep[k][1].a), free(t->deep[k][2].a), free(t->deep[k]);
@@ -275,7 +281,7 @@ static int one_place(int64_t bits)
 
 /* -- one state's program ------------------------------------------------------------------------ */
 typedef struct {
-    const Tables *t;
+    Tables *t;             /* with the lists the program is written in (memo, high, path, deep) */
     const int64_t *s;
     int d;
     double *scratch;
@@ -283,19 +289,8 @@ typedef struct {
     int64_t *index;
     int64_t **row;
     int64_t nen;
-    /* memo of regions: rule, acc, result (each result: a list of [n, triples...]) */
-    L memo_key;            /* per memo entry: r, nacc, acc... */
-    L memo_off;            /* per memo entry: where its result starts in pool */
-    L memo_at;             /* per memo entry: where its key starts in memo_key */
-    L memo_prev;           /* per memo entry: the entry of the same rule before it, -1 for none */
-    L pool;                /* results: count (-1: everywhere), then per region: n, triples... */
     int64_t gen;           /* this program's number (Tables' top_gen) */
-    /* per rule, the enabled interactions on its high side, in engine order (built at the first region) */
-    int highs;             /* high (below) built for this program */
-    L high;                /* pairs (enabled interaction, next pair of the same rule or -1): index_highs */
-    L **deep;              /* per depth of region's recursion: its three lists (depth_lists) */
-    int64_t ndeep;
-    L path;                /* the rules region is within (rule_region empties it) */
+    int highs;             /* Tables' high built for this program (index_highs, at the first region) */
 } Prog;
 
 /* Some clock values meet every bound (i, j, c: x_i - x_j <= c, clock 0 the zero): no negative cycle among the
@@ -407,28 +402,27 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
 
 static int memo_find(Prog *g, int64_t r, const int64_t *acc, int64_t nacc)
 {
-    if (!nacc) {
-        const Tables *t = g->t;
+    const Tables *t = g->t;
+    if (!nacc)
         return t->top_gen[r] == g->gen ? (int)t->top_idx[r] : -1;
-    }
-    if (g->t->chain_gen[r] != g->gen)
+    if (t->chain_gen[r] != g->gen)
         return -1;
-    for (int64_t k = g->t->chain_head[r]; k >= 0; k = g->memo_prev.a[k]) {  /* the rule's entries alone */
-        const int64_t *key = g->memo_key.a + g->memo_at.a[k];
+    for (int64_t k = t->chain_head[r]; k >= 0; k = t->memo_prev.a[k]) {  /* the rule's entries alone */
+        const int64_t *key = t->memo_key.a + t->memo_at.a[k];
         if (key[1] == nacc && !memcmp(key + 2, acc, 3 * nacc * sizeof(int64_t)))
             return (int)k;
     }
     return -1;
 }
 
-/* For each rule, the enabled interactions whose high side names it, in engine order: a chain of g->high's pairs
- * from Tables' high_head, valid where high_gen is this program's (a rule's region is asked for once per acc:
+/* For each rule, the enabled interactions whose high side names it, in engine order: a chain of Tables' high pairs
+ * from its high_head, valid where high_gen is this program's (a rule's region is asked for once per acc:
  * scanning every enabled interaction each time cost a tenth of whole DALA's search; a table over every rule, cleared
  * for each program, cost 3 % more).  0, or -9 without memory. */
 static int index_highs(Prog *g)
 {
-    const Tables *t = g->t;
-    g->high.n = 0;
+    Tables *t = g->t;
+    t->high.n = 0;
     for (int64_t e = g->nen - 1; e >= 0; e--) {  /* each pushed in front of its rule's chain: engine order */
         const int64_t *hl = lows(g->row[e]);
         hl += 1 + hl[0];
@@ -438,9 +432,9 @@ static int index_highs(Prog *g)
                 seen = hl[1 + j] == r;  /* an interaction once per rule */
             if (seen)
                 continue;
-            if (lpush(&g->high, e) || lpush(&g->high, t->high_gen[r] == g->gen ? t->high_head[r] : -1))
+            if (lpush(&t->high, e) || lpush(&t->high, t->high_gen[r] == g->gen ? t->high_head[r] : -1))
                 return -9;
-            t->high_gen[r] = g->gen, t->high_head[r] = g->high.n / 2 - 1;
+            t->high_gen[r] = g->gen, t->high_head[r] = t->high.n / 2 - 1;
         }
     }
     g->highs = 1;
@@ -451,31 +445,32 @@ static int index_highs(Prog *g)
  * depth's are allocated once and kept from program to program (Tables' deep), at addresses that do not move. */
 static L *depth_lists(Prog *g, int64_t depth)
 {
-    if (depth >= g->ndeep) {
-        int64_t n = g->ndeep ? 2 * g->ndeep : 8;
+    Tables *t = g->t;
+    if (depth >= t->ndeep) {
+        int64_t n = t->ndeep ? 2 * t->ndeep : 8;
         while (n <= depth)
             n *= 2;
-        L **a = realloc(g->deep, n * sizeof(L *));
+        L **a = realloc(t->deep, n * sizeof(L *));
         if (!a)
             return NULL;
-        for (int64_t k = g->ndeep; k < n; k++)
+        for (int64_t k = t->ndeep; k < n; k++)
             a[k] = NULL;
-        g->deep = a, g->ndeep = n;
+        t->deep = a, t->ndeep = n;
     }
-    if (!g->deep[depth] && !(g->deep[depth] = calloc(3, sizeof(L))))
+    if (!t->deep[depth] && !(t->deep[depth] = calloc(3, sizeof(L))))
         return NULL;
-    L *l = g->deep[depth];
+    L *l = t->deep[depth];
     l[0].n = l[1].n = l[2].n = 0;
     return l;
 }
 
 static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *path, L *out, int *everywhere)
 {
-    const Tables *t = g->t;
+    Tables *t = g->t;
     *everywhere = 0;
     int hit = memo_find(g, r, acc0, nacc0);
     if (hit >= 0) {
-        const int64_t *v = g->pool.a + g->memo_off.a[hit];
+        const int64_t *v = t->pool.a + t->memo_off.a[hit];
         if (v[0] < 0) {
             *everywhere = 1;
             return 0;
@@ -536,8 +531,8 @@ static int region(Prog *g, int64_t r, const int64_t *acc0, int64_t nacc0, L *pat
         status = -9;
         goto done;
     }
-    for (int64_t h = t->high_gen[r] == g->gen ? t->high_head[r] : -1; h >= 0; h = g->high.a[2 * h + 1]) {
-        int64_t e = g->high.a[2 * h];
+    for (int64_t h = t->high_gen[r] == g->gen ? t->high_head[r] : -1; h >= 0; h = t->high.a[2 * h + 1]) {
+        int64_t e = t->high.a[2 * h];
         int64_t at = mine.n;  /* the high side's need, written in place after its count */
         if (lpush(&mine, 0) || lcat(&mine, acc.a, acc.n)) {
             status = -9;
@@ -584,7 +579,7 @@ store:
         /* keep the feasible ones, then remember: the memo's lists grow together or not at all (memo_find follows
          * a rule's chain from chain_head through memo_prev, and reads each entry's key at memo_at) */
         L kept = lists[2];
-        int64_t count = 0, key_n = g->memo_key.n, pool_n = g->pool.n, entries = g->memo_at.n;
+        int64_t count = 0, key_n = t->memo_key.n, pool_n = t->pool.n, entries = t->memo_at.n;
         int64_t prev = t->chain_gen[r] == g->gen ? t->chain_head[r] : -1;
         if (!all)
             for (int64_t at = 0; at < mine.n && !status; at += 1 + 3 * mine.a[at])
@@ -592,15 +587,15 @@ store:
                     status = lcat(&kept, mine.a + at, 1 + 3 * mine.a[at]);
                     count++;
                 }
-        if (status || lpush(&g->memo_key, r) || lpush(&g->memo_key, nacc0) || lcat(&g->memo_key, acc0, 3 * nacc0)
-            || lpush(&g->pool, all ? -1 : count) || lcat(&g->pool, kept.a, kept.n) || lpush(&g->memo_at, key_n)
-            || lpush(&g->memo_prev, prev) || lpush(&g->memo_off, pool_n)) {
-            g->memo_key.n = key_n, g->pool.n = pool_n, g->memo_at.n = g->memo_prev.n = entries;
+        if (status || lpush(&t->memo_key, r) || lpush(&t->memo_key, nacc0) || lcat(&t->memo_key, acc0, 3 * nacc0)
+            || lpush(&t->pool, all ? -1 : count) || lcat(&t->pool, kept.a, kept.n) || lpush(&t->memo_at, key_n)
+            || lpush(&t->memo_prev, prev) || lpush(&t->memo_off, pool_n)) {
+            t->memo_key.n = key_n, t->pool.n = pool_n, t->memo_at.n = t->memo_prev.n = entries;
             status = -9;
         } else {
             t->chain_gen[r] = g->gen, t->chain_head[r] = entries;
             if (!nacc0)
-                t->top_gen[r] = g->gen, t->top_idx[r] = g->memo_off.n - 1;
+                t->top_gen[r] = g->gen, t->top_idx[r] = t->memo_off.n - 1;
             if (all)
                 *everywhere = 1;
             else if (lcat(out, kept.a, kept.n))
@@ -615,8 +610,8 @@ done:
 
 static int rule_region(Prog *g, int64_t r, L *out, int *everywhere)
 {
-    g->path.n = 0;
-    return region(g, r, NULL, 0, &g->path, out, everywhere);
+    g->t->path.n = 0;  /* a rule asked for at the top: within no other */
+    return region(g, r, NULL, 0, &g->t->path, out, everywhere);
 }
 
 /* The step's successors of state s into b, grown as needed: their number, or < 0 (-9 memory; else the step's
@@ -656,9 +651,8 @@ static int write_program(void *ctx, Tables *t, const int64_t *s, int d, double *
         return -9;
     int status = 0;
     list_failed = 0;
-    Prog g = {t, s, d, scratch, NULL, NULL, 0, t->memo[0], t->memo[1], t->memo[2], t->memo[3], t->memo[4], ++t->gen,
-              0, t->high, t->deep, t->ndeep, t->path};
-    g.memo_key.n = g.memo_off.n = g.memo_at.n = g.memo_prev.n = g.pool.n = 0;
+    Prog g = {t, s, d, scratch, NULL, NULL, 0, ++t->gen, 0};
+    t->memo_key.n = t->memo_off.n = t->memo_at.n = t->memo_prev.n = t->pool.n = 0;
     int64_t *sidx = NULL;
     int64_t **srow = NULL;
     if (n < 0) {
@@ -914,8 +908,5 @@ out:
     if (list_failed && !status)
         status = -9;  /* the program lacks what a push could not add */
     free(sidx), free(srow), free(g.index), free(g.row);
-    t->memo[0] = g.memo_key, t->memo[1] = g.memo_off, t->memo[2] = g.memo_at, t->memo[3] = g.memo_prev;
-    t->memo[4] = g.pool, t->deep = g.deep, t->ndeep = g.ndeep, t->path = g.path;  /* kept for the next program */
-    t->high = g.high;
     return status;
 }
