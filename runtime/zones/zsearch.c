@@ -485,31 +485,30 @@ static uint64_t hash_bytes(const uint8_t *b, int64_t n)
  * then those words' values as zigzag varints, in order.  A state of whole DALA has 324 words of which about 26
  * differ from the first one's: 70 bytes instead of 327 as varints alone.  One encoding per state, so equal words
  * are equal bytes (intern compares and hashes the bytes). */
+/* Bit l set where w[l] differs from ref[l], for l < n (at most 8): no branch per word (most are equal). */
+static inline unsigned differ8(const int64_t *w, const int64_t *ref, int n)
+{
+#ifdef __AVX2__  /* eight words compared in two instructions (-march=native on x86-64 machines of the last decade) */
+    if (n == 8) {
+        __m256i a0 = _mm256_loadu_si256((const __m256i *)w), a1 = _mm256_loadu_si256((const __m256i *)(w + 4));
+        __m256i r0 = _mm256_loadu_si256((const __m256i *)ref), r1 = _mm256_loadu_si256((const __m256i *)(ref + 4));
+        unsigned eq = (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(a0, r0)))
+                      | (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(a1, r1))) << 4;
+        return ~eq & 0xffu;
+    }
+#endif
+    unsigned bits = 0;
+    for (int l = 0; l < n; l++)
+        bits |= (unsigned)(w[l] != ref[l]) << l;
+    return bits;
+}
+
 static int64_t encode(const int64_t *w, int n, const int64_t *ref, uint8_t *out)
 {
     int64_t nb = (n + 7) / 8, k = nb;
-    for (int64_t byte = 0; byte < nb; byte++) {
-        /* the byte of the bitmap without a branch per word (most are equal), then its words' values */
+    for (int64_t byte = 0; byte < nb; byte++) {  /* a byte of the bitmap, then its words' values */
         int base = (int)byte * 8;
-        unsigned bits = 0;
-        if (base + 8 <= n)
-#ifdef __AVX2__  /* eight words compared in two instructions (-march=native on x86-64 machines of the last decade) */
-        {
-            __m256i a0 = _mm256_loadu_si256((const __m256i *)(w + base));
-            __m256i a1 = _mm256_loadu_si256((const __m256i *)(w + base + 4));
-            __m256i r0 = _mm256_loadu_si256((const __m256i *)(ref + base));
-            __m256i r1 = _mm256_loadu_si256((const __m256i *)(ref + base + 4));
-            unsigned eq = (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(a0, r0)))
-                          | (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(a1, r1))) << 4;
-            bits = ~eq & 0xffu;
-        }
-#else
-            for (int l = 0; l < 8; l++)
-                bits |= (unsigned)(w[base + l] != ref[base + l]) << l;
-#endif
-        else
-            for (int l = 0; base + l < n; l++)
-                bits |= (unsigned)(w[base + l] != ref[base + l]) << l;
+        unsigned bits = differ8(w + base, ref + base, n - base < 8 ? n - base : 8);
         out[byte] = (uint8_t)bits;
         for (; bits; bits &= bits - 1) {
             int i = base + __builtin_ctz(bits);
@@ -1223,6 +1222,22 @@ static Parts parts(const int64_t *p)
     return q;
 }
 
+/* One successor of a program (the header's layout, after next state and interaction): its guard's bounds (need: n,
+ * triples), its resets (n, pairs) and the regions where priorities block it (nblocks of them, each n, triples). */
+typedef struct { const int64_t *need, *resets, *blocks; int64_t nblocks; } SuccEntry;
+
+/* Successor entry s read into e; the entry after it. */
+static const int64_t *succ_entry(const int64_t *s, SuccEntry *e)
+{
+    e->need = s + 2, e->resets = skip_bounds(e->need);
+    const int64_t *bl = e->resets + 1 + 2 * e->resets[0];
+    e->nblocks = *bl++;
+    e->blocks = bl;
+    for (int64_t k = 0; k < e->nblocks; k++)
+        bl = skip_bounds(bl);
+    return bl;
+}
+
 /* -- time passing (search.py's limits and elapse) --------------------------------------------------- */
 /* The pieces of z (a zone on A's clocks) after time passes at a state where it can (``pass``: that part of the
  * state's program), appended to out with their grown flags; returns the number of pieces, -2 for a wait that is not
@@ -1677,14 +1692,12 @@ static void act_steps(Act *a, const int64_t *succ, int *fr, int *nf)
     *nf = 0;
     const int64_t *s = succ + 1;
     for (int64_t t = 0; t < succ[0]; t++) {
-        const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
-        act_reads(a, nb + 1, nb[0], fr, nf);
-        int64_t nblocks = *bl++;
-        for (int64_t b = 0; b < nblocks; b++) {
-            act_reads(a, bl + 1, bl[0], fr, nf);
-            bl = skip_bounds(bl);
-        }
-        s = bl;
+        SuccEntry e;
+        s = succ_entry(s, &e);
+        act_reads(a, e.need + 1, e.need[0], fr, nf);
+        const int64_t *b = e.blocks;
+        for (int64_t k = 0; k < e.nblocks; k++, b = skip_bounds(b))
+            act_reads(a, b + 1, b[0], fr, nf);
     }
 }
 
@@ -1844,12 +1857,10 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             for (int64_t t = 0; t < nsucc && !status; t++) {
                 const int64_t *entry = s;
                 int64_t nxt = s[0], via = s[1];
-                const int64_t *nb = s + 2, *rs = skip_bounds(nb), *bl = rs + 1 + 2 * rs[0];
-                int64_t nblocks = *bl++;
-                const int64_t *blocks = bl;
-                for (int64_t b = 0; b < nblocks; b++)
-                    bl = skip_bounds(bl);
-                s = bl;
+                SuccEntry e;
+                s = succ_entry(s, &e);
+                const int64_t *nb = e.need, *rs = e.resets, *blocks = e.blocks;
+                int64_t nblocks = e.nblocks;
                 if (keep && in_list(keep, via) != (round == 0))
                     continue;
                 a_copy(met, here, d, ha.c, ha.n);
@@ -2053,11 +2064,8 @@ int64_t zs_program(void *p, int64_t state, int64_t *out, int64_t cap)
     for (int64_t t = 0; t < n; t++) {
         if (s[0] < 0 && resolve(x, state, (int64_t *)s) < 0)
             return -2;
-        const int64_t *rs = skip_bounds(s + 2), *bl = rs + 1 + 2 * rs[0];
-        int64_t nb = *bl++;
-        for (int64_t b = 0; b < nb; b++)
-            bl = skip_bounds(bl);
-        s = bl;
+        SuccEntry e;
+        s = succ_entry(s, &e);
     }
     int64_t len = s - pr;
     if (len <= cap)
