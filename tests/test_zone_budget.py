@@ -16,11 +16,11 @@ import genom2bip.verify.zones as zones
 from genom2bip.loading import TimeSettings
 from genom2bip.verify import build_model
 from genom2bip.verify.results import Verdict
-from runtime.zones.csearch import Nodes
 from genom2bip.verify.options import Listener, SearchOptions
 from genom2bip.verify.zones import check_timing
 from platformkit import FIXTURES, ROOT, platform_file
 from runtime.explore import Progress
+from runtime.zones.csearch import Nodes
 
 ANOMALY = FIXTURES / "Anomaly.gen"
 #: mid's codel may take 1 s on a 20 ms task: the response times search for minutes, far past the budget below.
