@@ -26,7 +26,6 @@ import difflib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import networkx as nx
 import yaml
 
 from genom2bip import ir
@@ -296,6 +295,8 @@ def check_rules(rules: list[Rule], description: ir.Description, reporter: Report
                 reporter.error(r.span, f"rule {r.id} contradicts {other.id} ({other.origin}): "
                                f"{r.service[0]}.{r.service[1]} could never start",
                                f"{r.describe()}, but {other.describe()}")
+    import networkx as nx  # here, not at the top: every command reads rules, few have rules that could cycle
+
     graph = nx.DiGraph()
     for r in rules:
         if r.kind in ("requires", "requires_running"):

@@ -17,7 +17,7 @@ SHOWN_REFUTED = 5
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from runtime.compositional.analysis import DEFAULT_SOLVER
+    from runtime.compositional.solver import DEFAULT_SOLVER
     group = parser.add_argument_group("compositional deadlock analysis (--method compositional or both)")
     group.add_argument("--method", choices=METHODS, default="explore",
                        help="deadlock-freedom by exploration (default), by invariants and SAT (compositional: "

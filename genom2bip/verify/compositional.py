@@ -17,7 +17,7 @@ def check_deadlock_compositional(model: Model, options: SearchOptions | None = N
                                  listener: Listener | None = None) -> CompositionalResult:
     """Analyse, decide the candidates (``options.check_states`` each), and say whether a deadlock is reachable."""
     from runtime.compositional import analyse, decide
-    from runtime.compositional.analysis import DEFAULT_SOLVER
+    from runtime.compositional.solver import DEFAULT_SOLVER
 
     from genom2bip.verify.search import extern_bindings
 

@@ -30,8 +30,7 @@ from runtime.compositional.restricted import restricted_reach
 from runtime.compositional.traps import TrapFinder, TrapStore
 from runtime.engine.flatten import FlatSystem
 
-#: The SAT solver used unless told otherwise (bench/compositional_bench.py measures the others).
-DEFAULT_SOLVER = "cadical153"
+from runtime.compositional.solver import DEFAULT_SOLVER
 #: More candidates than this and the analysis stops listing them (verdict unknown).
 MAX_CANDIDATES = 64
 
