@@ -31,6 +31,9 @@ FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w
 LEVELS = ("0", "1", "2", "3")
 #: Added for the multi-threaded search (search.c's PARALLEL: per-thread scratch, atomic shared counters).
 PARALLEL_FLAGS = ("-DPARALLEL", "-pthread")
+#: Added for a step called one state at a time (the zone search's, a trace's, the agreement tests'): search.c's
+#: STEP_ONLY leaves its store and search out, which halves a small model's compile at -O0.
+STEP_FLAGS = ("-DSTEP_ONLY",)
 #: Added when the C text is dumped (GENOM2BIP_DUMP): line tables for gdb and perf; the code is the same.
 DEBUG_FLAGS = ("-g",)
 
@@ -76,13 +79,14 @@ def compiler() -> str | None:
 STEP_LEVEL = "0"
 
 
-def flags(parallel: bool = False, level: str | None = None) -> tuple[str, ...]:
+def flags(parallel: bool = False, level: str | None = None, step_only: bool = False) -> tuple[str, ...]:
     """gcc's flags: :data:`FLAGS` at ``level`` (None: -O2), ``GENOM2BIP_OPT``'s level if set (whatever the use),
-    the threaded build's if ``parallel``."""
+    the threaded build's if ``parallel``, the step's alone (:data:`STEP_FLAGS`) if ``step_only``."""
     level = os.environ.get("GENOM2BIP_OPT", "").strip() or level  # forced()
     if level and level not in LEVELS:
         raise BuildError(f"GENOM2BIP_OPT={level!r}: expected one of {', '.join(LEVELS)} (gcc's -O level)")
     base = tuple(f"-O{level}" if f == "-O2" and level else f for f in FLAGS)
+    base += STEP_FLAGS if step_only else ()
     return base + PARALLEL_FLAGS if parallel else base
 
 
@@ -95,26 +99,28 @@ def _key(source: str, cc: str, opts: tuple[str, ...], dump: Path | None) -> str:
     return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
 
-def cached(source: str, cc: str, parallel: bool = False, level: str | None = None) -> Path | None:
+def cached(source: str, cc: str, parallel: bool = False, level: str | None = None,
+           step_only: bool = False) -> Path | None:
     """The library :func:`build` would return for these arguments if it is in the cache already, else None."""
     if os.environ.get(DUMP_ENV):  # a dumped step is built from the dump, with line tables
         return None
-    opts = flags(parallel, level)
+    opts = flags(parallel, level, step_only)
     lib = cache_dir() / f"step-{_key(source, cc, opts, None)[:24]}.so"
     return lib if lib.exists() and lib.with_suffix(".c").exists() else None
 
 
 def build(source: str, cc: str, parallel: bool = False, what: str = "compiled step", level: str | None = None,
-          told: bool = True) -> Path:
+          told: bool = True, step_only: bool = False) -> Path:
     """The shared library for ``source``, compiled now or found in the cache; ``parallel``: the threaded build.
 
     The C text is kept next to the library (``step-<key>.c``) and compiled from there, so a profiler or a
     debugger finds the lines it was built from (``level``: gcc's, see :func:`flags`).  With ``GENOM2BIP_DUMP=DIR``
     it is written to DIR instead
     (named after ``what``) and compiled from that file with ``-g``: gdb and perf then show its lines.
-    ``told``: :data:`notice` hears of the compile (not from a compile on another thread).
+    ``told``: :data:`notice` hears of the compile (not from a compile on another thread); ``step_only``: the step
+    without the search (:data:`STEP_FLAGS`).
     """
-    opts = flags(parallel, level)
+    opts = flags(parallel, level, step_only)
     dump = dumped(source, what, ".c")
     if dump is not None:
         opts += DEBUG_FLAGS
@@ -205,7 +211,9 @@ def load(path: Path) -> ctypes.CDLL:
         "c_table_size": (ctypes.c_uint64, []), "c_bits_per_state": (i32, []), "c_parallel": (i32, []),
     }
     for name, (res, args) in sig.items():
-        fn = getattr(lib, name)
+        fn = getattr(lib, name, None)
+        if fn is None:  # a step built without the search (STEP_FLAGS) has the step's entry points only
+            continue
         fn.restype = res
         fn.argtypes = args
     return lib

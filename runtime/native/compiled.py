@@ -117,10 +117,11 @@ class CompiledSpace:
         if parallel is not None:
             self.parallel = parallel
         model = generate(self.space, self.choices, self.widths, self.monitors, self.wide_numbers)
-        faster = None if self.searching else cached(model.source, self.cc, self.parallel)
+        faster = None if self.searching else (cached(model.source, self.cc, self.parallel)
+                                              or cached(model.source, self.cc, self.parallel, step_only=True))
         self.optimised = self.searching or faster is not None or forced()
         self.lib = load(faster or build(model.source, self.cc, self.parallel, self._what(),
-                                        None if self.searching else STEP_LEVEL))
+                                        None if self.searching else STEP_LEVEL, step_only=not self.searching))
         self.width, self.source, self.bits = model.width, model.source, model.bits
         self.model = model
         self._index = {}  # numbered by this build
@@ -139,7 +140,7 @@ class CompiledSpace:
         def work() -> None:
             start = time.perf_counter()
             try:
-                done.append((build(source, self.cc, parallel, self._what(), None, told=False),
+                done.append((build(source, self.cc, parallel, self._what(), None, told=False, step_only=True),
                              time.perf_counter() - start))
             except (BuildError, OSError):
                 done.append(None)  # the -O0 build goes on serving

@@ -34,6 +34,7 @@ enum { ST_EXACT, ST_COMPACT, ST_BITSTATE };
 #define SEEN (-3)           /* add(): a lossy store already holds the state, which has no number here */
 #define BITK 3              /* bits per state in the bitstate store (SPIN's -k3) */
 
+#ifndef STEP_ONLY
 static int KIND;                    /* the store: ST_EXACT, ST_COMPACT or ST_BITSTATE */
 static int NWORK = 1;               /* threads of the breadth-first search */
 static uint64_t *STORE;             /* packed states numbered WBASE.. (exact: all of them, WBASE 0) */
@@ -48,20 +49,23 @@ static uint64_t *FTAB;              /* compact: fingerprints (0 free); bitstate:
 static uint64_t TSIZE;              /* slots of TABLE or FTAB; bits of the bitstate array */
 static int64_t *DEAD;
 static int64_t NDEAD, DCAP;
+#endif
 static TL V *SUCC;
 static TL VIA_T *SVIA;              /* successor i: the number of its interaction */
 static TL uint32_t *SSRC;           /* successor i: its interaction's source */
 static TL uint8_t *SBAD; /* successor i violates an observer */
 static TL uint64_t *PK;
 static TL int SCAP;
+static TL int PROPER;       /* the last expansion was of a proper ample set */
+#ifndef STEP_ONLY
 static int64_t VIOL = -1;
 static int64_t EXTRA; /* bytes of the depth-first stack and marks */
 static int POR;             /* reduce: expand an ample set where one is proper */
-static TL int PROPER;       /* the last expansion was of a proper ample set */
 static TL int64_t NREDUCED; /* states expanded with a proper ample set, by this thread */
 static int64_t REDUCED_ALL, TRANS_ALL;
 static int64_t LEVEL_END;  /* breadth-first: the first number past the current level */
 static TL uint64_t AMPLE[SW]; /* the sources of the last proper ample set */
+#endif
 
 #ifdef PARALLEL
 static pthread_mutex_t LOCKM = PTHREAD_MUTEX_INITIALIZER;
@@ -75,6 +79,7 @@ static pthread_barrier_t BAR;
 #define RELAX() ((void)0)
 #endif
 
+#ifndef STEP_ONLY
 static inline int same(const uint64_t *a, const uint64_t *b) {
     for (int i = 0; i < NW; i++) if (a[i] != b[i]) return 0;
     return 1;
@@ -118,11 +123,14 @@ static int64_t memory(void) {
     return CAP * (4 + (int64_t)sizeof(VIA_T) + (OUTK ? 2 : 0)) + WCAP * NW * 8 + table + DCAP * 8 + EXTRA;
 }
 
+#endif
+
 static void free_scratch(void) {
     free(SUCC); free(SVIA); free(SSRC); free(PK); free(SBAD);
     SUCC = 0; SVIA = 0; SSRC = 0; PK = 0; SBAD = 0; SCAP = 0;
 }
 
+#ifndef STEP_ONLY
 static void c_release(void) {
     free(STORE); free(PARENT); free(VIA); free(OUTK); free(TABLE); free(FTAB); free(DEAD);
     free_scratch();
@@ -301,6 +309,8 @@ static int held(const uint64_t *w) {
     return 1;
 }
 
+#endif
+
 static void ensure_succ(int n) {
     if (n <= SCAP) return;
     int cap = SCAP ? SCAP : 64;
@@ -315,6 +325,7 @@ static void ensure_succ(int n) {
 
 #define MAXSUCC 65536
 
+#ifndef STEP_ONLY
 /* ---- partial-order reduction (tables from runtime.native.por) ---- */
 
 static inline int has(const uint64_t *b, int i) { return (int)(b[i >> 6] >> (i & 63) & 1); }
@@ -381,13 +392,17 @@ static int ample(int n, uint32_t *isrc, uint32_t *imask, const uint64_t *bad) {
     return k;
 }
 
+#endif
+
 /* every successor of s (engine slots, then request counts): interactions, then the odometer over outcomes */
 static int expand(const V *s, int reduce) {
     uint32_t isrc[MAXI], imask[MAXI];
     CUR = s;
     int ni = enabled(s, isrc, imask);
     PROPER = 0;
+#ifndef STEP_ONLY
     if (reduce && POR_ON) ni = ample(ni, isrc, imask, 0);
+#endif
     int cnt = 0;
     for (int i = 0; i < ni; i++) {
         SL = 0;
@@ -409,6 +424,7 @@ static int expand(const V *s, int reduce) {
     return cnt;
 }
 
+#ifndef STEP_ONLY
 static int initials(void) {
     int cnt = 0;
     SL = 0;
@@ -504,19 +520,41 @@ static int64_t label_of(uint32_t src, VIA_T via) {
     return NLABELS + (int64_t)via;
 }
 
-/* ---- entry points called from Python ---- */
+#endif
+
+/* ---- entry points called from Python: a step's (every build), then the search's (not in a STEP_ONLY build,
+   which the zone search and the traces call one state at a time, and which compiles in about half the time) ---- */
 
 int c_width(int slot) { return WIDTHS[slot]; }
 int c_words(void) { return NW; }
 int c_state_width(void) { return W; }
+int c_via_bits(void) { return VIA_BITS; }
+int c_por_available(void) { return POR_ON; }
+
+/* successors of one explorer state as packing then unpacking them leaves them (dead variables reset, every field
+   checked; canon writes that without the packed words): the agreement tests' view, and the zone search's step */
+int c_successors(const V *s, V *out, int64_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
+    BUDGET = budget;
+    ensure_succ(1);
+    if (setjmp(JB)) { *ecode = ECODE; *earg = EARG; return -1; }
+    int n = expand(s, 0);
+    if (n > max) { *ecode = E_FULL; return -1; }
+    for (int i = 0; i < n; i++) {
+        canon(SUCC + (size_t)i * W, out + (size_t)i * W);
+        if (via) via[i] = (int64_t)SVIA[i];
+    }
+    return n;
+}
+
+#ifdef STEP_ONLY
+void c_free(void) { free_scratch(); }
+#else
 int64_t c_nstates(void) { return NSTATES; }
 int64_t c_parent(int64_t id) { return PARENT[id] == UINT32_MAX ? -1 : (int64_t)PARENT[id]; }
 int64_t c_via(int64_t id) { return VIA[id] == VIA_NONE ? -1 : (int64_t)VIA[id]; }
-int c_via_bits(void) { return VIA_BITS; }
 int64_t c_deadlock(int64_t i) { return DEAD[i]; }
 void c_free(void) { c_release(); }
 void c_set_por(int on) { POR = on && POR_ON; }
-int c_por_available(void) { return POR_ON; }
 int64_t c_reduced(void) { return REDUCED_ALL; }
 uint64_t c_table_size(void) { return TSIZE; }
 int c_bits_per_state(void) { return BITK; }
@@ -548,21 +586,6 @@ void c_state(int64_t id, V *out) {
     memcpy(out, S, W * sizeof *S);
     free(S);
     free(path);
-}
-
-/* successors of one explorer state as packing then unpacking them leaves them (dead variables reset, every field
-   checked; canon writes that without the packed words): the agreement tests' view, and the zone search's step */
-int c_successors(const V *s, V *out, int64_t *via, int max, int64_t budget, int *ecode, int64_t *earg) {
-    BUDGET = budget;
-    ensure_succ(1);
-    if (setjmp(JB)) { *ecode = ECODE; *earg = EARG; return -1; }
-    int n = expand(s, 0);
-    if (n > max) { *ecode = E_FULL; return -1; }
-    for (int i = 0; i < n; i++) {
-        canon(SUCC + (size_t)i * W, out + (size_t)i * W);
-        if (via) via[i] = (int64_t)SVIA[i];
-    }
-    return n;
 }
 
 static void push_dead(int64_t id) {
@@ -947,3 +970,4 @@ done:
     r->memory = memory();
     return r->status;
 }
+#endif  /* STEP_ONLY */
