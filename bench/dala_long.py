@@ -118,7 +118,7 @@ def module_counts() -> dict[str, int]:
     out = {}
     for m in MODULES:
         package, root = dala_model([m])
-        cs, why = compile_space(StateSpace(package, root))
+        cs, why = compile_space(StateSpace(package, root), search=True)
         if cs is None:
             raise RuntimeError(why)
         r = cs.explore(max_seconds=120)
@@ -135,7 +135,7 @@ def pair_check() -> str:
     from runtime.native.compiled import compile_space
 
     package, root = dala_model(["POM", "Aspect"])
-    cs, _ = compile_space(StateSpace(package, root))
+    cs, _ = compile_space(StateSpace(package, root), search=True)
     return f"{cs.explore(max_seconds=60).states:,}"
 
 
@@ -144,7 +144,7 @@ def full_search(package, root, seconds: float) -> LongRow:
     from runtime.explore import StateSpace
     from runtime.native.compiled import compile_space
 
-    cs, _ = compile_space(StateSpace(package, root))
+    cs, _ = compile_space(StateSpace(package, root), search=True)
     r = cs.explore(max_seconds=seconds, store="compact", max_bytes=6 << 30)
     return LongRow("deadlock", "compiled, no POR, compact store", "open (time)", r.complete, r.states, r.depth,
                    r.memory / 2**20, r.seconds)

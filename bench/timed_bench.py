@@ -44,7 +44,7 @@ def explored(package, root: str, max_states: int) -> tuple[str, float]:
 
 
 def explored_compiled(package, root: str, max_states: int) -> tuple[str, float]:
-    cs, why = compile_space(StateSpace(package, root, {}, None, True, set()))
+    cs, why = compile_space(StateSpace(package, root, {}, None, True, set()), search=True)
     if cs is None:
         return why, 0.0
     return _figures(cs.explore(max_states))

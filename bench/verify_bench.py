@@ -156,7 +156,7 @@ def run_compiled(package, root: str, seconds: float, por: bool = False,
     """
     from runtime.native.compiled import compile_space
 
-    cs, note = compile_space(StateSpace(package, root))
+    cs, note = compile_space(StateSpace(package, root), search=True)
     if cs is None:
         print(f"compiled explorer: {note}", file=sys.stderr)
         return 0, 0.0, 0.0, False

@@ -13,7 +13,7 @@ needs_cc = pytest.mark.skipif(compiler() is None, reason="no C compiler (gcc) on
 
 
 def compiled(space: StateSpace) -> CompiledSpace:
-    cs, note = compile_space(space)
+    cs, note = compile_space(space, search=True)
     assert cs is not None, note
     return cs
 

@@ -189,7 +189,7 @@ def _compiled(space, options: SearchOptions, listener: Listener, notes: Notes):
     """``(result, compiled space)`` of the compiled search, or None (noted) where it cannot run."""
     from runtime.native.compiled import Diverged, compile_space
 
-    cs, why = compile_space(space, extern_bindings(options.externs))
+    cs, why = compile_space(space, extern_bindings(options.externs), search=True)
     if cs is None:
         notes(why)
         return None

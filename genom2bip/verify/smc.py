@@ -146,7 +146,7 @@ def simulator(model: Model, config: SimConfig, externs: str | None = None,
     from runtime.native.compiled import compile_space
 
     space = StateSpace(model.package, model.root, _externs(externs), None, True, set())
-    step, why = compile_space(space) if compiled else (None, "")
+    step, why = compile_space(space, search=True) if compiled else (None, "")
     sim = Simulator(space, step, config)
     return sim, "; ".join(note for note in (why, sim.no_leaps) if note)
 

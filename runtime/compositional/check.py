@@ -83,7 +83,7 @@ def _breadth_first(space: StateSpace, externs, budget: int | None, use_compiled:
     (2,000,000 states unless ``budget``), else the Python one (20,000)."""
     from runtime.native.compiled import Diverged, compile_space
 
-    compiled = compile_space(space, externs)[0] if use_compiled else None
+    compiled = compile_space(space, externs, search=True)[0] if use_compiled else None
     if compiled is not None:
         limit = COMPILED_BFS_BUDGET if budget is None else budget
         try:

@@ -54,14 +54,16 @@ def exploration_choices(package, externs: dict[str, Any] | None) -> dict[str, Ch
 
 
 def compile_space(space: StateSpace, externs: dict[str, Any] | None = None, monitors=(), wide_numbers: bool = False,
-                  wide_fields: bool = False) -> tuple[CompiledSpace | None, str]:
+                  wide_fields: bool = False, search: bool = False) -> tuple[CompiledSpace | None, str]:
     """The compiled step and search of ``space``, or None and why not (one line).
 
     ``monitors`` are ``(Monitor, statics)`` safety observers the search steps with every interaction;
     ``wide_numbers`` stores 64-bit interaction numbers even when 32 bits hold them (what tests and benches
     compare the two layouts with); ``wide_fields`` gives every int without a declared domain 64 bits from the
     start, for a step called one state at a time (whose packed size does not matter): it never widens, so it
-    is generated and compiled once instead of once per field that outgrows its first bits.
+    is generated and compiled once instead of once per field that outgrows its first bits; ``search``: the caller
+    runs the C search (:meth:`CompiledSpace.explore`), so the library is built with it at once, at the search's
+    level, rather than the step alone first (what a caller stepping one state at a time gets).
     """
     if space.engine.invariants:
         return None, "the compiled explorer does not check atom invariants: exploring with the Python step"
@@ -69,6 +71,7 @@ def compile_space(space: StateSpace, externs: dict[str, Any] | None = None, moni
     if cc is None:
         return None, "no C compiler on PATH (gcc or $CC): exploring with the Python step"
     cs = CompiledSpace(space, exploration_choices(space.engine.flat.package, externs), cc, monitors, wide_numbers)
+    cs.searching = search
     if wide_fields:
         cs.widths.update({k: 64 for k, s in enumerate(space.slots) if s.kind == "int" and s.domain is None})
     try:

@@ -38,7 +38,7 @@ def compiled_check(space, item, externs=None, progress=None, max_states=None, ma
         except PromelaError:
             return None
         monitors.append((minimal(monitor), statics))
-    cs, _ = compile_space(space, externs, monitors)
+    cs, _ = compile_space(space, externs, monitors, search=True)
     if cs is None:
         return None
     start = time.perf_counter()
