@@ -26,7 +26,7 @@ from runtime.cachefiles import cache_dir, write_atomic
 from runtime.engine.source import DUMP_ENV, dumped
 
 HERE = Path(__file__).parent
-FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w")
+FLAGS = ("-O2", "-march=native", "-fPIC", "-shared", "-fno-strict-aliasing", "-w", "-pipe")
 #: GENOM2BIP_OPT's values: gcc's -O levels.
 LEVELS = ("0", "1", "2", "3")
 #: Added for the multi-threaded search (search.c's PARALLEL: per-thread scratch, atomic shared counters).
