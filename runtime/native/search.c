@@ -34,6 +34,47 @@ enum { ST_EXACT, ST_COMPACT, ST_BITSTATE };
 #define SEEN (-3)           /* add(): a lossy store already holds the state, which has no number here */
 #define BITK 3              /* bits per state in the bitstate store (SPIN's -k3) */
 
+static TL V *SUCC;
+static TL VIA_T *SVIA;              /* successor i: the number of its interaction */
+static TL uint32_t *SSRC;           /* successor i: its interaction's source */
+static TL uint8_t *SBAD; /* successor i violates an observer */
+static TL uint64_t *PK;
+static TL int SCAP;
+static TL int PROPER;       /* the last expansion was of a proper ample set */
+
+#ifdef PARALLEL
+static pthread_mutex_t LOCKM = PTHREAD_MUTEX_INITIALIZER;
+static pthread_barrier_t BAR;
+#define LOCK() pthread_mutex_lock(&LOCKM)
+#define UNLOCK() pthread_mutex_unlock(&LOCKM)
+#define RELAX() __builtin_ia32_pause()
+#else
+#define LOCK() ((void)0)
+#define UNLOCK() ((void)0)
+#define RELAX() ((void)0)
+#endif
+
+static void free_scratch(void) {
+    free(SUCC); free(SVIA); free(SSRC); free(PK); free(SBAD);
+    SUCC = 0; SVIA = 0; SSRC = 0; PK = 0; SBAD = 0; SCAP = 0;
+}
+
+static void ensure_succ(int n) {
+    if (n <= SCAP) return;
+    int cap = SCAP ? SCAP : 64;
+    while (cap < n) cap *= 2;
+    SUCC = realloc(SUCC, (size_t)cap * W * sizeof *SUCC);
+    SVIA = realloc(SVIA, (size_t)cap * sizeof *SVIA);
+    SSRC = realloc(SSRC, (size_t)cap * sizeof *SSRC);
+    PK = realloc(PK, (size_t)cap * NW * sizeof *PK);
+    SBAD = realloc(SBAD, (size_t)cap);
+    SCAP = cap;
+}
+
+#define MAXSUCC 65536
+
+/* ---- what the search adds: its store and bounds, hashing, partial-order reduction (not in a STEP_ONLY build) ---- */
+
 #ifndef STEP_ONLY
 static int KIND;                    /* the store: ST_EXACT, ST_COMPACT or ST_BITSTATE */
 static int NWORK = 1;               /* threads of the breadth-first search */
@@ -49,15 +90,6 @@ static uint64_t *FTAB;              /* compact: fingerprints (0 free); bitstate:
 static uint64_t TSIZE;              /* slots of TABLE or FTAB; bits of the bitstate array */
 static int64_t *DEAD;
 static int64_t NDEAD, DCAP;
-#endif
-static TL V *SUCC;
-static TL VIA_T *SVIA;              /* successor i: the number of its interaction */
-static TL uint32_t *SSRC;           /* successor i: its interaction's source */
-static TL uint8_t *SBAD; /* successor i violates an observer */
-static TL uint64_t *PK;
-static TL int SCAP;
-static TL int PROPER;       /* the last expansion was of a proper ample set */
-#ifndef STEP_ONLY
 static int64_t VIOL = -1;
 static int64_t EXTRA; /* bytes of the depth-first stack and marks */
 static int POR;             /* reduce: expand an ample set where one is proper */
@@ -65,21 +97,7 @@ static TL int64_t NREDUCED; /* states expanded with a proper ample set, by this 
 static int64_t REDUCED_ALL, TRANS_ALL;
 static int64_t LEVEL_END;  /* breadth-first: the first number past the current level */
 static TL uint64_t AMPLE[SW]; /* the sources of the last proper ample set */
-#endif
 
-#ifdef PARALLEL
-static pthread_mutex_t LOCKM = PTHREAD_MUTEX_INITIALIZER;
-static pthread_barrier_t BAR;
-#define LOCK() pthread_mutex_lock(&LOCKM)
-#define UNLOCK() pthread_mutex_unlock(&LOCKM)
-#define RELAX() __builtin_ia32_pause()
-#else
-#define LOCK() ((void)0)
-#define UNLOCK() ((void)0)
-#define RELAX() ((void)0)
-#endif
-
-#ifndef STEP_ONLY
 static inline int same(const uint64_t *a, const uint64_t *b) {
     for (int i = 0; i < NW; i++) if (a[i] != b[i]) return 0;
     return 1;
@@ -123,14 +141,6 @@ static int64_t memory(void) {
     return CAP * (4 + (int64_t)sizeof(VIA_T) + (OUTK ? 2 : 0)) + WCAP * NW * 8 + table + DCAP * 8 + EXTRA;
 }
 
-#endif
-
-static void free_scratch(void) {
-    free(SUCC); free(SVIA); free(SSRC); free(PK); free(SBAD);
-    SUCC = 0; SVIA = 0; SSRC = 0; PK = 0; SBAD = 0; SCAP = 0;
-}
-
-#ifndef STEP_ONLY
 static void c_release(void) {
     free(STORE); free(PARENT); free(VIA); free(OUTK); free(TABLE); free(FTAB); free(DEAD);
     free_scratch();
@@ -309,23 +319,6 @@ static int held(const uint64_t *w) {
     return 1;
 }
 
-#endif
-
-static void ensure_succ(int n) {
-    if (n <= SCAP) return;
-    int cap = SCAP ? SCAP : 64;
-    while (cap < n) cap *= 2;
-    SUCC = realloc(SUCC, (size_t)cap * W * sizeof *SUCC);
-    SVIA = realloc(SVIA, (size_t)cap * sizeof *SVIA);
-    SSRC = realloc(SSRC, (size_t)cap * sizeof *SSRC);
-    PK = realloc(PK, (size_t)cap * NW * sizeof *PK);
-    SBAD = realloc(SBAD, (size_t)cap);
-    SCAP = cap;
-}
-
-#define MAXSUCC 65536
-
-#ifndef STEP_ONLY
 /* ---- partial-order reduction (tables from runtime.native.por) ---- */
 
 static inline int has(const uint64_t *b, int i) { return (int)(b[i >> 6] >> (i & 63) & 1); }
