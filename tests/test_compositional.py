@@ -198,3 +198,24 @@ def test_the_papers_potential_deadlock_is_no_deadlock_of_our_ndd_model():
     # ... and not reachable either: a service's control is ACTIVE only while its activity has left ETHER
     trap = refuting_trap(analysis, state)
     assert trap is not None and trap.startswith("an initially marked trap stays marked")
+
+
+def test_the_package_loads_its_exports_on_first_use_and_refuses_a_name_it_does_not_export():
+    # runtime/compositional/__init__.py loads analysis, check and traps when a name is first asked for (so that the
+    # command line reads the solver's name without networkx and python-sat); a name it does not export is refused.
+    import subprocess
+    import sys
+
+    import runtime.compositional as package
+    from runtime.compositional import analysis, check, traps
+
+    assert (package.analyse, package.decide, package.TrapStore) == (analysis.analyse, check.decide, traps.TrapStore)
+    with pytest.raises(AttributeError, match="module 'runtime.compositional' has no attribute 'analyze'"):
+        package.analyze  # noqa: B018
+    with pytest.raises(ImportError, match="cannot import name 'analyze' from 'runtime.compositional'"):
+        from runtime.compositional import analyze  # noqa: F401
+    probe = ("import sys, runtime.compositional.solver as s; "
+             "print(s.DEFAULT_SOLVER, 'networkx' in sys.modules, 'pysat' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).resolve().parents[1]).stdout
+    assert out.split() == ["cadical153", "False", "False"]
