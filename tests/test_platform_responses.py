@@ -129,6 +129,38 @@ def test_merging_zones_changes_no_maximum_and_no_verdict(tmp_path):
     assert merged, "no case merged a zone: the comparison says nothing"
 
 
+def test_pruning_below_covered_nodes_changes_no_answer(tmp_path, monkeypatch):
+    # A node expanded before a larger zone of its state came is covered then, and what lies below it is not
+    # expanded further unless it covers a newcomer (ZoneExplorer.prune, on by default): every maximum, observer in
+    # error, response time and lasso's verdict must be those of the search that expands every node it keeps.
+    import genom2bip.verify.zones as zones
+    from runtime.zones.search import ZoneExplorer
+
+    def answers(model) -> list:
+        return [(r.observer, r.verdict, getattr(r, "value_ticks", None), getattr(r, "unbounded", None))
+                for r in check_timing(model, ("overrun", "latency"), responses=True)]
+
+    seen = {"fewer": 0, "pruned": 0, "revived": 0}
+    for name, gen, defines, platform, mission in CASES:
+        model = model_of(tmp_path, gen, defines, platform, mission)
+        full = ZoneExplorer(model.package, model.root, prune=False).explore()
+        pruned = ZoneExplorer(model.package, model.root).explore()
+        assert full.complete and pruned.complete, name
+        assert full.pruned == full.revived == 0, name
+        assert {c: v for c, (v, _) in pruned.maxima.items()} == {c: v for c, (v, _) in full.maxima.items()}, name
+        assert set(pruned.violations) == set(full.violations), name
+        assert pruned.discrete == full.discrete, name
+        seen["fewer"] += pruned.states < full.states
+        seen["pruned"] += pruned.pruned > 0
+        seen["revived"] += pruned.revived > 0
+        with_pruning = answers(model)
+        with monkeypatch.context() as m:
+            m.setattr(zones, "explorer", lambda model, options=None: ZoneExplorer(model.package, model.root,
+                                                                               prune=False))
+            assert answers(model) == with_pruning, name
+    assert all(seen.values()), f"the cases say nothing of some part of pruning: {seen}"
+
+
 def test_keeping_only_upper_bounds_of_watched_clocks_changes_no_maximum_and_no_verdict(tmp_path):
     # The observers' and response times' clocks, which no guard reads, keep their upper bounds only
     # (model.py's grow_only): the maxima and the observers in error must be those of the search that keeps

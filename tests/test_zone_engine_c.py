@@ -15,12 +15,13 @@ pytestmark = pytest.mark.skipif(library() is None, reason="the C zone search nee
 def _node(n) -> tuple:
     zone = None if n.stored is None else n.stored.tobytes()
     own = None if n.own is None else n.own.tobytes()
-    return (n.state, zone, own, n.parent, n.via, sorted(n.guard), n.grown, n.covered, n.by, n.members, n.expanded)
+    return (n.state, zone, own, n.parent, n.via, sorted(n.guard), n.grown, n.covered, n.by, n.members, n.expanded,
+            n.dead)
 
 
 def _explore(model, engine: str, **kw):
     z = ZoneExplorer(model.package, model.root, engine=engine, merge=kw.pop("merge", True),
-                     local_ceilings=kw.pop("local", False))
+                     local_ceilings=kw.pop("local", False), prune=kw.pop("prune", True))
     return z, z.explore(**kw)
 
 
@@ -37,14 +38,15 @@ def _both_on(tmp_path, net, **kw):
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
-@pytest.mark.parametrize("merge,local", [(True, False), (False, False), (True, True)], ids=["merged", "apart", "lu"])
-def test_c_search_stores_what_the_python_search_stores(tmp_path, case, merge, local):
+@pytest.mark.parametrize("merge,local,prune", [(True, False, True), (False, False, True), (True, True, True),
+                                               (True, False, False)], ids=["merged", "apart", "lu", "unpruned"])
+def test_c_search_stores_what_the_python_search_stores(tmp_path, case, merge, local, prune):
     _, gen, defines, platform, mission = case
     model = model_of(tmp_path, gen, defines, platform, mission)
-    zp, rp = _explore(model, "python", merge=merge, local=local)
-    zc, rc = _explore(model, "c", merge=merge, local=local)
-    assert (rc.states, rc.discrete, rc.transitions, rc.merged, rc.complete) == \
-        (rp.states, rp.discrete, rp.transitions, rp.merged, rp.complete)
+    zp, rp = _explore(model, "python", merge=merge, local=local, prune=prune)
+    zc, rc = _explore(model, "c", merge=merge, local=local, prune=prune)
+    assert (rc.states, rc.discrete, rc.transitions, rc.merged, rc.complete, rc.pruned, rc.revived) == \
+        (rp.states, rp.discrete, rp.transitions, rp.merged, rp.complete, rp.pruned, rp.revived)
     assert rc.violations == rp.violations
     assert rc.maxima == rp.maxima
     assert zc.dropped == zp.dropped

@@ -3,7 +3,8 @@
 The oracle (tests/randomtimed.py) explores each network's integer-time semantics state by state, written from the
 TChecker format's meaning, without the zone engine or the translation to BIP.  The zone engine must reach the same
 configurations (locations and integer) whatever its options: merging zones (``merge``), Extra_LU+ by place
-(``local_ceilings``), invariants kept in the state (``invariants``), the C or the Python search.  With the
+(``local_ceilings``), invariants kept in the state (``invariants``), subtrees of covered nodes pruned (``prune``, on
+unless said), the C or the Python search.  With the
 partial-order reduction (``reduce``), which keeps out orders of commuting zero-time steps, every location must keep
 its reachability verdict.
 """
@@ -20,8 +21,10 @@ from runtime.zones.csearch import library
 from runtime.zones.search import ZoneExplorer
 
 #: The options of the zone search, each one on and off; the C search where it builds.
-OPTIONS = [dict(engine=e, merge=m, local_ceilings=lu, invariants=inv) for e in ["python"] + (["c"] if library() else [])
-           for m in (False, True) for lu in (False, True) for inv in (False, True)]
+ENGINES = ["python"] + (["c"] if library() else [])
+OPTIONS = [dict(engine=e, merge=m, local_ceilings=lu, invariants=inv) for e in ENGINES
+           for m in (False, True) for lu in (False, True) for inv in (False, True)] + \
+    [dict(engine=e, prune=False, merge=m) for e in ENGINES for m in (False, True)]
 SEEDS = range(96)
 #: Networks on which each location's verdict is compared with the partial-order reduction on and off.
 POR_SEEDS = range(96, 128)
@@ -51,12 +54,12 @@ def test_zones_reach_what_ticks_reach_with_every_option(tmp_path, chunk):
 
 def test_each_option_changes_what_is_stored_on_some_network(tmp_path):
     # Else the comparison above would say nothing about it.
-    changed = {"merge": 0, "local_ceilings": 0}
+    changed = {"merge": 0, "local_ceilings": 0, "prune": 0}
     for seed in SEEDS:
         path, grid = _file(tmp_path, network(random.Random(seed)))
         counts = {name: ZoneExplorer(*_translated(path, grid), merge=name == "merge",
-                                     local_ceilings=name == "local_ceilings").explore().states
-                  for name in ("none", "merge", "local_ceilings")}
+                                     local_ceilings=name == "local_ceilings", prune=name == "prune").explore().states
+                  for name in ("none", "merge", "local_ceilings", "prune")}
         for name in changed:
             changed[name] += counts[name] != counts["none"]
     assert all(changed.values()), changed

@@ -55,7 +55,7 @@ def library():
             ("zs_intern", i64, [p, ctypes.POINTER(i64)]), ("zs_state_words", None, [p, i64, ctypes.POINTER(i64)]),
             ("zs_nstates", i64, [p]), ("zs_program", i64, [p, i64, ctypes.POINTER(i64), i64]),
             ("zs_set_interaction", i32, [p, i64, ctypes.POINTER(i64), i64]),
-            ("zs_set_por", None, [p, AMPLE]), ("zs_set_invariants", None, [p, i32]),
+            ("zs_set_por", None, [p, AMPLE]), ("zs_set_invariants", None, [p, i32]), ("zs_set_prune", None, [p, i32]),
             ("zs_set_grow_only", i32, [p, ctypes.POINTER(i32), i32]),
             ("zs_set_ample", i32, [p, ctypes.POINTER(i64), i64]),
             ("zs_node_words", None, [p, ctypes.POINTER(i64), i64, i32, ctypes.POINTER(i64)]),
@@ -92,6 +92,7 @@ class CSearch:
         if not self.ctx:
             raise MemoryError("zone search: no memory for its context")
         lib.zs_set_invariants(self.ctx, int(z.invariants))
+        lib.zs_set_prune(self.ctx, int(z.prune))
         grow = z.grow_only
         if lib.zs_set_grow_only(self.ctx, (ctypes.c_int * max(len(grow), 1))(*grow), len(grow)):
             raise MemoryError("zone search: no memory for its context")
@@ -269,6 +270,7 @@ class CSearch:
         lib = self.lib
         counts = self.counts()
         result.states, result.discrete, result.transitions, result.merged = counts[0], counts[1], counts[2], counts[3]
+        result.pruned, result.revived = counts[16], counts[17]
         self.z.dropped = counts[4]
         violation, top, node = self.violation, self.top, self.top_node
         lib.zs_results(self.ctx, violation, _dbl(top), node)
@@ -285,8 +287,9 @@ class CSearch:
 
     def counts(self) -> list[int]:
         """zsearch.c's zs_counts: nodes, discrete states, transitions, merged, dropped, steps, edges, members,
-        guard words, waiting, error argument, bytes held, then bytes of zones, of states and of programs."""
-        counts = (ctypes.c_int64 * 16)()
+        guard words, waiting, error argument, bytes held, then bytes of zones, of states and of programs, steps
+        of the partial-order reduction, nodes left unexpanded by pruning and pruned nodes brought back."""
+        counts = (ctypes.c_int64 * 18)()
         self.lib.zs_counts(self.ctx, counts)
         return list(counts)
 
@@ -538,7 +541,7 @@ class CNode(Node):
         g = search.back.guards[goff:goff + 3 * glen].tolist()
         super().__init__(None, None, parent, via, list(zip(g[0::3], g[1::3], g[2::3])), bool(flags & 1))
         self._search, self._sid, self._slot, self._own_slot = search, state, slot, own
-        self.covered, self.expanded, self.by = bool(flags & 2), bool(flags & 4), by
+        self.covered, self.expanded, self.dead, self.by = bool(flags & 2), bool(flags & 4), bool(flags & 8), by
         while first >= 0:
             members = search.back.members
             self.members.append(int(members[first, 0]))

@@ -15,7 +15,7 @@ class Node:
     """
 
     __slots__ = ("state", "_zone", "parent", "via", "guard", "grown", "covered", "by", "_own", "members",
-                 "expanded")
+                 "expanded", "dead", "skipped", "covers")
 
     def __init__(self, state: tuple, zone: np.ndarray | None, parent: int, via: int, guard: list,
                  grown: bool) -> None:
@@ -30,6 +30,9 @@ class Node:
         self.own = None  # the step's own zone when others merged into ``zone`` (their union is one)
         self.members: list[int] = []  # the nodes merged into this one
         self.expanded = False  # its successors were computed
+        self.dead = False  # pruned: below a node that a larger zone covered after it was expanded
+        self.skipped = False  # taken from the queue while dead (queued again if it lives again)
+        self.covers = False  # a newcomer's zone was found inside its own (it is never pruned)
 
     @property
     def zone(self) -> np.ndarray | None:

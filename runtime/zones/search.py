@@ -49,6 +49,8 @@ class ZoneResult:
     violations: dict[int, int] = field(default_factory=dict)  # observer atom -> node of its first violation
     maxima: dict[int, tuple[float, int]] = field(default_factory=dict)  # clock -> (largest value, node)
     merged: int = 0  # zones merged into another of their discrete state (their union being one zone)
+    pruned: int = 0  # nodes left unexpanded below a covered node (ZoneExplorer.prune)
+    revived: int = 0  # pruned nodes brought back, each because it covered a newcomer
 
 
 #: Bytes of discrete states' programs the C search holds before it lets go of those of the states whose nodes
@@ -65,7 +67,8 @@ class ZoneExplorer:
 
     def __init__(self, package, root: str, externs=None, watch: dict[int, str] | None = None,
                  merge: bool = True, engine: str = "c", local_ceilings: bool = False, reduce: bool = False,
-                 program_bytes: int = PROGRAM_BYTES, invariants: bool = False, grow_only: bool = True) -> None:
+                 program_bytes: int = PROGRAM_BYTES, invariants: bool = False, grow_only: bool = True,
+                 prune: bool = True) -> None:
         self.model: TimedModel = analyse(package, root)
         self.externs = externs  # the tick model's replay compiles its step with them (runtime/zones/tickstep.py)
         self.space = StateSpace(self.model.erased, root, externs, None, True, self.model.discrete_reads())
@@ -112,6 +115,11 @@ class ZoneExplorer:
         #: The clocks read only for how large they grow keep their upper bounds only (model.py's grow_only): zones
         #: that differ only in how small such a clock can be are one.
         self.grow_only = list(self.model.grow_only) if grow_only else []
+        #: A node expanded before a larger zone of its state came is covered then; what lies below it is pruned: the
+        #: nodes there not expanded yet are not (``dead``), unless one covers a newcomer (docs/verification/platform.md,
+        #: *What lies below a covered node is pruned*).
+        self.prune = prune
+        self.current = -1  # the last node expanded (a node revived is expanded after nodes stored after it)
         self.dropped = 0  # nodes whose zone was let go (covered before they were expanded)
         self.engine = engine
         self.states: list[tuple] = []  # discrete states by number (the C search knows them so)
@@ -439,6 +447,7 @@ class ZoneExplorer:
             return result
         passed: dict[tuple, list[int]] = {}
         waiting: deque[int] = deque()
+        self.current = -1
         result = self.result = ZoneResult(0, 0, 0, 0.0, True)
 
         def add(state: tuple, zone: np.ndarray, parent: int, via: int, guard: list, grown: bool) -> bool:
@@ -450,6 +459,10 @@ class ZoneExplorer:
                 stack = np.stack([self.nodes[k].stored for k in kept])
                 bigger = np.flatnonzero((stack >= zone).all(axis=(1, 2)))
                 if len(bigger):
+                    cover = self.nodes[kept[bigger[0]]]
+                    if cover.dead:
+                        revive(kept[bigger[0]])
+                    cover.covers = True
                     if parent >= 0:  # the step is kept for cycles (lassos), its zone not: the covering node's stands
                         step.zone, step.by = None, kept[bigger[0]]
                         self.out[parent].append((kept[bigger[0]], step))
@@ -457,6 +470,8 @@ class ZoneExplorer:
                 for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):
                     old = self.nodes[kept[i]]
                     old.covered, old.by = True, len(self.nodes)  # a larger zone came: no need to expand this one
+                    if old.expanded and self.prune:
+                        prune_below(kept[i])
                     if not old.expanded:
                         old.zone = None  # no path goes through it: the larger zone stands for it
                         self.dropped += 1
@@ -471,21 +486,58 @@ class ZoneExplorer:
             waiting.append(len(self.nodes) - 1)
             return True
 
+        def below(k: int) -> list[int]:
+            """The children of node ``k`` in the search's tree."""
+            return [t for t, step in self.out[k] if step is self.nodes[t]]
+
+        def prune_below(k: int) -> None:
+            """Node ``k`` was expanded and a larger zone covers it now: the nodes below it die, down through those
+            expanded (as zsearch.c's prune_below), but for a node that covered a newcomer and what is below it."""
+            todo = [k]
+            while todo:
+                for c in below(todo.pop()):
+                    n = self.nodes[c]
+                    if not (n.dead or n.covered or n.covers):
+                        n.dead = True
+                        if n.expanded:
+                            todo.append(c)
+
+        def revive(k: int) -> None:
+            """Node ``k`` is dead and covers a newcomer: it and the dead nodes below it live again, those passed over
+            while dead queued again in the order they were stored (as zsearch.c's revive)."""
+            todo, back = [k], []
+            while todo:
+                u = todo.pop()
+                n = self.nodes[u]
+                n.dead = False
+                result.revived += 1
+                if n.skipped:
+                    n.skipped = False
+                    back.append(u)
+                if n.expanded:
+                    todo += [c for c in below(u) if self.nodes[c].dead]
+            waiting.extend(sorted(back))
+
         for sid in self.space.initial_ids:
             state = self.space.state(sid)
             zone = self.forget(self.initial_zone(), state)
             for z, grown in self.elapse(zone, state):
                 add(state, z, -1, -1, [], grown)
-        popped, level_end, depth = 0, 0, -1  # breadth-first levels: nodes before level_end are at depth
+        popped, level_end, depth = 0, 0, -1  # breadth-first levels: the queue's entries before level_end at depth
         while waiting:
             if popped >= level_end:
-                depth, level_end = depth + 1, len(self.nodes)
+                depth, level_end = depth + 1, popped + len(waiting)
             k = waiting.popleft()
             popped += 1
             node = self.nodes[k]
-            if node.covered:
+            if node.covered or node.expanded:
+                continue
+            if node.dead:
+                node.skipped = True
+                result.pruned += 1
                 continue
             node.expanded = True
+            self.current = max(self.current, k)
             self.check(k, result)
             if self.watcher is not None:
                 self.watcher(result)
@@ -662,16 +714,16 @@ class ZoneExplorer:
         return (len(self.nodes) - self.dropped) * (self.n + 1) ** 2 * 4
 
     def merge_into(self, step: Node, kept: list[int]) -> int:
-        """``step``'s zone grown by every kept zone of its discrete state, not expanded yet, that makes one zone with
-        it: orders of independent zero-time steps reset clocks at different instants and cut one zone into
-        pieces."""
+        """``step``'s zone grown by every kept zone of its discrete state stored after the last node expanded (not
+        taken from the queue yet) that makes one zone with it: orders of independent zero-time steps reset clocks at
+        different instants and cut one zone into pieces."""
         index, zone = len(self.nodes), step.zone
         grew = True
         while grew:
             grew = False
             for k in kept:
-                if self.nodes[k].expanded:
-                    continue  # its successors are there: merging would compute them again
+                if k <= self.current:
+                    continue  # expanded, or passed over while dead: its successors are there, or its coverer's
                 hull = dbm.union(zone, self.nodes[k].zone)
                 if hull is not None:
                     zone = hull

@@ -51,6 +51,8 @@ typedef struct {
     int64_t guard;  /* offset of the step's bounds in the guard pool; their count is guard_len */
     int32_t guard_len;
     uint8_t grown, covered, expanded;
+    uint8_t dead, skipped, covers;  /* pruned below a covered node; popped while dead; covered a newcomer */
+    int32_t child, sibling;  /* its first child in the tree and its next sibling, -1 for none (pruning's walks) */
 } Node;
 
 /* A step into a zone another node covers: what a trace and a lasso read of it (a Node's row without a zone, members
@@ -165,6 +167,8 @@ typedef struct {
     int64_t pinned;         /* the state being expanded: its program is read while its successors arrive */
     int64_t let_go, rewritten;
     int64_t level_end, depth;  /* breadth-first levels: the waiting list's end when the current one began */
+    int prune;              /* the subtrees of covered nodes pruned (zs_set_prune) */
+    int64_t pruned, revived;  /* nodes left unexpanded for it, and dead nodes brought back */
     int invariants;         /* points past an invariant are no state (search.py's ZoneExplorer.invariants) */
     int16_t *z16own;        /* scratch: slot_new's own stored 16-bit form of a zone (z16r may hold its caller's) */
     int32_t *past;          /* scratch: d * d numbers (union16, z_union) */
@@ -176,6 +180,8 @@ typedef struct {
     int32_t *lay_of;        /* per state: its layout, -1 before its first zone (grown with prog) */
     int64_t kept_bytes;     /* the states' lists of zones kept, with their signatures */
     int64_t current;        /* the node being expanded (-1 before the first): those before it are expanded */
+    VEC(int32_t) walk;      /* scratch: the nodes a pruning or a revival walks through */
+    VEC(int32_t) back;      /* scratch: the nodes a revival queues again */
     VEC(int32_t) under;     /* scratch: the state's zones it includes (positions in its list) */
     Doubles out;            /* scratch: arrive's pieces after time passes, kept from call to call */
     Longs grown;            /* scratch: each piece's grown flag */
@@ -440,7 +446,7 @@ void zs_free(void *p)
         free(x->lays.a[i].rows);  /* the layout's one block */
     free(x->lays.a), free(x->lkey), free(x->lay_of);
     free(x->prog.a), free(x->kept.a), free(x->zkey), free(x->nodes.a), free(x->steps.a);
-    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
+    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->walk.a), free(x->back.a), free(x->ceiling), free(x->grow_only);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16own), free(x->past), free(x->sig);
     free(x->under.a), free(x->z16r);
     free(x->out.a), free(x->grown.a);
@@ -1164,6 +1170,13 @@ int zs_set_program(void *p, int64_t state, const int64_t *words, int64_t n)
     return 0;
 }
 
+/* The subtree of a node that a larger zone covers once it was expanded is not expanded further (1, search.py's
+ * ZoneExplorer.prune) or it is (0). */
+void zs_set_prune(void *p, int on)
+{
+    ((Ctx *)p)->prune = on;
+}
+
 /* Points past an invariant are no state (1) or a piece where time cannot pass (0, the default). */
 void zs_set_invariants(void *p, int on)
 {
@@ -1532,6 +1545,62 @@ static int merge_into(Ctx *x, const Layout *L, Node *step, double *zone, Kept *k
     return count;
 }
 
+/* Node k was expanded and a larger zone now covers it: the nodes below it are marked dead, down through those
+ * expanded, and those not expanded yet will not be; a node that covered a newcomer stays, with what is below it
+ * (the newcomer's successors are its).  docs/verification/platform.md, *What lies below a covered node is pruned*,
+ * says why the answers stay the same. */
+static int prune_below(Ctx *x, int32_t k)
+{
+    x->walk.n = 0;
+    PUSH(x->walk, k);
+    while (x->walk.n) {
+        int32_t u = x->walk.a[--x->walk.n];
+        for (int32_t c = x->nodes.a[u].child; c >= 0; c = x->nodes.a[c].sibling) {
+            Node *n = &x->nodes.a[c];
+            if (n->dead || n->covered || n->covers)
+                continue;
+            n->dead = 1;
+            if (n->expanded)
+                PUSH(x->walk, c);
+        }
+    }
+    return 0;
+}
+
+static int ascending(const void *a, const void *b)
+{
+    int32_t p = *(const int32_t *)a, q = *(const int32_t *)b;
+    return (p > q) - (p < q);
+}
+
+/* Node k is dead and covers a newcomer: it and the dead nodes below it, down through those expanded, live again;
+ * those passed over while dead are queued again, in the order they were stored. */
+static int revive(Ctx *x, int32_t k)
+{
+    x->walk.n = x->back.n = 0;
+    PUSH(x->walk, k);
+    while (x->walk.n) {
+        int32_t u = x->walk.a[--x->walk.n];
+        Node *n = &x->nodes.a[u];
+        n->dead = 0;
+        x->revived++;
+        if (n->skipped) {
+            n->skipped = 0;
+            PUSH(x->back, u);
+        }
+        if (n->expanded)
+            for (int32_t c = n->child; c >= 0; c = x->nodes.a[c].sibling)
+                if (x->nodes.a[c].dead)
+                    PUSH(x->walk, c);
+    }
+    qsort(x->back.a, (size_t)x->back.n, sizeof(int32_t), ascending);
+    for (int64_t q = 0; q < x->back.n; q++) {
+        PUSH(x->waiting, x->back.a[q]);
+        x->pending[x->nodes.a[x->back.a[q]].state]++;
+    }
+    return 0;
+}
+
 /* Store (state, zone) reached from node parent by interaction via: zone's bounds are those between A's clocks (the
  * state's active ones, and any idle one its program reads); zone is changed (extrapolated; its idle clocks freed only
  * where whole matrices meet, in merging: the stored form and every comparison leave their rows and columns out, see
@@ -1554,7 +1623,7 @@ static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
-    Node step = {(int32_t)state, parent, via, -1, -1, -1, -1, x->guards.n, (int32_t)nguard, (uint8_t)grown, 0, 0};
+    Node step = {(int32_t)state, parent, via, -1, -1, -1, -1, x->guards.n, (int32_t)nguard, (uint8_t)grown, 0, 0, 0, 0, 0, -1, -1};
     const int16_t *ready = NULL;  /* the zone's stored 16-bit form, once computed and while it is the zone's */
     for (int64_t k = 0; k < 3 * nguard; k++)
         PUSH(x->guards, guard[k]);
@@ -1591,8 +1660,11 @@ static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent
                 ge = slot_geq(x, slot, zone);
                 le = !ge && slot_leq(x, slot, zone);
             }
+            if (ge && x->nodes.a[kept->a[i]].dead && revive(x, kept->a[i]))
+                return -9;
             if (ge) {
                 x->old_hit = 1;
+                x->nodes.a[kept->a[i]].covers = 1;
                 if (parent >= 0) {
                     Step into = {step.state, step.parent, step.via, kept->a[i], step.guard, step.guard_len, step.grown};
                     Edge e = {parent, kept->a[i], (int32_t)(-x->steps.n - 1)};
@@ -1607,6 +1679,8 @@ static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent
         for (int64_t u = 0; u < x->under.n; u++) {
             Node *old = &x->nodes.a[kept->a[x->under.a[u]]];
             old->covered = 1, old->by = (int32_t)x->nodes.n;
+            if (old->expanded && x->prune && prune_below(x, kept->a[x->under.a[u]]))
+                return -9;
             if (!old->expanded) {
                 if (slot_drop(x, old->zone))
                     return -9;
@@ -1638,6 +1712,10 @@ static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent
     if (parent >= 0) {
         Edge e = {parent, index, index};
         PUSH(x->edges, e);
+        if (x->prune) {
+            x->nodes.a[index].sibling = x->nodes.a[parent].child;
+            x->nodes.a[parent].child = index;
+        }
     }
     if (kept_push(x, L, kept, index, step.zone))
         return -9;
@@ -1810,10 +1888,16 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             status = -9;
             break;
         }
-        if (x->nodes.a[k].covered)
+        if (x->nodes.a[k].covered || x->nodes.a[k].expanded)
             continue;
+        if (x->nodes.a[k].dead) {
+            x->nodes.a[k].skipped = 1;
+            x->pruned++;
+            continue;
+        }
         x->nodes.a[k].expanded = 1;
-        x->current = k;
+        if (k > x->current)
+            x->current = k;
         x->pinned = x->nodes.a[k].state;
         const int64_t *pr = program(x, x->nodes.a[k].state, ask);
         if (!pr) {
@@ -1971,16 +2055,16 @@ void zs_counts(void *p, int64_t *out)
     out[4] = x->dropped, out[5] = x->steps.n, out[6] = x->edges.n, out[7] = x->members.n, out[8] = x->guards.n;
     out[9] = x->waiting.n - x->head, out[10] = x->err_arg, out[11] = zs_memory(x);
     out[12] = zone_bytes(x), out[13] = x->bytes.n + x->ends.n * 16, out[14] = x->prog_words * 8;
-    out[15] = x->reduced;
+    out[15] = x->reduced, out[16] = x->pruned, out[17] = x->revived;
 }
 
 /* A node's (or a step's) fields as an int64 row of 10: state parent via by zone own members guard guard_len
- * grown|covered<<1|expanded<<2. */
+ * grown|covered<<1|expanded<<2|dead<<3. */
 static void node_row(const Node *a, int64_t *r)
 {
     r[0] = a->state, r[1] = a->parent, r[2] = a->via, r[3] = a->by, r[4] = a->zone;
     r[5] = a->own, r[6] = a->members, r[7] = a->guard, r[8] = a->guard_len;
-    r[9] = a->grown | a->covered << 1 | a->expanded << 2;
+    r[9] = a->grown | a->covered << 1 | a->expanded << 2 | a->dead << 3;
 }
 
 /* Column ``col`` of every node's row (node_row): a search of millions of nodes is read back a column at a time. */
