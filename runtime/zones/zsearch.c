@@ -46,14 +46,15 @@ static int grow_vec(void **a, int64_t *cap, size_t size)
     (v).a[(v).n++] = (x); } while (0)
 #define PUSH(v, x) PUSH_OR(v, x, return -9)
 
-typedef struct {
-    int32_t state, parent, via, by, zone, own, members;  /* zone, own: slots; members: first of a chain, -1 */
+typedef struct {  /* 56 bytes: the 64-bit field first, the bytes last */
     int64_t guard;  /* offset of the step's bounds in the guard pool; their count is guard_len */
+    int32_t state, parent, via, by, zone, own, members;  /* zone, own: slots; members: first of a chain, -1 */
     int32_t guard_len;
+    int32_t child, sibling;  /* its first child in the tree and its next sibling, -1 for none (pruning's walks) */
     uint8_t grown, covered, expanded;
     uint8_t dead, skipped, covers;  /* pruned below a covered node; popped while dead; covered a newcomer */
-    int32_t child, sibling;  /* its first child in the tree and its next sibling, -1 for none (pruning's walks) */
 } Node;
+_Static_assert(sizeof(Node) == 56, "a Node is 56 bytes: millions are kept");
 
 /* A step into a zone another node covers: what a trace and a lasso read of it (a Node's row without a zone, members
  * or flags of its own), in 32 bytes instead of a Node's 48.  A search keeps several times more of them than nodes. */
@@ -1623,7 +1624,9 @@ static int add(Ctx *x, int64_t state, double *zone, const Act *A, int32_t parent
     Kept *kept = &x->kept.a[state];
     if (!kept->seen)
         kept->seen = 1, x->discrete++;
-    Node step = {(int32_t)state, parent, via, -1, -1, -1, -1, x->guards.n, (int32_t)nguard, (uint8_t)grown, 0, 0, 0, 0, 0, -1, -1};
+    Node step = {.state = (int32_t)state, .parent = parent, .via = via, .by = -1, .zone = -1, .own = -1, .members = -1,
+                 .guard = x->guards.n, .guard_len = (int32_t)nguard, .grown = (uint8_t)grown, .child = -1,
+                 .sibling = -1};
     const int16_t *ready = NULL;  /* the zone's stored 16-bit form, once computed and while it is the zone's */
     for (int64_t k = 0; k < 3 * nguard; k++)
         PUSH(x->guards, guard[k]);
@@ -2087,7 +2090,8 @@ void zs_node_row(void *p, int64_t k, int64_t *out)
 void zs_step_row(void *p, int64_t k, int64_t *out)
 {
     const Step *a = ((Ctx *)p)->steps.a + k;
-    Node as = {a->state, a->parent, a->via, a->by, -1, -1, -1, a->guard, a->guard_len, a->grown, 0, 0};
+    Node as = {.state = a->state, .parent = a->parent, .via = a->via, .by = a->by, .zone = -1, .own = -1, .members = -1,
+               .guard = a->guard, .guard_len = a->guard_len, .grown = a->grown, .child = -1, .sibling = -1};
     node_row(&as, out);
 }
 
