@@ -153,6 +153,8 @@ def test_pruning_below_covered_nodes_changes_no_answer(tmp_path, monkeypatch):
         seen["fewer"] += pruned.states < full.states
         seen["pruned"] += pruned.pruned > 0
         seen["revived"] += pruned.revived > 0
+        if pruned.states == full.states and not pruned.pruned:
+            continue  # the same search: the same answers
         with_pruning = answers(model)
         with monkeypatch.context() as m:
             m.setattr(zones, "explorer", lambda model, options=None: ZoneExplorer(model.package, model.root,

@@ -24,7 +24,7 @@ from runtime.zones.search import ZoneExplorer
 ENGINES = ["python"] + (["c"] if library() else [])
 OPTIONS = [dict(engine=e, merge=m, local_ceilings=lu, invariants=inv) for e in ENGINES
            for m in (False, True) for lu in (False, True) for inv in (False, True)] + \
-    [dict(engine=e, prune=False, merge=m) for e in ENGINES for m in (False, True)]
+    [dict(engine=e, prune=False) for e in ENGINES]
 SEEDS = range(96)
 #: Networks on which each location's verdict is compared with the partial-order reduction on and off.
 POR_SEEDS = range(96, 128)
