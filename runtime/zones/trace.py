@@ -107,6 +107,14 @@ def _parts(z: ZoneExplorer, k: int) -> list[int]:
     return out
 
 
+def _covering(z: ZoneExplorer, k: int) -> np.ndarray:
+    """The zone of node ``k`` that a step into a covered zone went into; if a larger zone covered ``k`` before it
+    was expanded (its zone then let go), that one's, up the chain of covers."""
+    while z.nodes[k].stored is None:
+        k = z.nodes[k].by
+    return z.nodes[k].zone
+
+
 def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]) -> tuple[list[int], int]:
     """Integer times of the steps of ``path`` (each record: the step into it, the first one initial) and the time
     after the last step where ``goal`` holds."""
@@ -144,7 +152,7 @@ def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]])
             for c, v in z.guard(n.via, path[step - 1].state)[1]:
                 origin[c] = (step, v)
         nxt = step + 1 if step + 1 < k else end
-        zone = n.reached if n.stored is not None else z.nodes[n.by].zone
+        zone = n.reached if n.stored is not None else _covering(z, n.by)
         limits = z.limits(n.state, zone) if n.grown else None
         if limits is None:
             le(nxt, step, 0)
