@@ -459,13 +459,13 @@ class ZoneExplorer:
                 stack = np.stack([self.nodes[k].stored for k in kept])
                 bigger = np.flatnonzero((stack >= zone).all(axis=(1, 2)))
                 if len(bigger):
-                    cover = self.nodes[kept[bigger[0]]]
-                    if cover.dead:
-                        revive(kept[bigger[0]])
-                    cover.covers = True
+                    by = kept[bigger[0]]
+                    if self.nodes[by].dead:
+                        revive(by)
+                    self.nodes[by].covers = True
                     if parent >= 0:  # the step is kept for cycles (lassos), its zone not: the covering node's stands
-                        step.zone, step.by = None, kept[bigger[0]]
-                        self.out[parent].append((kept[bigger[0]], step))
+                        step.zone, step.by = None, by
+                        self.out[parent].append((by, step))
                     return False
                 for i in np.flatnonzero((stack <= zone).all(axis=(1, 2))):
                     old = self.nodes[kept[i]]
@@ -530,7 +530,7 @@ class ZoneExplorer:
             k = waiting.popleft()
             popped += 1
             node = self.nodes[k]
-            if node.covered or node.expanded:
+            if node.covered:
                 continue
             if node.dead:
                 node.skipped = True

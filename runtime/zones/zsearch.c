@@ -57,7 +57,7 @@ typedef struct {  /* 56 bytes: the 64-bit field first, the bytes last */
 _Static_assert(sizeof(Node) == 56, "a Node is 56 bytes: millions are kept");
 
 /* A step into a zone another node covers: what a trace and a lasso read of it (a Node's row without a zone, members
- * or flags of its own), in 32 bytes instead of a Node's 48.  A search keeps several times more of them than nodes. */
+ * or flags of its own), in 32 bytes instead of a Node's 56.  A search keeps several times more of them than nodes. */
 typedef struct {
     int32_t state, parent, via, by;
     int64_t guard;
@@ -447,7 +447,8 @@ void zs_free(void *p)
         free(x->lays.a[i].rows);  /* the layout's one block */
     free(x->lays.a), free(x->lkey), free(x->lay_of);
     free(x->prog.a), free(x->kept.a), free(x->zkey), free(x->nodes.a), free(x->steps.a);
-    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->walk.a), free(x->back.a), free(x->ceiling), free(x->grow_only);
+    free(x->edges.a), free(x->members.a), free(x->guards.a), free(x->waiting.a), free(x->ceiling), free(x->grow_only);
+    free(x->walk.a), free(x->back.a);
     free(x->violation), free(x->max_value), free(x->max_node), free(x->tmp), free(x->z16own), free(x->past), free(x->sig);
     free(x->under.a), free(x->z16r);
     free(x->out.a), free(x->grown.a);
@@ -1891,7 +1892,7 @@ int zs_run(void *p, int64_t max_states, int stop_at_violation, program_fn ask, p
             status = -9;
             break;
         }
-        if (x->nodes.a[k].covered || x->nodes.a[k].expanded)
+        if (x->nodes.a[k].covered)
             continue;
         if (x->nodes.a[k].dead) {
             x->nodes.a[k].skipped = 1;
