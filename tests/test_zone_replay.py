@@ -264,3 +264,38 @@ def test_a_step_into_a_zone_whose_coverer_was_covered_in_turn_gets_its_times(tmp
             replay(z, path, [], space)
         except ConcretizeError:
             pass  # a path the tick model does not take is refused with its reason, as any other
+
+
+def _least(n: int, edges: list[tuple[int, int, float]]) -> list[float] | None:
+    """The least solution of ``u - w <= d`` for every edge (0 at most for each variable), by Floyd–Warshall on
+    the bounds' matrix; None when they have none (a cycle of negative weight)."""
+    inf = float("inf")
+    m = [[0.0 if i == j else inf for j in range(n)] for i in range(n)]
+    for w, u, d in edges:
+        m[w][u] = min(m[w][u], d)
+    for k in range(n):
+        for i in range(n):
+            for j in range(n):
+                m[i][j] = min(m[i][j], m[i][k] + m[k][j])
+    if any(m[i][i] < 0 for i in range(n)):
+        return None
+    return [min(0.0, *(m[i][j] for i in range(n))) for j in range(n)]
+
+
+def test_a_paths_clock_bounds_get_their_least_times_or_are_refused_when_they_have_none():
+    import random
+
+    rng = random.Random(7)
+    solved = refused = 0
+    for _ in range(300):
+        n = rng.randint(1, 9)
+        edges = [(rng.randrange(n), rng.randrange(n), float(rng.randint(-4, 9))) for _ in range(rng.randint(0, 3 * n))]
+        want = _least(n, edges)
+        if want is None:
+            with pytest.raises(ConcretizeError, match="the path's clock bounds have no solution"):
+                trace_module._shortest(n, edges)
+            refused += 1
+        else:
+            assert trace_module._shortest(n, edges) == want, (n, edges)
+            solved += 1
+    assert solved > 100 and refused > 20, (solved, refused)
