@@ -391,13 +391,15 @@ def test_a_starved_task_has_no_bound_on_one_core_and_a_small_one_on_two(tmp_path
 
 
 def test_a_lasso_no_clock_value_can_go_round_is_passed_over_for_one_that_can(capsys):
-    """Whole DALA on one core: the first 20 cycles the search finds where a GoTo request never ends close through
-    covering zones, and no clock value takes one round of them; later ones can be taken, and run GoTo's codels
-    every period.  GoTo keeps working (nddPlan may pause for ever), shown by its lasso, rather than "a request can
-    wait for ever" with no trace, which is what the first 20 alone gave."""
+    """Whole DALA on one core, with throws: the first 160 cycles the search finds where a GoTo request never ends
+    close through covering zones, and no clock value takes one round of them, counting how far time may pass in
+    the covered zones a round steps into (the covering zone's invariants and urgent priorities, as the trace's
+    times count them); a later one can be taken, and runs GoTo's codels every period.  GoTo keeps working
+    (nddPlan may pause for ever), shown by its lasso, rather than "no concrete trace", which is what the first 20
+    that passed without those bounds gave (and, without throws, the first 20 cycles alone)."""
     dala = ROOT / "descriptions/dala"
     code, out, _ = verify(capsys, dala, "--timed", "--platform", dala / "platforms/one-core.yaml",
-                          "--client", dala / "missions/corridor.yaml", "--response-times", "--no-exceptions")
+                          "--client", dala / "missions/corridor.yaml", "--response-times")
     assert response_table(out)["NDD.GoTo"] == KEEPS_RUNNING, out
     assert "no concrete trace" not in out
     steps, lines, loop = lasso_of(out, "NDD.GoTo", KEEPS_RUNNING)

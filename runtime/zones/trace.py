@@ -71,7 +71,14 @@ def loop_needs(z: ZoneExplorer, loop: list[Node]) -> np.ndarray | None:
         here = dbm.intersect(zone, need) if zone is not None else need
         if here is None:
             return None
-        need = _before(z, m, here)
+        grown = m.grown
+        if zone is None and grown:  # a step into a covered zone: time passes there only as far as :func:`times` lets it
+            limits = z.limits(m.state, _covering(z, m.by))
+            grown = limits is not None
+            here = dbm.constrain_all(here, limits[1]) if grown else here
+            if here is None:
+                return None
+        need = _before(z, m, here, grown)
         if need is None:
             return None
     return need
@@ -85,9 +92,10 @@ def _unfold(linked: tuple) -> list[Node]:
     return out
 
 
-def _before(z: ZoneExplorer, m: Node, here: np.ndarray) -> np.ndarray | None:
-    """The clock values at the step into ``m``'s state from which it reaches ``here`` (its parent's side)."""
-    zone = dbm.down(here) if m.grown else here
+def _before(z: ZoneExplorer, m: Node, here: np.ndarray, grown: bool | None = None) -> np.ndarray | None:
+    """The clock values at the step into ``m``'s state from which it reaches ``here`` (its parent's side); ``grown``:
+    whether time passes in the state after the step (``m.grown`` unless said)."""
+    zone = dbm.down(here) if (m.grown if grown is None else grown) else here
     idle = z.idle(m.state)
     if idle:
         zone = dbm.free_many(zone, idle)
