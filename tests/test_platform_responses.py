@@ -20,6 +20,7 @@ PAIR = FIXTURES / "Pair.gen"
 SHARED = FIXTURES / "Shared.gen"
 ANOMALY = FIXTURES / "Anomaly.gen"
 AFTER = FIXTURES / "After.gen"
+AFTER_BOTH = FIXTURES / "AfterBoth.gen"
 
 #: (name, description, defines, platform file, mission): small models with every kind of response.
 CASES = [
@@ -37,6 +38,8 @@ CASES = [
      FIXTURES / "run_once.yaml"),
     # a done flag that dies once the client has sent its last request reading it (runtime/explore/layout.py)
     ("after-client", AFTER, {}, "cores: 1\n", FIXTURES / "set_then_go.yaml"),
+    # two done flags read only together: one is dead once the other is false for good (runtime/explore/conjunctions.py)
+    ("after-both", AFTER_BOTH, {}, "cores: 1\n", FIXTURES / "set_both_then_go.yaml"),
 ]
 #: The cases whose tick model is small enough to explore state by state in a test (zeno-services is not).
 SMALL = [c for c in CASES if c[0] != "zeno-services"]

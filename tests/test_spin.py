@@ -68,6 +68,21 @@ def test_same_when_a_variable_dies_with_a_mission_s_last_request(tmp_path):
 
 
 @needs_spin
+def test_same_when_a_flag_dies_with_the_other_flag_of_its_conjunction(tmp_path):
+    """Two done flags read only together (runtime/explore/conjunctions.py): the Promela model resets one where the
+    other is false for good, after the steps of either flag's atom or of the client, and SPIN stores the states
+    the explorer does."""
+    from test_platform_responses import AFTER_BOTH, FIXTURES as PLATFORMS, model_of
+
+    model = model_of(tmp_path, AFTER_BOTH, {}, "cores: 1\n", PLATFORMS / "set_both_then_go.yaml")
+    ours, theirs = both(model.package, model.root)
+    flag = next(s for s in StateSpace(model.package, model.root).slots if s.title == "AfterBoth.SetA.control.done")
+    assert flag.void  # the case this test is for
+    assert ours.states == theirs.report.states == 576  # 646 when neither resets the flags
+    assert theirs.report.errors == len(ours.deadlocks) and theirs.report.complete
+
+
+@needs_spin
 def test_same_with_a_request_budget():
     pkg, root = ndd_model()
     ours, theirs = both(pkg, root, requests=1)

@@ -45,16 +45,32 @@ class Slot:
     domain: tuple[int, int] | None = None
     marking: int | None = None  # slot of the atom's marking, for variables
     alive: tuple[tuple[int, int], ...] = ()  # also live while the marking in one of these slots meets its mask
+    #: ...but not when one of these flags, read in every conjunction that reads this variable, is false and can no
+    #: longer be set: ``(flag slot, its marking slot, settable)`` (runtime/explore/conjunctions.py)
+    void: tuple = ()
 
     @property
     def never_live(self) -> bool:
         """Always the default: no bits in a packed state."""
         return self.live == 0 and not self.alive
 
-    def live_test(self, marking: Callable[[int], str], sep: str = " || ") -> str:
+    def live_test(self, marking: Callable[[int], str], sep: str = " || ",
+                  value: Callable[[int], str] | None = None) -> str:
         """The condition under which the variable is live, in C, Python or Promela: ``marking`` names a marking
-        slot's value (``lambda m: f"L[{m}]"``), ``sep`` joins the alternatives."""
-        return sep.join(f"({marking(m)} & {mask})" for m, mask in ((self.marking, self.live), *self.alive))
+        slot's value (``lambda m: f"L[{m}]"``), ``value`` a variable's (``marking`` unless given), ``sep`` joins
+        the alternatives (`` or `` for Python, whose other operators follow)."""
+        if not self.void:
+            return sep.join(f"({marking(m)} & {mask})" for m, mask in ((self.marking, self.live), *self.alive))
+        value = value or marking
+        both, no = (" and ", "not ") if sep.strip() == "or" else (" && ", "!")
+
+        def meets(pairs) -> str:
+            return both.join(f"({marking(m)} & {mask})" for m, mask in pairs)
+
+        read = sep.join(meets([pair]) for pair in self.alive)
+        gone = sep.join(f"({no}{value(g)}{both}{no}({sep.join(f'({meets(alt)})' for alt in settable) or '0'}))"
+                        for g, _, settable in self.void)
+        return f"({marking(self.marking)} & {self.live}){sep}(({read}){both}{no}({gone}))"
 
     @property
     def title(self) -> str:
@@ -244,6 +260,9 @@ def layout(flat: FlatSystem, reduce: bool = True, observed: Iterable[tuple[str, 
     observed = set(observed)
     by_connectors = readers_by_connectors(flat)
     by_priorities = observed_by_priorities(flat)
+    from runtime.explore.conjunctions import dead_with  # it reads connector_alive from here
+
+    void = dead_with(flat) if reduce else {}
     slots: list[Slot] = []
     for fa in flat.atoms:
         slots.append(Slot(fa.offset, "marking", fa.name, "marking", places=len(fa.places)))
@@ -268,7 +287,8 @@ def layout(flat: FlatSystem, reduce: bool = True, observed: Iterable[tuple[str, 
             domain = declared_domain(d, fa.name)
             slots.append(Slot(fa.slot(d.name), kind, fa.name, d.name, live=masks.get(d.name),
                               default=default_value(d.type), domain=domain, marking=fa.offset,
-                              alive=alive.get(d.name, ())))
+                              alive=alive.get(d.name, ()),
+                              void=void.get(fa.slot(d.name), ()) if d.name in alive else ()))
     for k in range(requests):
         slots.append(Slot(flat.state_size + k, "requests", None, f"requests[{k}]", default=0))
     return slots

@@ -108,12 +108,13 @@ class AtomWriter(ExprWriter):
         for s in self.slots:
             if s.live is None or s.atom is None or (s.never_live and self.hidden):
                 continue
-            if by_slot[s.marking] in atoms or any(by_slot[m] in atoms for m, _ in s.alive):
+            flags = [m for _, flag, settable in s.void for m in [flag] + [p for alt in settable for p, _ in alt]]
+            if any(by_slot[m] in atoms for m in [s.marking, *(m for m, _ in s.alive), *flags]):
                 name = self.names[s.index]
                 if s.never_live:
                     out.append(f"{ind}{name} = {literal(s.default)};")
                 else:
-                    test = s.live_test(lambda m: f"m{by_slot[m]}")
+                    test = s.live_test(lambda m: f"m{by_slot[m]}", value=lambda k: self.names[k])
                     out.append(f"{ind}{name} = (({test}) != 0 -> {name} : {literal(s.default)});")
         if not self.hidden:
             out.extend(f"{ind}{t} = 0;" for t in temps)
