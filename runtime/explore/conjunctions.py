@@ -14,7 +14,7 @@ from dataclasses import fields, is_dataclass
 
 from runtime.engine.flatten import FlatAtom, FlatSystem, Leaf, Sub
 from runtime.explore.layout import connector_alive
-from runtime.model.expressions import Assign, Binary, If, PortData, Var
+from runtime.model.expressions import Assign, Binary, PortData, Var, assigned
 
 #: A way a flag can still be set: every ``(marking slot, mask)`` of one alternative meets its mask.
 Settable = tuple[tuple[tuple[int, int], ...], ...]
@@ -133,9 +133,9 @@ def _settable(flat: FlatSystem, fa: FlatAtom, slot: int) -> Settable:
         conditions = [connector_alive(flat, flat.connectors[c], fa.index) for c in fp.connectors]
         if None not in conditions:
             dying[fp.name] = tuple(sorted({pair for c in conditions for pair in c}))
-    writers = [t for t in fa.type.transitions if var in _written(t.action)]
+    writers = [t for t in fa.type.transitions if var in assigned(t.action)]
     # a transition that neither moves the atom nor writes the flag (a port offering data where it is) leads nowhere
-    moves = [t for t in fa.type.transitions if set(t.sources) != set(t.targets) or var in _written(t.action)]
+    moves = [t for t in fa.type.transitions if set(t.sources) != set(t.targets) or var in assigned(t.action)]
 
     def reach(allowed) -> int:
         mask = 0
@@ -158,14 +158,3 @@ def _settable(flat: FlatSystem, fa: FlatAtom, slot: int) -> Settable:
         ports = {t.port for t in moves if t.port in dying}
         out += [((s, mask), (fa.offset, every)) for s, mask in sorted({p for q in ports for p in dying[q]})]
     return tuple(out)
-
-
-def _written(stmts) -> set[str]:
-    """Variables some path of ``stmts`` assigns."""
-    out: set[str] = set()
-    for st in stmts:
-        if isinstance(st, Assign) and isinstance(st.target, Var):
-            out.add(st.target.name)
-        elif isinstance(st, If):
-            out |= _written(st.then) | _written(st.orelse)
-    return out

@@ -113,6 +113,17 @@ def variables(node: Expr | Stmt) -> set[str]:
     return set()
 
 
+def assigned(stmts) -> set[str]:
+    """Names of the plain variables some path of ``stmts`` assigns."""
+    out: set[str] = set()
+    for s in stmts:
+        if isinstance(s, Assign) and isinstance(s.target, Var):
+            out.add(s.target.name)
+        elif isinstance(s, If):
+            out |= assigned(s.then) | assigned(s.orelse)
+    return out
+
+
 def map_port_data(e: Expr, fn: Callable[[PortData], Expr]) -> Expr:
     """``e`` with every port data read ``p.x`` replaced by ``fn(p.x)`` (moving a guard between connectors)."""
     if isinstance(e, PortData):

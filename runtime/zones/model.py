@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 from runtime.engine.flatten import FlatSystem, flatten
 from runtime.model import Annotation, Assign, Binary, Const, If, Package, PortData, Transition, Unary, Var
-from runtime.model.expressions import Expr
+from runtime.model.expressions import Expr, assigned
 
 CLOCK = "tick_clock"
 TICK = "tick"
@@ -198,16 +198,6 @@ def _advances(action, clock: str) -> bool:
     return False
 
 
-def _assigned(action) -> set[str]:
-    out = set()
-    for s in action:
-        if isinstance(s, Assign) and isinstance(s.target, Var):
-            out.add(s.target.name)
-        elif isinstance(s, If):
-            out |= _assigned(s.then) | _assigned(s.orelse)
-    return out
-
-
 def _resets(action, clocks: dict[str, int], where: str) -> list[tuple[int, Expr]]:
     out = []
     for s in action:
@@ -215,7 +205,7 @@ def _resets(action, clocks: dict[str, int], where: str) -> list[tuple[int, Expr]
             if _mentions(s.value, set(clocks)):
                 raise Unsupported(f"{where}: clock {s.target.name} is set from a clock")
             out.append((clocks[s.target.name], s.value))
-        elif isinstance(s, If) and _assigned([s]) & set(clocks):
+        elif isinstance(s, If) and assigned([s]) & set(clocks):
             raise Unsupported(f"{where}: a clock is set under a condition")
     return out
 
@@ -327,7 +317,7 @@ def analyse(package: Package, root: str) -> TimedModel:
                 place.ticks = True
                 place.atoms, place.discrete = atoms, rest
                 place.advancing = {c for name, c in mine.items() if _advances(tr.action, name)}
-                if _assigned(tr.action) - set(mine):
+                if assigned(tr.action) - set(mine):
                     raise Unsupported(f"{where}: time changes discrete data")
                 continue
             if tr.port is None and atoms:
