@@ -74,7 +74,7 @@ BOTH = FIXTURES / "set_both_then_go.yaml"
 
 def explore_both(tmp_path, reduce_conjunctions=True, monkeypatch=None):
     if not reduce_conjunctions:
-        monkeypatch.setattr(conjunctions, "dead_with", lambda flat: {})
+        monkeypatch.setattr(layout, "dead_with", lambda flat: {})
     model = model_of(tmp_path, AFTER_BOTH, {}, "cores: 1\n", BOTH)
     z = ZoneExplorer(model.package, model.root, SearchOptions().externs, engine="c")
     return z, z.explore()

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import fields, is_dataclass
 
 from runtime.engine.flatten import FlatAtom, FlatSystem, Leaf, Sub
-from runtime.explore.layout import connector_alive
+from runtime.explore.firing import connector_alive
 from runtime.model.expressions import Assign, Binary, PortData, Var, assigned
 
 #: A way a flag can still be set: every ``(marking slot, mask)`` of one alternative meets its mask.

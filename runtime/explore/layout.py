@@ -20,6 +20,8 @@ from typing import Any, Callable, Iterable
 from runtime.engine.cexpr import default_value
 from runtime.engine.flatten import FlatAtom, FlatSystem, Leaf
 from runtime.explore.choices import ExploreError
+from runtime.explore.conjunctions import dead_with
+from runtime.explore.firing import connector_alive
 from runtime.model.expressions import Assign, Do, If, PortData, Var, variables
 
 
@@ -152,64 +154,6 @@ def readers_by_connectors(flat: FlatSystem) -> dict[tuple[int, str], list[int]]:
     return out
 
 
-def reaching(fa: FlatAtom, port: str) -> int:
-    """The mask of the atom's places from which some path of its transitions (guards aside) takes ``port``."""
-    bit = {p: 1 << i for i, p in enumerate(fa.places)}
-    mask = 0
-    for tr in fa.type.transitions:
-        if tr.port == port:
-            mask |= _or_places(bit, tr.sources)
-    grew = True
-    while grew:
-        grew = False
-        for tr in fa.type.transitions:
-            if _or_places(bit, tr.targets) & mask and _or_places(bit, tr.sources) & ~mask:
-                mask |= _or_places(bit, tr.sources)
-                grew = True
-    return mask
-
-
-def _or_places(bit: dict[str, int], places) -> int:
-    out = 0
-    for p in places:
-        out |= bit.get(p, 0)
-    return out
-
-
-def connector_alive(flat: FlatSystem, fc, owner: int) -> tuple[tuple[int, int], ...] | None:
-    """A necessary condition for connector ``fc`` to fire again, as ``(marking slot, mask)`` pairs one of which
-    holds while it may: an atom other than ``owner`` whose port takes part in every interaction of ``fc`` in one
-    of the places from which it can still take that port (the fewest such places, where several atoms qualify);
-    for a connector that fires only within others (it exports a port), that of each of them.  None when the
-    places say nothing (it may always fire again)."""
-    from runtime.engine.defines import compile_define, required
-
-    index = {p.name: i for i, p in enumerate(fc.type.params)}
-    need = required(compile_define(fc.type.define, index, fc.path))
-    best = None
-    for i, alts in enumerate(fc.params):
-        if not need >> i & 1 or len(alts) != 1 or not isinstance(alts[0], Leaf):
-            continue
-        fp = flat.ports[alts[0].port]
-        fa = flat.atoms[fp.atom]
-        if fa.index == owner:
-            continue
-        mask = reaching(fa, fp.name)
-        if mask != (1 << len(fa.places)) - 1 and (best is None or bin(mask).count("1") < bin(best[1]).count("1")):
-            best = (fa.offset, mask)
-    if best is not None:
-        return (best,)
-    if fc.top or not fc.parents:
-        return None
-    out: list[tuple[int, int]] = []
-    for parent in fc.parents:
-        got = connector_alive(flat, flat.connectors[parent], owner)
-        if got is None:
-            return None
-        out += got
-    return tuple(out)
-
-
 def observed_by_priorities(flat: FlatSystem) -> set[int]:
     """State slots read by guards of compound priorities."""
     out: set[int] = set()
@@ -260,8 +204,6 @@ def layout(flat: FlatSystem, reduce: bool = True, observed: Iterable[tuple[str, 
     observed = set(observed)
     by_connectors = readers_by_connectors(flat)
     by_priorities = observed_by_priorities(flat)
-    from runtime.explore.conjunctions import dead_with  # it reads connector_alive from here
-
     void = dead_with(flat) if reduce else {}
     slots: list[Slot] = []
     for fa in flat.atoms:
