@@ -176,3 +176,15 @@ def test_the_command_says_its_memory_budget_and_stops_there(tmp_path):
         assert "so far (at --max-memory)" in row, row
     assert proc.returncode == 4, proc.stdout + proc.stderr  # the overruns found are the answer
     assert "Traceback" not in proc.stderr
+
+
+def test_the_programs_may_hold_a_quarter_of_the_memory_budget_and_never_less_than_a_gib(tmp_path):
+    """Programs let go past their budget are written again when a new zone of their state comes (whole DALA on
+    two cores with throws wrote 2.6 million again at 1 GiB): a larger memory budget gives them more room."""
+    from runtime.zones.search import PROGRAM_BYTES
+
+    model = build_model([str(ANOMALY)], time=TimeSettings(platform=str(platform_file(tmp_path, LONG)),
+                                                          responses=True))
+    gib = 1 << 30
+    assert zones.explorer(model, SearchOptions(max_memory_mb=16 * 1024)).program_bytes == 4 * gib
+    assert zones.explorer(model, SearchOptions(max_memory_mb=2 * 1024)).program_bytes == PROGRAM_BYTES == gib

@@ -69,13 +69,21 @@ class ZonesUnsupported(Exception):
     """The model is outside what the zone explorer takes: the tick explorer decides it (the message says why)."""
 
 
+#: The discrete states' programs may hold this share of the memory budget (at least search.py's PROGRAM_BYTES)
+#: before those of the states already expanded are let go (written again when a new zone of theirs arrives).
+PROGRAM_SHARE = 1 / 4
+
+
 def explorer(model: Model, options: SearchOptions | None = None):
     """The zone explorer of a platform model; :class:`ZonesUnsupported` when it does not take the model."""
     from runtime.zones.model import Unsupported
-    from runtime.zones.search import ZoneExplorer
+    from runtime.zones.search import PROGRAM_BYTES, ZoneExplorer
 
+    options = options or SearchOptions()
+    budget = options.max_bytes
+    programs = max(PROGRAM_BYTES, int(budget * PROGRAM_SHARE)) if budget else PROGRAM_BYTES
     try:
-        return ZoneExplorer(model.package, model.root, (options or SearchOptions()).externs)
+        return ZoneExplorer(model.package, model.root, options.externs, program_bytes=programs)
     except Unsupported as exc:
         raise ZonesUnsupported(str(exc)) from None
 
