@@ -5,7 +5,7 @@ flags of the other services they come after (GenoM3's ``after A, B, C``: a reque
 and is refused while one has not).  Once one of those flags is false and its atom can no longer set it (its service
 cannot run again: the mission will not send it any more), every such conjunction is false for ever, whatever the
 others hold: the others are dead there, and states that differ only in them have the same future
-(docs/verification/explorer.md, *Dead-variable reduction*).  This module finds, for each variable that connectors
+(docs/verification/explorer.md, *Flags read only together*).  This module finds, for each variable that connectors
 alone read, those other flags and the condition under which each can still be set.
 """
 from __future__ import annotations
