@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import fields, is_dataclass
 
 from runtime.engine.flatten import FlatAtom, FlatSystem, Leaf, Sub
-from runtime.explore.firing import connector_alive
+from runtime.explore.firing import connector_alive, places_to
 from runtime.model.expressions import Assign, Binary, PortData, Var, assigned
 
 #: A way a flag can still be set: every ``(marking slot, mask)`` of one alternative meets its mask.
@@ -125,7 +125,6 @@ def _settable(flat: FlatSystem, fa: FlatAtom, slot: int) -> Settable:
     through ports that never stop being offered, or, while one of the ports that may stop (their connectors need
     an atom that can leave the places from which it offers them) still can, from any place that reaches it."""
     var = next(d.name for d in fa.variables if fa.slot(d.name) == slot)
-    bit = {p: 1 << i for i, p in enumerate(fa.places)}
     dying: dict[str, tuple[tuple[int, int], ...]] = {}
     for fp in flat.ports:
         if fp.atom != fa.index or not fp.connectors:
@@ -134,27 +133,14 @@ def _settable(flat: FlatSystem, fa: FlatAtom, slot: int) -> Settable:
         if None not in conditions:
             dying[fp.name] = tuple(sorted({pair for c in conditions for pair in c}))
     writers = [t for t in fa.type.transitions if var in assigned(t.action)]
-    # a transition that neither moves the atom nor writes the flag (a port offering data where it is) leads nowhere
-    moves = [t for t in fa.type.transitions if set(t.sources) != set(t.targets) or var in assigned(t.action)]
-
-    def reach(allowed) -> int:
-        mask = 0
-        for t in writers:
-            if allowed(t):
-                mask |= sum(bit[p] for p in t.sources)
-        grew = True
-        while grew:
-            grew = False
-            for t in moves:
-                if allowed(t) and sum(bit[p] for p in t.targets) & mask and sum(bit[p] for p in t.sources) & ~mask:
-                    mask |= sum(bit[p] for p in t.sources)
-                    grew = True
-        return mask
-
-    steady = reach(lambda t: t.port not in dying)
-    every = reach(lambda t: True)
-    out = [((fa.offset, steady),)] if steady else []
+    steady = [t for t in fa.type.transitions if t.port not in dying]
+    still = places_to(fa, [t for t in writers if t.port not in dying], steady)
+    every = places_to(fa, writers)
+    out = [((fa.offset, still),)] if still else []
     if every:
-        ports = {t.port for t in moves if t.port in dying}
+        # a transition that neither moves the atom nor writes the flag (a port offering data where it is) leads
+        # nowhere: its port stopping changes nothing
+        ports = {t.port for t in fa.type.transitions if t.port in dying
+                 and (set(t.sources) != set(t.targets) or t in writers)}
         out += [((s, mask), (fa.offset, every)) for s, mask in sorted({p for q in ports for p in dying[q]})]
     return tuple(out)

@@ -10,15 +10,21 @@ from runtime.engine.flatten import FlatAtom, FlatSystem, Leaf
 
 def reaching(fa: FlatAtom, port: str) -> int:
     """The mask of the atom's places from which some path of its transitions (guards aside) takes ``port``."""
+    return places_to(fa, [tr for tr in fa.type.transitions if tr.port == port])
+
+
+def places_to(fa: FlatAtom, ends, through=None) -> int:
+    """The mask of the atom's places from which a path of ``through`` (its transitions unless given; guards
+    aside) leads to a place where one of the transitions ``ends`` starts."""
     bit = {p: 1 << i for i, p in enumerate(fa.places)}
     mask = 0
-    for tr in fa.type.transitions:
-        if tr.port == port:
-            mask |= _or_places(bit, tr.sources)
+    for tr in ends:
+        mask |= _or_places(bit, tr.sources)
+    through = fa.type.transitions if through is None else through
     grew = True
     while grew:
         grew = False
-        for tr in fa.type.transitions:
+        for tr in through:
             if _or_places(bit, tr.targets) & mask and _or_places(bit, tr.sources) & ~mask:
                 mask |= _or_places(bit, tr.sources)
                 grew = True
