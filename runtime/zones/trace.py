@@ -73,7 +73,7 @@ def loop_needs(z: ZoneExplorer, loop: list[Node]) -> np.ndarray | None:
             return None
         grown = m.grown
         if zone is None and grown:  # a step into a covered zone: time passes there only as far as :func:`times` lets it
-            limits = z.limits(m.state, _covering(z, m.by))
+            limits = _limits(z, m)
             grown = limits is not None
             here = dbm.constrain_all(here, limits[1]) if grown else here
             if here is None:
@@ -123,6 +123,14 @@ def _covering(z: ZoneExplorer, k: int) -> np.ndarray:
     return z.nodes[k].zone
 
 
+def _limits(z: ZoneExplorer, n: Node) -> tuple[list, list] | None:
+    """How far time may pass at ``n``'s state after the step into it (:meth:`ZoneExplorer.limits` of the zone it
+    reached, or of the one covering it); None when it does not pass there."""
+    if not n.grown:
+        return None
+    return z.limits(n.state, n.reached if n.stored is not None else _covering(z, n.by))
+
+
 def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]]) -> tuple[list[int], int]:
     """Integer times of the steps of ``path`` (each record: the step into it, the first one initial) and the time
     after the last step where ``goal`` holds."""
@@ -160,8 +168,7 @@ def times(z: ZoneExplorer, path: list[Node], goal: list[tuple[int, int, float]])
             for c, v in z.guard(n.via, path[step - 1].state)[1]:
                 origin[c] = (step, v)
         nxt = step + 1 if step + 1 < k else end
-        zone = n.reached if n.stored is not None else _covering(z, n.by)
-        limits = z.limits(n.state, zone) if n.grown else None
+        limits = _limits(z, n)
         if limits is None:
             le(nxt, step, 0)
             continue
