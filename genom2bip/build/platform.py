@@ -314,6 +314,7 @@ class PlatformBuilder:
         self.codels: list[Codel] = []
         self.urgent: list[Wire] = []  # time may not pass while one of these is possible
         self.grants: dict[tuple[str, ...], Wire] = {}
+        self.rests: dict[tuple[str, ...], Wire] = {}
         self.resumes: dict[tuple[str, ...], Wire] = {}  # tasks that suspend: the end of their suspension
         self.suspend_ticks: dict[tuple[str, ...], int] = {}  # and its longest, in ticks
 
@@ -538,6 +539,7 @@ class PlatformBuilder:
             grant = asm.wire(Wire(level._rendezvous(grant_ends), grant_ends, "grant", info.path, f"{label}:grant",
                                   comment="a core runs the task", annotations=list(sleep.annotations)))
             self.grants[info.path] = grant
+            self.rests[info.path] = rest
             asm.rank(Rank(f"{'_'.join(info.path)}_grant_after_rest", grant, rest, owner=(),
                           comment="a period with nothing to run takes no core"))
             self.urgent += [rest, grant]
@@ -593,6 +595,7 @@ class PlatformBuilder:
         tasks = [i for i in self.tasks.values() if i.path in self.grants]
         if self.platform.releases == "together":
             self.releases_first(tasks)
+        self.rests_first(tasks)
         if self.platform.policy == "edf":
             left = {i.path: self.time_left(i) for i in tasks}
             for a in tasks:
@@ -611,6 +614,15 @@ class PlatformBuilder:
                                        self.grants[b.path], owner=(),
                                        comment=f"fixed priority: {b.label} ({prio[b.path]}) before "
                                                f"{a.label} ({prio[a.path]})"))
+
+    def rests_first(self, tasks: list[TaskInfo]) -> None:
+        """A period with nothing to run closes before any core is granted at its instant."""
+        for i in tasks:
+            for j in tasks:
+                if i is not j:
+                    self.asm.rank(Rank(f"{'_'.join(i.path)}_grant_after_{'_'.join(j.path)}_rest", self.grants[i.path],
+                                       self.rests[j.path], owner=(),
+                                       comment="a period with nothing to run closes before a core is granted"))
 
     def releases_first(self, tasks: list[TaskInfo]) -> None:
         """Every grant waits for the periods that open at its instant (a delayed first one once it must)."""
