@@ -40,8 +40,8 @@ CASES = [
     ("after-client", AFTER, {}, "cores: 1\n", FIXTURES / "set_then_go.yaml"),
     # two done flags read only together: one is dead once the other is false for good (runtime/explore/conjunctions.py)
     ("after-both", AFTER_BOTH, {}, "cores: 1\n", FIXTURES / "set_both_then_go.yaml"),
-    # a task with nothing to run for this client: its periods close before the cores are granted (rests_first)
-    ("spare", FIXTURES / "Spare.gen", {}, "cores: 2\nbest: 1 ms\n", FIXTURES / "run_only.yaml"),
+    # a task with nothing to run in most periods: those close before the cores are granted (rests_first)
+    ("spare", FIXTURES / "Spare.gen", {}, "cores: 2\nbest: 1 ms\n", FIXTURES / "run_then_help.yaml"),
 ]
 #: The cases whose tick model is small enough to explore state by state in a test (zeno-services is not).
 SMALL = [c for c in CASES if c[0] != "zeno-services"]

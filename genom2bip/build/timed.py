@@ -118,6 +118,7 @@ class Timing:
     ticks: bool = True
     platform: str = ""  # the platform in words, when the tasks run on one
     client: str = ""  # the mission that is the environment, when one is
+    idle: list[str] = field(default_factory=list)  # tasks with nothing to run for the client (:func:`idle_tasks`)
 
     def annotation(self) -> Annotation:
         """``@timed(tick_us=...)`` (or ``@monitored`` without ticks) on the package: a ``.bip`` knows its resolution."""
@@ -130,6 +131,8 @@ class Timing:
             args["platform"] = self.platform
         if self.client:
             args["client"] = self.client
+        if self.idle:
+            args["idle"] = ",".join(self.idle)
         served = [f"{o.atom}={o.name.rsplit(':', 1)[0]}" for o in self.observers
                   if o.kind in ("response", "pending") and "." not in o.atom]
         if served:
@@ -211,6 +214,34 @@ def timer_type() -> AtomType:
         Transition("late", ["LATE"], ["LATE"], guard=released, action=restart),
     ] + [Transition("tick", [p], [p], guard=passing, action=list(older)) for p in ("WAIT", "PERIOD", "LATE")]
     return base
+
+
+def idle_timer_type() -> AtomType:
+    """The timer of a task with nothing to run for the client: no release is explored (:func:`idle_tasks`).
+
+    Such a task's periods would each open and close at the instant they open, taking no core (the platform's
+    ``rest``, ranked before every grant of that instant): nothing another task or an observer of another task
+    can tell.  Its phase would only multiply the zones (a 200 ms timer beside a 75 ms one doubles the
+    hyperperiod), so it keeps the timer's ports and parameters, and its clock and releases go.
+    """
+    base = timer_type()
+    return AtomType(name="IdleTimer", annotations=list(base.annotations), params=list(base.params), data=[],
+                    ports=list(base.ports), places=["WAIT"], initial=InitialTransition(["WAIT"]),
+                    transitions=[Transition("tick", ["WAIT"], ["WAIT"])])
+
+
+def idle_tasks(level, mission) -> list[tuple[str, ...]]:
+    """The periodic tasks with nothing to run for ``mission``: no codel of their own (a permanent activity), and
+    none of their services among the requests it sends (only a request starts a service)."""
+    sent = {step.target for step in mission.steps if step.kind == "send"}
+    busy = {parts.task for parts in level.services.values() if parts.label in sent}
+    out = []
+    for task, wires in level.task_execs.items():
+        timer = level.asm.atoms.get(task + ("timer",))
+        own = any(isinstance(e, End) and e.atom == task + ("permanent",) for w in wires for e in w.ends)
+        if timer is not None and timer.type == "Timer" and task not in busy and not own:
+            out.append(task)
+    return out
 
 
 def _capped(var: str, cap: str) -> If:
@@ -586,7 +617,7 @@ def add_responses(level, options: TimeOptions, tick: int, periods, watch, tickin
     level.atom_types["ResponseObserver"] = response_type()
     level.docs.setdefault("ResponseObserver", "Response time: the ticks from an opening to its closing.")
     timers = {path[:-1]: inst.args[1].value for path, inst in level.asm.atoms.items()
-              if inst.type in ("Timer", "DelayedTimer")}  # a task with a delay has a DelayedTimer
+              if inst.type in ("Timer", "DelayedTimer", "IdleTimer")}  # a task with a delay has a DelayedTimer
 
     def observe(path, label: str, opens: list, closes: list, what: str, cap: int | None,
                 until_stopped: bool = False) -> None:
@@ -649,6 +680,7 @@ def apply(level, options: TimeOptions) -> Timing:
     urgent: list[Wire] = []
     observers: list[Observer] = []
     extra: dict[int, tuple[Wire, list[End]]] = {}
+    idle: list[str] = []
 
     def watch(wire: Wire, end: End) -> None:
         extra.setdefault(id(wire), (wire, []))[1].append(end)
@@ -678,6 +710,10 @@ def apply(level, options: TimeOptions) -> Timing:
             level.atom_types.pop("Scheduler", None)
             urgent = platform.apply(level, options.platform, tick, options.default_wcet_us)
             urgent += [w for w in level.asm.wires if w.label and w.label.rsplit(":", 1)[1] in REPORTS]
+            for task in idle_tasks(level, options.client) if options.client is not None else ():
+                level.asm.atoms[task + ("timer",)].type = "IdleTimer"
+                level.atom_types["IdleTimer"] = idle_timer_type()
+                idle.append(level.task_labels[task])
         if "IdleScheduler" in level.atom_types:
             level.atom_types["IdleScheduler"] = idle_scheduler_type()
         ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]
@@ -732,4 +768,4 @@ def apply(level, options: TimeOptions) -> Timing:
                                 comment="time passes only when nothing urgent can happen"))
     return Timing(tick, observers, untimed, options.default_wcet_us, costs, options.ticks,
                   options.platform.describe() if options.platform is not None else "",
-                  options.client.name if options.client is not None else "")
+                  options.client.name if options.client is not None else "", idle)

@@ -184,8 +184,9 @@ def print_zone_verdict(found, early: bool = False) -> int:
     what = "overrun" if found.kind == "overrun" else "violation"
     figures = f"{found.method}, {found.figures.states:,} symbolic states, {found.figures.seconds:.2f} s"
     if found.verdict is Verdict.HOLDS:
-        print(f"{found.subject}: no {what} reachable ({figures})")
-        active().check("observer", found.subject, "holds", found, message=f"no {what} reachable")
+        said = found.message or f"no {what} reachable"  # a task with nothing to run says why without a search
+        print(f"{found.subject}: {said} ({figures})")
+        active().check("observer", found.subject, "holds", found, message=said)
         return EXIT_OK
     if found.verdict is Verdict.VIOLATED:
         when = (f"found after {found.figures.states:,} symbolic states, {found.figures.seconds:.1f} s; "

@@ -31,6 +31,8 @@ UNTIL_STOPPED = "runs until stopped: once started, no final report without an in
 #: Why a service has no bound when its lasso keeps running the service itself (a tracking or polling service that
 #: may end by itself, but need not): not a fault, unlike a request that waits.
 KEEPS_RUNNING = "runs until stopped: works every period once started, may go on for ever (not a fault)"
+#: Why a task's period holds and its response time is 0 without a search of its releases (build/timed.py idle_tasks).
+IDLE = "nothing to run for this client: each period closes at the instant it opens, taking no core"
 
 
 @dataclass
@@ -275,6 +277,7 @@ def _results(z, model, result, atoms, responses, watch, start, where) -> list[Ch
     figures = Figures(states=result.states, transitions=result.transitions, seconds=time.perf_counter() - start)
     method = f"zones, {result.discrete:,} discrete states"
     out: list[CheckResult] = []
+    idle = idle_tasks(model)
     decided = result.stopped == "decided"
     inconclusive = Verdict.INCONCLUSIVE if not result.complete and not decided else None
     for atom in atoms:
@@ -282,7 +285,9 @@ def _results(z, model, result, atoms, responses, watch, start, where) -> list[Ch
         node = result.violations.get(fa.index)
         common = dict(figures=figures, method=method, observer=atom.path, kind=atom.kind, bound_ticks=atom.bound,
                       tick_us=tick)
-        if atom.path in watch.told:  # told as found: the same verdict and trace, with the whole search's figures
+        if atom.path.rsplit(".", 1)[0] in idle:
+            out.append(ObserverResult(subject(atom, tick), Verdict.HOLDS, message=IDLE, **common))
+        elif atom.path in watch.told:  # told as found: the same verdict and trace, with the whole search's figures
             out.append(dataclasses.replace(watch.told[atom.path], figures=figures, method=method))
         elif node is not None:
             clock = z.model.observers[fa.index][1]
@@ -331,6 +336,11 @@ def _timed(model: Model, key: str) -> list[str]:
     return [x for x in (ann.arguments.get(key, "") if ann is not None else "").split(",") if x]
 
 
+def idle_tasks(model: Model) -> set[str]:
+    """The tasks with nothing to run for the model's client, whose releases were not searched (``IDLE``)."""
+    return set(_timed(model, "idle"))
+
+
 def _owners(model: Model) -> dict[str, str]:
     """Observer instance -> the service it measures, for the service observers at the root (``@timed``)."""
     return dict(p.split("=", 1) for p in _timed(model, "responses") if "=" in p)
@@ -350,6 +360,8 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
                   cap_ticks=atom.bound, tick_us=tick, period_ticks=period,
                   limit=result.stopped if inconclusive else "")
     subject_text = f"response time of {owner}"
+    if owner in idle_tasks(model):
+        return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=0, message=IDLE, **common)
     watch = fa.place_mask(["WATCH"])
     offset = fa.offset
     if atom.kind == "response":
