@@ -40,6 +40,12 @@ def idle_of(model) -> list[str]:
 def test_a_task_is_idle_when_the_client_sends_none_of_its_services_and_it_has_no_codel_of_its_own(tmp_path):
     assert idle_of(build(tmp_path, "one-core")) == ["Spare.spare"]
     assert idle_of(build(tmp_path, "one-core", FIXTURES / "run_then_help.yaml")) == []  # Help is sent once
+    suspends = model_of(tmp_path, SPARE, {}, PLATFORMS["one-core"] + "tasks:\n  Spare.spare:\n    suspend: 2 ms\n",
+                        RUN_ONLY)
+    assert idle_of(suspends) == []  # each of its periods lasts its suspension
+    delayed = model_of(tmp_path, SPARE, {}, PLATFORMS["one-core"] + "tasks:\n  Spare.spare:\n    delay: 3 ms\n",
+                       RUN_ONLY)
+    assert idle_of(delayed) == []
     dala = ROOT / "descriptions" / "dala"
     mission = tmp_path / "init.yaml"
     mission.write_text("mission: init-only\nsteps:\n  - send: RFLEX.Init\n    expect: ok\n")

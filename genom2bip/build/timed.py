@@ -232,14 +232,17 @@ def idle_timer_type() -> AtomType:
 
 def idle_tasks(level, mission) -> list[tuple[str, ...]]:
     """The periodic tasks with nothing to run for ``mission``: no codel of their own (a permanent activity), and
-    none of their services among the requests it sends (only a request starts a service)."""
+    none of their services among the requests it sends (only a request starts a service).  A task that suspends
+    after each release, or whose first release is delayed, is not one: its periods do not close at once."""
     sent = {step.target for step in mission.steps if step.kind == "send"}
     busy = {parts.task for parts in level.services.values() if parts.label in sent}
     out = []
     for task, wires in level.task_execs.items():
         timer = level.asm.atoms.get(task + ("timer",))
+        scheduler = level.asm.atoms.get(task + ("scheduler",))
         own = any(isinstance(e, End) and e.atom == task + ("permanent",) for w in wires for e in w.ends)
-        if timer is not None and timer.type == "Timer" and task not in busy and not own:
+        if (timer is not None and timer.type == "Timer" and task not in busy and not own
+                and not (scheduler is not None and scheduler.type.startswith("Suspending"))):
             out.append(task)
     return out
 
