@@ -12,7 +12,7 @@ from genom2bip.build import timed
 from genom2bip.loading import TimeSettings
 from genom2bip.verify.model import build_model
 from genom2bip.verify.results import ObserverResult
-from genom2bip.verify.zones import IDLE, ResponseResult, check_timing
+from genom2bip.verify.zones import IDLE, ResponseResult, check_timing, idle_owners
 from platformkit import FIXTURES, platform_file, verify
 from test_cli import ROOT
 from test_platform_responses import model_of, tick_maxima
@@ -23,18 +23,14 @@ PLATFORMS = {"one-core": "cores: 1\nbest: 1 ms\n", "two-cores": "cores: 2\nbest:
 
 
 def build(tmp_path, platform: str, mission=RUN_ONLY, idle: bool = True):
-    saved = timed.idle_tasks
-    if not idle:
-        timed.idle_tasks = lambda level, mission: []
-    try:
+    with pytest.MonkeyPatch.context() as patch:
+        if not idle:
+            patch.setattr(timed, "idle_tasks", lambda level, mission: [])
         return model_of(tmp_path, SPARE, {}, PLATFORMS[platform], mission)
-    finally:
-        timed.idle_tasks = saved
 
 
 def idle_of(model) -> list[str]:
-    ann = next(a for a in model.package.annotations if a.name == "timed")
-    return [x for x in ann.arguments.get("idle", "").split(",") if x]
+    return sorted(idle_owners(model))
 
 
 def test_a_task_is_idle_when_the_client_sends_none_of_its_services_and_it_has_no_codel_of_its_own(tmp_path):

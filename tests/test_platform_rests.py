@@ -17,13 +17,10 @@ PLATFORMS = {"one-core": "cores: 1\nbest: 1 ms\n", "two-cores": "cores: 2\nbest:
 
 
 def build(tmp_path, platform: str, ranks: bool = True):
-    saved = PlatformBuilder.rests_first
-    if not ranks:
-        PlatformBuilder.rests_first = lambda self, tasks: None
-    try:
+    with pytest.MonkeyPatch.context() as patch:
+        if not ranks:
+            patch.setattr(PlatformBuilder, "rests_first", lambda self, tasks: None)
         return model_of(tmp_path, SPARE, {}, PLATFORMS[platform], RUN_THEN_HELP)
-    finally:
-        PlatformBuilder.rests_first = saved
 
 
 def search(model):

@@ -715,8 +715,9 @@ def apply(level, options: TimeOptions) -> Timing:
             urgent += [w for w in level.asm.wires if w.label and w.label.rsplit(":", 1)[1] in REPORTS]
             for task in idle_tasks(level, options.client) if options.client is not None else ():
                 level.asm.atoms[task + ("timer",)].type = "IdleTimer"
-                level.atom_types["IdleTimer"] = idle_timer_type()
                 idle.append(level.task_labels[task])
+            if idle:
+                level.atom_types["IdleTimer"] = idle_timer_type()
         if "IdleScheduler" in level.atom_types:
             level.atom_types["IdleScheduler"] = idle_scheduler_type()
         ticking += [End(task + ("scheduler",), "tick") for task in level.task_execs]

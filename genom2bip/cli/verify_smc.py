@@ -214,14 +214,14 @@ def _progress(args):
 
 
 def _responses(report, model) -> None:
-    from genom2bip.verify.zones import IDLE, idle_tasks
+    from genom2bip.verify.zones import IDLE, idle_owners
 
     seen = [d for d in report.responses if d.samples]
     if not report.responses:
         return
     print(f"response times seen ({report.runs:,} runs; mean, 99th percentile, largest, how many):")
     width = max(len(d.owner) for d in report.responses)
-    idle = idle_tasks(model)
+    idle = idle_owners(model)
     for d in report.responses:
         if d.owner in idle:  # its releases are not in the model: the build's argument answers
             print(f"  {d.owner:<{width}}  0 ms: {IDLE}")

@@ -277,7 +277,7 @@ def _results(z, model, result, atoms, responses, watch, start, where) -> list[Ch
     figures = Figures(states=result.states, transitions=result.transitions, seconds=time.perf_counter() - start)
     method = f"zones, {result.discrete:,} discrete states"
     out: list[CheckResult] = []
-    idle = idle_tasks(model)
+    idle = idle_owners(model)
     decided = result.stopped == "decided"
     inconclusive = Verdict.INCONCLUSIVE if not result.complete and not decided else None
     for atom in atoms:
@@ -336,7 +336,7 @@ def _timed(model: Model, key: str) -> list[str]:
     return [x for x in (ann.arguments.get(key, "") if ann is not None else "").split(",") if x]
 
 
-def idle_tasks(model: Model) -> set[str]:
+def idle_owners(model: Model) -> set[str]:
     """The tasks with nothing to run for the model's client, whose releases were not searched (``IDLE``)."""
     return set(_timed(model, "idle"))
 
@@ -360,7 +360,7 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
                   cap_ticks=atom.bound, tick_us=tick, period_ticks=period,
                   limit=result.stopped if inconclusive else "")
     subject_text = f"response time of {owner}"
-    if owner in idle_tasks(model):
+    if owner in idle_owners(model):
         return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=0, message=IDLE, **common)
     watch = fa.place_mask(["WATCH"])
     offset = fa.offset
