@@ -21,6 +21,9 @@ SHARED = FIXTURES / "Shared.gen"
 ANOMALY = FIXTURES / "Anomaly.gen"
 AFTER = FIXTURES / "After.gen"
 AFTER_BOTH = FIXTURES / "AfterBoth.gen"
+OVERDUE = FIXTURES / "Overdue.gen"
+OVERDUE_PLATFORM = ("cores: 1\npolicy: edf\nbest: wcet\ntasks:\n  Overdue.a:\n    delay: [1 ms, 1 ms]\n"
+                    "  Overdue.b:\n    delay: [5 ms, 5 ms]\n")
 
 #: (name, description, defines, platform file, mission): small models with every kind of response.
 CASES = [
@@ -42,6 +45,8 @@ CASES = [
     ("after-both", AFTER_BOTH, {}, "cores: 1\n", FIXTURES / "set_both_then_go.yaml"),
     # a task with nothing to run in most periods: those close before the cores are granted (rests_first)
     ("spare", FIXTURES / "Spare.gen", {}, "cores: 2\nbest: 1 ms\n", FIXTURES / "run_then_help.yaml"),
+    # two tasks waiting past their deadlines: EDF's time left below 0, the earlier deadline first
+    ("overdue", OVERDUE, {}, OVERDUE_PLATFORM, None),
 ]
 #: The cases whose tick model is small enough to explore state by state in a test (zeno-services is not).
 SMALL = [c for c in CASES if c[0] != "zeno-services"]
@@ -98,7 +103,8 @@ def test_every_overrun_trace_holds_a_period_open_longer_than_the_period(tmp_path
                                                                        mission):
     model = model_of(tmp_path, gen, defines, platform, mission)
     violated = [r.to_json() for r in check_timing(model, ("overrun",)) if r.verdict.value == "violated"]
-    assert bool(violated) == (name in ("pair-1-edf", "pair-1-fp", "shared-slow", "zeno-services", "catchup"))
+    assert bool(violated) == (name in ("pair-1-edf", "pair-1-fp", "shared-slow", "zeno-services", "catchup",
+                                       "overdue"))
     for data in violated:
         steps = [(s["time_ms"], s["label"]) for s in data["trace"]["steps"]]
         owner = data["details"]["observer"].rsplit(".", 1)[0]
@@ -429,3 +435,41 @@ def test_zones_asked_for_on_a_model_they_do_not_take_is_refused_without_explorin
     assert code == 2
     assert "--time-search zones: clock zones do not take this model (" in err
     assert "exploring tick by tick" not in err and "overrun" not in out
+
+
+# --------------------------------------------------------------------------- overdue tasks under EDF
+
+
+def test_of_two_overdue_tasks_the_one_whose_deadline_passed_first_goes_first(tmp_path, capsys):
+    """a's deadline (11 ms) passed before b's (15 ms) while slow held the one core: a goes first at 30 ms."""
+    code, out, _ = verify(capsys, OVERDUE, "--timed", "--platform", platform_file(tmp_path, OVERDUE_PLATFORM),
+                          "--response-times", "--traces", "terminal")
+    assert response_ms(out) == {"Overdue.slow": 30, "Overdue.a": 31, "Overdue.b": 29}, out
+    model = model_of(tmp_path, OVERDUE, {}, OVERDUE_PLATFORM, None)
+    assert tick_maxima(model) == {"Overdue.slow.response": 30, "Overdue.a.response": 31, "Overdue.b.response": 29}
+    assert code == 4  # a and b overrun their periods
+
+
+def test_a_priority_comparing_a_capped_clock_with_another_is_refused_by_the_zones(tmp_path, capsys):
+    """A tick that caps a clock (``if (x < k) x = x + 1``) stops it at k; a zone's clock goes on, and the two
+    differ in how far the capped clock is from another one: the zones refuse the model rather than answer for
+    another one."""
+    from genom2bip.cli import main
+
+    path = platform_file(tmp_path, OVERDUE_PLATFORM)
+    assert main([str(OVERDUE), "--timed", "--platform", str(path), "--response-times", "-o", str(tmp_path)]) == 0
+    bip = tmp_path / "overdue" / "overdue.bip"
+    text = bip.read_text()
+    ready = re.search(r"on tick from READY to READY do \{ *x = x \+ 1; *\}", text)
+    assert ready, text
+    capped = text.replace(ready.group(0), "on tick from READY to READY do { if (x < 10) then x = x + 1; fi }")
+    bip.write_text(capped)
+    capsys.readouterr()
+    code, out, err = verify(capsys, bip, "--timed", "--response-times")
+    note = re.search(r"clock zones do not take this model \(priority \w+: compares Overdue\.\w+\.scheduler\.x, a clock "
+                     r"its tick caps, with another clock \(past the cap their difference is not the zones'\)\)", out)
+    assert note, out
+    assert "--response-times: response times are measured with clock zones; this model is not one clock zones " \
+           "take" in err
+    assert code == 2 and "\nresponse times (" not in out, out
+    assert bip.read_text() == capped

@@ -76,8 +76,10 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     non-preemptive at codel boundaries).  A codel runs ``x`` ticks, ending at
     any ``x`` in ``[lo, hi]``: ``done`` needs ``x >= lo`` and time stops at ``hi``.
     Under EDF (``keep_core``), while READY, ``x`` counts the ticks since the
-    period opened (the time left to the deadline is ``p - x``), up to ``p``,
-    the period in ticks.
+    period opened: the time left to the deadline is the period less ``x``
+    (the EDF ranks' guards, ``time_left``), below 0 once the deadline has
+    passed, so that of two overdue tasks the one whose deadline passed first
+    goes first.  ``x`` is not capped there: it grows as long as the task waits.
     """
     x, lo, hi = Var("x"), Var("lo"), Var("hi")
     clear = [Assign(x, Const(0)), Assign(lo, Const(0)), Assign(hi, Const(0))]
@@ -98,15 +100,13 @@ def scheduler_type(core: bool, keep_core: bool) -> AtomType:
     edf = core and keep_core
     transitions += [Transition("tick", [p], [p]) for p in places if p != "BUSY" and not (edf and p == "READY")]
     if edf:
-        transitions.append(Transition("tick", ["READY"], ["READY"], action=[If(Binary("<", x, Var("p")), (
-            Assign(x, Binary("+", x, Const(1))),))]))
+        transitions.append(Transition("tick", ["READY"], ["READY"], action=[Assign(x, Binary("+", x, Const(1)))]))
     transitions.append(Transition("tick", ["BUSY"], ["BUSY"], guard=Binary("<", x, hi),
                                   action=[Assign(x, Binary("+", x, Const(1)))]))
     name = ("CoreScheduler" if keep_core else "CodelScheduler") if core else "ControlScheduler"
     return AtomType(
         name=name,
         annotations=[Annotation("scheduler", {"period": "period", "exec": "exec", "sleep": "sleep"})],
-        params=[DataParam("int", "p")] if edf else [],
         data=[DataDecl("int", "x", annotations=[library.CLOCK], exported=edf),
               DataDecl("int", "lo"), DataDecl("int", "hi")],
         ports=ports,
@@ -406,8 +406,6 @@ class PlatformBuilder:
             elif level.task_execs.get(path):  # a periodic task that runs no codel keeps its idle scheduler
                 scheduler = asm.atoms[path + ("scheduler",)]
                 scheduler.type = core_type.name if info.core else "ControlScheduler"
-                if info.core and keep:
-                    scheduler.args = [Const(self.period_ticks(info))]
         self.suspensions(core_type)
         self.activities()
         for c in self.codels:
