@@ -473,3 +473,31 @@ def test_a_priority_comparing_a_capped_clock_with_another_is_refused_by_the_zone
            "take" in err
     assert code == 2 and "\nresponse times (" not in out, out
     assert bip.read_text() == capped
+
+
+@pytest.mark.parametrize("guard,refused", [("c <= cap", True), ("c > cap", True), ("c >= 5", False)])
+def test_a_capped_clock_read_past_its_cap_is_refused_by_the_zones(tmp_path, capsys, guard, refused):
+    """The response observer's tick stops its clock at ``cap``: a guard reading it afterwards must read the same
+    of ``cap`` and of any larger value, as ``c >= 5`` does and ``c <= cap`` (always true tick by tick, false in
+    a zone past the cap) does not."""
+    from genom2bip.cli import main
+
+    path = platform_file(tmp_path, OVERDUE_PLATFORM)
+    assert main([str(OVERDUE), "--timed", "--platform", str(path), "--response-times", "-o", str(tmp_path)]) == 0
+    bip = tmp_path / "overdue" / "overdue.bip"
+    text = bip.read_text()
+    assert text.count("    on close from WATCH to IDLE\n") == 1, text
+    edited = text.replace("    on close from WATCH to IDLE\n", f"    on close from WATCH to IDLE provided ({guard})\n")
+    bip.write_text(edited)
+    capsys.readouterr()
+    code, out, err = verify(capsys, bip, "--timed")
+    note = re.search(r"clock zones do not take this model \(atom Overdue\.\w+\.response: clock c, which its tick "
+                     r"stops at (\d+) in place WATCH, is then compared \((<=|>)\) with (\d+): past \1 the zones' "
+                     r"clock is not the model's\)", out)
+    if refused:
+        assert note, out
+        assert note.group(1) == note.group(3)
+    else:
+        assert note is None and "clock zones do not take" not in out, out
+        assert "explored with clock zones" in out, out
+    assert bip.read_text() == edited

@@ -79,6 +79,7 @@ class Place:
     atoms_read: set[int] = field(default_factory=set)  # clocks read there besides guards (observers, queries)
     ceilings: dict[int, tuple[int, int]] = field(default_factory=dict)  # clock -> (L, U): the largest constants
     # (+1) a guard may bound it with from below and from above before its next reset, from here (Extra_LU)
+    capped: dict[int, int] = field(default_factory=dict)  # clock -> k: the tick here stops it at k
 
 
 @dataclass
@@ -312,6 +313,7 @@ def analyse(package: Package, root: str) -> TimedModel:
                         if v is not None:
                             k = mine[st.cond.left.name]
                             capped[k] = f"{fa.name}.{st.cond.left.name}"
+                            places[(fa.index, bit)].capped[k] = int(v)
                             ceilings[k] = max(ceilings[k], int(v))
                             for side in (low, up):
                                 side[k] = max(side.get(k, 0), int(v))
@@ -501,6 +503,39 @@ def holds(pr, state) -> bool:
     return bool(ev(pr.guard))
 
 
+def _ahead(here: dict[int, set], out: dict[int, list[tuple[int, set[int]]]], clock) -> dict[int, set]:
+    """Per place, what ``here`` holds there or at a place reached before the reset of its ``clock``."""
+    ahead = {bit: set(r) for bit, r in here.items()}
+    changed = True
+    while changed:
+        changed = False
+        for bit, edges in out.items():
+            for target, reset in edges:
+                more = {r for r in ahead[target] if clock(r) not in reset} - ahead[bit]
+                if more:
+                    ahead[bit] |= more
+                    changed = True
+    return ahead
+
+
+#: For ``clock op c`` and a clock stopped at k: the comparisons that read the same of k and of any value past it.
+_SAME_PAST_CAP = {">=": lambda c, k: c <= k, ">": lambda c, k: c < k, "<": lambda c, k: c <= k,
+                  "<=": lambda c, k: c < k, "==": lambda c, k: c < k, "!=": lambda c, k: c < k}
+
+
+def _cap_kept(fa, bit: int, place: Place, compared: set[tuple], names: dict[str, int]) -> None:
+    """A clock its tick stops at k in ``place`` must be read, before its next reset, only where a zone's clock,
+    which goes on, reads the same: against constants that do not tell k from what lies past it."""
+    for clock, op, c in sorted(compared, key=repr):
+        k = place.capped.get(clock)
+        if k is None or (c is not None and _SAME_PAST_CAP[op](c, k)):
+            continue
+        name = next(n for n, i in names.items() if i == clock)
+        raise Unsupported(f"atom {fa.name}: clock {name}, which its tick stops at {k} in place "
+                          f"{fa.places[bit.bit_length() - 1]}, is then compared ({op}) with "
+                          f"{'data' if c is None else c}: past {k} the zones' clock is not the model's")
+
+
 def _activity(flat, places, steps, per_atom) -> None:
     """Per place, the clocks some guard may read before their next reset (the others are forgotten there)."""
     for fa in flat.atoms:
@@ -509,10 +544,12 @@ def _activity(flat, places, steps, per_atom) -> None:
             continue
         out: dict[int, list[tuple[int, set[int]]]] = {}  # place -> (target, resets)
         reads: dict[int, set[int]] = {}
+        compares: dict[int, set[tuple]] = {}  # place -> its guards' (clock, op, constant or None for data)
         for k in range(len(fa.places)):
             bit = 1 << k
             p = places[(fa.index, bit)]
             reads[bit] = {a.clock for a in p.atoms} | p.atoms_read
+            compares[bit] = {(a.clock, a.op, _static(a.rhs, fa)) for a in p.atoms}
         for tr in fa.type.transitions:
             if len(tr.sources) != 1:
                 continue
@@ -521,20 +558,14 @@ def _activity(flat, places, steps, per_atom) -> None:
             if step is None:
                 continue
             reads[bit] |= {a.clock for a in step.atoms}
+            compares[bit] |= {(a.clock, a.op, _static(a.rhs, fa)) for a in step.atoms}
             for target in tr.targets:
                 out.setdefault(bit, []).append((1 << fa.places.index(target), {c for c, _ in step.resets}))
-        active = {bit: set(r) for bit, r in reads.items()}
-        changed = True
-        while changed:
-            changed = False
-            for bit, edges in out.items():
-                for target, reset in edges:
-                    more = (active[target] - reset) - active[bit]
-                    if more:
-                        active[bit] |= more
-                        changed = True
+        active = _ahead(reads, out, lambda c: c)
+        compared = _ahead(compares, out, lambda c: c[0])
         for bit, a in active.items():
             place = places[(fa.index, bit)]
+            _cap_kept(fa, bit, place, compared[bit], per_atom[fa.index])
             place.active = a & mine
             stopped = place.active - place.advancing
             if place.ticks and stopped:
