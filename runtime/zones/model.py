@@ -272,7 +272,6 @@ def analyse(package: Package, root: str) -> TimedModel:
     measures: dict[int, tuple[str, int]] = {}
     initial: dict[int, int] = {}
     ceilings = [0] * (len(clocks) + 1)
-    capped: dict[int, str] = {}  # clock -> its name, for the clocks a tick caps
     consts: dict[tuple, dict[int, int]] = {}  # (atom, place bit, "L" or "U") -> clock -> its guards' largest bound + 1
     dynamic: set[int] = set()
     erased_types = {}
@@ -312,7 +311,6 @@ def analyse(package: Package, root: str) -> TimedModel:
                         v = _static(st.cond.right, fa)
                         if v is not None:
                             k = mine[st.cond.left.name]
-                            capped[k] = f"{fa.name}.{st.cond.left.name}"
                             places[(fa.index, bit)].capped[k] = int(v)
                             ceilings[k] = max(ceilings[k], int(v))
                             for side in (low, up):
@@ -342,7 +340,7 @@ def analyse(package: Package, root: str) -> TimedModel:
     model = TimedModel(flat, package, root, clocks, initial, steps, places, timed_atoms, [], [], observers, ceilings,
                        measures)
     model.erased, model.urgent, model.rules = _erase(package, flat, model, per_atom, tick[0])
-    _no_capped_differences(model.rules, capped)
+    _no_capped_differences(model)
     _read_by_priorities(flat, model)
     _activity(flat, places, steps, per_atom)
     _local_ceilings(flat, model, per_atom, consts, dynamic)
@@ -419,16 +417,17 @@ def _grow_only(model: TimedModel, dynamic: set[int]) -> list[int]:
     return sorted(watched - read)
 
 
-def _no_capped_differences(rules: list[Rule], capped: dict[int, str]) -> None:
+def _no_capped_differences(model: TimedModel) -> None:
     """A clock its tick caps (``if (c < k) c = c + 1``) stands still at ``k``, which a zone's clock does not: past
     ``k`` its difference with another clock is not the model's, so no priority may compare the two."""
-    for rule in rules:
+    capped = {k for place in model.places.values() for k in place.capped}
+    for rule in model.rules:
         for d in rule.guard if isinstance(rule.guard, list) else []:
             both = [k for k in (d.i, d.j) if k]
             if len(both) == 2 and any(k in capped for k in both):
-                name = capped[next(k for k in both if k in capped)]
-                raise Unsupported(f"priority {rule.name}: compares {name}, a clock its tick caps, with another clock "
-                                  "(past the cap their difference is not the zones')")
+                atom, var = model.clocks[next(k for k in both if k in capped) - 1]
+                raise Unsupported(f"priority {rule.name}: compares {model.flat.atoms[atom].name}.{var}, a clock its "
+                                  "tick caps, with another clock (past the cap their difference is not the zones')")
 
 
 def _read_by_priorities(flat: FlatSystem, model: TimedModel) -> None:
