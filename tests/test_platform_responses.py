@@ -450,15 +450,20 @@ def test_of_two_overdue_tasks_the_one_whose_deadline_passed_first_goes_first(tmp
     assert code == 4  # a and b overrun their periods
 
 
-def test_a_priority_comparing_a_capped_clock_with_another_is_refused_by_the_zones(tmp_path, capsys):
-    """A tick that caps a clock (``if (x < k) x = x + 1``) stops it at k; a zone's clock goes on, and the two
-    differ in how far the capped clock is from another one: the zones refuse the model rather than answer for
-    another one."""
+def overdue_bip(tmp_path):
+    """Overdue written as a .bip with its response observers, for a test to edit."""
     from genom2bip.cli import main
 
     path = platform_file(tmp_path, OVERDUE_PLATFORM)
     assert main([str(OVERDUE), "--timed", "--platform", str(path), "--response-times", "-o", str(tmp_path)]) == 0
-    bip = tmp_path / "overdue" / "overdue.bip"
+    return tmp_path / "overdue" / "overdue.bip"
+
+
+def test_a_priority_comparing_a_capped_clock_with_another_is_refused_by_the_zones(tmp_path, capsys):
+    """A tick that caps a clock (``if (x < k) x = x + 1``) stops it at k; a zone's clock goes on, and the two
+    differ in how far the capped clock is from another one: the zones refuse the model rather than answer for
+    another one."""
+    bip = overdue_bip(tmp_path)
     text = bip.read_text()
     ready = re.search(r"on tick from READY to READY do \{ *x = x \+ 1; *\}", text)
     assert ready, text
@@ -480,11 +485,7 @@ def test_a_capped_clock_read_past_its_cap_is_refused_by_the_zones(tmp_path, caps
     """The response observer's tick stops its clock at ``cap``: a guard reading it afterwards must read the same
     of ``cap`` and of any larger value, as ``c >= 5`` does and ``c <= cap`` (always true tick by tick, false in
     a zone past the cap) does not."""
-    from genom2bip.cli import main
-
-    path = platform_file(tmp_path, OVERDUE_PLATFORM)
-    assert main([str(OVERDUE), "--timed", "--platform", str(path), "--response-times", "-o", str(tmp_path)]) == 0
-    bip = tmp_path / "overdue" / "overdue.bip"
+    bip = overdue_bip(tmp_path)
     text = bip.read_text()
     assert text.count("    on close from WATCH to IDLE\n") == 1, text
     edited = text.replace("    on close from WATCH to IDLE\n", f"    on close from WATCH to IDLE provided ({guard})\n")
