@@ -23,7 +23,8 @@ TABLE: tuple[tuple[int, str], ...] = (
     (EXIT_INTERNAL, "internal error: a bug (one line; --traceback or GENOM2BIP_TRACEBACK=1 shows where)"),
     (EXIT_VIOLATED, "found: a deadlock, a violated property or invariant, a model error, an unmet expectation, "
                     "real time not held"),
-    (EXIT_INCONCLUSIVE, "inconclusive: a limit (states, time, memory) stopped the search before an answer"),
+    (EXIT_INCONCLUSIVE, "inconclusive: a limit (states, time, memory) stopped the search before an answer, "
+                        "or no trace shows the answer"),
     (EXIT_INTERRUPTED, "interrupted by Ctrl-C (or SIGTERM), after saying what was known"),
     (EXIT_CLOSED, "stopped because nobody reads the output any more (a campaign piped into head)"),
 )

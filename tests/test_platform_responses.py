@@ -386,6 +386,30 @@ def test_a_request_that_never_gets_its_core_has_no_bound_worded_as_a_wait(tmp_pa
     assert "Waiting.Ping" in times.message.split(";")[0]
 
 
+def test_a_cycle_of_zones_no_run_goes_round_is_no_bound_shown_but_inconclusive(tmp_path, capsys, monkeypatch):
+    """A cycle of zones that keeps a request open need not be one a run can take (it may close through a covering
+    zone): when none of those tried replays on the tick model, the answer is not "no bound", nor a bound, but
+    inconclusive, with the reason (here no trace of Waiting replays: idle's and Ping's lassos alike)."""
+    from runtime.zones import trace
+
+    def refuse(z, path, goal, space):
+        raise trace.ConcretizeError("step 3 cannot be taken (made so by the test)")
+
+    monkeypatch.setattr(trace, "replay", refuse)
+    code, out, _ = verify(capsys, WAITING, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times")
+    table = response_table(out)
+    shown = "no bound shown: a cycle of zones keeps a request open, but no run found goes round one"
+    assert table["Waiting.Ping"] == shown, out
+    assert f"\nWaiting.Ping: {shown} (no concrete trace: step 3 cannot be taken (made so by the test))\n" in out, out
+    assert "no bound: a request can wait for ever" not in out
+    assert code == 4  # idle's overrun is found, its trace or not: a reachable state is one a run reaches
+    times = check_response_times(model_of(tmp_path, WAITING, {}, FP1, None))
+    ping = next(r for r in times.responses if r.owner == "Waiting.Ping")
+    assert ping.verdict.value == "inconclusive" and not ping.unbounded and ping.trace is None
+    assert times.values()["Waiting.Ping"] == "inconclusive" and times.verdict.value == "inconclusive"
+    assert times.message.startswith("not decided: Waiting.idle, Waiting.Ping (") and "stopped by" not in times.message
+
+
 def test_a_starved_task_has_no_bound_on_one_core_and_a_small_one_on_two(tmp_path, capsys):
     code, out, _ = verify(capsys, STARVED, "--timed", "--platform", platform_file(tmp_path, FP1), "--response-times")
     table = response_table(out)

@@ -274,7 +274,8 @@ def check_timing_zones(model, kinds, responses: bool, options, listener, z=None)
                     timed_trace(r.trace)
                     if r.trace.loop is not None:
                         print(f"    ... and back to the state after step {r.trace.loop}, forever")
-            elif r.message and r.verdict is not Verdict.INCONCLUSIVE and r.message != _response_value(r):
+            elif r.message and r.message != _response_value(r) and (r.verdict is not Verdict.INCONCLUSIVE
+                                                                     or not r.limit):  # not a limit's lower bound
                 print(f"{owner}: {r.message}")
         if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
             worst = _worse(worst, EXIT_INCONCLUSIVE)
@@ -309,13 +310,15 @@ def _worse(a: int, b: int) -> int:
 def _response_value(r) -> str:
     """A response time in words: ``40 ms``, ``no bound``, ``more than 200 ms`` (the campaign's value, worded)."""
     from genom2bip.verify import Verdict
-    from genom2bip.verify.zones import ABOVE_CAP, UNTIL_STOPPED, response_value
+    from genom2bip.verify.zones import ABOVE_CAP, NO_LASSO, UNTIL_STOPPED, response_value
 
     if r.verdict is Verdict.INCONCLUSIVE and r.value_ticks is not None:  # reached so far: a lower bound
         return f"≥ {r.value_ms:g} ms so far ({_stopped_by(r.limit)})"
     value = response_value(r)
     if isinstance(value, float | int):
         return f"{value:g} ms"
+    if r.verdict is Verdict.INCONCLUSIVE and r.message.startswith(NO_LASSO):  # the search ended: no limit to name
+        return NO_LASSO
     if r.verdict is Verdict.INCONCLUSIVE and r.message == ABOVE_CAP:
         return f"more than {r.ms(r.cap_ticks):g} ms so far ({_stopped_by(r.limit)})"
     return {"inconclusive": f"inconclusive ({_stopped_by(r.limit)})",

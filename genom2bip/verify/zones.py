@@ -31,6 +31,13 @@ UNTIL_STOPPED = "runs until stopped: once started, no final report without an in
 #: Why a service has no bound when its lasso keeps running the service itself (a tracking or polling service that
 #: may end by itself, but need not): not a fault, unlike a request that waits.
 KEEPS_RUNNING = "runs until stopped: works every period once started, may go on for ever (not a fault)"
+#: Why a service's response time is not decided though the search ended: a cycle of zones keeps one of its requests
+#: open, but no run found goes round one (a cycle closing through a covering zone need not be one any clock value
+#: takes), so "no bound" is not shown, and neither is a bound.
+NO_LASSO = "no bound shown: a cycle of zones keeps a request open, but no run found goes round one"
+#: Lassos tried for a response without a bound: the first ``LASSO_CYCLES`` cycles of zones found, of which the first
+#: ``LASSO_ROUNDS`` that clock values can go round, each reached by up to ``LASSO_PATHS`` paths.
+LASSO_CYCLES, LASSO_ROUNDS, LASSO_PATHS = 200, 20, 8
 #: Why a task's period holds and its response time is 0 without a search of its releases (build/timed.py idle_tasks).
 IDLE = "nothing to run for this client: each period closes at the instant it opens, taking no core"
 
@@ -389,25 +396,21 @@ def _response(z, model, result, atom, by_path, space, tick, figures, method, inc
         return ResponseResult(subject_text, Verdict.HOLDS, value_ticks=None, message=message, **common)
     # the builder read the service's codels: none reached from its start yields ether or throws
     stopped = owner in _timed(model, "until_stopped")
-    # a cycle of zones whose round no clock value can take (it closes through a covering zone) is passed over:
-    # the first 20 that can be taken, among the first 200 found
+    # a cycle of zones whose round no clock value can take (it closes through a covering zone) is passed over
     cycles = itertools.chain([first], cycles)
-    rounds = itertools.islice(((entry, loop, need) for entry, loop in itertools.islice(cycles, 200)
-                               for need in [loop_needs(z, loop)] if need is not None), 20)
+    rounds = itertools.islice(((entry, loop, need) for entry, loop in itertools.islice(cycles, LASSO_CYCLES)
+                               for need in [loop_needs(z, loop)] if need is not None), LASSO_ROUNDS)
     ways = ((head + loop, len(head) - 1) for entry, loop, need in rounds
-            for head in itertools.islice(paths_to(z, entry, need=need), 8))
+            for head in itertools.islice(paths_to(z, entry, need=need), LASSO_PATHS))
     trace, message = _trace(z, ways, [], space, tick)
-    running = not stopped and common["kind"] == "service" and (
-        _runs_in_loop(trace, owner) if trace is not None else _loop_runs(z, first[1], owner))
+    if trace is None and not stopped:  # a cycle of zones alone shows no run that waits for ever
+        return ResponseResult(subject_text, Verdict.INCONCLUSIVE, value_ticks=None, message=f"{NO_LASSO} ({message})",
+                              **common)
+    running = not stopped and common["kind"] == "service" and _runs_in_loop(trace, owner)
     word = UNTIL_STOPPED if stopped else KEEPS_RUNNING if running else "a request can wait for ever"
     return ResponseResult(subject_text, Verdict.VIOLATED, trace=trace, value_ticks=None, unbounded=True,
                           until_stopped=stopped, keeps_running=running,
                           message=f"{word} ({message})" if message else word, **common)
-
-
-def _loop_runs(z, loop, owner: str) -> bool:
-    """A lasso's loop, as the search found it, fires ``owner``'s codels (:func:`_runs_in_loop` before a trace)."""
-    return any(z.interaction(m.via)[2].startswith(f"{owner}:exec") for m in loop)
 
 
 def _runs_in_loop(trace: Trace | None, owner: str) -> bool:
@@ -465,7 +468,8 @@ def check_response_times(model: Model, options: SearchOptions | None = None, lis
         raise LookupError("no task or service of this model is among those asked for")
     first = found[0]
     unbounded = [r for r in found if r.unbounded]
-    stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE]
+    stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE and r.limit]
+    undecided = [r.owner for r in found if r.verdict is Verdict.INCONCLUSIVE and not r.limit]  # NO_LASSO
     waiting = [r.owner for r in unbounded if not (r.until_stopped or r.keeps_running)]
     running = [r.owner for r in unbounded if r.until_stopped or r.keeps_running]
     if stopped:
@@ -473,7 +477,11 @@ def check_response_times(model: Model, options: SearchOptions | None = None, lis
     elif unbounded:
         verdict, message = Verdict.VIOLATED, "; ".join(
             ([f"no bound: {', '.join(waiting)}"] if waiting else [])
-            + ([f"run until stopped: {', '.join(running)}"] if running else []))
+            + ([f"run until stopped: {', '.join(running)}"] if running else [])
+            + ([f"not decided: {', '.join(undecided)}"] if undecided else []))
+    elif undecided:
+        verdict, message = Verdict.INCONCLUSIVE, f"not decided: {', '.join(undecided)} (no run found goes round " \
+                                                 f"the cycles of zones that keep a request open)"
     else:
         verdict, message = Verdict.HOLDS, "every response time has a bound"
     return ResponseTimes(f"response times of {model.title}", verdict, first.figures,
