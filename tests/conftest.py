@@ -12,10 +12,19 @@
 * The compiled-C cache (``$XDG_CACHE_HOME/genom2bip/native``) is shared by the workers of ``-n``: a
   library is written under a name of its own and renamed into place, so two workers building the same
   model at once both load a whole library (tests/test_native.py checks it).
+* Bytecode, where the environment says not to write it (``PYTHONDONTWRITEBYTECODE``, as on some CI
+  machines): the suite starts hundreds of ``python -m genom2bip`` processes, each of which would compile
+  every module it imports from source again (a quarter of a small ``verify``'s time).  The run writes
+  their bytecode instead into a directory of its own (``PYTHONPYCACHEPREFIX``), outside the tree, shared
+  by its workers and removed at its end by the process that made it.
 """
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
+import sys
+import tempfile
 
 import pytest
 
@@ -23,6 +32,21 @@ import pytest
 TEST_LEVEL = "0"
 os.environ.setdefault("GENOM2BIP_OPT", TEST_LEVEL)
 os.environ.setdefault("GENOM2BIP_TRACES", "terminal")
+
+
+def _bytecode_apart() -> None:
+    """``PYTHONDONTWRITEBYTECODE`` replaced, for this run and the processes it starts, by a bytecode directory
+    of the run's own (the first process to load this file makes it; its workers inherit it)."""
+    if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
+        return
+    where = tempfile.mkdtemp(prefix="genom2bip-tests-bytecode-")
+    os.environ["PYTHONPYCACHEPREFIX"] = where
+    del os.environ["PYTHONDONTWRITEBYTECODE"]
+    sys.pycache_prefix, sys.dont_write_bytecode = where, False
+    atexit.register(shutil.rmtree, where, ignore_errors=True)
+
+
+_bytecode_apart()
 
 
 @pytest.fixture
