@@ -12,11 +12,11 @@
 * The compiled-C cache (``$XDG_CACHE_HOME/genom2bip/native``) is shared by the workers of ``-n``: a
   library is written under a name of its own and renamed into place, so two workers building the same
   model at once both load a whole library (tests/test_native.py checks it).
-* Bytecode, where the environment says not to write it (``PYTHONDONTWRITEBYTECODE``, as on some CI
-  machines): the suite starts hundreds of ``python -m genom2bip`` processes, each of which would compile
-  every module it imports from source again (a quarter of a small ``verify``'s time).  The run writes
-  their bytecode instead into a directory of its own (``PYTHONPYCACHEPREFIX``), outside the tree, shared
-  by its workers and removed at its end by the process that made it.
+* Bytecode, where the environment says not to write it (``PYTHONDONTWRITEBYTECODE``, as on the machine
+  these tests were written on): the suite starts hundreds of ``python -m genom2bip`` processes, each of
+  which would compile every module it imports from source again (a quarter of a small ``verify``'s time).
+  The run writes their bytecode instead into a directory of its own (``PYTHONPYCACHEPREFIX``), outside the
+  tree, shared by its workers and removed at its end by the process that made it.
 """
 from __future__ import annotations
 

@@ -275,7 +275,7 @@ def check_timing_zones(model, kinds, responses: bool, options, listener, z=None)
                     if r.trace.loop is not None:
                         print(f"    ... and back to the state after step {r.trace.loop}, forever")
             elif r.message and r.message != _response_value(r) and (r.verdict is not Verdict.INCONCLUSIVE
-                                                                     or not r.limit):  # not a limit's lower bound
+                                                                     or r.no_lasso):  # not a limit's lower bound
                 print(f"{owner}: {r.message}")
         if any(r.verdict is Verdict.INCONCLUSIVE for r in times):
             worst = _worse(worst, EXIT_INCONCLUSIVE)
@@ -317,7 +317,7 @@ def _response_value(r) -> str:
     value = response_value(r)
     if isinstance(value, float | int):
         return f"{value:g} ms"
-    if r.verdict is Verdict.INCONCLUSIVE and r.message.startswith(NO_LASSO):  # the search ended: no limit to name
+    if r.no_lasso:  # the search ended: no limit to name
         return NO_LASSO
     if r.verdict is Verdict.INCONCLUSIVE and r.message == ABOVE_CAP:
         return f"more than {r.ms(r.cap_ticks):g} ms so far ({_stopped_by(r.limit)})"

@@ -20,7 +20,7 @@ class Verdict(str, Enum):
 
     HOLDS = "holds"
     VIOLATED = "violated"
-    INCONCLUSIVE = "inconclusive"  # a limit stopped it first (``limit`` says which)
+    INCONCLUSIVE = "inconclusive"  # a limit stopped it first (``limit`` says which), or no run shows the answer
     ERROR = "error"  # the model is wrong before the property (a model error met on the way)
 
 

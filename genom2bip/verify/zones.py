@@ -66,6 +66,12 @@ class ResponseResult(CheckResult):
     def value_ms(self) -> float | None:
         return self.ms(self.value_ticks)
 
+    @property
+    def no_lasso(self) -> bool:
+        """Not decided though the search ended: a cycle of zones keeps a request open, no run found goes round one
+        (:data:`NO_LASSO`), rather than a limit stopping the search."""
+        return self.verdict is Verdict.INCONCLUSIVE and self.message.startswith(NO_LASSO)
+
     def details(self) -> dict[str, Any]:
         return {"observer": self.observer, "owner": self.owner, "kind": self.kind, "value_ticks": self.value_ticks,
                 "unbounded": self.unbounded, "until_stopped": self.until_stopped,
@@ -424,7 +430,8 @@ def _runs_in_loop(trace: Trace | None, owner: str) -> bool:
 @dataclass
 class ResponseTimes(CheckResult):
     """Every response time of a model from one exploration: holds when each one has a bound, violated when one
-    has none (``trace``: its lasso), inconclusive when the search stopped (the values so far are not maxima)."""
+    has none (``trace``: its lasso), inconclusive when the search stopped (the values so far are not maxima) or
+    when no run shows whether one has a bound (:data:`NO_LASSO`)."""
 
     check: ClassVar[str] = "response-times"
 
@@ -468,8 +475,8 @@ def check_response_times(model: Model, options: SearchOptions | None = None, lis
         raise LookupError("no task or service of this model is among those asked for")
     first = found[0]
     unbounded = [r for r in found if r.unbounded]
-    stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE and r.limit]
-    undecided = [r.owner for r in found if r.verdict is Verdict.INCONCLUSIVE and not r.limit]  # NO_LASSO
+    stopped = [r for r in found if r.verdict is Verdict.INCONCLUSIVE and not r.no_lasso]
+    undecided = [r.owner for r in found if r.no_lasso]
     waiting = [r.owner for r in unbounded if not (r.until_stopped or r.keeps_running)]
     running = [r.owner for r in unbounded if r.until_stopped or r.keeps_running]
     if stopped:
