@@ -1,5 +1,5 @@
-"""Where compiled artefacts are cached (compiled C libraries, code objects of large generated sources), and how a
-file there is written so that concurrent writers never see half of it."""
+"""Where compiled artefacts are cached (compiled C libraries, code objects of large generated sources, the grammars'
+parser tables), and how a file there is written so that concurrent writers never see half of it."""
 from __future__ import annotations
 
 import os

@@ -27,6 +27,7 @@ from genom2bip.parser.dotgen_types import TypeReader
 from genom2bip.parser.expected import blank, enclosing_item, explain, terminal_words
 from genom2bip.parser.limits import TOO_DEEP, TOO_DEEP_HINT, deep_place
 from genom2bip.parser.preprocess import Preprocessed
+from runtime import lalr
 from runtime.diagnostics import Reporter
 
 MAX_SYNTAX_ERRORS = 20
@@ -48,8 +49,8 @@ class _WholeWords:
 def grammar() -> Lark:
     """The dotgen LALR parser (built once per process)."""
     text = resources.files("genom2bip.parser").joinpath("dotgen.lark").read_text(encoding="utf-8")
-    return Lark(text, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=False,
-                postlex=_WholeWords())
+    return lalr.parser(text, lexer="contextual", propagate_positions=True, maybe_placeholders=False,
+                       postlex=_WholeWords())
 
 
 @lru_cache(maxsize=1)

@@ -28,6 +28,7 @@ from genom2bip.parser.genom2_c import (
     path_text,
     string_literal,
 )
+from runtime import lalr
 from runtime.diagnostics import Reporter, Span
 
 GRAMMAR = Path(__file__).with_name("genom2.lark")
@@ -40,8 +41,8 @@ WCET_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
 @lru_cache(maxsize=1)
 def grammar_parser() -> Lark:
-    return Lark(GRAMMAR.read_text(encoding="utf-8"), parser="lalr", start=["start", "expr"],
-                propagate_positions=False, maybe_placeholders=False)
+    return lalr.parser(GRAMMAR.read_text(encoding="utf-8"), start=["start", "expr"], propagate_positions=False,
+                       maybe_placeholders=False)
 
 
 @dataclass

@@ -8,6 +8,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from lark.lexer import PatternStr
 
+from runtime import lalr
 from runtime.bip2.reserved import KEYWORDS
 from runtime.diagnostics import Diagnostic, Span
 
@@ -28,8 +29,8 @@ _ORDER_HINT = ("the order is fixed: in an atom, data, clocks and ports, then pla
 @lru_cache(maxsize=1)
 def parser() -> Lark:
     """The LALR parser for bip2.lark, built once."""
-    return Lark(GRAMMAR.read_text(encoding="utf-8"), parser="lalr", lexer="basic",
-                propagate_positions=True, maybe_placeholders=True)
+    return lalr.parser(GRAMMAR.read_text(encoding="utf-8"), lexer="basic", propagate_positions=True,
+                       maybe_placeholders=True)
 
 
 def parse_tree(text: str, filename: str) -> Tree | Diagnostic:

@@ -15,6 +15,7 @@ from typing import Any
 from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from runtime import lalr
 from runtime.diagnostics import Diagnostic, DiagnosticError, SourceCache, Span
 from runtime.nesting import MAX_DEPTH, too_deep
 
@@ -56,8 +57,7 @@ TERMINALS = {
 
 @lru_cache(maxsize=1)
 def parser() -> Lark:
-    return Lark(GRAMMAR.read_text(encoding="utf-8"), parser="lalr", propagate_positions=True,
-                maybe_placeholders=False)
+    return lalr.parser(GRAMMAR.read_text(encoding="utf-8"), propagate_positions=True, maybe_placeholders=False)
 
 
 def _span(file: str, meta_or_token) -> Span:

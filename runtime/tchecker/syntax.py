@@ -198,12 +198,11 @@ def _attributes(src: Source, i: int) -> tuple[list[Attribute], int]:
 
 @lru_cache(maxsize=1)
 def _parser():
-    from lark import Lark
+    from runtime import lalr
 
     grammar = (Path(__file__).parent / "expressions.lark").read_text(encoding="utf-8")
-    # cache: lark keeps the built tables in a temporary file named by the grammar's and lark's hash (building them
-    # took about as long as a small model's whole search)
-    return Lark(grammar, parser="lalr", propagate_positions=True, start=["expression", "statements"], cache=True)
+    # tables from the cache: building them took about as long as a small model's whole search
+    return lalr.parser(grammar, propagate_positions=True, start=["expression", "statements"])
 
 
 _UNSUPPORTED_WORDS = re.compile(r"\b(if|while|local|then|else|end)\b")
