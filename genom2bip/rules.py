@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import difflib
 from dataclasses import dataclass, field
+from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
 
 import yaml
@@ -295,7 +296,16 @@ def check_rules(rules: list[Rule], description: ir.Description, reporter: Report
                 reporter.error(r.span, f"rule {r.id} contradicts {other.id} ({other.origin}): "
                                f"{r.service[0]}.{r.service[1]} could never start",
                                f"{r.describe()}, but {other.describe()}")
-    import networkx as nx  # here, not at the top: every command reads rules, few have rules that could cycle
+    needs: dict[tuple[str, str], set[tuple[str, str]]] = {}
+    for r in rules:
+        if r.kind in ("requires", "requires_running"):
+            needs.setdefault(r.service, set()).update(r.others)
+    try:
+        TopologicalSorter(needs).prepare()  # the standard library says whether there is a cycle at all
+        return
+    except CycleError:
+        pass
+    import networkx as nx  # here, not at the top: every command reads rules, few have rules that cycle
 
     graph = nx.DiGraph()
     for r in rules:
