@@ -44,8 +44,18 @@ def test_tables_kept_by_one_command_are_read_by_the_next_and_parse_every_dala_fi
     assert len(files) >= 5
     for path in files:
         source = preprocess(path, filename=str(path), include_dirs=[str(DALA)], reporter=Reporter())
-        # the same tree, with the postlexer given back on reading (identifiers lexed whole after keywords)
-        assert read.parse(source.text) == built.parse(source.text), path.name
+        # the same tree, with the postlexer given back on reading (identifiers lexed whole after keywords), and the
+        # same positions on every node (what a diagnostic's file:line:column is read from)
+        mine, theirs = read.parse(source.text), built.parse(source.text)
+        assert mine == theirs, path.name
+        assert [_where(t) for t in mine.iter_subtrees()] == [_where(t) for t in theirs.iter_subtrees()], path.name
+        assert any(t.meta.line > 1 for t in mine.iter_subtrees())
+
+
+def _where(tree) -> tuple:
+    m = tree.meta
+    return tree.data, getattr(m, "line", None), getattr(m, "column", None), getattr(m, "end_line", None), \
+        getattr(m, "end_column", None)
 
 
 def test_each_grammar_and_options_have_tables_of_their_own(cache, monkeypatch):
