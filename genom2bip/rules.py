@@ -296,10 +296,10 @@ def check_rules(rules: list[Rule], description: ir.Description, reporter: Report
                 reporter.error(r.span, f"rule {r.id} contradicts {other.id} ({other.origin}): "
                                f"{r.service[0]}.{r.service[1]} could never start",
                                f"{r.describe()}, but {other.describe()}")
+    edges = [(r.service, o, r) for r in rules if r.kind in ("requires", "requires_running") for o in r.others]
     needs: dict[tuple[str, str], set[tuple[str, str]]] = {}
-    for r in rules:
-        if r.kind in ("requires", "requires_running"):
-            needs.setdefault(r.service, set()).update(r.others)
+    for service, other, _ in edges:
+        needs.setdefault(service, set()).add(other)
     try:
         TopologicalSorter(needs).prepare()  # the standard library says whether there is a cycle at all
         return
@@ -308,10 +308,8 @@ def check_rules(rules: list[Rule], description: ir.Description, reporter: Report
     import networkx as nx  # here, not at the top: every command reads rules, few have rules that cycle
 
     graph = nx.DiGraph()
-    for r in rules:
-        if r.kind in ("requires", "requires_running"):
-            for o in r.others:
-                graph.add_edge(r.service, o, rule=r)
+    for service, other, r in edges:
+        graph.add_edge(service, other, rule=r)
     order = {id(r): i for i, r in enumerate(rules)}
     for cycle in sorted(nx.simple_cycles(graph), key=lambda c: sorted(c)):
         # Start the cycle where its earliest rule starts, so that messages do not depend on hashing.
