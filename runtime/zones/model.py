@@ -574,8 +574,14 @@ def _activity(flat, places, steps, per_atom) -> None:
 
 
 def _erase(package: Package, flat: FlatSystem, model: TimedModel, per_atom, tick) -> tuple[Package, list, list[Rule]]:
-    """The package without tick, clock guards, clock resets, observer errors and the priorities zones apply."""
-    erased = copy.deepcopy(package)
+    """The package without tick, clock guards, clock resets, observer errors and the priorities zones apply.
+
+    Only what changes is copied (the types, and of a type with clocks its initial transition and clock
+    declarations); the rest is shared with ``package``, which nothing changes in place (a deep copy of whole DALA
+    took 0.16 s of every timed check)."""
+    erased = copy.copy(package)
+    erased.atom_types = [copy.copy(t) for t in package.atom_types]
+    erased.compound_types = [copy.copy(ct) for ct in package.compound_types]
     clocks_of_type: dict[str, set[str]] = {}
     for fa in flat.atoms:
         if per_atom[fa.index]:
@@ -596,7 +602,9 @@ def _erase(package: Package, flat: FlatSystem, model: TimedModel, per_atom, tick
                                    span=tr.span))
         t.transitions = kept
         if t.initial:
+            t.initial = copy.copy(t.initial)
             t.initial.action = _without_clocks(t.initial.action, names)
+        t.data = [copy.copy(d) if d.name in names else d for d in t.data]
         for d in t.data:
             if d.name in names:
                 d.annotations = [a for a in d.annotations if a.name != CLOCK] + [Annotation("erased_clock", {})]
