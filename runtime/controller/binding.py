@@ -31,7 +31,7 @@ from runtime.codels import UNDECLARED, CodelSpec
 from runtime.controller.codel_times import CodelTimes
 from runtime.controller.codels import CodelSource
 from runtime.controller.data import Data, clone, get_path, path_steps, set_path
-from runtime.controller.schema import problems
+from runtime.controller.schema import checker, problems
 from runtime.genom import Ref, Throw
 
 
@@ -180,6 +180,7 @@ class Binder:
         # extern name -> (component, argument list) found anywhere: for a codel called outside its own scope
         self._anywhere: dict[str, tuple[str, list[Arg]]] = {}
         self._home: dict[str, str] = {}  # extern name -> the first service or task that has it, ``Module.Owner``
+        self._fits: dict[tuple[str, str], Callable[[Any], bool]] = {}  # (component, port) -> its poster's test
         for scope in list(self.services.values()) + list(self.tasks.values()):
             for extern, args in scope.codels.items():
                 self._anywhere.setdefault(extern, (scope.component, args))
@@ -328,7 +329,11 @@ class Binder:
         spec = self.interface["components"][component]["ports"].get(port)
         if spec is None or spec.get("multiple"):  # a multiple port's value is the codel's own dict of values
             return []
-        return problems(value, spec["schema"], self.interface.get("types", {}), port)
+        schema, types = spec["schema"], self.interface.get("types", {})
+        fits = self._fits.get((component, port))
+        if fits is None:
+            fits = self._fits[(component, port)] = checker(schema, types)
+        return [] if fits(value) else problems(value, schema, types, port)
 
     def _write_back(self, record: CodelCall, spec: CodelSpec) -> bool:
         """Store what the codel left in its holders; False (and a failure) when a value has nowhere to go."""

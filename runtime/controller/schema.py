@@ -8,10 +8,15 @@ min/maxItems, maxLength, enum, minimum/maximum, anyOf, min/maxProperties and
 from __future__ import annotations
 
 import math
-from typing import Any
+from itertools import islice
+from typing import Any, Callable
 
 _JSON_TYPES = {"object": "an object", "array": "an array", "string": "a string", "integer": "an integer",
                "number": "a number", "boolean": "a boolean (true or false)", "null": "null"}
+
+
+#: The items of an array :func:`problems` looks at; the rest are not checked.
+ITEMS_CHECKED = 10_000
 
 
 def _is(value: Any, kind: str) -> bool:
@@ -65,7 +70,7 @@ def problems(value: Any, schema: dict[str, Any], types: dict[str, dict[str, Any]
             out.append(f"{path}: at least {schema['minItems']} items expected, got {len(value)}")
         if "maxItems" in schema and len(value) > schema["maxItems"]:
             out.append(f"{path}: at most {schema['maxItems']} items expected, got {len(value)}")
-        for i, item in enumerate(value[:10_000]):
+        for i, item in enumerate(value[:ITEMS_CHECKED]):
             out += problems(item, schema.get("items", {}), types, f"{path}[{i}]")
             if len(out) > 20:
                 break
@@ -84,6 +89,102 @@ def problems(value: Any, schema: dict[str, Any], types: dict[str, dict[str, Any]
         if "minProperties" in schema and len(value) < schema["minProperties"]:
             out.append(f"{path}: one of {', '.join(props)} expected")
     return out
+
+
+def checker(schema: dict[str, Any], types: dict[str, dict[str, Any]]) -> Callable[[Any], bool]:
+    """A test of values against ``schema``, made once: True only when :func:`problems` finds nothing, told without
+    making a message (the check of every value a codel writes).  False says look closer (:func:`problems` has the
+    last word), so its fast paths may be cautious."""
+    return _test(schema, types, {})
+
+
+def _test(schema: dict[str, Any], types: dict[str, dict[str, Any]], made: dict[int, Any]) -> Callable[[Any], bool]:
+    """:func:`problems`' rules as one function of the value (``made``: the tests of the named types in progress, for a
+    type that contains itself)."""
+    while "$ref" in schema:
+        name = schema["$ref"]
+        schema = types.get(name, {})
+    key = id(schema)
+    if key in made:
+        cell = made[key]
+        return lambda v: cell[0](v)
+    cell = made[key] = [None]
+    cell[0] = test = _test_of(schema, types, made)
+    return test
+
+
+def _test_of(schema: dict[str, Any], types: dict[str, dict[str, Any]], made: dict[int, Any]) -> Callable[[Any], bool]:
+    if "anyOf" in schema:
+        options = [_test(s, types, made) for s in schema["anyOf"]]
+        return lambda v: any(o(v) for o in options)
+    kind = schema.get("type")
+    enum = schema.get("enum")
+    low, high = schema.get("minimum"), schema.get("maximum")
+    if kind in ("integer", "number"):
+        exact = (int,) if kind == "integer" else (int, float)
+        if enum is None and low is None and high is None:
+            if kind == "integer":
+                return lambda v: type(v) is int
+            return lambda v: type(v) is int or (type(v) is float and math.isfinite(v))
+        return lambda v: type(v) in exact and (type(v) is int or math.isfinite(v)) and (enum is None or v in enum) \
+            and (low is None or v >= low) and (high is None or v <= high)
+    if kind == "array":
+        items = schema.get("items", {})
+        few, many = schema.get("minItems"), schema.get("maxItems")
+        every = _all_of(items, types, made)
+        return lambda v: type(v) is list and (few is None or len(v) >= few) and (many is None or len(v) <= many) \
+            and (enum is None or v in enum) and every(v)
+    if kind == "object":
+        props = schema.get("properties", {})
+        tests = {k: _test(t, types, made) for k, t in props.items()}
+        closed = schema.get("additionalProperties") is False
+        required = schema.get("required", [])
+        most, least = schema.get("maxProperties"), schema.get("minProperties")
+
+        def obj(v: Any) -> bool:
+            if type(v) is not dict or (enum is not None and v not in enum):
+                return False
+            for k, x in v.items():
+                t = tests.get(k)
+                if t is None:
+                    if closed:
+                        return False
+                elif not t(x):
+                    return False
+            return all(k in v for k in required) and (most is None or len(v) <= most) \
+                and (least is None or len(v) >= least)
+        return obj
+    if kind == "string":
+        longest = schema.get("maxLength")
+        return lambda v: type(v) is str and (longest is None or len(v) <= longest) and (enum is None or v in enum)
+    if kind == "boolean":
+        return lambda v: type(v) is bool and (enum is None or v in enum)
+    if kind == "null":
+        return lambda v: v is None and (enum is None or v in enum)
+    return lambda v: enum is None or v in enum  # no type, or one problems() reads nothing more of
+
+
+def _all_of(items: dict[str, Any], types: dict[str, dict[str, Any]], made: dict[int, Any]) -> Callable[[list], bool]:
+    """The test of an array's items (the first :data:`ITEMS_CHECKED`): a plain number or integer item type in one pass
+    over the list in C, any other item by its test."""
+    plain = items
+    while "$ref" in plain:
+        plain = types.get(plain["$ref"], {})
+    if "anyOf" not in plain and not ({"enum", "minimum", "maximum"} & plain.keys()) and \
+            plain.get("type") in ("integer", "number"):
+        allowed = {int} if plain["type"] == "integer" else {int, float}
+
+        def numbers(v: list) -> bool:
+            head = v if len(v) <= ITEMS_CHECKED else v[:ITEMS_CHECKED]
+            if not set(map(type, head)) <= allowed:
+                return False
+            try:
+                return float not in allowed or math.isfinite(math.fsum(head))
+            except (OverflowError, ValueError):  # a sum past the largest float, or inf - inf: looked at closer
+                return False
+        return numbers
+    one = _test(items, types, made)
+    return lambda v: all(map(one, islice(v, ITEMS_CHECKED)))
 
 
 def completed(value: Any, default: Any) -> Any:
