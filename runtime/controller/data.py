@@ -15,11 +15,18 @@ from typing import Any
 _STEP = re.compile(r"\.?([A-Za-z_]\w*)|\[(\d+)\]")
 
 
+#: The values :func:`clone` shares rather than copies (immutable).
+_SCALARS = frozenset({int, float, str, bool, type(None)})
+
+
 def clone(value: Any) -> Any:
-    """A deep copy of JSON-like data (faster than copy.deepcopy for dicts, lists and scalars)."""
+    """A deep copy of JSON-like data (faster than copy.deepcopy for dicts, lists and scalars); a list of scalars alone
+    (a scan, a path) is copied in one call."""
     if isinstance(value, dict):
         return {k: clone(v) for k, v in value.items()}
     if isinstance(value, list):
+        if _SCALARS.issuperset(map(type, value)):
+            return list(value)
         return [clone(v) for v in value]
     return value
 

@@ -79,23 +79,23 @@ def triggers(node: Node) -> int:
 
 
 def max_allowed(node: Node, enabled: int) -> int:
-    """Largest interaction made of ports in ``enabled`` (0 when there is none)."""
+    """Largest interaction made of ports in ``enabled`` (0 when there is none): in a group with triggers, what each
+    member offers if a trigger offers something; in a group without, what each offers if every member does."""
     if node[0] == "p":
         return node[1] & enabled
-    with_triggers = _group_has_trigger(node)
     out = 0
-    trigger_present = False
+    missing = triggered = with_triggers = False
     for sub, trig in node[1]:
         m = max_allowed(sub, enabled)
-        if not m:
-            if not with_triggers:
-                return 0
-            continue
-        trigger_present = trigger_present or trig
-        out |= m
-    if with_triggers and not trigger_present:
-        return 0
-    return out
+        with_triggers = with_triggers or trig
+        if m:
+            out |= m
+            triggered = triggered or trig
+        else:
+            missing = True
+    if with_triggers:
+        return out if triggered else 0
+    return 0 if missing else out
 
 
 def _group_has_trigger(node: Node) -> bool:

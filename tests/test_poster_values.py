@@ -1,4 +1,5 @@
-"""The test a codel's poster value takes on every write (``schema.checker``) says what ``schema.problems`` says.
+"""What the controller does with every value a codel writes or is handed: the test a poster value takes
+(``schema.checker``) says what ``schema.problems`` says, and a clone shares nothing that can change.
 
 ``checker`` answers True only where ``problems`` finds nothing; it may answer False where ``problems`` then finds
 nothing (it leaves subclasses of int or float, and sums past the largest float, to ``problems``).  On values made
@@ -157,3 +158,18 @@ def test_a_type_that_contains_itself_is_tested_without_end():
     test = checker({"$ref": "L"}, types)
     assert test(good) and problems(good, {"$ref": "L"}, types, "p") == []
     assert not test(bad) and problems(bad, {"$ref": "L"}, types, "p") != []
+
+
+def test_a_clone_shares_nothing_that_can_change_with_the_value_it_copies():
+    """The controller hands codels clones of posters and ids: a codel changing its copy, at any depth, changes nothing
+    stored (a list of scalars is copied in one call, a list holding lists or dicts member by member)."""
+    from runtime.controller.data import clone
+
+    stored = {"scan": [0.5, 1, None, "x", True], "rows": [[1, 2], [3]], "poses": [{"x": 1.0}], "n": 3}
+    copy = clone(stored)
+    assert copy == stored
+    copy["scan"][0] = 9.0
+    copy["rows"][0].append(7)
+    copy["poses"][0]["x"] = 2.0
+    copy["n"] = 4
+    assert stored == {"scan": [0.5, 1, None, "x", True], "rows": [[1, 2], [3]], "poses": [{"x": 1.0}], "n": 3}
