@@ -1,5 +1,6 @@
-"""A large generated source is compiled once per text without its comments: its code is read back from the cache
-under the new source's name, and what is not a comment always reaches the code."""
+"""A generated source is compiled once per text without its comments: its code is kept for the process and, for a
+large one, read back from the cache in later processes, under the new source's name; what is not a comment always
+reaches the code."""
 from __future__ import annotations
 
 import marshal
@@ -34,7 +35,9 @@ def compiles(tmp_path, monkeypatch):
         return real(*args, **kw)
 
     monkeypatch.setattr(source_module, "compile", counting, raising=False)
-    return made
+    source_module._kept.clear()  # as in a new process
+    yield made
+    source_module._kept.clear()
 
 
 def test_sources_differing_in_comments_share_one_compile(tmp_path, compiles):
@@ -58,6 +61,7 @@ def test_a_cache_file_that_does_not_read_back_is_compiled_again(tmp_path, compil
     compile_generated(text, "demo step")
     (kept,) = tmp_path.glob("py-*.marshal")
     kept.write_bytes(kept.read_bytes()[:100])  # cut short
+    source_module._kept.clear()  # a later process
     assert _run(compile_generated(text, "demo step"))["answer"] == 5
     assert len(compiles) == 2
     assert _run(marshal.loads(kept.read_bytes()))["answer"] == 5  # written again whole
@@ -74,3 +78,20 @@ def test_small_sources_open_strings_and_an_unwritable_cache_are_compiled_as_befo
     text = 'doc = """first\nkept  # inside a string\n"""\n' + _big(4)
     assert _run(compile_generated(text, "demo step"))["doc"] == "first\nkept  # inside a string\n"
     assert not (tmp_path / "c").exists()
+
+
+def test_a_process_compiles_a_text_once_and_forgets_the_oldest_past_its_bound(tmp_path, monkeypatch, compiles):
+    small = "answer = 1  # from /tmp/a/client.yaml\n"
+    first = compile_generated(small, "small step")
+    again = compile_generated(small.replace("/tmp/a", "/tmp/b"), "small step")
+    same = compile_generated(small, "small step")
+    assert len(compiles) == 1 and not list(tmp_path.glob("py-*.marshal"))  # a small text is kept in memory only
+    assert same is first and again.co_filename != first.co_filename and _run(again)["answer"] == 1
+    assert again.co_filename.startswith("<small step #")
+    big = _big(6)
+    monkeypatch.setattr(source_module, "KEPT_CHARS", 100)  # room for the small text alone: the newest always stays
+    compile_generated(big, "demo step")
+    compile_generated(small, "small step")  # the older one, let go for the big text
+    assert len(compiles) == 3
+    compile_generated(small, "small step")
+    assert len(compiles) == 3
