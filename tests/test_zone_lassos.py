@@ -7,7 +7,8 @@ import random
 
 import numpy as np
 
-from runtime.zones.lassos import Graph, _graph_lassos, _path_sums, _shape, _tree, _tree_lassos, edges_of
+from runtime.zones.lassos import (Graph, _first_per_component, _graph_lassos, _path_sums, _shape, _tree, _tree_lassos,
+                                  edges_of)
 
 
 def _graph(parent: list[int], covered_by: dict[int, int], edges: list[tuple[int, int, bool]],
@@ -120,3 +121,12 @@ def test_a_cycle_down_the_tree_needs_time_to_pass_after_its_entry():
     assert lassos({0, 1}) == []  # time passes before the entry only
     for k in (2, 3, 4):  # in a step of the loop, the last one included
         assert lassos({k}) == [(1, [2, 3, 4])]
+
+
+def test_the_edges_tried_are_the_first_twenty_of_each_component_components_in_the_order_first_met():
+    edges = np.arange(100, 160)
+    comps = np.array([7, 3] * 25 + [9] * 10)  # 7 and 3 interleaved, 25 edges each, then 9
+    got = _first_per_component(edges, comps)
+    assert got == [list(range(100, 140, 2)), list(range(101, 141, 2)), list(range(150, 160))]
+    assert _first_per_component(np.array([4, 5, 6]), np.array([2, 1, 2]), most=1) == [[4], [5]]
+    assert _first_per_component(np.array([], dtype=np.int64), np.array([], dtype=np.int64)) == []

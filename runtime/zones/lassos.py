@@ -259,25 +259,37 @@ def _graph_lassos(g: Graph, watch: np.ndarray, rep: np.ndarray, edges: Edges | N
         i = int(np.searchsorted(sorted_keys, x * n + y))
         return int(label[order[i]])
 
-    chosen: dict[int, list[int]] = {}  # component -> up to 20 edges inside it in which time passes, in order met
-    for i in np.flatnonzero(stepg[label]).tolist():
-        got = chosen.setdefault(int(comp[a[inside[i]]]), [])
-        if len(got) < 20:
-            got.append(i)
-    for c, picks in chosen.items():
-        members = np.flatnonzero(comp == c)
-        sub = adj[members][:, members].tocsr()
-        where = {int(v): k for k, v in enumerate(members.tolist())}
+    timed_inside = np.flatnonzero(stepg[label])  # the edges inside a component in which time passes, in order met
+    for picks in _first_per_component(timed_inside, comp[a[inside[timed_inside]]]):
+        members = np.flatnonzero(comp == comp[a[inside[picks[0]]]])  # sorted: a node's place is a binary search
+        sub = adj[members][:, members].tocsr().astype(np.float64)  # the form scipy's searches take, made once
+        sub.sum_duplicates()
         for i in picks:
             u, v = int(a[inside[i]]), int(b[inside[i]])
             x, y = int(names[u]), int(names[v])
             if u == v:
                 back = [x]
             else:
-                _, pred = breadth_first_order(sub, where[v], directed=True, return_predecessors=True)
-                path, k = [], where[u]
+                at_v, at_u = np.searchsorted(members, [v, u]).tolist()
+                _, pred = breadth_first_order(sub, at_v, directed=True, return_predecessors=True)
+                path, k = [], at_u
                 while k >= 0:
                     path.append(int(names[members[k]]))
-                    k = int(pred[k]) if k != where[v] else -1
+                    k = int(pred[k]) if k != at_v else -1
                 back = path[::-1]
             yield x, [step(edge_label(x, y))] + [step(edge_label(p, q)) for p, q in zip(back, back[1:])]
+
+
+def _first_per_component(edges: np.ndarray, comps: np.ndarray, most: int = 20) -> list[list[int]]:
+    """Of ``edges`` (in the order met) and their components, up to ``most`` per component in that order, the
+    components in the order their first edge was met: a sort, not a Python loop over millions of edges."""
+    if not len(edges):
+        return []
+    order = np.argsort(comps, kind="stable")
+    grouped = comps[order]
+    starts = np.r_[0, np.flatnonzero(np.diff(grouped)) + 1]
+    rank = np.arange(len(order)) - np.repeat(starts, np.diff(np.r_[starts, len(order)]))
+    kept = order[rank < most]  # positions in edges, grouped by component, in order met within each
+    groups = np.split(kept, np.flatnonzero(np.diff(comps[kept])) + 1)
+    groups.sort(key=lambda g: int(g[0]))
+    return [edges[g].tolist() for g in groups]
