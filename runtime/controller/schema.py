@@ -19,6 +19,13 @@ _JSON_TYPES = {"object": "an object", "array": "an array", "string": "a string",
 ITEMS_CHECKED = 10_000
 
 
+def _resolved(schema: dict[str, Any], types: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """``schema`` with its ``$ref`` followed to the named type (an unknown name: no constraint)."""
+    while "$ref" in schema:
+        schema = types.get(schema["$ref"], {})
+    return schema
+
+
 def _is(value: Any, kind: str) -> bool:
     if kind == "object":
         return isinstance(value, dict)
@@ -45,8 +52,7 @@ def _show(value: Any) -> str:
 
 def problems(value: Any, schema: dict[str, Any], types: dict[str, dict[str, Any]], path: str) -> list[str]:
     """What is wrong with ``value`` for ``schema`` (empty when nothing), each naming ``path``."""
-    while "$ref" in schema:
-        schema = types.get(schema["$ref"], {})
+    schema = _resolved(schema, types)
     if "anyOf" in schema:
         options = [problems(value, s, types, path) for s in schema["anyOf"]]
         return [] if any(not o for o in options) else options[0]
@@ -101,9 +107,7 @@ def checker(schema: dict[str, Any], types: dict[str, dict[str, Any]]) -> Callabl
 def _test(schema: dict[str, Any], types: dict[str, dict[str, Any]], made: dict[int, Any]) -> Callable[[Any], bool]:
     """:func:`problems`' rules as one function of the value (``made``: the tests of the named types in progress, for a
     type that contains itself)."""
-    while "$ref" in schema:
-        name = schema["$ref"]
-        schema = types.get(name, {})
+    schema = _resolved(schema, types)
     key = id(schema)
     if key in made:
         cell = made[key]
@@ -167,9 +171,7 @@ def _test_of(schema: dict[str, Any], types: dict[str, dict[str, Any]], made: dic
 def _all_of(items: dict[str, Any], types: dict[str, dict[str, Any]], made: dict[int, Any]) -> Callable[[list], bool]:
     """The test of an array's items (the first :data:`ITEMS_CHECKED`): a plain number or integer item type in one pass
     over the list in C, any other item by its test."""
-    plain = items
-    while "$ref" in plain:
-        plain = types.get(plain["$ref"], {})
+    plain = _resolved(items, types)
     if "anyOf" not in plain and not ({"enum", "minimum", "maximum"} & plain.keys()) and \
             plain.get("type") in ("integer", "number"):
         allowed = {int} if plain["type"] == "integer" else {int, float}
@@ -199,8 +201,7 @@ def completed(value: Any, default: Any) -> Any:
 
 def zero(schema: dict[str, Any], types: dict[str, dict[str, Any]]) -> Any:
     """The value of a variable of this type before anything is written (C's zero initialisation)."""
-    while "$ref" in schema:
-        schema = types.get(schema["$ref"], {})
+    schema = _resolved(schema, types)
     kind = schema.get("type")
     if "enum" in schema:
         return schema["enum"][0] if schema["enum"] else None
