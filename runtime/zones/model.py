@@ -25,7 +25,7 @@ fragment raises :class:`Unsupported` with what and where.
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from runtime.engine.flatten import FlatSystem, flatten
 from runtime.model import Annotation, Assign, Binary, Const, If, Package, PortData, Transition, Unary, Var
@@ -602,12 +602,9 @@ def _erase(package: Package, flat: FlatSystem, model: TimedModel, per_atom, tick
                                    span=tr.span))
         t.transitions = kept
         if t.initial:
-            t.initial = copy.copy(t.initial)
-            t.initial.action = _without_clocks(t.initial.action, names)
-        t.data = [copy.copy(d) if d.name in names else d for d in t.data]
-        for d in t.data:
-            if d.name in names:
-                d.annotations = [a for a in d.annotations if a.name != CLOCK] + [Annotation("erased_clock", {})]
+            t.initial = replace(t.initial, action=_without_clocks(t.initial.action, names))
+        t.data = [replace(d, annotations=[a for a in d.annotations if a.name != CLOCK]
+                          + [Annotation("erased_clock", {})]) if d.name in names else d for d in t.data]
     slot_clock = {flat.atoms[a].slot(v): k + 1 for k, (a, v) in enumerate(model.clocks)}
     rules = []
     for pr in flat.priorities:
